@@ -1,0 +1,378 @@
+//! The one internal representation: a deduplicated expression DAG in evaluation order.
+//!
+//! Every solid lowers to an [`Expr`]: a list of [`Node`]s in which each node refers only
+//! to earlier ones and the last is the root, with equal subexpressions stored once
+//! (hash-consing) and constant subexpressions folded. Evaluation is one pass over the
+//! list with any [`Scalar`]: f64, f32, [`Interval`], [`Dual`].
+
+use crate::dual::Dual;
+use crate::interval::Interval;
+use crate::scalar::Scalar;
+use crate::tree::{BinaryOp, Tree, TreeOp, UnaryOp, Var};
+use std::collections::HashMap;
+
+/// One node of an [`Expr`]; operands are indices of earlier nodes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Node {
+    /// A constant, stored as its bit pattern so that nodes hash.
+    Const(u64),
+    /// A coordinate.
+    Var(Var),
+    /// A one-argument operation.
+    Unary(UnaryOp, u32),
+    /// A two-argument operation.
+    Binary(BinaryOp, u32, u32),
+    /// An integer power.
+    PowI(u32, i32),
+}
+
+/// A compiled, deduplicated expression of x, y, z (see the module docs).
+#[derive(Clone, Debug)]
+pub struct Expr {
+    nodes: Vec<Node>,
+}
+
+/// Builds the node list with hash-consing and constant folding.
+struct Builder {
+    nodes: Vec<Node>,
+    index: HashMap<Node, u32>,
+}
+
+impl Builder {
+    fn push(&mut self, n: Node) -> u32 {
+        if let Some(&i) = self.index.get(&n) {
+            return i;
+        }
+        let i = self.nodes.len() as u32;
+        self.nodes.push(n);
+        self.index.insert(n, i);
+        i
+    }
+    fn constant(&mut self, v: f64) -> u32 {
+        // -0.0 and 0.0 are kept apart (atan2 tells them apart); NaN stays NaN.
+        self.push(Node::Const(v.to_bits()))
+    }
+    fn const_of(&self, i: u32) -> Option<f64> {
+        match self.nodes[i as usize] {
+            Node::Const(b) => Some(f64::from_bits(b)),
+            _ => None,
+        }
+    }
+    fn unary(&mut self, op: UnaryOp, a: u32) -> u32 {
+        if let Some(v) = self.const_of(a) {
+            return self.constant(eval_unary(op, v));
+        }
+        if op == UnaryOp::Neg {
+            if let Node::Unary(UnaryOp::Neg, inner) = self.nodes[a as usize] {
+                return inner;
+            }
+        }
+        self.push(Node::Unary(op, a))
+    }
+    fn binary(&mut self, op: BinaryOp, a: u32, b: u32) -> u32 {
+        let (ca, cb) = (self.const_of(a), self.const_of(b));
+        if let (Some(x), Some(y)) = (ca, cb) {
+            return self.constant(eval_binary(op, x, y));
+        }
+        match (op, ca, cb) {
+            (BinaryOp::Add, Some(z), _) if z == 0.0 => return b,
+            (BinaryOp::Add | BinaryOp::Sub, _, Some(z)) if z == 0.0 => return a,
+            (BinaryOp::Sub, Some(z), _) if z == 0.0 => return self.unary(UnaryOp::Neg, b),
+            (BinaryOp::Mul, Some(o), _) if o == 1.0 => return b,
+            (BinaryOp::Mul | BinaryOp::Div, _, Some(o)) if o == 1.0 => return a,
+            (BinaryOp::Mul, Some(m), _) if m == -1.0 => return self.unary(UnaryOp::Neg, b),
+            (BinaryOp::Mul | BinaryOp::Div, _, Some(m)) if m == -1.0 => {
+                return self.unary(UnaryOp::Neg, a)
+            }
+            _ => {}
+        }
+        if a == b && matches!(op, BinaryOp::Min | BinaryOp::Max) {
+            return a;
+        }
+        // Commutative operations get a canonical operand order so that a+b and b+a merge.
+        let (a, b) = match op {
+            BinaryOp::Add | BinaryOp::Mul | BinaryOp::Min | BinaryOp::Max if b < a => (b, a),
+            _ => (a, b),
+        };
+        self.push(Node::Binary(op, a, b))
+    }
+    fn powi(&mut self, a: u32, n: i32) -> u32 {
+        match (self.const_of(a), n) {
+            (Some(v), _) => self.constant(v.powi(n)),
+            (_, 0) => self.constant(1.0),
+            (_, 1) => a,
+            (_, 2) => self.unary(UnaryOp::Square, a),
+            _ => self.push(Node::PowI(a, n)),
+        }
+    }
+    fn lower(&mut self, t: &Tree, memo: &mut HashMap<*const TreeOp, u32>) -> u32 {
+        if let Some(&i) = memo.get(&t.ptr()) {
+            return i;
+        }
+        // An explicit stack: models such as prospero.vm nest thousands of levels deep.
+        let mut stack: Vec<(Tree, bool)> = vec![(t.clone(), false)];
+        while let Some((n, expanded)) = stack.pop() {
+            if memo.contains_key(&n.ptr()) {
+                continue;
+            }
+            if !expanded {
+                stack.push((n.clone(), true));
+                match n.op() {
+                    TreeOp::Unary(_, a) | TreeOp::PowI(a, _) => stack.push((a.clone(), false)),
+                    TreeOp::Binary(_, a, b) => {
+                        stack.push((b.clone(), false));
+                        stack.push((a.clone(), false));
+                    }
+                    _ => {}
+                }
+                continue;
+            }
+            let id = match n.op() {
+                TreeOp::Const(v) => self.constant(*v),
+                TreeOp::Var(v) => self.push(Node::Var(*v)),
+                TreeOp::Unary(op, a) => {
+                    let a = memo[&a.ptr()];
+                    self.unary(*op, a)
+                }
+                TreeOp::Binary(op, a, b) => {
+                    let (a, b) = (memo[&a.ptr()], memo[&b.ptr()]);
+                    self.binary(*op, a, b)
+                }
+                TreeOp::PowI(a, k) => {
+                    let a = memo[&a.ptr()];
+                    self.powi(a, *k)
+                }
+            };
+            memo.insert(n.ptr(), id);
+        }
+        memo[&t.ptr()]
+    }
+}
+
+fn eval_unary(op: UnaryOp, v: f64) -> f64 {
+    apply_unary(op, v)
+}
+
+fn eval_binary(op: BinaryOp, a: f64, b: f64) -> f64 {
+    apply_binary(op, a, b)
+}
+
+#[inline(always)]
+fn apply_unary<S: Scalar>(op: UnaryOp, a: S) -> S {
+    match op {
+        UnaryOp::Neg => -a,
+        UnaryOp::Abs => a.abs(),
+        UnaryOp::Sqrt => a.sqrt(),
+        UnaryOp::Square => a.square(),
+        UnaryOp::Exp => a.exp(),
+        UnaryOp::Ln => a.ln(),
+        UnaryOp::Sin => a.sin(),
+        UnaryOp::Cos => a.cos(),
+        UnaryOp::Tan => a.tan(),
+        UnaryOp::Asin => a.asin(),
+        UnaryOp::Acos => a.acos(),
+        UnaryOp::Atan => a.atan(),
+        UnaryOp::Floor => a.floor(),
+        UnaryOp::Ceil => a.ceil(),
+        UnaryOp::Round => a.round(),
+        UnaryOp::Not => a.not(),
+    }
+}
+
+#[inline(always)]
+fn apply_binary<S: Scalar>(op: BinaryOp, a: S, b: S) -> S {
+    match op {
+        BinaryOp::Add => a + b,
+        BinaryOp::Sub => a - b,
+        BinaryOp::Mul => a * b,
+        BinaryOp::Div => a / b,
+        BinaryOp::Min => a.min(b),
+        BinaryOp::Max => a.max(b),
+        BinaryOp::Atan2 => a.atan2(b),
+        BinaryOp::Mod => a.modulo(b),
+        BinaryOp::Compare => a.compare(b),
+        BinaryOp::And => a.and(b),
+        BinaryOp::Or => a.or(b),
+    }
+}
+
+impl Expr {
+    /// Lowers a tree: shared and equal subexpressions become one node, constants fold,
+    /// and nodes that the root does not use are dropped.
+    pub fn new(tree: &Tree) -> Self {
+        let mut b = Builder {
+            nodes: Vec::new(),
+            index: HashMap::new(),
+        };
+        let root = b.lower(tree, &mut HashMap::new());
+        Self::compact(b.nodes, root)
+    }
+
+    /// Keeps the nodes reachable from `root`, in order, with `root` last.
+    fn compact(nodes: Vec<Node>, root: u32) -> Self {
+        let mut live = vec![false; nodes.len()];
+        live[root as usize] = true;
+        for i in (0..=root as usize).rev() {
+            if !live[i] {
+                continue;
+            }
+            match nodes[i] {
+                Node::Unary(_, a) | Node::PowI(a, _) => live[a as usize] = true,
+                Node::Binary(_, a, b) => {
+                    live[a as usize] = true;
+                    live[b as usize] = true;
+                }
+                _ => {}
+            }
+        }
+        let mut remap = vec![u32::MAX; nodes.len()];
+        let mut out = Vec::new();
+        for i in 0..=root as usize {
+            if !live[i] {
+                continue;
+            }
+            remap[i] = out.len() as u32;
+            out.push(match nodes[i] {
+                Node::Unary(op, a) => Node::Unary(op, remap[a as usize]),
+                Node::PowI(a, n) => Node::PowI(remap[a as usize], n),
+                Node::Binary(op, a, b) => Node::Binary(op, remap[a as usize], remap[b as usize]),
+                n => n,
+            });
+        }
+        Expr { nodes: out }
+    }
+
+    /// The nodes in evaluation order; the last is the root.
+    pub fn nodes(&self) -> &[Node] {
+        &self.nodes
+    }
+
+    /// Number of nodes.
+    pub fn len(&self) -> usize {
+        self.nodes.len()
+    }
+
+    /// Always false: an expression has at least its root.
+    pub fn is_empty(&self) -> bool {
+        self.nodes.is_empty()
+    }
+
+    /// Rebuilds a tree (sharing preserved), to compose a compiled expression further.
+    pub fn to_tree(&self) -> Tree {
+        self.substitute(&Tree::x(), &Tree::y(), &Tree::z())
+    }
+
+    /// Rebuilds a tree with `x`, `y`, `z` put in place of the coordinates.
+    pub fn substitute(&self, x: &Tree, y: &Tree, z: &Tree) -> Tree {
+        let mut t: Vec<Tree> = Vec::with_capacity(self.nodes.len());
+        for n in &self.nodes {
+            let v = match *n {
+                Node::Const(b) => Tree::constant(f64::from_bits(b)),
+                Node::Var(Var::X) => x.clone(),
+                Node::Var(Var::Y) => y.clone(),
+                Node::Var(Var::Z) => z.clone(),
+                Node::Unary(op, a) => Tree::unary(op, t[a as usize].clone()),
+                Node::Binary(op, a, b) => Tree::binary(op, t[a as usize].clone(), t[b as usize].clone()),
+                Node::PowI(a, k) => Tree::new(TreeOp::PowI(t[a as usize].clone(), k)),
+            };
+            t.push(v);
+        }
+        t.pop().expect("an expression has a root")
+    }
+
+    /// Evaluates at (x, y, z) over any [`Scalar`], using `scratch` for the node values.
+    #[inline]
+    pub fn eval_with<S: Scalar>(&self, x: S, y: S, z: S, scratch: &mut Vec<S>) -> S {
+        scratch.clear();
+        for n in &self.nodes {
+            let v = match *n {
+                Node::Const(b) => S::constant(f64::from_bits(b)),
+                Node::Var(Var::X) => x,
+                Node::Var(Var::Y) => y,
+                Node::Var(Var::Z) => z,
+                Node::Unary(op, a) => apply_unary(op, scratch[a as usize]),
+                Node::Binary(op, a, b) => apply_binary(op, scratch[a as usize], scratch[b as usize]),
+                Node::PowI(a, k) => scratch[a as usize].powi(k),
+            };
+            scratch.push(v);
+        }
+        *scratch.last().expect("an expression has a root")
+    }
+
+    /// F at a point, in f64.
+    pub fn eval(&self, p: [f64; 3]) -> f64 {
+        self.eval_with(p[0], p[1], p[2], &mut Vec::with_capacity(self.len()))
+    }
+
+    /// F at a point, in f32 (what the GPU computes).
+    pub fn eval_f32(&self, p: [f32; 3]) -> f32 {
+        self.eval_with(p[0], p[1], p[2], &mut Vec::with_capacity(self.len()))
+    }
+
+    /// Bounds of F over the box `lo..hi`.
+    pub fn eval_interval(&self, lo: [f64; 3], hi: [f64; 3]) -> Interval {
+        let i = |k: usize| Interval::new(lo[k], hi[k]);
+        self.eval_with(i(0), i(1), i(2), &mut Vec::with_capacity(self.len()))
+    }
+
+    /// F and ∇F at a point.
+    pub fn gradient(&self, p: [f64; 3]) -> (f64, [f64; 3]) {
+        let v = |k: usize| Dual::<f64, 3>::var(p[k], k);
+        let r = self.eval_with(v(0), v(1), v(2), &mut Vec::with_capacity(self.len()));
+        (r.v, r.d)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sphere() -> Tree {
+        1.0 - (Tree::x().square() + Tree::y().square() + Tree::z().square())
+    }
+
+    #[test]
+    fn dedup_and_fold() {
+        let x = Tree::x();
+        // (x + 1·2) + (x + 2): the two sums are one node.
+        let a = &x + (Tree::constant(1.0) * 2.0);
+        let b = &x + 2.0;
+        let e = Expr::new(&(a * b));
+        // x, 2, x+2, (x+2)·(x+2)
+        assert_eq!(e.len(), 4, "{:?}", e.nodes());
+        assert_eq!(e.eval([1.0, 0.0, 0.0]), 9.0);
+    }
+
+    #[test]
+    fn sphere_values_and_gradient() {
+        let e = Expr::new(&sphere());
+        assert_eq!(e.eval([0.0, 0.0, 0.0]), 1.0);
+        assert_eq!(e.eval([1.0, 0.0, 0.0]), 0.0);
+        let (v, g) = e.gradient([0.5, -0.25, 2.0]);
+        assert_eq!(v, 1.0 - 0.25 - 0.0625 - 4.0);
+        assert_eq!(g, [-1.0, 0.5, -4.0]);
+        let i = e.eval_interval([-1.0, -1.0, -1.0], [1.0, 1.0, 1.0]);
+        assert!(i.lo <= -2.0 && i.hi >= 1.0 && i.hi < 1.0 + 1e-9);
+    }
+
+    #[test]
+    fn roundtrip_tree_keeps_values() {
+        let t = (Tree::x().sin() * Tree::y().atan2(&Tree::z())).max(&sphere()) / 3.0;
+        let e = Expr::new(&t);
+        let e2 = Expr::new(&e.to_tree());
+        assert_eq!(e.nodes(), e2.nodes());
+        let p = [0.3, -0.7, 0.2];
+        assert_eq!(e.eval(p), e2.eval(p));
+        assert!((e.eval_f32([0.3, -0.7, 0.2]) as f64 - e.eval(p)).abs() < 1e-6);
+    }
+
+    #[test]
+    fn deep_chain_does_not_overflow_the_stack() {
+        let mut t = Tree::x();
+        for k in 0..200_000 {
+            t = t + (k % 7) as f64;
+        }
+        let e = Expr::new(&t);
+        assert_eq!(e.eval([0.0; 3]), (0..200_000).map(|k| (k % 7) as f64).sum::<f64>());
+    }
+}

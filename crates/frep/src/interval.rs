@@ -1,0 +1,444 @@
+//! Interval arithmetic: guaranteed bounds of an expression over a box.
+//!
+//! Every operation returns an interval that contains the exact result for every point of
+//! its operands (Moore, "Interval Analysis", 1966), widened outward by one ulp so that
+//! floating-point rounding can never make a bound too tight. An empty or undefined result
+//! (√ of a wholly negative interval, 0·∞) is NaN, which callers read as "unknown".
+
+use crate::scalar::{Scalar, Zero};
+use std::f64::consts::{FRAC_PI_2, PI, TAU};
+use std::ops::{Add, Div, Mul, Neg, Sub};
+
+/// A closed interval `[lo, hi]` of reals.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Interval {
+    /// Lower bound.
+    pub lo: f64,
+    /// Upper bound.
+    pub hi: f64,
+}
+
+#[inline]
+fn down(v: f64) -> f64 {
+    if v.is_finite() {
+        v.next_down()
+    } else {
+        v
+    }
+}
+
+#[inline]
+fn up(v: f64) -> f64 {
+    if v.is_finite() {
+        v.next_up()
+    } else {
+        v
+    }
+}
+
+impl Interval {
+    /// The interval `[lo, hi]` (exact, not widened).
+    #[inline]
+    pub const fn new(lo: f64, hi: f64) -> Self {
+        Self { lo, hi }
+    }
+    /// The degenerate interval `[v, v]`.
+    #[inline]
+    pub const fn point(v: f64) -> Self {
+        Self { lo: v, hi: v }
+    }
+    /// The whole real line.
+    pub const ENTIRE: Self = Self::new(f64::NEG_INFINITY, f64::INFINITY);
+    /// The "unknown / empty" interval.
+    pub const NAN: Self = Self::new(f64::NAN, f64::NAN);
+
+    /// Bounds widened outward by one ulp each.
+    #[inline]
+    fn widened(lo: f64, hi: f64) -> Self {
+        if lo.is_nan() || hi.is_nan() {
+            Self::NAN
+        } else {
+            Self::new(down(lo), up(hi))
+        }
+    }
+    /// Whether either bound is NaN.
+    #[inline]
+    pub fn is_nan(&self) -> bool {
+        self.lo.is_nan() || self.hi.is_nan()
+    }
+    /// Whether `v` lies in the interval (false for NaN intervals).
+    #[inline]
+    pub fn contains(&self, v: f64) -> bool {
+        self.lo <= v && v <= self.hi
+    }
+    /// hi − lo.
+    #[inline]
+    pub fn width(&self) -> f64 {
+        self.hi - self.lo
+    }
+    /// The midpoint.
+    #[inline]
+    pub fn mid(&self) -> f64 {
+        0.5 * (self.lo + self.hi)
+    }
+    /// Applies a non-decreasing function.
+    #[inline]
+    fn increasing(self, f: impl Fn(f64) -> f64) -> Self {
+        Self::widened(f(self.lo), f(self.hi))
+    }
+}
+
+impl Add for Interval {
+    type Output = Self;
+    #[inline]
+    fn add(self, b: Self) -> Self {
+        Self::widened(self.lo + b.lo, self.hi + b.hi)
+    }
+}
+
+impl Sub for Interval {
+    type Output = Self;
+    #[inline]
+    fn sub(self, b: Self) -> Self {
+        Self::widened(self.lo - b.hi, self.hi - b.lo)
+    }
+}
+
+impl Neg for Interval {
+    type Output = Self;
+    #[inline]
+    fn neg(self) -> Self {
+        Self::new(-self.hi, -self.lo)
+    }
+}
+
+impl Mul for Interval {
+    type Output = Self;
+    #[inline]
+    fn mul(self, b: Self) -> Self {
+        let p = [self.lo * b.lo, self.lo * b.hi, self.hi * b.lo, self.hi * b.hi];
+        if p.iter().any(|v| v.is_nan()) {
+            // 0·∞: the product is unbounded unless an operand is exactly zero.
+            if (self.lo == 0.0 && self.hi == 0.0) || (b.lo == 0.0 && b.hi == 0.0) {
+                return Self::point(0.0);
+            }
+            if self.is_nan() || b.is_nan() {
+                return Self::NAN;
+            }
+            return Self::ENTIRE;
+        }
+        let lo = p.iter().copied().fold(f64::INFINITY, f64::min);
+        let hi = p.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        Self::widened(lo, hi)
+    }
+}
+
+impl Div for Interval {
+    type Output = Self;
+    #[inline]
+    fn div(self, b: Self) -> Self {
+        if b.is_nan() || self.is_nan() {
+            return Self::NAN;
+        }
+        if b.lo <= 0.0 && b.hi >= 0.0 {
+            if b.lo == 0.0 && b.hi == 0.0 {
+                return Self::NAN;
+            }
+            return Self::ENTIRE;
+        }
+        self * Self::widened(1.0 / b.hi, 1.0 / b.lo)
+    }
+}
+
+impl Scalar for Interval {
+    #[inline]
+    fn constant(v: f64) -> Self {
+        Self::point(v)
+    }
+    fn abs(self) -> Self {
+        if self.lo >= 0.0 {
+            self
+        } else if self.hi <= 0.0 {
+            -self
+        } else {
+            Self::new(0.0, self.hi.max(-self.lo))
+        }
+    }
+    fn sqrt(self) -> Self {
+        if self.hi < 0.0 || self.is_nan() {
+            return Self::NAN;
+        }
+        Self::widened(self.lo.max(0.0).sqrt(), self.hi.sqrt()).clamp_lo(0.0)
+    }
+    fn square(self) -> Self {
+        let a = Scalar::abs(self);
+        Self::widened(a.lo * a.lo, a.hi * a.hi).clamp_lo(0.0)
+    }
+    fn powi(self, n: i32) -> Self {
+        match n {
+            0 => Self::point(1.0),
+            1 => self,
+            n if n < 0 => Self::point(1.0) / self.powi(-n),
+            n if n % 2 == 0 => {
+                let a = Scalar::abs(self);
+                Self::widened(a.lo.powi(n), a.hi.powi(n)).clamp_lo(0.0)
+            }
+            n => self.increasing(|v| v.powi(n)),
+        }
+    }
+    fn exp(self) -> Self {
+        self.increasing(f64::exp).clamp_lo(0.0)
+    }
+    fn ln(self) -> Self {
+        if self.hi < 0.0 || self.is_nan() {
+            return Self::NAN;
+        }
+        let lo = if self.lo <= 0.0 {
+            f64::NEG_INFINITY
+        } else {
+            self.lo.ln()
+        };
+        Self::widened(lo, self.hi.ln())
+    }
+    fn sin(self) -> Self {
+        (self - Self::point(FRAC_PI_2)).cos()
+    }
+    fn cos(self) -> Self {
+        if self.is_nan() {
+            return Self::NAN;
+        }
+        if !(self.width() < TAU) {
+            return Self::new(-1.0, 1.0);
+        }
+        // Shift so that lo ∈ [0, 2π); cos has its maximum at 2πk, minimum at π + 2πk.
+        // The shift is only used to locate the extrema, with slack for its rounding;
+        // the endpoint values come from the unshifted arguments.
+        let k = (self.lo / TAU).floor();
+        let lo = self.lo - k * TAU;
+        let hi = self.hi - k * TAU;
+        let slack = 1e-12 * (1.0 + self.lo.abs().max(self.hi.abs()));
+        let (cl, ch) = (self.lo.cos(), self.hi.cos());
+        let mut min = cl.min(ch);
+        let mut max = cl.max(ch);
+        let has = |c: f64| lo <= c + slack && hi >= c - slack;
+        if has(PI) || has(3.0 * PI) {
+            min = -1.0;
+        }
+        if has(TAU) || has(0.0) {
+            max = 1.0;
+        }
+        Self::widened(min, max).clamp(-1.0, 1.0)
+    }
+    fn tan(self) -> Self {
+        if self.is_nan() || !(self.width() < PI) {
+            return Self::ENTIRE;
+        }
+        // A pole at π/2 + kπ inside the interval makes it unbounded.
+        let k = ((self.lo - FRAC_PI_2) / PI).floor();
+        let pole = FRAC_PI_2 + (k + 1.0) * PI;
+        if self.hi >= pole {
+            return Self::ENTIRE;
+        }
+        self.increasing(f64::tan)
+    }
+    fn asin(self) -> Self {
+        if self.hi < -1.0 || self.lo > 1.0 || self.is_nan() {
+            return Self::NAN;
+        }
+        Self::widened(self.lo.max(-1.0).asin(), self.hi.min(1.0).asin())
+    }
+    fn acos(self) -> Self {
+        if self.hi < -1.0 || self.lo > 1.0 || self.is_nan() {
+            return Self::NAN;
+        }
+        Self::widened(self.hi.min(1.0).acos(), self.lo.max(-1.0).acos())
+    }
+    fn atan(self) -> Self {
+        self.increasing(f64::atan)
+    }
+    fn atan2(self, x: Self) -> Self {
+        let y = self;
+        if y.is_nan() || x.is_nan() {
+            return Self::NAN;
+        }
+        // Over a box that neither contains the origin nor meets the branch cut
+        // (x ≤ 0, y = 0), atan2 is continuous and its extremes lie at the corners.
+        let meets_cut = x.lo <= 0.0 && y.lo <= 0.0 && y.hi >= 0.0;
+        if meets_cut {
+            return Self::new(-PI, PI);
+        }
+        let c = [
+            y.lo.atan2(x.lo),
+            y.lo.atan2(x.hi),
+            y.hi.atan2(x.lo),
+            y.hi.atan2(x.hi),
+        ];
+        let lo = c.iter().copied().fold(f64::INFINITY, f64::min);
+        let hi = c.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        Self::widened(lo, hi).clamp(-PI, PI)
+    }
+    fn min(self, b: Self) -> Self {
+        Self::new(self.lo.min(b.lo), self.hi.min(b.hi))
+    }
+    fn max(self, b: Self) -> Self {
+        Self::new(self.lo.max(b.lo), self.hi.max(b.hi))
+    }
+    fn floor(self) -> Self {
+        Self::new(self.lo.floor(), self.hi.floor())
+    }
+    fn ceil(self) -> Self {
+        Self::new(self.lo.ceil(), self.hi.ceil())
+    }
+    fn round(self) -> Self {
+        Self::new(self.lo.round(), self.hi.round())
+    }
+    fn modulo(self, b: Self) -> Self {
+        if self.is_nan() || b.is_nan() {
+            return Self::NAN;
+        }
+        if b.lo == b.hi && b.lo != 0.0 && b.lo.is_finite() {
+            let c = b.lo.abs();
+            let k0 = (self.lo / c).floor();
+            let k1 = (self.hi / c).floor();
+            if k0 == k1 && self.lo.is_finite() {
+                return Self::widened(self.lo - k0 * c, self.hi - k0 * c).clamp(0.0, c);
+            }
+            return Self::new(0.0, c);
+        }
+        if b.lo > 0.0 || b.hi < 0.0 {
+            return Self::new(0.0, b.lo.abs().max(b.hi.abs()));
+        }
+        Self::ENTIRE
+    }
+    fn compare(self, b: Self) -> Self {
+        if self.is_nan() || b.is_nan() {
+            Self::NAN
+        } else if self.hi < b.lo {
+            Self::point(-1.0)
+        } else if self.lo > b.hi {
+            Self::point(1.0)
+        } else if self.lo == self.hi && b.lo == b.hi {
+            Self::point(0.0)
+        } else {
+            Self::new(-1.0, 1.0)
+        }
+    }
+    fn zero(self) -> Zero {
+        if self.lo == 0.0 && self.hi == 0.0 {
+            Zero::Yes
+        } else if self.lo > 0.0 || self.hi < 0.0 {
+            Zero::No
+        } else {
+            Zero::Maybe
+        }
+    }
+    fn hull(self, b: Self) -> Self {
+        Self::new(self.lo.min(b.lo), self.hi.max(b.hi))
+    }
+    fn less(self, b: Self) -> Option<bool> {
+        if self.hi < b.lo {
+            Some(true)
+        } else if self.lo >= b.hi {
+            Some(false)
+        } else {
+            None
+        }
+    }
+}
+
+impl Interval {
+    #[inline]
+    fn clamp_lo(self, lo: f64) -> Self {
+        if self.is_nan() {
+            self
+        } else {
+            Self::new(self.lo.max(lo), self.hi.max(lo))
+        }
+    }
+    #[inline]
+    fn clamp(self, lo: f64, hi: f64) -> Self {
+        if self.is_nan() {
+            self
+        } else {
+            Self::new(self.lo.clamp(lo, hi), self.hi.clamp(lo, hi))
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::{Rng, SeedableRng};
+
+    /// Every unary operation's interval contains the point results of random points in it.
+    #[test]
+    fn unary_ops_enclose_samples() {
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(7);
+        type Op = (&'static str, fn(Interval) -> Interval, fn(f64) -> f64);
+        let ops: [Op; 12] = [
+            ("sin", Scalar::sin, f64::sin),
+            ("cos", Scalar::cos, f64::cos),
+            ("tan", Scalar::tan, f64::tan),
+            ("exp", Scalar::exp, f64::exp),
+            ("ln", Scalar::ln, f64::ln),
+            ("sqrt", Scalar::sqrt, f64::sqrt),
+            ("square", Scalar::square, |v| v * v),
+            ("cube", |v| v.powi(3), |v| v.powi(3)),
+            ("pow4", |v| v.powi(4), |v| v.powi(4)),
+            ("asin", Scalar::asin, f64::asin),
+            ("acos", Scalar::acos, f64::acos),
+            ("atan", Scalar::atan, f64::atan),
+        ];
+        for _ in 0..2000 {
+            let a: f64 = rng.gen_range(-8.0..8.0);
+            let b: f64 = a + rng.gen_range(0.0..6.0f64).powi(2) * 0.3;
+            let i = Interval::new(a, b);
+            for (name, fi, fp) in ops.iter() {
+                let r = fi(i);
+                for k in 0..=16 {
+                    let v = (a + (b - a) * k as f64 / 16.0).min(b);
+                    let p = fp(v);
+                    if p.is_nan() || r.is_nan() {
+                        continue;
+                    }
+                    assert!(
+                        r.lo <= p && p <= r.hi || (r.lo == f64::NEG_INFINITY && p.is_infinite()),
+                        "{name}([{a}, {b}]) = {r:?} misses {name}({v}) = {p}"
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn binary_ops_enclose_samples() {
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(8);
+        for _ in 0..3000 {
+            let (a0, b0): (f64, f64) = (rng.gen_range(-4.0..4.0), rng.gen_range(-4.0..4.0));
+            let a = Interval::new(a0, a0 + rng.gen_range(0.0..3.0));
+            let b = Interval::new(b0, b0 + rng.gen_range(0.0..3.0));
+            for i in 0..=6 {
+                for j in 0..=6 {
+                    let x = (a.lo + a.width() * i as f64 / 6.0).min(a.hi);
+                    let y = (b.lo + b.width() * j as f64 / 6.0).min(b.hi);
+                    let checks = [
+                        ((a + b), x + y),
+                        ((a - b), x - y),
+                        ((a * b), x * y),
+                        ((a / b), x / y),
+                        (a.atan2(b), x.atan2(y)),
+                        (Scalar::min(a, b), x.min(y)),
+                        (Scalar::max(a, b), x.max(y)),
+                        (a.modulo(Interval::point(1.5)), x.rem_euclid(1.5)),
+                    ];
+                    for (k, (r, p)) in checks.iter().enumerate() {
+                        if p.is_nan() || p.is_infinite() {
+                            continue;
+                        }
+                        assert!(r.contains(*p), "op {k}: {a:?} {b:?} -> {r:?} misses {p}");
+                    }
+                }
+            }
+        }
+    }
+}

@@ -1,0 +1,45 @@
+//! # frep — functionally defined solids
+//!
+//! The modelling kernel of frepray: solids are the sets where a function F of x, y, z is
+//! ≥ 0 (the HyperFun / FRep convention), the surface is F = 0. Every solid lowers to one
+//! representation, a deduplicated expression DAG ([`Expr`]), evaluated over f64, f32,
+//! intervals or dual numbers; rays meet solids through one contract ([`Surface`]).
+//!
+//! ```
+//! use frep::{Expr, Tree};
+//! // The unit ball: 1 − x² − y² − z² ≥ 0 inside.
+//! let ball = 1.0 - (Tree::x().square() + Tree::y().square() + Tree::z().square());
+//! let f = Expr::new(&ball);
+//! assert_eq!(f.eval([0.0, 0.0, 0.0]), 1.0);
+//! assert!(f.eval([2.0, 0.0, 0.0]) < 0.0);
+//! let (_, grad) = f.gradient([1.0, 0.0, 0.0]);
+//! assert_eq!(grad, [-2.0, 0.0, 0.0]);
+//! ```
+#![warn(missing_docs)]
+
+pub mod bounds;
+pub mod bvh;
+pub mod csg;
+pub mod dual;
+pub mod expr;
+pub mod interval;
+pub mod interval_trace;
+pub mod perturbed;
+pub mod poly;
+pub mod quadric;
+pub mod ray;
+pub mod read;
+pub mod scalar;
+pub mod shape;
+pub mod surface;
+pub mod transform;
+pub mod tree;
+
+pub use dual::Dual;
+pub use expr::{Expr, Node};
+pub use interval::Interval;
+pub use ray::{Aabb, Ray};
+pub use scalar::Scalar;
+pub use surface::Surface;
+pub use transform::Affine;
+pub use tree::{BinaryOp, Tree, TreeOp, UnaryOp, Var};

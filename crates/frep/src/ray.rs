@@ -1,0 +1,98 @@
+//! Rays and axis-aligned boxes.
+
+use glam::DVec3;
+
+/// A ray `o + t·d` (d need not be unit length; t is in units of d).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Ray {
+    /// Origin.
+    pub o: DVec3,
+    /// Direction.
+    pub d: DVec3,
+}
+
+impl Ray {
+    /// A ray from `o` along `d`.
+    pub fn new(o: DVec3, d: DVec3) -> Self {
+        Self { o, d }
+    }
+    /// The point at parameter t.
+    #[inline]
+    pub fn at(&self, t: f64) -> DVec3 {
+        self.o + self.d * t
+    }
+}
+
+/// An axis-aligned box; `Aabb::EMPTY` has lo > hi.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Aabb {
+    /// Lower corner.
+    pub lo: DVec3,
+    /// Upper corner.
+    pub hi: DVec3,
+}
+
+impl Aabb {
+    /// The empty box (identity of `union`).
+    pub const EMPTY: Self = Self {
+        lo: DVec3::splat(f64::INFINITY),
+        hi: DVec3::splat(f64::NEG_INFINITY),
+    };
+    /// All of space.
+    pub const EVERYTHING: Self = Self {
+        lo: DVec3::splat(f64::NEG_INFINITY),
+        hi: DVec3::splat(f64::INFINITY),
+    };
+    /// The box with corners `lo` and `hi`.
+    pub fn new(lo: DVec3, hi: DVec3) -> Self {
+        Self { lo, hi }
+    }
+    /// Whether the box holds no point.
+    pub fn is_empty(&self) -> bool {
+        self.lo.x > self.hi.x || self.lo.y > self.hi.y || self.lo.z > self.hi.z
+    }
+    /// Whether every side is finite.
+    pub fn is_finite(&self) -> bool {
+        self.lo.is_finite() && self.hi.is_finite()
+    }
+    /// The smallest box holding both.
+    pub fn union(&self, b: &Aabb) -> Aabb {
+        Aabb::new(self.lo.min(b.lo), self.hi.max(b.hi))
+    }
+    /// The common part (possibly empty).
+    pub fn intersection(&self, b: &Aabb) -> Aabb {
+        Aabb::new(self.lo.max(b.lo), self.hi.min(b.hi))
+    }
+    /// Grows the box to hold `p`.
+    pub fn include(&mut self, p: DVec3) {
+        self.lo = self.lo.min(p);
+        self.hi = self.hi.max(p);
+    }
+    /// The centre.
+    pub fn center(&self) -> DVec3 {
+        (self.lo + self.hi) * 0.5
+    }
+    /// hi − lo.
+    pub fn extent(&self) -> DVec3 {
+        self.hi - self.lo
+    }
+    /// Whether `p` is inside or on the box.
+    pub fn contains(&self, p: DVec3) -> bool {
+        p.cmpge(self.lo).all() && p.cmple(self.hi).all()
+    }
+    /// The parameter range where the ray is inside the box, clipped to `[t0, t1]`
+    /// (slab method, Kay & Kajiya 1986), or None.
+    #[inline]
+    pub fn clip(&self, ray: &Ray, t0: f64, t1: f64) -> Option<(f64, f64)> {
+        let inv = ray.d.recip();
+        let a = (self.lo - ray.o) * inv;
+        let b = (self.hi - ray.o) * inv;
+        // NaN (0·∞ when the origin lies on a slab of a ray parallel to it) must not
+        // shrink the range: f64::max/min ignore a NaN operand.
+        let near = a.min(b);
+        let far = a.max(b);
+        let lo = t0.max(near.x).max(near.y).max(near.z);
+        let hi = t1.min(far.x).min(far.y).min(far.z);
+        (lo <= hi).then_some((lo, hi))
+    }
+}

@@ -1,0 +1,1 @@
+//! Light transport on the CPU (being written).
