@@ -1,1 +1,90 @@
-//! (being written)
+//! Bounding boxes of {F ≥ 0} for any expression, by interval octree refinement.
+//!
+//! A cell where the interval of F is wholly negative holds no part of the solid and is
+//! dropped; the others are split until a depth limit, and the union of what remains is a
+//! box guaranteed (up to the search domain) to hold the solid. The search is repeated
+//! inside the box it found, which tightens it quickly for compact models.
+
+use crate::expr::Expr;
+use crate::interval::Interval;
+use crate::ray::Aabb;
+use glam::DVec3;
+
+/// The box searched when a model declares none: HyperFun and Fidget models live well
+/// inside it; anything that reaches its faces is clipped to it.
+pub const DEFAULT_DOMAIN: f64 = 100.0;
+
+/// A box holding every point of `domain` where F ≥ 0 (empty if there is none).
+pub fn expr_bounds(expr: &Expr, domain: Aabb) -> Aabb {
+    let mut scratch = Vec::with_capacity(expr.len());
+    let mut b = domain;
+    // Each pass searches the previous result; stop when it no longer shrinks.
+    for _ in 0..8 {
+        let mut out = Aabb::EMPTY;
+        refine(expr, b, 0, &mut out, &mut scratch);
+        if out.is_empty() {
+            return out;
+        }
+        let shrunk = out.extent().max_element() < 0.9 * b.extent().max_element();
+        b = out;
+        if !shrunk {
+            break;
+        }
+    }
+    b
+}
+
+const MAX_DEPTH: u32 = 6;
+
+fn refine(expr: &Expr, cell: Aabb, depth: u32, out: &mut Aabb, scratch: &mut Vec<Interval>) {
+    // Cells already inside the result cannot grow it.
+    if out.lo.cmple(cell.lo).all() && out.hi.cmpge(cell.hi).all() {
+        return;
+    }
+    let i = |k: usize| Interval::new(cell.lo[k], cell.hi[k]);
+    let v = expr.eval_with(i(0), i(1), i(2), scratch);
+    if v.hi < 0.0 {
+        return;
+    }
+    if depth == MAX_DEPTH || v.lo >= 0.0 {
+        *out = out.union(&cell);
+        return;
+    }
+    let c = cell.center();
+    for k in 0..8 {
+        let pick = |bit: usize, axis: usize| {
+            if k >> bit & 1 == 0 {
+                (cell.lo[axis], c[axis])
+            } else {
+                (c[axis], cell.hi[axis])
+            }
+        };
+        let (x, y, z) = (pick(0, 0), pick(1, 1), pick(2, 2));
+        let sub = Aabb::new(DVec3::new(x.0, y.0, z.0), DVec3::new(x.1, y.1, z.1));
+        refine(expr, sub, depth + 1, out, scratch);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::Tree;
+
+    #[test]
+    fn ball_bounds_are_tight_and_conservative() {
+        let (x, y, z) = (Tree::x(), Tree::y(), Tree::z());
+        let ball = 0.25 - ((x - 1.0).square() + (y + 2.0).square() + z.square());
+        let d = Aabb::new(DVec3::splat(-DEFAULT_DOMAIN), DVec3::splat(DEFAULT_DOMAIN));
+        let b = expr_bounds(&Expr::new(&ball), d);
+        let want = Aabb::new(DVec3::new(0.5, -2.5, -0.5), DVec3::new(1.5, -1.5, 0.5));
+        assert!(b.lo.cmple(want.lo).all() && b.hi.cmpge(want.hi).all(), "{b:?}");
+        assert!((b.extent() - want.extent()).max_element() < 0.1, "{b:?}");
+    }
+
+    #[test]
+    fn nothing_inside_gives_empty() {
+        let f = -1.0 - Tree::x().square();
+        let d = Aabb::new(DVec3::splat(-1.0), DVec3::splat(1.0));
+        assert!(expr_bounds(&Expr::new(&f), d).is_empty());
+    }
+}
