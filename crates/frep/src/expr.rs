@@ -26,6 +26,17 @@ pub enum Node {
     PowI(u32, i32),
 }
 
+/// Which operand of a min/max node decides its value over a box.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Choice {
+    /// The first operand, everywhere in the box.
+    Left,
+    /// The second operand, everywhere in the box.
+    Right,
+    /// Either, depending on the point.
+    Both,
+}
+
 /// A compiled, deduplicated expression of x, y, z (see the module docs).
 #[derive(Clone, Debug)]
 pub struct Expr {
@@ -299,6 +310,83 @@ impl Expr {
         *scratch.last().expect("an expression has a root")
     }
 
+    /// Interval evaluation that also records, for every min/max node, which operand
+    /// decides the result over the whole box (Keeter 2020, "Massively Parallel Rendering
+    /// of Complex Closed-Form Implicit Surfaces", §3: tape simplification). `choices`
+    /// gets one entry per node.
+    pub fn eval_interval_choices(
+        &self,
+        x: Interval,
+        y: Interval,
+        z: Interval,
+        scratch: &mut Vec<Interval>,
+        choices: &mut Vec<Choice>,
+    ) -> Interval {
+        scratch.clear();
+        choices.clear();
+        for n in &self.nodes {
+            let mut choice = Choice::Both;
+            let v = match *n {
+                Node::Binary(op @ (BinaryOp::Min | BinaryOp::Max), a, b) => {
+                    let (u, w) = (scratch[a as usize], scratch[b as usize]);
+                    let a_low = u.hi <= w.lo;
+                    let b_low = w.hi <= u.lo;
+                    choice = match (op, a_low, b_low) {
+                        (BinaryOp::Min, true, _) | (BinaryOp::Max, _, true) => Choice::Left,
+                        (BinaryOp::Min, _, true) | (BinaryOp::Max, true, _) => Choice::Right,
+                        _ => Choice::Both,
+                    };
+                    match choice {
+                        Choice::Left => u,
+                        Choice::Right => w,
+                        Choice::Both => apply_binary(op, u, w),
+                    }
+                }
+                Node::Const(b) => Interval::point(f64::from_bits(b)),
+                Node::Var(Var::X) => x,
+                Node::Var(Var::Y) => y,
+                Node::Var(Var::Z) => z,
+                Node::Unary(op, a) => apply_unary(op, scratch[a as usize]),
+                Node::Binary(op, a, b) => apply_binary(op, scratch[a as usize], scratch[b as usize]),
+                Node::PowI(a, k) => scratch[a as usize].powi(k),
+            };
+            scratch.push(v);
+            choices.push(choice);
+        }
+        *scratch.last().expect("an expression has a root")
+    }
+
+    /// The expression with every decided min/max replaced by its deciding operand and
+    /// what no longer feeds the root dropped. Over the box the choices were recorded on,
+    /// the result has exactly the same values as `self`. None when nothing was decided.
+    pub fn simplify(&self, choices: &[Choice]) -> Option<Expr> {
+        if !choices.iter().any(|c| *c != Choice::Both) {
+            return None;
+        }
+        let mut remap: Vec<u32> = Vec::with_capacity(self.nodes.len());
+        let mut out: Vec<Node> = Vec::with_capacity(self.nodes.len());
+        for (n, c) in self.nodes.iter().zip(choices) {
+            let id = match (*n, c) {
+                (Node::Binary(_, a, _), Choice::Left) => remap[a as usize],
+                (Node::Binary(_, _, b), Choice::Right) => remap[b as usize],
+                (n, _) => {
+                    out.push(match n {
+                        Node::Unary(op, a) => Node::Unary(op, remap[a as usize]),
+                        Node::PowI(a, k) => Node::PowI(remap[a as usize], k),
+                        Node::Binary(op, a, b) => {
+                            Node::Binary(op, remap[a as usize], remap[b as usize])
+                        }
+                        n => n,
+                    });
+                    out.len() as u32 - 1
+                }
+            };
+            remap.push(id);
+        }
+        let root = *remap.last().expect("an expression has a root");
+        Some(Self::compact(out, root))
+    }
+
     /// F at a point, in f64.
     pub fn eval(&self, p: [f64; 3]) -> f64 {
         self.eval_with(p[0], p[1], p[2], &mut Vec::with_capacity(self.len()))
@@ -364,6 +452,23 @@ mod tests {
         let p = [0.3, -0.7, 0.2];
         assert_eq!(e.eval(p), e2.eval(p));
         assert!((e.eval_f32([0.3, -0.7, 0.2]) as f64 - e.eval(p)).abs() < 1e-6);
+    }
+
+    #[test]
+    fn simplify_keeps_values_inside_the_box() {
+        let (x, y) = (Tree::x(), Tree::y());
+        // min(x, 5 + y²) over x ∈ [-1, 1]: always x.  max(that, y − 10): always the min.
+        let t = x.min(&(5.0 + y.square())).max(&(&y - 10.0)) + x.sin();
+        let e = Expr::new(&t);
+        let (mut s, mut c) = (vec![], vec![]);
+        let b = Interval::new(-1.0, 1.0);
+        e.eval_interval_choices(b, b, b, &mut s, &mut c);
+        let simple = e.simplify(&c).expect("both choices are decided");
+        assert!(simple.len() < e.len(), "{} vs {}", simple.len(), e.len());
+        for i in 0..50 {
+            let p = [-1.0 + i as f64 * 0.04, 0.3 - i as f64 * 0.01, 0.0];
+            assert_eq!(simple.eval(p), e.eval(p));
+        }
     }
 
     #[test]

@@ -9,12 +9,13 @@
 //! ends: only a feature that enters and leaves within `eps` along the ray can be missed.
 
 use crate::dual::Dual;
-use crate::expr::Expr;
+use crate::expr::{Choice, Expr};
 use crate::interval::Interval;
 use crate::ray::{Aabb, Ray};
 use crate::surface::Surface;
 use glam::DVec3;
 use std::cell::RefCell;
+use std::sync::Arc;
 
 /// Relative resolution along a ray: segments shorter than this times the bounds'
 /// diagonal are decided by their end signs.
@@ -23,7 +24,7 @@ pub const RESOLUTION: f64 = 1e-7;
 /// An expression solid ready for ray queries.
 #[derive(Clone, Debug)]
 pub struct ExprSurface {
-    expr: Expr,
+    expr: Arc<Expr>,
     bounds: Aabb,
     eps: f64,
 }
@@ -44,7 +45,7 @@ impl ExprSurface {
             1.0
         };
         Self {
-            expr,
+            expr: Arc::new(expr),
             bounds,
             eps: RESOLUTION * diag.max(1e-12),
         }
@@ -55,36 +56,39 @@ impl ExprSurface {
         &self.expr
     }
 
-    /// Whether p is inside (F ≥ 0; NaN counts as outside).
+    /// Whether the point at t is inside (F ≥ 0; NaN counts as outside), by `tape`.
     #[inline]
-    fn inside_at(&self, ray: &Ray, t: f64) -> bool {
-        self.value(ray.at(t)) >= 0.0
+    fn inside_at(tape: &Expr, ray: &Ray, t: f64) -> bool {
+        let p = ray.at(t);
+        SCRATCH_F.with_borrow_mut(|s| tape.eval_with(p.x, p.y, p.z, s)) >= 0.0
     }
 
-    /// F and dF/dt over the segment [t0, t1].
-    fn segment(&self, ray: &Ray, t0: f64, t1: f64, with_slope: bool) -> (Interval, Interval) {
+    /// F over the segment [t0, t1] by `tape`, recording min/max choices.
+    fn segment(tape: &Expr, ray: &Ray, t0: f64, t1: f64, choices: &mut Vec<Choice>) -> Interval {
         let t = Interval::new(t0, t1);
-        let coord = |k: usize| Interval::point(ray.o[k]) + t * Interval::point(ray.d[k]);
-        if !with_slope {
-            let v = SCRATCH_I.with_borrow_mut(|s| {
-                self.expr.eval_with(coord(0), coord(1), coord(2), s)
-            });
-            return (v, Interval::ENTIRE);
-        }
-        let dual = |k: usize| Dual::new(coord(k), [Interval::point(ray.d[k])]);
-        let v = SCRATCH_D.with_borrow_mut(|s| self.expr.eval_with(dual(0), dual(1), dual(2), s));
-        (v.v, v.d[0])
+        let c = |k: usize| Interval::point(ray.o[k]) + t * Interval::point(ray.d[k]);
+        SCRATCH_I.with_borrow_mut(|s| tape.eval_interval_choices(c(0), c(1), c(2), s, choices))
+    }
+
+    /// dF/dt over the segment [t0, t1] by `tape`.
+    fn slope(tape: &Expr, ray: &Ray, t0: f64, t1: f64) -> Interval {
+        let t = Interval::new(t0, t1);
+        let c = |k: usize| {
+            let v = Interval::point(ray.o[k]) + t * Interval::point(ray.d[k]);
+            Dual::new(v, [Interval::point(ray.d[k])])
+        };
+        SCRATCH_D.with_borrow_mut(|s| tape.eval_with(c(0), c(1), c(2), s)).d[0]
     }
 
     /// Bisects [a, b], where the inside predicate differs at the ends, down to rounding;
     /// returns the first t known to be on the far side of the crossing.
-    fn bisect(&self, ray: &Ray, mut a: f64, mut b: f64, inside_a: bool) -> f64 {
+    fn bisect(tape: &Expr, ray: &Ray, mut a: f64, mut b: f64, inside_a: bool) -> f64 {
         for _ in 0..200 {
             let m = 0.5 * (a + b);
             if m <= a || m >= b {
                 break;
             }
-            if self.inside_at(ray, m) == inside_a {
+            if Self::inside_at(tape, ray, m) == inside_a {
                 a = m;
             } else {
                 b = m;
@@ -93,6 +97,9 @@ impl ExprSurface {
         b
     }
 }
+
+/// Expressions shorter than this are not worth simplifying per segment.
+const SIMPLIFY_MIN_LEN: usize = 24;
 
 impl Surface for ExprSurface {
     fn value(&self, p: DVec3) -> f64 {
@@ -114,30 +121,37 @@ impl Surface for ExprSurface {
             return None;
         }
         let eps_t = self.eps / ray.d.length().max(f64::MIN_POSITIVE);
-        let mut stack = vec![(t0, t1)];
-        while let Some((a, b)) = stack.pop() {
-            let (v, _) = self.segment(ray, a, b, false);
+        let root = self.expr.clone();
+        let mut choices = Vec::new();
+        let mut stack = vec![(t0, t1, root)];
+        while let Some((a, b, tape)) = stack.pop() {
+            let v = Self::segment(&tape, ray, a, b, &mut choices);
             if v.lo > 0.0 || v.hi < 0.0 {
                 continue;
             }
-            let (ia, ib) = (self.inside_at(ray, a), self.inside_at(ray, b));
+            let (ia, ib) = (Self::inside_at(&tape, ray, a), Self::inside_at(&tape, ray, b));
             if b - a <= eps_t {
                 if ia != ib {
-                    return Some(self.bisect(ray, a, b, ia));
+                    return Some(Self::bisect(&tape, ray, a, b, ia));
                 }
                 continue;
             }
-            let (_, slope) = self.segment(ray, a, b, true);
+            let slope = Self::slope(&tape, ray, a, b);
             if slope.lo > 0.0 || slope.hi < 0.0 {
                 // Monotonic: at most one crossing, present iff the end signs differ.
                 if ia != ib {
-                    return Some(self.bisect(ray, a, b, ia));
+                    return Some(Self::bisect(&tape, ray, a, b, ia));
                 }
                 continue;
             }
+            // Both halves lie in this segment, so its min/max choices hold there too.
+            let tape = match tape.len() >= SIMPLIFY_MIN_LEN {
+                true => tape.simplify(&choices).map(Arc::new).unwrap_or(tape),
+                false => tape,
+            };
             let m = 0.5 * (a + b);
-            stack.push((m, b));
-            stack.push((a, m));
+            stack.push((m, b, tape.clone()));
+            stack.push((a, m, tape));
         }
         None
     }
@@ -168,7 +182,7 @@ mod tests {
             let t = t0 + (t1 - t0) * k as f64 / n as f64;
             let cur = inside(t);
             if cur != prev {
-                return Some(s.bisect(ray, t0 + (t1 - t0) * (k - 1) as f64 / n as f64, t, prev));
+                return Some(ExprSurface::bisect(&s.expr, ray, t0 + (t1 - t0) * (k - 1) as f64 / n as f64, t, prev));
             }
             prev = cur;
         }

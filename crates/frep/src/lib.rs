@@ -37,7 +37,7 @@ pub mod transform;
 pub mod tree;
 
 pub use dual::Dual;
-pub use expr::{Expr, Node};
+pub use expr::{Choice, Expr, Node};
 pub use interval::Interval;
 pub use interval_trace::ExprSurface;
 pub use ray::{Aabb, Ray};
