@@ -310,18 +310,18 @@ impl Expr {
         *scratch.last().expect("an expression has a root")
     }
 
-    /// Interval evaluation that also records, for every min/max node, which operand
-    /// decides the result over the whole box (Keeter 2020, "Massively Parallel Rendering
-    /// of Complex Closed-Form Implicit Surfaces", §3: tape simplification). `choices`
-    /// gets one entry per node.
-    pub fn eval_interval_choices(
+    /// Evaluation over a box (intervals, or duals of intervals) that also records, for
+    /// every min/max node, which operand decides the result over the whole box (Keeter
+    /// 2020, "Massively Parallel Rendering of Complex Closed-Form Implicit Surfaces",
+    /// §3: tape simplification). `choices` gets one entry per node.
+    pub fn eval_choices<S: Scalar>(
         &self,
-        x: Interval,
-        y: Interval,
-        z: Interval,
-        scratch: &mut Vec<Interval>,
+        x: S,
+        y: S,
+        z: S,
+        scratch: &mut Vec<S>,
         choices: &mut Vec<Choice>,
-    ) -> Interval {
+    ) -> S {
         scratch.clear();
         choices.clear();
         for n in &self.nodes {
@@ -329,8 +329,8 @@ impl Expr {
             let v = match *n {
                 Node::Binary(op @ (BinaryOp::Min | BinaryOp::Max), a, b) => {
                     let (u, w) = (scratch[a as usize], scratch[b as usize]);
-                    let a_low = u.hi <= w.lo;
-                    let b_low = w.hi <= u.lo;
+                    let a_low = u.less(w) == Some(true);
+                    let b_low = w.less(u) == Some(true);
                     choice = match (op, a_low, b_low) {
                         (BinaryOp::Min, true, _) | (BinaryOp::Max, _, true) => Choice::Left,
                         (BinaryOp::Min, _, true) | (BinaryOp::Max, true, _) => Choice::Right,
@@ -342,7 +342,7 @@ impl Expr {
                         Choice::Both => apply_binary(op, u, w),
                     }
                 }
-                Node::Const(b) => Interval::point(f64::from_bits(b)),
+                Node::Const(b) => S::constant(f64::from_bits(b)),
                 Node::Var(Var::X) => x,
                 Node::Var(Var::Y) => y,
                 Node::Var(Var::Z) => z,
@@ -462,7 +462,7 @@ mod tests {
         let e = Expr::new(&t);
         let (mut s, mut c) = (vec![], vec![]);
         let b = Interval::new(-1.0, 1.0);
-        e.eval_interval_choices(b, b, b, &mut s, &mut c);
+        e.eval_choices(b, b, b, &mut s, &mut c);
         let simple = e.simplify(&c).expect("both choices are decided");
         assert!(simple.len() < e.len(), "{} vs {}", simple.len(), e.len());
         for i in 0..50 {
