@@ -6,6 +6,7 @@
 //! name table, so a 7,866-line tape (prospero.vm) loads without recursion.
 
 use super::{Model, ReadError};
+use crate::ray::Aabb;
 use crate::shape::Shape;
 use crate::tree::{BinaryOp, Tree, UnaryOp};
 use std::collections::HashMap;
@@ -139,12 +140,24 @@ pub(crate) fn read(text: &str, file: &str) -> Result<Model, ReadError> {
             "expected at least one instruction, found none",
         )
     })?;
+    // Fidget renders the region [-1, 1]³ and its models are written for it; some
+    // (colonnade's ground) extend beyond it, so it is their declared domain.
+    let domain = Some(VM_DOMAIN);
     Ok(Model {
         name: None,
-        shape: Shape::function(-out),
-        domain: None,
+        shape: Shape::Function {
+            tree: -out,
+            domain,
+        },
+        domain,
     })
 }
+
+/// The region Fidget renders, [-1, 1]³: the domain of every `.vm` model.
+pub const VM_DOMAIN: Aabb = Aabb {
+    lo: glam::DVec3::splat(-1.0),
+    hi: glam::DVec3::splat(1.0),
+};
 
 /// The whitespace-separated words of a line with their 1-based character columns.
 fn split_words(code: &str) -> Vec<(usize, &str)> {
