@@ -34,6 +34,7 @@ thread_local! {
     static SCRATCH_D: RefCell<Vec<Dual<Interval, 1>>> = const { RefCell::new(Vec::new()) };
     static SCRATCH_F: RefCell<Vec<f64>> = const { RefCell::new(Vec::new()) };
     static SCRATCH_G: RefCell<Vec<Dual<f64, 3>>> = const { RefCell::new(Vec::new()) };
+    static SCRATCH_T: RefCell<Vec<Dual<f64, 1>>> = const { RefCell::new(Vec::new()) };
 }
 
 impl ExprSurface {
@@ -86,18 +87,32 @@ impl ExprSurface {
         SCRATCH_F.with_borrow_mut(|s| tape.eval_with(p.x, p.y, p.z, s))
     }
 
-    /// Bisects [a, b], where the inside predicate differs at the ends, down to rounding;
-    /// returns the first t known to be on the far side of the crossing.
-    fn bisect(tape: &Expr, ray: &Ray, mut a: f64, mut b: f64, inside_a: bool) -> f64 {
-        for _ in 0..200 {
-            let m = 0.5 * (a + b);
-            if m <= a || m >= b {
-                break;
-            }
-            if Self::inside_at(tape, ray, m) == inside_a {
-                a = m;
+    /// Finds the crossing in [a, b], where the inside predicate differs at the ends:
+    /// safeguarded Newton on F(t) (a Newton step that leaves the bracket becomes a
+    /// bisection), stopping when the bracket or the step is below `tol`.
+    fn refine(tape: &Expr, ray: &Ray, mut a: f64, mut b: f64, inside_a: bool, tol: f64) -> f64 {
+        let mut x = 0.5 * (a + b);
+        for _ in 0..100 {
+            let p = ray.at(x);
+            let c = |k: usize| Dual::<f64, 1>::new(p[k], [ray.d[k]]);
+            let r = SCRATCH_T.with_borrow_mut(|s| tape.eval_with(c(0), c(1), c(2), s));
+            if (r.v >= 0.0) == inside_a {
+                a = x;
             } else {
-                b = m;
+                b = x;
+            }
+            if b - a <= tol {
+                return b;
+            }
+            let step = r.v / r.d[0];
+            let newton = x - step;
+            if step.is_finite() && newton > a && newton < b {
+                if step.abs() <= tol {
+                    return newton;
+                }
+                x = newton;
+            } else {
+                x = 0.5 * (a + b);
             }
         }
         b
@@ -127,6 +142,8 @@ impl Surface for ExprSurface {
             return None;
         }
         let eps_t = self.eps / ray.d.length().max(f64::MIN_POSITIVE);
+        // Crossings are located to 1e-5 of the resolution (1e-12 of the solid's size).
+        let tol = eps_t * 1e-5;
         let root = self.expr.clone();
         let mut choices = Vec::new();
         let ia = Self::inside_at(&root, ray, t0);
@@ -141,7 +158,7 @@ impl Surface for ExprSurface {
                 // Monotonic (at most one crossing) or below resolution: decided by the
                 // signs at the ends.
                 if ia != ib {
-                    return Some(Self::bisect(&tape, ray, a, b, ia));
+                    return Some(Self::refine(&tape, ray, a, b, ia, tol));
                 }
                 continue;
             }
@@ -191,7 +208,17 @@ mod tests {
             let t = t0 + (t1 - t0) * k as f64 / n as f64;
             let cur = inside(t);
             if cur != prev {
-                return Some(ExprSurface::bisect(&s.expr, ray, t0 + (t1 - t0) * (k - 1) as f64 / n as f64, t, prev));
+                // Plain bisection: the reference shares no code with the intersector.
+                let (mut a, mut b) = (t0 + (t1 - t0) * (k - 1) as f64 / n as f64, t);
+                for _ in 0..60 {
+                    let m = 0.5 * (a + b);
+                    if inside(m) == prev {
+                        a = m;
+                    } else {
+                        b = m;
+                    }
+                }
+                return Some(b);
             }
             prev = cur;
         }

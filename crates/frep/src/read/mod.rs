@@ -24,7 +24,7 @@ mod sym;
 mod vm;
 mod vm_write;
 
-pub use vm::VM_DOMAIN;
+pub use vm::{view_domain, VM_DOMAIN};
 pub use vm_write::write_vm;
 
 use crate::ray::Aabb;

@@ -140,9 +140,7 @@ pub(crate) fn read(text: &str, file: &str) -> Result<Model, ReadError> {
             "expected at least one instruction, found none",
         )
     })?;
-    // Fidget renders the region [-1, 1]³ and its models are written for it; some
-    // (colonnade's ground) extend beyond it, so it is their declared domain.
-    let domain = Some(VM_DOMAIN);
+    let domain = Some(view_domain(text));
     Ok(Model {
         name: None,
         shape: Shape::Function {
@@ -153,11 +151,32 @@ pub(crate) fn read(text: &str, file: &str) -> Result<Model, ReadError> {
     })
 }
 
-/// The region Fidget renders, [-1, 1]³: the domain of every `.vm` model.
+/// The region Fidget renders by default, [-1, 1]³.
 pub const VM_DOMAIN: Aabb = Aabb {
     lo: glam::DVec3::splat(-1.0),
     hi: glam::DVec3::splat(1.0),
 };
+
+/// The region a `.vm` model is meant to be seen in: Fidget's view [-1, 1]³, divided by
+/// the `--scale S` of a "Recommended settings" comment when the file has one (e.g.
+/// tanglecube.vm's `--scale 0.222` shows ±4.5). Some models (colonnade's ground)
+/// extend beyond it; it is their declared domain.
+pub fn view_domain(text: &str) -> Aabb {
+    let scale = text
+        .lines()
+        .filter_map(|l| l.trim_start().strip_prefix('#'))
+        .find_map(|c| {
+            let mut words = c.split_whitespace();
+            words.find(|w| *w == "--scale")?;
+            words.next()?.parse::<f64>().ok()
+        })
+        .filter(|s| s.is_finite() && *s > 0.0)
+        .unwrap_or(1.0);
+    Aabb {
+        lo: VM_DOMAIN.lo / scale,
+        hi: VM_DOMAIN.hi / scale,
+    }
+}
 
 /// The whitespace-separated words of a line with their 1-based character columns.
 fn split_words(code: &str) -> Vec<(usize, &str)> {
