@@ -1,0 +1,97 @@
+//! A perspective pinhole camera (pbrt-v4 §5.2) with a box pixel filter.
+
+use frep::Ray;
+use glam::{DVec2, DVec3};
+
+/// A perspective camera looking from `eye` toward a target, with a vertical field of
+/// view; pixel (0, 0) is the top-left corner of the image.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Camera {
+    /// Position of the pinhole.
+    pub eye: DVec3,
+    forward: DVec3,
+    right: DVec3,
+    up: DVec3,
+    tan_half_fov: f64,
+    /// Image width in pixels.
+    pub width: u32,
+    /// Image height in pixels.
+    pub height: u32,
+}
+
+impl Camera {
+    /// A camera at `eye` looking at `target`, `up` giving the image's vertical,
+    /// `vfov_degrees` the full vertical field of view.
+    pub fn look_at(
+        eye: DVec3,
+        target: DVec3,
+        up: DVec3,
+        vfov_degrees: f64,
+        width: u32,
+        height: u32,
+    ) -> Self {
+        assert!(width > 0 && height > 0, "empty image");
+        assert!(vfov_degrees > 0.0 && vfov_degrees < 180.0, "field of view");
+        let forward = (target - eye).normalize();
+        let right = forward.cross(up).normalize();
+        assert!(right.is_finite(), "up is parallel to the view direction");
+        let up = right.cross(forward);
+        Self {
+            eye,
+            forward,
+            right,
+            up,
+            tan_half_fov: (vfov_degrees.to_radians() / 2.0).tan(),
+            width,
+            height,
+        }
+    }
+    /// Unit view direction.
+    pub fn forward(&self) -> DVec3 {
+        self.forward
+    }
+    /// The ray through pixel (x, y) at sub-pixel `offset` ∈ [0,1)² (box filter:
+    /// offsets uniform over the pixel), with a unit direction.
+    pub fn ray(&self, x: u32, y: u32, offset: DVec2) -> Ray {
+        let aspect = self.width as f64 / self.height as f64;
+        let sx =
+            (2.0 * (x as f64 + offset.x) / self.width as f64 - 1.0) * self.tan_half_fov * aspect;
+        let sy = (1.0 - 2.0 * (y as f64 + offset.y) / self.height as f64) * self.tan_half_fov;
+        Ray::new(
+            self.eye,
+            (self.forward + sx * self.right + sy * self.up).normalize(),
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rays_span_the_field_of_view() {
+        let c = Camera::look_at(
+            DVec3::new(0.0, -5.0, 1.0),
+            DVec3::new(0.0, 0.0, 1.0),
+            DVec3::Z,
+            60.0,
+            200,
+            100,
+        );
+        let centre = c.ray(100, 50, DVec2::ZERO);
+        assert_eq!(centre.o, c.eye);
+        assert!((centre.d - DVec3::Y).length() < 1e-12);
+        // Top edge at +30° elevation, at image centre horizontally.
+        let top = c.ray(100, 0, DVec2::ZERO).d;
+        assert!((top.z.asin().to_degrees() - 30.0).abs() < 1e-9);
+        // Left edge: tan(h/2) = aspect · tan(30°); left is −x for a camera looking along +y, up +z.
+        let left = c.ray(0, 50, DVec2::ZERO).d;
+        let expect = (2.0 * 30f64.to_radians().tan()).atan();
+        assert!(left.x < 0.0 && ((-left.x / left.y).atan() - expect).abs() < 1e-9);
+        // Bottom-right corner at offset (1, 1) of the last pixel.
+        let br = c.ray(199, 99, DVec2::ONE).d;
+        assert!(br.x > 0.0 && br.z < 0.0);
+        assert!((br.z / br.y + 30f64.to_radians().tan()).abs() < 1e-9);
+        assert!((br.x / br.y - 2.0 * 30f64.to_radians().tan()).abs() < 1e-9);
+    }
+}

@@ -1,0 +1,303 @@
+//! Area lights with analytic shapes: sphere, parallelogram ("rect") and disk
+//! (pbrt-v4 §6.2, §6.5 and §12.2). Emission is uniform radiance `L` on the side of the
+//! outward normal (both sides when `two_sided`; spheres emit outward).
+
+use super::LightSample;
+use crate::color::Rgb;
+use crate::frame::Frame;
+use crate::warp::{safe_sqrt, spherical_direction, uniform_disk_concentric, uniform_sphere};
+use frep::Ray;
+use glam::{DVec2, DVec3};
+use std::f64::consts::PI;
+
+/// The geometry of an area light.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Shape {
+    /// A sphere.
+    Sphere {
+        /// Centre.
+        center: DVec3,
+        /// Radius.
+        radius: f64,
+    },
+    /// The parallelogram `corner + a·edge_u + b·edge_v`, a, b ∈ [0, 1]; normal along
+    /// edge_u × edge_v.
+    Rect {
+        /// One corner.
+        corner: DVec3,
+        /// First edge.
+        edge_u: DVec3,
+        /// Second edge.
+        edge_v: DVec3,
+    },
+    /// A disk.
+    Disk {
+        /// Centre.
+        center: DVec3,
+        /// Unit normal (the emitting side).
+        normal: DVec3,
+        /// Radius.
+        radius: f64,
+    },
+}
+
+/// A surface crossing of a ray with a light.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Crossing {
+    /// Ray parameter.
+    pub t: f64,
+    /// Outward unit normal there.
+    pub n: DVec3,
+}
+
+/// A shape with uniform emitted radiance.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AreaLight {
+    /// The emitting surface.
+    pub shape: Shape,
+    /// Emitted radiance.
+    pub radiance: Rgb,
+    /// Whether planar shapes emit on both sides.
+    pub two_sided: bool,
+}
+
+impl AreaLight {
+    /// A light of radiance `radiance` on `shape`, one-sided.
+    pub fn new(shape: Shape, radiance: Rgb) -> Self {
+        Self {
+            shape,
+            radiance,
+            two_sided: false,
+        }
+    }
+    /// Surface area.
+    pub fn area(&self) -> f64 {
+        match self.shape {
+            Shape::Sphere { radius, .. } => 4.0 * PI * radius * radius,
+            Shape::Rect { edge_u, edge_v, .. } => edge_u.cross(edge_v).length(),
+            Shape::Disk { radius, .. } => PI * radius * radius,
+        }
+    }
+    /// Emitted power Φ = π A L (twice that when two-sided).
+    pub fn power(&self) -> Rgb {
+        let sides = if self.two_sided && !matches!(self.shape, Shape::Sphere { .. }) {
+            2.0
+        } else {
+            1.0
+        };
+        self.radiance * (PI * self.area() * sides)
+    }
+    /// Radiance leaving a point of normal `n` in direction `w`.
+    pub fn emitted(&self, n: DVec3, w: DVec3) -> Rgb {
+        let c = n.dot(w);
+        if c > 0.0 || (self.two_sided && c < 0.0 && !matches!(self.shape, Shape::Sphere { .. })) {
+            self.radiance
+        } else {
+            Rgb::ZERO
+        }
+    }
+    /// Every crossing of the line `o + t d` (d unit) with t > 0, nearest first.
+    pub fn crossings(&self, o: DVec3, d: DVec3) -> ([Option<Crossing>; 2], usize) {
+        let mut out = [None, None];
+        let mut k = 0;
+        match self.shape {
+            Shape::Sphere { center, radius } => {
+                let oc = o - center;
+                let b = d.dot(oc);
+                let c = oc.length_squared() - radius * radius;
+                let disc = b * b - c;
+                if disc < 0.0 {
+                    return (out, 0);
+                }
+                let s = disc.sqrt();
+                // Stable roots: q = −(b + sign(b)·s), t = q and c/q.
+                let q = -(b + s.copysign(b));
+                let (mut t0, mut t1) = (q, if q != 0.0 { c / q } else { -b });
+                if t0 > t1 {
+                    std::mem::swap(&mut t0, &mut t1);
+                }
+                for t in [t0, t1] {
+                    if t > 0.0 {
+                        out[k] = Some(Crossing {
+                            t,
+                            n: (o + d * t - center) / radius,
+                        });
+                        k += 1;
+                    }
+                }
+            }
+            Shape::Rect {
+                corner,
+                edge_u,
+                edge_v,
+            } => {
+                let nn = edge_u.cross(edge_v);
+                let denom = d.dot(nn);
+                if denom != 0.0 {
+                    let t = (corner - o).dot(nn) / denom;
+                    let q = o + d * t - corner;
+                    let l2 = nn.length_squared();
+                    let a = q.cross(edge_v).dot(nn) / l2;
+                    let b = edge_u.cross(q).dot(nn) / l2;
+                    // Edges widened by 1e-12 so that points sampled on them are found.
+                    let inside = |x: f64| (-1e-12..=1.0 + 1e-12).contains(&x);
+                    if t > 0.0 && inside(a) && inside(b) {
+                        out[0] = Some(Crossing {
+                            t,
+                            n: nn / l2.sqrt(),
+                        });
+                        k = 1;
+                    }
+                }
+            }
+            Shape::Disk {
+                center,
+                normal,
+                radius,
+            } => {
+                let denom = d.dot(normal);
+                if denom != 0.0 {
+                    let t = (center - o).dot(normal) / denom;
+                    let r2 = radius * radius * (1.0 + 1e-12);
+                    if t > 0.0 && (o + d * t - center).length_squared() <= r2 {
+                        out[0] = Some(Crossing { t, n: normal });
+                        k = 1;
+                    }
+                }
+            }
+        }
+        (out, k)
+    }
+    /// The nearest crossing with t in (t_min, t_max), for a ray with a unit direction.
+    pub fn intersect(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<Crossing> {
+        let (c, k) = self.crossings(ray.o, ray.d);
+        c[..k]
+            .iter()
+            .flatten()
+            .find(|c| c.t > t_min && c.t < t_max)
+            .copied()
+    }
+    /// A point uniform over the surface, and its outward normal.
+    pub fn sample_point(&self, u: DVec2) -> (DVec3, DVec3) {
+        match self.shape {
+            Shape::Sphere { center, radius } => {
+                let n = uniform_sphere(u);
+                (center + radius * n, n)
+            }
+            Shape::Rect {
+                corner,
+                edge_u,
+                edge_v,
+            } => (
+                corner + u.x * edge_u + u.y * edge_v,
+                edge_u.cross(edge_v).normalize(),
+            ),
+            Shape::Disk {
+                center,
+                normal,
+                radius,
+            } => {
+                let f = Frame::from_z(normal);
+                let d = uniform_disk_concentric(u) * radius;
+                (center + d.x * f.s + d.y * f.t, normal)
+            }
+        }
+    }
+    /// The sample toward point `q` (normal `n`) from `p`, its pdf given by `pdf(wi)`.
+    fn toward(
+        &self,
+        p: DVec3,
+        q: DVec3,
+        n: DVec3,
+        pdf: impl FnOnce(DVec3) -> f64,
+    ) -> Option<LightSample> {
+        let v = q - p;
+        let dist = v.length();
+        if dist == 0.0 {
+            return None;
+        }
+        let wi = v / dist;
+        let pdf = pdf(wi);
+        if !(pdf > 0.0 && pdf.is_finite()) {
+            return None;
+        }
+        Some(LightSample {
+            wi,
+            dist,
+            radiance: self.emitted(n, -wi),
+            pdf,
+            delta: false,
+            light: None,
+        })
+    }
+    /// Uniform area sampling seen from `p`; the pdf (solid angle) is [`Self::pdf_area`],
+    /// which sums over every crossing of the direction with the shape.
+    pub fn sample_area(&self, p: DVec3, u: DVec2) -> Option<LightSample> {
+        let (q, n) = self.sample_point(u);
+        self.toward(p, q, n, |wi| self.pdf_area(p, wi))
+    }
+    /// Σ over crossings of t² / (A |cos θ_light|): the solid-angle density of
+    /// [`Self::sample_area`] at direction `wi` (unit).
+    pub fn pdf_area(&self, p: DVec3, wi: DVec3) -> f64 {
+        let (c, k) = self.crossings(p, wi);
+        let a = self.area();
+        c[..k]
+            .iter()
+            .flatten()
+            .map(|c| {
+                let cos = c.n.dot(wi).abs();
+                if cos > 0.0 {
+                    c.t * c.t / (a * cos)
+                } else {
+                    0.0
+                }
+            })
+            .sum()
+    }
+    /// The light's preferred sampling: the cone of directions subtended by a sphere
+    /// seen from outside (uniform in solid angle, pbrt-v4 §6.2.4); uniform area
+    /// otherwise.
+    pub fn sample_li(&self, p: DVec3, u: DVec2) -> Option<LightSample> {
+        let Shape::Sphere { center, radius } = self.shape else {
+            return self.sample_area(p, u);
+        };
+        let dc2 = p.distance_squared(center);
+        if dc2 <= radius * radius {
+            return self.sample_area(p, u);
+        }
+        let sin2_max = radius * radius / dc2;
+        // 1 − cos θ without cancellation: sin²θ / (1 + cos θ); likewise below.
+        let one_minus_cos_max = sin2_max / (1.0 + safe_sqrt(1.0 - sin2_max));
+        let w = u.x * one_minus_cos_max;
+        let (cos_t, sin2_t) = (1.0 - w, w * (2.0 - w));
+        // The point on the sphere along the sampled cone direction.
+        let cos_alpha = sin2_t / sin2_max.sqrt() + cos_t * safe_sqrt(1.0 - sin2_t / sin2_max);
+        let sin_alpha = safe_sqrt(1.0 - cos_alpha * cos_alpha);
+        let w = spherical_direction(sin_alpha, cos_alpha, 2.0 * PI * u.y);
+        let frame = Frame::from_z((center - p).normalize());
+        let n = frame.from_local(-w);
+        self.toward(p, center + radius * n, n, |_| {
+            1.0 / (2.0 * PI * one_minus_cos_max)
+        })
+    }
+    /// The solid-angle density of [`Self::sample_li`] at direction `wi` (unit).
+    pub fn pdf_li(&self, p: DVec3, wi: DVec3) -> f64 {
+        let Shape::Sphere { center, radius } = self.shape else {
+            return self.pdf_area(p, wi);
+        };
+        let dc2 = p.distance_squared(center);
+        if dc2 <= radius * radius {
+            return self.pdf_area(p, wi);
+        }
+        let sin2_max = radius * radius / dc2;
+        let one_minus_cos_max = sin2_max / (1.0 + safe_sqrt(1.0 - sin2_max));
+        // Inside the cone ⇔ the line meets the sphere: distance² from the centre ≤ r².
+        let pc = center - p;
+        let along = pc.dot(wi);
+        if along > 0.0 && (dc2 - along * along) <= radius * radius {
+            1.0 / (2.0 * PI * one_minus_cos_max)
+        } else {
+            0.0
+        }
+    }
+}

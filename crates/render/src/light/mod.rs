@@ -1,0 +1,218 @@
+//! Light sources (pbrt-v4 ch. 12) and the scene's collection of them.
+//!
+//! Area lights and the environment have pdfs in solid angle and take part in MIS;
+//! point and spot lights ([`DeltaLight`]) are sampled on their own. Every sampling
+//! routine here reports the density of the *direction* it produced, summed over every
+//! way the routine could have produced it (e.g. a sphere seen through another light),
+//! so that the pdfs integrate to 1 over the sphere of directions.
+
+mod area;
+mod delta;
+mod environment;
+
+pub use area::{AreaLight, Crossing, Shape};
+pub use delta::DeltaLight;
+pub use environment::{EnvMap, Environment};
+
+use crate::color::{luminance, Rgb};
+use crate::distribution::Distribution1D;
+use frep::Ray;
+use glam::{DVec2, DVec3};
+
+/// A direction toward a light, drawn from a shading point.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LightSample {
+    /// Unit direction from the shading point toward the light.
+    pub wi: DVec3,
+    /// Distance to the sampled point (infinite for the environment).
+    pub dist: f64,
+    /// Radiance leaving the sampled point toward the shading point (0 when it faces
+    /// away); for delta lights, I/d².
+    pub radiance: Rgb,
+    /// Solid-angle density of the direction (1 for delta lights).
+    pub pdf: f64,
+    /// Whether the light is a delta light.
+    pub delta: bool,
+    /// Index of the sampled area light (None: environment or delta light).
+    pub light: Option<usize>,
+}
+
+/// The nearest area light along a ray.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LightHit {
+    /// Index into [`Lights::area`].
+    pub light: usize,
+    /// Ray parameter.
+    pub t: f64,
+    /// Outward normal of the light there.
+    pub n: DVec3,
+    /// Radiance leaving the light toward the ray origin.
+    pub radiance: Rgb,
+}
+
+/// All lights of a scene, with the distributions used to choose among them.
+#[derive(Clone, Debug)]
+pub struct Lights {
+    area: Vec<AreaLight>,
+    delta: Vec<DeltaLight>,
+    environment: Option<Environment>,
+    /// Area lights then (last) the environment, ∝ luminance of power.
+    by_power: Option<Distribution1D>,
+    /// Area lights ∝ area.
+    by_area: Option<Distribution1D>,
+}
+
+impl Lights {
+    /// The lights of a scene whose geometry fits in a ball of radius `scene_radius`
+    /// (which sets the environment's power for selection).
+    pub fn new(
+        area: Vec<AreaLight>,
+        delta: Vec<DeltaLight>,
+        environment: Option<Environment>,
+        scene_radius: f64,
+    ) -> Self {
+        let mut power: Vec<f64> = area.iter().map(|l| luminance(l.power())).collect();
+        if let Some(e) = &environment {
+            power.push(luminance(e.power(scene_radius)));
+        }
+        let by_power = (!power.is_empty()).then(|| Distribution1D::new(&power));
+        let areas: Vec<f64> = area.iter().map(|l| l.area()).collect();
+        let by_area = (!areas.is_empty()).then(|| Distribution1D::new(&areas));
+        Self {
+            area,
+            delta,
+            environment,
+            by_power,
+            by_area,
+        }
+    }
+    /// The area lights.
+    pub fn area(&self) -> &[AreaLight] {
+        &self.area
+    }
+    /// The point and spot lights.
+    pub fn delta(&self) -> &[DeltaLight] {
+        &self.delta
+    }
+    /// The environment, if any.
+    pub fn environment(&self) -> Option<&Environment> {
+        self.environment.as_ref()
+    }
+    /// The nearest area light along `ray` (unit direction) with t in (t_min, t_max).
+    pub fn intersect(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<LightHit> {
+        let mut best: Option<LightHit> = None;
+        for (i, l) in self.area.iter().enumerate() {
+            let lim = best.map_or(t_max, |b| b.t);
+            if let Some(c) = l.intersect(ray, t_min, lim) {
+                best = Some(LightHit {
+                    light: i,
+                    t: c.t,
+                    n: c.n,
+                    radiance: l.emitted(c.n, -ray.d),
+                });
+            }
+        }
+        best
+    }
+    /// Radiance arriving at `ray.o` from direction `ray.d` when nothing but lights
+    /// lies in (t_min, t_max): the nearest area light, or the environment if the ray
+    /// escapes (t_max infinite).
+    pub fn radiance_along(&self, ray: &Ray, t_min: f64, t_max: f64) -> Rgb {
+        match self.intersect(ray, t_min, t_max) {
+            Some(h) => h.radiance,
+            None if t_max == f64::INFINITY => self.environment_radiance(ray.d),
+            None => Rgb::ZERO,
+        }
+    }
+    /// Radiance of the environment from direction `dir` (0 without one).
+    pub fn environment_radiance(&self, dir: DVec3) -> Rgb {
+        self.environment
+            .as_ref()
+            .map_or(Rgb::ZERO, |e| e.radiance(dir))
+    }
+    fn env_sample(&self, u: DVec2) -> Option<LightSample> {
+        let e = self.environment.as_ref()?;
+        let (wi, pdf) = e.sample(u)?;
+        Some(LightSample {
+            wi,
+            dist: f64::INFINITY,
+            radiance: e.radiance(wi),
+            pdf,
+            delta: false,
+            light: None,
+        })
+    }
+    /// Light sampling: a light (or the environment) chosen ∝ power with `uc`, then
+    /// its preferred sampling ([`AreaLight::sample_li`]); pdf = [`Self::pdf_by_power`].
+    pub fn sample_by_power(&self, p: DVec3, uc: f64, u: DVec2) -> Option<LightSample> {
+        let (i, _, _) = self.by_power.as_ref()?.sample_discrete(uc);
+        let mut s = if i == self.area.len() {
+            self.env_sample(u)?
+        } else {
+            LightSample {
+                light: Some(i),
+                ..self.area[i].sample_li(p, u)?
+            }
+        };
+        s.pdf = self.pdf_by_power(p, s.wi);
+        (s.pdf > 0.0).then_some(s)
+    }
+    /// Σ_lights P(light) · pdf_light(wi), over every light the direction meets.
+    pub fn pdf_by_power(&self, p: DVec3, wi: DVec3) -> f64 {
+        let Some(d) = &self.by_power else {
+            return 0.0;
+        };
+        let mut pdf: f64 = self
+            .area
+            .iter()
+            .enumerate()
+            .map(|(i, l)| {
+                let pm = d.pmf(i);
+                if pm > 0.0 {
+                    pm * l.pdf_li(p, wi)
+                } else {
+                    0.0
+                }
+            })
+            .sum();
+        if let Some(e) = &self.environment {
+            pdf += d.pmf(self.area.len()) * e.pdf(wi);
+        }
+        pdf
+    }
+    /// Uniform light-area sampling: an area light chosen ∝ area, then a point uniform
+    /// on it, i.e. a point uniform over the total emitting area; pdf =
+    /// [`Self::pdf_by_area`].
+    pub fn sample_by_area(&self, p: DVec3, uc: f64, u: DVec2) -> Option<LightSample> {
+        let (i, _, _) = self.by_area.as_ref()?.sample_discrete(uc);
+        let s = self.area[i].sample_area(p, u)?;
+        let pdf = self.pdf_by_area(p, s.wi);
+        (pdf > 0.0).then_some(LightSample {
+            pdf,
+            light: Some(i),
+            ..s
+        })
+    }
+    /// Σ_lights P(light) · pdf_area,light(wi).
+    pub fn pdf_by_area(&self, p: DVec3, wi: DVec3) -> f64 {
+        let Some(d) = &self.by_area else {
+            return 0.0;
+        };
+        self.area
+            .iter()
+            .enumerate()
+            .map(|(i, l)| d.pmf(i) * l.pdf_area(p, wi))
+            .sum()
+    }
+    /// Environment sampling (None without an environment).
+    pub fn sample_environment(&self, u: DVec2) -> Option<LightSample> {
+        self.env_sample(u)
+    }
+    /// The density of [`Self::sample_environment`].
+    pub fn pdf_environment(&self, wi: DVec3) -> f64 {
+        self.environment.as_ref().map_or(0.0, |e| e.pdf(wi))
+    }
+}
+
+#[cfg(test)]
+mod tests;

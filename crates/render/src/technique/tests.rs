@@ -1,0 +1,233 @@
+//! Every technique against its pdf, and irradiance from analytic configurations.
+
+use super::*;
+use crate::bsdf::{Bxdf, CoatTable, DiffuseBxdf, PlasticBxdf};
+use crate::color::Rgb;
+use crate::light::{AreaLight, EnvMap, Environment, Shape};
+use crate::sampler::Sampler;
+use crate::testutil::{sphere_chi2, SphereBins};
+use frep::Ray;
+use glam::DMat3;
+use std::f64::consts::PI;
+
+fn scene_lights() -> Lights {
+    let (w, h) = (32, 16);
+    let pixels = (0..w * h)
+        .map(|i| Rgb::splat(if i % w < 8 && i / w < 5 { 4.0 } else { 0.1 }))
+        .collect();
+    Lights::new(
+        vec![
+            AreaLight::new(
+                Shape::Sphere {
+                    center: DVec3::new(1.0, 0.5, 2.0),
+                    radius: 0.5,
+                },
+                Rgb::splat(5.0),
+            ),
+            AreaLight::new(
+                Shape::Rect {
+                    corner: DVec3::new(-2.0, -1.0, 1.5),
+                    edge_u: DVec3::new(0.0, 1.0, 0.0),
+                    edge_v: DVec3::new(1.0, 0.0, 0.0),
+                },
+                Rgb::splat(2.0),
+            ),
+            AreaLight::new(
+                Shape::Disk {
+                    center: DVec3::new(0.0, -1.0, 0.5),
+                    normal: DVec3::new(0.0, 1.0, 0.0),
+                    radius: 0.3,
+                },
+                Rgb::new(3.0, 1.0, 1.0),
+            ),
+        ],
+        vec![],
+        Some(Environment::Map(EnvMap::new(w, h, pixels, DMat3::IDENTITY))),
+        3.0,
+    )
+}
+
+/// Planar lights only, two of them overlapping as seen from the origin (so that the
+/// pdfs must sum over lights behind lights).
+fn planar_lights() -> Lights {
+    let rect = |z: f64, s: f64, l: f64| {
+        AreaLight::new(
+            Shape::Rect {
+                corner: DVec3::new(-s, -s, z),
+                edge_u: DVec3::new(0.0, 2.0 * s, 0.0),
+                edge_v: DVec3::new(2.0 * s, 0.0, 0.0),
+            },
+            Rgb::splat(l),
+        )
+    };
+    let disk = AreaLight::new(
+        Shape::Disk {
+            center: DVec3::new(1.5, 0.0, 0.5),
+            normal: DVec3::new(-1.0, 0.0, -0.2).normalize(),
+            radius: 0.4,
+        },
+        Rgb::ONE,
+    );
+    Lights::new(
+        vec![rect(1.0, 0.5, 2.0), rect(2.0, 1.5, 1.0), disk],
+        vec![],
+        None,
+        3.0,
+    )
+}
+
+/// Each technique's samples follow its pdf (chi-square over 32 × 64 cells, 300 000
+/// samples, significance 1e-3), its pdf integrates to the fraction of non-specular
+/// samples it yields (1 for the light, environment and cosine techniques; quadrature
+/// tolerance 3e-3 plus 4 binomial σ), and a sample's pdf equals pdf(wi). Scene A has
+/// a sphere, a rectangle, a disk and an environment map; light-area sampling, whose
+/// direction pdf is singular at a sphere's silhouette (see the light tests), is
+/// checked on scene B of overlapping planar lights, with light sampling.
+#[test]
+fn techniques_match_pdfs() {
+    let a = scene_lights();
+    let b = planar_lights();
+    let cases = [
+        (&a, Technique::Bsdf),
+        (&a, Technique::LightPower),
+        (&a, Technique::Environment),
+        (&a, Technique::CosineHemisphere),
+        (&b, Technique::LightArea),
+        (&b, Technique::LightPower),
+    ];
+    let coat = CoatTable::new(1.5, 0.2);
+    let bsdfs = [
+        Bsdf::new(
+            DVec3::Z,
+            Bxdf::Plastic(PlasticBxdf::new(Rgb::splat(0.5), &coat)),
+        ),
+        Bsdf::new(
+            DVec3::new(0.2, 0.1, 1.0).normalize(),
+            Bxdf::Diffuse(DiffuseBxdf { r: Rgb::ONE }),
+        ),
+    ];
+    let bins = SphereBins::new(32, 64);
+    let n = 300_000;
+    for bsdf in &bsdfs {
+        for (lights, t) in cases {
+            let ctx = ShadingPoint {
+                p: DVec3::new(0.1, 0.0, 0.0),
+                n: bsdf.frame.n,
+                wo: DVec3::new(0.3, -0.4, 0.8).normalize(),
+                bsdf,
+                lights,
+            };
+            let r = sphere_chi2(
+                &bins,
+                n,
+                31,
+                |u| {
+                    let s = t.sample(&ctx, u[0], DVec2::new(u[1], u[2]))?;
+                    if s.specular {
+                        return None;
+                    }
+                    let pdf = t.pdf(&ctx, s.wi);
+                    assert!(
+                        (s.pdf - pdf).abs() <= 1e-9 * pdf,
+                        "{}: {} vs {pdf}",
+                        t.name(),
+                        s.pdf
+                    );
+                    Some(s.wi)
+                },
+                |w| t.pdf(&ctx, w),
+            );
+            let tol = 4.0 * (r.valid * (1.0 - r.valid) / n as f64).sqrt() + 3e-3;
+            assert!(r.p_value > 1e-3, "{}: {r:?}", t.name());
+            assert!((r.mass - r.valid).abs() < tol, "{}: {r:?}", t.name());
+            if t != Technique::Bsdf {
+                assert_eq!(r.valid, 1.0, "{}", t.name());
+            }
+        }
+    }
+}
+
+/// Monte Carlo irradiance E = ∫ L cos θ dω at the origin (normal +z) with `n`
+/// samples of technique `t`: (mean, standard error).
+fn irradiance(lights: &Lights, t: Technique, n: u64, seed: u64) -> (f64, f64) {
+    let bsdf = Bsdf::new(DVec3::Z, Bxdf::Diffuse(DiffuseBxdf { r: Rgb::ONE }));
+    let ctx = ShadingPoint {
+        p: DVec3::ZERO,
+        n: DVec3::Z,
+        wo: DVec3::Z,
+        bsdf: &bsdf,
+        lights,
+    };
+    let s = Sampler::new(seed);
+    let (mut sum, mut sum2) = (0.0, 0.0);
+    for i in 0..n {
+        let st = s.stream(0, 0, i);
+        if let Some(x) = t.sample(&ctx, st.get(0), DVec2::new(st.get(1), st.get(2))) {
+            let l = lights.radiance_along(&Ray::new(ctx.p, x.wi), 0.0, f64::INFINITY);
+            let v = l.x * x.wi.z.max(0.0) / x.pdf;
+            sum += v;
+            sum2 += v * v;
+        }
+    }
+    let mean = sum / n as f64;
+    (mean, ((sum2 / n as f64 - mean * mean) / n as f64).sqrt())
+}
+
+/// Irradiance under a sphere light (E = π L sin²θ, θ the half-angle it subtends)
+/// and under a parallel rectangle centred above the point (E = π L F, F the form
+/// factor of a differential area to a parallel rectangle, sum of four corner terms
+/// F = (1/2π)[X/√(1+X²) atan(Y/√(1+X²)) + Y/√(1+Y²) atan(X/√(1+Y²))]), with light,
+/// light-area, BSDF and cosine sampling, 200 000 samples each: within 4 standard
+/// errors (two-sided confidence 99.99 %), standard errors below 1 % of E.
+#[test]
+fn irradiance_matches_analytic() {
+    let l = 3.0;
+    let sphere = Lights::new(
+        vec![AreaLight::new(
+            Shape::Sphere {
+                center: DVec3::new(0.0, 0.0, 2.0),
+                radius: 1.0,
+            },
+            Rgb::splat(l),
+        )],
+        vec![],
+        None,
+        3.0,
+    );
+    let e_sphere = PI * l * 0.25;
+    let (a, b, h) = (2.0, 1.0, 0.8);
+    let rect = Lights::new(
+        vec![AreaLight::new(
+            Shape::Rect {
+                corner: DVec3::new(-a / 2.0, -b / 2.0, h),
+                edge_u: DVec3::new(0.0, b, 0.0),
+                edge_v: DVec3::new(a, 0.0, 0.0),
+            },
+            Rgb::splat(l),
+        )],
+        vec![],
+        None,
+        3.0,
+    );
+    let corner = |x: f64, y: f64| {
+        let (x, y) = (x / h, y / h);
+        let (sx, sy) = ((1.0 + x * x).sqrt(), (1.0 + y * y).sqrt());
+        (x / sx * (y / sx).atan() + y / sy * (x / sy).atan()) / (2.0 * PI)
+    };
+    let e_rect = PI * l * 4.0 * corner(a / 2.0, b / 2.0);
+    for (name, lights, exact) in [("sphere", &sphere, e_sphere), ("rect", &rect, e_rect)] {
+        for t in [
+            Technique::LightPower,
+            Technique::LightArea,
+            Technique::Bsdf,
+            Technique::CosineHemisphere,
+        ] {
+            let (e, se) = irradiance(lights, t, 200_000, 77);
+            assert!(
+                (e - exact).abs() < 4.0 * se && se < 0.01 * exact,
+                "{name} {}: {e} ± {se} vs {exact}",
+                t.name()
+            );
+        }
+    }
+}

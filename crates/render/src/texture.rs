@@ -1,0 +1,107 @@
+//! Colour textures: constants and procedural checkers, usable for any colour parameter.
+
+use crate::color::Rgb;
+use glam::{DVec2, DVec3};
+
+/// Where a texture is evaluated: the hit point and surface coordinates.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct TexCoord {
+    /// The hit point (world space).
+    pub p: DVec3,
+    /// Surface parameters (0 where a surface has none, as for most FRep solids).
+    pub uv: DVec2,
+}
+
+/// The domain of a checker.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TextureSpace {
+    /// Solid (3-D) checker over the hit point: cubes of side 1/scale.
+    Point,
+    /// 2-D checker over (u, v): squares of side 1/scale.
+    Uv,
+}
+
+/// A colour that may vary over a surface.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Texture {
+    /// The same colour everywhere.
+    Constant(Rgb),
+    /// Alternating colours `a` and `b`, `scale` checks per unit length.
+    Checker {
+        /// Colour where the sum of the cell indices is even.
+        a: Rgb,
+        /// Colour where it is odd.
+        b: Rgb,
+        /// Checks per unit length.
+        scale: f64,
+        /// Point or uv domain.
+        space: TextureSpace,
+    },
+}
+
+impl From<Rgb> for Texture {
+    fn from(c: Rgb) -> Self {
+        Texture::Constant(c)
+    }
+}
+
+impl Texture {
+    /// The colour at `tc`.
+    pub fn eval(&self, tc: &TexCoord) -> Rgb {
+        match self {
+            Texture::Constant(c) => *c,
+            Texture::Checker { a, b, scale, space } => {
+                let cells = match space {
+                    TextureSpace::Point => (tc.p * *scale).floor().to_array().iter().sum::<f64>(),
+                    TextureSpace::Uv => (tc.uv * *scale).floor().to_array().iter().sum::<f64>(),
+                };
+                if cells.rem_euclid(2.0) < 0.5 {
+                    *a
+                } else {
+                    *b
+                }
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn checker_alternates() {
+        let (a, b) = (Rgb::ONE, Rgb::ZERO);
+        let t = Texture::Checker {
+            a,
+            b,
+            scale: 2.0,
+            space: TextureSpace::Point,
+        };
+        let at = |x, y, z| {
+            t.eval(&TexCoord {
+                p: DVec3::new(x, y, z),
+                uv: DVec2::ZERO,
+            })
+        };
+        assert_eq!(at(0.1, 0.1, 0.1), a);
+        assert_eq!(at(0.6, 0.1, 0.1), b);
+        assert_eq!(at(0.6, 0.6, 0.1), a);
+        assert_eq!(at(-0.1, 0.1, 0.1), b);
+        assert_eq!(at(-0.6, -0.1, 0.1), b);
+        assert_eq!(at(-0.6, 0.1, 0.1), a);
+        let u = Texture::Checker {
+            a,
+            b,
+            scale: 4.0,
+            space: TextureSpace::Uv,
+        };
+        let tc = |x, y| TexCoord {
+            p: DVec3::splat(0.1),
+            uv: DVec2::new(x, y),
+        };
+        assert_eq!(u.eval(&tc(0.1, 0.1)), a);
+        assert_eq!(u.eval(&tc(0.3, 0.1)), b);
+        assert_eq!(Texture::from(Rgb::X).eval(&tc(5.0, 5.0)), Rgb::X);
+    }
+}
