@@ -77,7 +77,10 @@ mod tests {
         let d = Aabb::new(DVec3::splat(-DEFAULT_DOMAIN), DVec3::splat(DEFAULT_DOMAIN));
         let b = expr_bounds(&Expr::new(&ball), d);
         let want = Aabb::new(DVec3::new(0.5, -2.5, -0.5), DVec3::new(1.5, -1.5, 0.5));
-        assert!(b.lo.cmple(want.lo).all() && b.hi.cmpge(want.hi).all(), "{b:?}");
+        assert!(
+            b.lo.cmple(want.lo).all() && b.hi.cmpge(want.hi).all(),
+            "{b:?}"
+        );
         assert!((b.extent() - want.extent()).max_element() < 0.1, "{b:?}");
     }
 

@@ -87,7 +87,10 @@ mod tests {
     fn set_operations_agree_in_sign() {
         let (a, b) = (ball(-0.3, 1.0), ball(0.4, 0.8));
         let ops: [(Tree, Vec<Tree>); 3] = [
-            (union(&a, &b), vec![r_union(&a, &b, 0.0), r_union(&a, &b, 0.5)]),
+            (
+                union(&a, &b),
+                vec![r_union(&a, &b, 0.0), r_union(&a, &b, 0.5)],
+            ),
             (
                 intersection(&a, &b),
                 vec![r_intersection(&a, &b, 0.0), r_intersection(&a, &b, -0.3)],

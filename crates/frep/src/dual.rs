@@ -141,10 +141,7 @@ impl<S: Scalar, const N: usize> Scalar for Dual<S, N> {
         match n {
             0 => Self::constant(1.0),
             1 => self,
-            _ => self.chain(
-                self.v.powi(n),
-                S::constant(n as f64) * self.v.powi(n - 1),
-            ),
+            _ => self.chain(self.v.powi(n), S::constant(n as f64) * self.v.powi(n - 1)),
         }
     }
     fn exp(self) -> Self {

@@ -85,16 +85,15 @@ impl Builder {
         if let (Some(x), Some(y)) = (ca, cb) {
             return self.constant(eval_binary(op, x, y));
         }
+        // Identities (a float pattern compares with ==, so 0.0 also matches −0.0).
         match (op, ca, cb) {
-            (BinaryOp::Add, Some(z), _) if z == 0.0 => return b,
-            (BinaryOp::Add | BinaryOp::Sub, _, Some(z)) if z == 0.0 => return a,
-            (BinaryOp::Sub, Some(z), _) if z == 0.0 => return self.unary(UnaryOp::Neg, b),
-            (BinaryOp::Mul, Some(o), _) if o == 1.0 => return b,
-            (BinaryOp::Mul | BinaryOp::Div, _, Some(o)) if o == 1.0 => return a,
-            (BinaryOp::Mul, Some(m), _) if m == -1.0 => return self.unary(UnaryOp::Neg, b),
-            (BinaryOp::Mul | BinaryOp::Div, _, Some(m)) if m == -1.0 => {
-                return self.unary(UnaryOp::Neg, a)
-            }
+            (BinaryOp::Add, Some(0.0), _) => return b,
+            (BinaryOp::Add | BinaryOp::Sub, _, Some(0.0)) => return a,
+            (BinaryOp::Sub, Some(0.0), _) => return self.unary(UnaryOp::Neg, b),
+            (BinaryOp::Mul, Some(1.0), _) => return b,
+            (BinaryOp::Mul | BinaryOp::Div, _, Some(1.0)) => return a,
+            (BinaryOp::Mul, Some(-1.0), _) => return self.unary(UnaryOp::Neg, b),
+            (BinaryOp::Mul | BinaryOp::Div, _, Some(-1.0)) => return self.unary(UnaryOp::Neg, a),
             _ => {}
         }
         if a == b && matches!(op, BinaryOp::Min | BinaryOp::Max) {
@@ -283,7 +282,9 @@ impl Expr {
                 Node::Var(Var::Y) => y.clone(),
                 Node::Var(Var::Z) => z.clone(),
                 Node::Unary(op, a) => Tree::unary(op, t[a as usize].clone()),
-                Node::Binary(op, a, b) => Tree::binary(op, t[a as usize].clone(), t[b as usize].clone()),
+                Node::Binary(op, a, b) => {
+                    Tree::binary(op, t[a as usize].clone(), t[b as usize].clone())
+                }
                 Node::PowI(a, k) => Tree::new(TreeOp::PowI(t[a as usize].clone(), k)),
             };
             t.push(v);
@@ -302,7 +303,9 @@ impl Expr {
                 Node::Var(Var::Y) => y,
                 Node::Var(Var::Z) => z,
                 Node::Unary(op, a) => apply_unary(op, scratch[a as usize]),
-                Node::Binary(op, a, b) => apply_binary(op, scratch[a as usize], scratch[b as usize]),
+                Node::Binary(op, a, b) => {
+                    apply_binary(op, scratch[a as usize], scratch[b as usize])
+                }
                 Node::PowI(a, k) => scratch[a as usize].powi(k),
             };
             scratch.push(v);
@@ -347,7 +350,9 @@ impl Expr {
                 Node::Var(Var::Y) => y,
                 Node::Var(Var::Z) => z,
                 Node::Unary(op, a) => apply_unary(op, scratch[a as usize]),
-                Node::Binary(op, a, b) => apply_binary(op, scratch[a as usize], scratch[b as usize]),
+                Node::Binary(op, a, b) => {
+                    apply_binary(op, scratch[a as usize], scratch[b as usize])
+                }
                 Node::PowI(a, k) => scratch[a as usize].powi(k),
             };
             scratch.push(v);
@@ -478,6 +483,9 @@ mod tests {
             t = t + (k % 7) as f64;
         }
         let e = Expr::new(&t);
-        assert_eq!(e.eval([0.0; 3]), (0..200_000).map(|k| (k % 7) as f64).sum::<f64>());
+        assert_eq!(
+            e.eval([0.0; 3]),
+            (0..200_000).map(|k| (k % 7) as f64).sum::<f64>()
+        );
     }
 }

@@ -116,7 +116,12 @@ impl Mul for Interval {
     type Output = Self;
     #[inline]
     fn mul(self, b: Self) -> Self {
-        let p = [self.lo * b.lo, self.lo * b.hi, self.hi * b.lo, self.hi * b.hi];
+        let p = [
+            self.lo * b.lo,
+            self.lo * b.hi,
+            self.hi * b.lo,
+            self.hi * b.hi,
+        ];
         if p.iter().any(|v| v.is_nan()) {
             // 0·∞: the product is unbounded unless an operand is exactly zero.
             if (self.lo == 0.0 && self.hi == 0.0) || (b.lo == 0.0 && b.hi == 0.0) {
@@ -207,7 +212,7 @@ impl Scalar for Interval {
         if self.is_nan() {
             return Self::NAN;
         }
-        if !(self.width() < TAU) {
+        if self.width() >= TAU {
             return Self::new(-1.0, 1.0);
         }
         // Shift so that lo ∈ [0, 2π); cos has its maximum at 2πk, minimum at π + 2πk.
@@ -230,7 +235,7 @@ impl Scalar for Interval {
         Self::widened(min, max).clamp(-1.0, 1.0)
     }
     fn tan(self) -> Self {
-        if self.is_nan() || !(self.width() < PI) {
+        if self.is_nan() || self.width() >= PI {
             return Self::ENTIRE;
         }
         // A pole at π/2 + kπ inside the interval makes it unbounded.

@@ -138,7 +138,7 @@ impl Surface for ExprSurface {
         // a surface on the box face is not clipped away.
         let grown = Aabb::new(self.bounds.lo - self.eps, self.bounds.hi + self.eps);
         let (t0, t1) = grown.clip(ray, t_min, t_max)?;
-        if !(t1 > t0) || !t1.is_finite() || !t0.is_finite() {
+        if t1 <= t0 || !t1.is_finite() || !t0.is_finite() {
             return None;
         }
         let eps_t = self.eps / ray.d.length().max(f64::MIN_POSITIVE);

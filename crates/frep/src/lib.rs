@@ -36,10 +36,13 @@ pub mod surface;
 pub mod transform;
 pub mod tree;
 
+pub use bvh::Bvh;
 pub use dual::Dual;
 pub use expr::{Choice, Expr, Node};
 pub use interval::Interval;
 pub use interval_trace::ExprSurface;
+pub use perturbed::{PerturbedQuadric, PerturbedSurface};
+pub use quadric::Quadric;
 pub use ray::{Aabb, Ray};
 pub use scalar::Scalar;
 pub use shape::Shape;

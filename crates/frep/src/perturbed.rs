@@ -3,8 +3,15 @@
 //! The paper's solids (Vyatkin & Dolgovesov; RESEARCH.md §1): a base quadric F plus
 //! compact cubic perturbations. r = q³ has zero value, slope and curvature where q = 0,
 //! so F' is C² and each perturbation only acts inside its support q_i ≥ 0.
+//! [`PerturbedSurface`] intersects rays with such a solid exactly.
+
+mod scan;
+mod surface;
+
+pub use surface::PerturbedSurface;
 
 use crate::quadric::Quadric;
+use crate::transform::Affine;
 use crate::tree::Tree;
 use glam::DVec3;
 
@@ -59,6 +66,19 @@ impl PerturbedQuadric {
             }
         }
         v
+    }
+    /// The solid moved by the affine map `a` (F'∘A⁻¹: the base and every q_i moved, the
+    /// form factors kept). None for a singular map.
+    pub fn transformed(&self, a: &Affine) -> Option<PerturbedQuadric> {
+        let mut out = PerturbedQuadric::new(self.base.transformed(a)?);
+        for p in &self.perturbations {
+            out.push(p.f, p.q.transformed(a)?);
+        }
+        Some(out)
+    }
+    /// The solid prepared for ray intersection (see [`PerturbedSurface::new`]).
+    pub fn surface(&self) -> PerturbedSurface {
+        PerturbedSurface::new(self)
     }
     /// F' as an expression tree: F + Σ f_i·max(q_i, 0)³.
     pub fn to_tree(&self) -> Tree {

@@ -5,8 +5,10 @@
 //! Along a ray a quadric is a quadratic in t, which is what makes the exact
 //! intersection of perturbed quadrics possible (RESEARCH.md §4).
 
+use crate::ray::Aabb;
+use crate::transform::Affine;
 use crate::tree::Tree;
-use glam::DVec3;
+use glam::{DMat3, DVec3};
 
 /// A quadric function of x, y, z (see the module docs for the coefficient order).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -21,7 +23,7 @@ impl Quadric {
         Self { c }
     }
 
-    /// Ball of radius r: r² − |x − c|².
+    /// Ball of radius r: 1 − |x − c|²/r² (normalised: 1 at the centre, whatever r).
     pub fn sphere(center: DVec3, r: f64) -> Self {
         Self::ellipsoid(center, DVec3::splat(r))
     }
@@ -83,13 +85,14 @@ impl Quadric {
         Self::from_line_form(point, sub3(m, identity()), r * r)
     }
 
-    /// Infinite double cone with apex `apex`, axis `axis` and half-angle `half_angle`:
-    /// ((x−p)·â)²·cos²θ − |x−p|²·sin²θ... scaled as ((x−p)·â)² − tan²θ·|x − p − ((x−p)·â)â|².
+    /// Infinite double cone with apex `apex`, axis `axis` and half-angle `half_angle` θ:
+    /// tan²θ·h² − ρ², with h = (x−p)·â the height along the axis and
+    /// ρ² = |x−p|² − h² the squared distance from it (zero where ρ = |h|·tanθ).
     pub fn cone(apex: DVec3, axis: DVec3, half_angle: f64) -> Self {
         let a = axis.normalize();
         let t2 = half_angle.tan().powi(2);
-        // ((x−p)·â)²(1 + t²) − t²|x−p|²
-        let m = add3(scale3(outer(a, a), 1.0 + t2), scale3(identity(), -t2));
+        // tan²θ·h² − (|x−p|² − h²) = (1 + tan²θ)·((x−p)·â)² − |x−p|²
+        let m = add3(scale3(outer(a, a), 1.0 + t2), scale3(identity(), -1.0));
         Self::from_line_form(apex, m, 0.0)
     }
 
@@ -108,7 +111,9 @@ impl Quadric {
 
     /// Half-space n·x ≤ d (inside where d − n·x ≥ 0).
     pub fn plane(normal: DVec3, d: f64) -> Self {
-        Self::new([0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -normal.x, -normal.y, -normal.z, d])
+        Self::new([
+            0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -normal.x, -normal.y, -normal.z, d,
+        ])
     }
 
     /// F = (x−p)ᵀM(x−p) + k for symmetric M.
@@ -163,6 +168,102 @@ impl Quadric {
         [self.eval(o), a1, a2]
     }
 
+    /// The quadratic part xᵀAx as a matrix (symmetric).
+    pub fn quadratic_part(&self) -> DMat3 {
+        let (a, _, _) = self.to_matrix();
+        DMat3::from_cols_array_2d(&a)
+    }
+
+    /// dᵀAd: the t² coefficient of [`along`](Self::along), which depends on the
+    /// direction only.
+    #[inline]
+    pub fn curvature_along(&self, d: DVec3) -> f64 {
+        let c = &self.c;
+        c[0] * d.x * d.x
+            + c[1] * d.y * d.y
+            + c[2] * d.z * d.z
+            + c[3] * d.x * d.y
+            + c[4] * d.y * d.z
+            + c[5] * d.x * d.z
+    }
+
+    /// The centre and peak value of a quadric whose quadratic part A is negative
+    /// definite: c = −A⁻¹b, F(c) = k + bᵀc (F = xᵀAx + 2bᵀx + k, so F(c + y) = yᵀAy +
+    /// F(c)). None when A is not negative definite (Sylvester's criterion on −A, with a
+    /// relative margin of 1e-12: a nearly degenerate ellipsoid counts as unbounded).
+    pub fn peak(&self) -> Option<(DVec3, f64)> {
+        let (a, b, k) = self.to_matrix();
+        let am = self.quadratic_part();
+        // Leading minors of −A, each required to exceed rounding of its size (so that a
+        // cylinder's or cone's zero determinant never passes as a tiny positive one).
+        let norm = a.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
+        let tol = 1e-12;
+        let m1 = -a[0][0];
+        let m2 = a[0][0] * a[1][1] - a[0][1] * a[1][0];
+        let m3 = -am.determinant();
+        if !(m1 > tol * norm && m2 > tol * norm * norm && m3 > tol * norm * norm * norm) {
+            return None;
+        }
+        let c = -(am.inverse() * b);
+        Some((c, k + b.dot(c)))
+    }
+
+    /// A box holding {F ≥ 0}. For negative definite A the set is the ellipsoid
+    /// (x−c)ᵀ(−A)(x−c) ≤ F(c), whose half-extent along axis k is √(F(c)·(−A⁻¹)_kk)
+    /// (the support function of an ellipsoid); the box is widened by a few ulps so that
+    /// rounding never makes it too small, and is [`Aabb::EMPTY`] when F(c) < 0. Any other
+    /// quadric gives [`Aabb::EVERYTHING`].
+    pub fn support_bounds(&self) -> Aabb {
+        let Some((c, peak)) = self.peak() else {
+            return Aabb::EVERYTHING;
+        };
+        if peak < 0.0 {
+            return Aabb::EMPTY;
+        }
+        let inv = -self.quadratic_part().inverse();
+        let diag = DVec3::new(inv.x_axis.x, inv.y_axis.y, inv.z_axis.z);
+        let half = (diag * peak).max(DVec3::ZERO).map(f64::sqrt);
+        let pad = (half + c.abs()) * 1e-12 + DVec3::splat(f64::MIN_POSITIVE);
+        let half = half + pad;
+        if !half.is_finite() || !c.is_finite() {
+            return Aabb::EVERYTHING;
+        }
+        Aabb::new(c - half, c + half)
+    }
+
+    /// F∘A⁻¹: the quadric moved by the affine map `a`, again a quadric. With A⁻¹x = Mx + t
+    /// and F = yᵀAy + 2bᵀy + k: A' = MᵀAM, b' = Mᵀ(At + b), k' = F(t). None for a
+    /// singular map.
+    pub fn transformed(&self, a: &Affine) -> Option<Quadric> {
+        let inv = a.inverse()?;
+        let (m, t) = (inv.m, inv.t);
+        let (am, b, _) = self.to_matrix();
+        let am = DMat3::from_cols_array_2d(&am);
+        let a2 = m.transpose() * am * m;
+        let b2 = m.transpose() * (am * t + b);
+        let k2 = self.eval(t);
+        let a2 = a2.to_cols_array_2d();
+        // Symmetrise exactly: the off-diagonal sums are what the coefficients hold.
+        let sym = [
+            [
+                a2[0][0],
+                0.5 * (a2[0][1] + a2[1][0]),
+                0.5 * (a2[0][2] + a2[2][0]),
+            ],
+            [
+                0.5 * (a2[0][1] + a2[1][0]),
+                a2[1][1],
+                0.5 * (a2[1][2] + a2[2][1]),
+            ],
+            [
+                0.5 * (a2[0][2] + a2[2][0]),
+                0.5 * (a2[1][2] + a2[2][1]),
+                a2[2][2],
+            ],
+        ];
+        Some(Self::from_matrix(sym, b2, k2))
+    }
+
     /// The quadric as an expression tree.
     pub fn to_tree(&self) -> Tree {
         let (x, y, z) = (Tree::x(), Tree::y(), Tree::z());
@@ -215,4 +316,237 @@ fn add3(a: [[f64; 3]; 3], b: [[f64; 3]; 3]) -> [[f64; 3]; 3] {
 
 fn sub3(a: [[f64; 3]; 3], b: [[f64; 3]; 3]) -> [[f64; 3]; 3] {
     add3(a, scale3(b, -1.0))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::{Rng, SeedableRng};
+    use rand_pcg::Pcg64;
+
+    fn unit(rng: &mut Pcg64) -> DVec3 {
+        loop {
+            let v = DVec3::new(
+                rng.gen_range(-1.0..1.0),
+                rng.gen_range(-1.0..1.0),
+                rng.gen_range(-1.0..1.0),
+            );
+            let l = v.length();
+            if l > 0.1 && l < 1.0 {
+                return v / l;
+            }
+        }
+    }
+
+    /// An orthonormal pair perpendicular to `a`.
+    fn frame(a: DVec3) -> (DVec3, DVec3) {
+        let a = a.normalize();
+        let u = a.any_orthonormal_vector();
+        (u, a.cross(u))
+    }
+
+    /// (name, quadric, surface parametrisation, an inside point, an outside point).
+    type Case = (
+        &'static str,
+        Quadric,
+        Box<dyn Fn(f64, f64) -> DVec3>,
+        DVec3,
+        DVec3,
+    );
+
+    /// Each helper with a parametrised surface point, an inside and an outside point.
+    fn shapes() -> Vec<Case> {
+        let c = DVec3::new(0.3, -0.2, 0.5);
+        let axis = DVec3::new(1.0, 2.0, -0.5).normalize();
+        let (u, v) = frame(axis);
+        let radii = DVec3::new(0.5, 1.5, 0.8);
+        let theta = 0.4f64;
+        vec![
+            (
+                "sphere",
+                Quadric::sphere(c, 0.7),
+                Box::new(move |s, w| {
+                    c + 0.7 * DVec3::new(s.cos() * w.sin(), s.sin() * w.sin(), w.cos())
+                }),
+                c + DVec3::splat(0.3),
+                c + DVec3::new(0.0, 0.71, 0.0),
+            ),
+            (
+                "ellipsoid",
+                Quadric::ellipsoid(c, radii),
+                Box::new(move |s, w| {
+                    c + radii * DVec3::new(s.cos() * w.sin(), s.sin() * w.sin(), w.cos())
+                }),
+                c + DVec3::new(0.45, 0.0, 0.0),
+                c + DVec3::new(0.0, 0.0, 0.81),
+            ),
+            (
+                "cylinder",
+                Quadric::cylinder(c, axis, 0.6),
+                Box::new(move |s, w| c + 0.6 * (s.cos() * u + s.sin() * v) + 10.0 * w * axis),
+                c + 100.0 * axis + 0.59 * u,
+                c - 3.0 * axis + 0.61 * v,
+            ),
+            (
+                "cone",
+                Quadric::cone(c, axis, theta),
+                Box::new(move |s, w| {
+                    c + w * 3.0 * (axis + theta.tan() * (s.cos() * u + s.sin() * v))
+                }),
+                c + 2.0 * axis + 0.9 * theta.tan() * 2.0 * u,
+                c + 2.0 * axis + 1.1 * theta.tan() * 2.0 * v,
+            ),
+            (
+                "paraboloid",
+                Quadric::paraboloid(c, axis, 2.0),
+                Box::new(move |s, w| {
+                    let rho = 2.0 * w.abs();
+                    c + 2.0 * rho * rho * axis + rho * (s.cos() * u + s.sin() * v)
+                }),
+                c + 0.5 * axis + 0.49 * u,
+                c + 0.5 * axis + 0.51 * u,
+            ),
+            (
+                "plane",
+                Quadric::plane(axis, 0.25),
+                Box::new(move |s, w| 0.25 * axis + 5.0 * (s * u + w * v)),
+                0.2 * axis + u,
+                0.3 * axis - 4.0 * v,
+            ),
+        ]
+    }
+
+    #[test]
+    fn helpers_vanish_on_their_surface_and_are_positive_inside() {
+        let mut rng = Pcg64::seed_from_u64(3);
+        for (name, q, surf, inside, outside) in shapes() {
+            for _ in 0..200 {
+                let p = surf(rng.gen_range(-3.2..3.2), rng.gen_range(-1.0..1.0));
+                let scale = 1.0 + p.length_squared();
+                assert!(
+                    q.eval(p).abs() < 1e-12 * scale,
+                    "{name}: F = {} at {p}",
+                    q.eval(p)
+                );
+            }
+            assert!(q.eval(inside) > 0.0, "{name} inside");
+            assert!(q.eval(outside) < 0.0, "{name} outside");
+        }
+    }
+
+    #[test]
+    fn gradient_and_along_match_finite_differences() {
+        let mut rng = Pcg64::seed_from_u64(4);
+        for (name, q, ..) in shapes() {
+            for _ in 0..50 {
+                let p = DVec3::new(
+                    rng.gen_range(-2.0..2.0),
+                    rng.gen_range(-2.0..2.0),
+                    rng.gen_range(-2.0..2.0),
+                );
+                let h = 1e-6;
+                let fd = DVec3::new(
+                    q.eval(p + DVec3::X * h) - q.eval(p - DVec3::X * h),
+                    q.eval(p + DVec3::Y * h) - q.eval(p - DVec3::Y * h),
+                    q.eval(p + DVec3::Z * h) - q.eval(p - DVec3::Z * h),
+                ) / (2.0 * h);
+                assert!(
+                    (q.gradient(p) - fd).length() < 1e-7,
+                    "{name}: {} vs {fd}",
+                    q.gradient(p)
+                );
+                let d = unit(&mut rng) * 1.7;
+                let a = q.along(p, d);
+                assert_eq!(a[2], q.curvature_along(d));
+                for t in [-1.3, 0.0, 0.4, 2.5] {
+                    let direct = q.eval(p + t * d);
+                    assert!(
+                        (a[0] + t * (a[1] + t * a[2]) - direct).abs()
+                            < 1e-12 * (1.0 + direct.abs())
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn support_bounds_are_tight_boxes_of_the_positive_set() {
+        let mut rng = Pcg64::seed_from_u64(5);
+        // A rotated, translated ellipsoid: the box must hold every surface point and be
+        // touched on every face (its extreme points lie on the surface).
+        let a = Affine::rotate(DVec3::new(1.0, 1.0, 0.3), 0.8)
+            .then(&Affine::translate(DVec3::new(0.5, -1.0, 2.0)));
+        let radii = DVec3::new(0.3, 1.2, 0.7);
+        let q = Quadric::ellipsoid(DVec3::ZERO, radii)
+            .transformed(&a)
+            .unwrap();
+        let b = q.support_bounds();
+        assert!(b.is_finite());
+        let mut seen = Aabb::EMPTY;
+        for _ in 0..200_000 {
+            let p = a.point(radii * unit(&mut rng));
+            assert!(q.eval(p).abs() < 1e-12);
+            assert!(b.contains(p), "{p} outside {b:?}");
+            seen.include(p);
+        }
+        assert!(
+            (seen.lo - b.lo).abs().max_element() < 2e-3,
+            "{seen:?} vs {b:?}"
+        );
+        assert!(
+            (seen.hi - b.hi).abs().max_element() < 2e-3,
+            "{seen:?} vs {b:?}"
+        );
+        // Axis-aligned: exact.
+        let s = Quadric::sphere(DVec3::new(1.0, 2.0, 3.0), 0.5).support_bounds();
+        assert!((s.lo - DVec3::new(0.5, 1.5, 2.5)).abs().max_element() < 1e-11);
+        assert!((s.hi - DVec3::new(1.5, 2.5, 3.5)).abs().max_element() < 1e-11);
+        // Nothing positive: empty. Unbounded positive sets: everything.
+        let mut none = Quadric::sphere(DVec3::ZERO, 1.0);
+        none.c[9] = -0.1;
+        assert!(none.support_bounds().is_empty());
+        let (_, cyl, ..) = &shapes()[2];
+        assert_eq!(cyl.support_bounds(), Aabb::EVERYTHING);
+        assert_eq!(
+            Quadric::plane(DVec3::X, 0.0).support_bounds(),
+            Aabb::EVERYTHING
+        );
+        let outside_ball = Quadric::new(Quadric::sphere(DVec3::ZERO, 1.0).c.map(|v| -v));
+        assert_eq!(outside_ball.support_bounds(), Aabb::EVERYTHING);
+    }
+
+    #[test]
+    fn transformed_quadric_is_the_quadric_moved_by_the_map() {
+        let mut rng = Pcg64::seed_from_u64(6);
+        let a = Affine::scale(DVec3::new(2.0, 0.5, 1.5))
+            .then(&Affine::rotate(DVec3::new(0.2, 1.0, 0.4), 1.1))
+            .then(&Affine::translate(DVec3::new(-1.0, 0.3, 0.8)));
+        for (name, q, ..) in shapes() {
+            let moved = q.transformed(&a).unwrap();
+            for _ in 0..100 {
+                let p = DVec3::new(
+                    rng.gen_range(-2.0..2.0),
+                    rng.gen_range(-2.0..2.0),
+                    rng.gen_range(-2.0..2.0),
+                );
+                let want = q.eval(p);
+                assert!(
+                    (moved.eval(a.point(p)) - want).abs() < 1e-12 * (1.0 + want.abs()),
+                    "{name}"
+                );
+            }
+            let back = moved.transformed(&a.inverse().unwrap()).unwrap();
+            for k in 0..10 {
+                assert!(
+                    (back.c[k] - q.c[k]).abs() < 1e-12,
+                    "{name}: {back:?} vs {q:?}"
+                );
+            }
+        }
+        let singular = Affine::scale(DVec3::new(1.0, 0.0, 1.0));
+        assert_eq!(
+            Quadric::sphere(DVec3::ZERO, 1.0).transformed(&singular),
+            None
+        );
+    }
 }

@@ -66,19 +66,20 @@ impl Solid {
                 let moved = m
                     .apply(tree)
                     .ok_or_else(|| format!("singular transform {m:?}"))?;
-                let domain = domain
-                    .map(|d| transform_box(&d, m))
-                    .unwrap_or(Aabb::new(
-                        DVec3::splat(-DEFAULT_DOMAIN),
-                        DVec3::splat(DEFAULT_DOMAIN),
-                    ));
+                let domain = domain.map(|d| transform_box(&d, m)).unwrap_or(Aabb::new(
+                    DVec3::splat(-DEFAULT_DOMAIN),
+                    DVec3::splat(DEFAULT_DOMAIN),
+                ));
                 let expr = Expr::new(&moved);
                 let bounds = expr_bounds(&expr, domain);
                 Solid::Leaf(Box::new(ExprSurface::new(expr, bounds)))
             }
             Shape::Perturbed(p) => {
-                let tree = p.to_tree();
-                return Self::build_moved(&Shape::function(tree), m);
+                // A moved quadric is a quadric: the exact path survives any transform.
+                let moved = p
+                    .transformed(m)
+                    .ok_or_else(|| format!("singular transform {m:?}"))?;
+                Solid::Leaf(Box::new(moved.surface()))
             }
             Shape::Union(v) => {
                 let parts = v
@@ -167,7 +168,7 @@ fn combine_refs(
     } else {
         (t_min, t_max)
     };
-    let nudge = 1e-10 * (bounds.extent().length().min(1e12).max(1.0)) / ray.d.length();
+    let nudge = 1e-10 * bounds.extent().length().clamp(1.0, 1e12) / ray.d.length();
     // Each part's state at the start of the clipped range: a part may well be inside
     // there even though the combination is not.
     let start = ray.at(lo);
@@ -198,7 +199,10 @@ impl Surface for Solid {
     fn value(&self, p: DVec3) -> f64 {
         match self {
             Solid::Leaf(s) => s.value(p),
-            Solid::Union(v, _) => v.iter().map(|s| s.value(p)).fold(f64::NEG_INFINITY, f64::max),
+            Solid::Union(v, _) => v
+                .iter()
+                .map(|s| s.value(p))
+                .fold(f64::NEG_INFINITY, f64::max),
             Solid::Intersection(v, _) => v.iter().map(|s| s.value(p)).fold(f64::INFINITY, f64::min),
             Solid::Difference(a, b) => a.value(p).min(-b.value(p)),
         }
@@ -263,8 +267,14 @@ mod tests {
         let ray = Ray::new(DVec3::new(-5.0, 0.0, 0.0), DVec3::X);
         let cases: [(Shape, &[f64]); 4] = [
             (Shape::Union(vec![a.clone(), b.clone()]), &[-2.0, 2.0]),
-            (Shape::Intersection(vec![a.clone(), b.clone()]), &[-0.5, 0.5]),
-            (Shape::Difference(Box::new(a.clone()), Box::new(b.clone())), &[-2.0, -0.5]),
+            (
+                Shape::Intersection(vec![a.clone(), b.clone()]),
+                &[-0.5, 0.5],
+            ),
+            (
+                Shape::Difference(Box::new(a.clone()), Box::new(b.clone())),
+                &[-2.0, -0.5],
+            ),
             (
                 Shape::Difference(Box::new(b.clone()), Box::new(a.clone())),
                 &[0.5, 2.0],

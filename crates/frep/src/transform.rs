@@ -62,7 +62,10 @@ impl Affine {
             return None;
         }
         let mi = self.m.inverse();
-        Some(Affine { m: mi, t: -(mi * self.t) })
+        Some(Affine {
+            m: mi,
+            t: -(mi * self.t),
+        })
     }
     /// Maps a point.
     pub fn point(&self, p: DVec3) -> DVec3 {
@@ -104,6 +107,8 @@ mod tests {
         let tip = a.point(DVec3::X);
         assert!((tip - DVec3::new(1.0, 4.0, 3.0)).length() < 1e-12);
         assert!(e.eval(tip.to_array()).abs() < 1e-12);
-        assert!(Affine::scale(DVec3::new(0.0, 1.0, 1.0)).apply(&ball).is_none());
+        assert!(Affine::scale(DVec3::new(0.0, 1.0, 1.0))
+            .apply(&ball)
+            .is_none());
     }
 }

@@ -204,7 +204,10 @@ impl TreeOp {
     /// Moves the non-leaf children out, leaving shared leaves in their place.
     fn take_children(&mut self, out: &mut Vec<Tree>) {
         let mut take = |t: &mut Tree| {
-            if matches!(t.op(), TreeOp::Unary(..) | TreeOp::Binary(..) | TreeOp::PowI(..)) {
+            if matches!(
+                t.op(),
+                TreeOp::Unary(..) | TreeOp::Binary(..) | TreeOp::PowI(..)
+            ) {
                 out.push(std::mem::replace(t, LEAF.clone()));
             }
         };

@@ -100,6 +100,26 @@ impl Film {
             .zip(&other.aov)
             .for_each(|(a, b)| *a += *b);
     }
+    /// Adds the sums of `tile` (same channels) to the pixels starting at (x0, y0): how
+    /// the tiles rendered by different threads come together.
+    pub fn add_tile(&mut self, x0: u32, y0: u32, tile: &Film) {
+        assert_eq!(self.aov_names, tile.aov_names, "AOV channels");
+        assert!(
+            x0 + tile.width <= self.width && y0 + tile.height <= self.height,
+            "tile inside the film"
+        );
+        let k = self.aov_names.len();
+        for y in 0..tile.height {
+            for x in 0..tile.width {
+                let (i, j) = (self.index(x0 + x, y0 + y), tile.index(x, y));
+                self.rgb[i] += tile.rgb[j];
+                self.weight[i] += tile.weight[j];
+                for c in 0..k {
+                    self.aov[i * k + c] += tile.aov[j * k + c];
+                }
+            }
+        }
+    }
     /// The number of samples of pixel (x, y).
     pub fn samples(&self, x: u32, y: u32) -> f64 {
         self.weight[self.index(x, y)]

@@ -143,10 +143,7 @@ pub(crate) fn read(text: &str, file: &str) -> Result<Model, ReadError> {
     let domain = Some(view_domain(text));
     Ok(Model {
         name: None,
-        shape: Shape::Function {
-            tree: -out,
-            domain,
-        },
+        shape: Shape::Function { tree: -out, domain },
         domain,
     })
 }

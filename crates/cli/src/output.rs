@@ -1,0 +1,45 @@
+//! Choosing the output format from the file name.
+
+use crate::preview::Look;
+use render::Film;
+use std::path::Path;
+
+/// An image format frepray writes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Format {
+    /// 8-bit sRGB PNG (display only).
+    Png,
+    /// Linear f32 OpenEXR with AOV channels.
+    Exr,
+}
+
+/// The format for `path`, or an error naming what is expected — checked before any
+/// work is done.
+pub fn format_for(path: &Path, look: Look) -> Result<Format, String> {
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(|e| e.to_ascii_lowercase());
+    match ext.as_deref() {
+        Some("exr") => Ok(Format::Exr),
+        Some("png") if look == Look::Shaded => Ok(Format::Png),
+        Some("png") => Err(format!(
+            "{}: --integrator {} writes EXR channels; use a .exr output",
+            path.display(),
+            format!("{look:?}").to_lowercase()
+        )),
+        _ => Err(format!(
+            "{}: unknown output format (expected a .png or .exr file name)",
+            path.display()
+        )),
+    }
+}
+
+/// Writes the film whole or not at all.
+pub fn write(path: &Path, film: &Film, format: Format) -> Result<(), String> {
+    match format {
+        Format::Png => film.write_png(path),
+        Format::Exr => film.write_exr(path),
+    }
+    .map_err(|e| format!("{}: {e}", path.display()))
+}

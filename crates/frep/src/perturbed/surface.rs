@@ -1,0 +1,355 @@
+//! [`PerturbedSurface`]: a perturbed quadric prepared for ray intersection.
+//!
+//! A perturbation only acts inside its support q_i ≥ 0, so a BVH over the support boxes
+//! hands each ray (and each point) only the perturbations it can touch; supports that
+//! are not bounded ellipsoids are tested by every query. The crossing itself is the
+//! exact piecewise-polynomial scan of [`super::scan`].
+
+use super::scan::{self, Coeffs};
+use super::{Perturbation, PerturbedQuadric};
+use crate::bvh::Bvh;
+use crate::quadric::Quadric;
+use crate::ray::{Aabb, Ray};
+use crate::surface::Surface;
+use glam::{DVec3, Vec3};
+
+/// An immutable perturbed quadric with a BVH over its perturbations' supports,
+/// implementing [`Surface`] by exact root finding (RESEARCH.md §4).
+#[derive(Clone, Debug)]
+pub struct PerturbedSurface {
+    base: Quadric,
+    perturbations: Vec<Perturbation>,
+    bvh: Bvh,
+    bounds: Aabb,
+}
+
+impl PerturbedSurface {
+    /// Prepares `pq`: builds the BVH over the support boxes
+    /// ([`Quadric::support_bounds`]) of its perturbations.
+    pub fn new(pq: &PerturbedQuadric) -> Self {
+        let boxes: Vec<Aabb> = pq
+            .perturbations()
+            .iter()
+            .map(|p| p.q.support_bounds())
+            .collect();
+        Self::with_boxes(pq, &boxes)
+    }
+
+    /// The same solid with no culling: every ray and point query tests every
+    /// perturbation. For benchmarks and as a reference for what the BVH buys.
+    pub fn unculled(pq: &PerturbedQuadric) -> Self {
+        Self::with_boxes(pq, &vec![Aabb::EVERYTHING; pq.perturbations().len()])
+    }
+
+    fn with_boxes(pq: &PerturbedQuadric, boxes: &[Aabb]) -> Self {
+        let mut bounds = pq.base().support_bounds();
+        for p in pq.perturbations() {
+            if p.f > 0.0 {
+                bounds = bounds.union(&p.q.support_bounds());
+            }
+        }
+        Self {
+            base: *pq.base(),
+            perturbations: pq.perturbations().to_vec(),
+            bvh: Bvh::new(boxes),
+            bounds,
+        }
+    }
+
+    /// The base quadric F.
+    pub fn base(&self) -> &Quadric {
+        &self.base
+    }
+
+    /// The perturbations, indexed as the BVH's items.
+    pub fn perturbations(&self) -> &[Perturbation] {
+        &self.perturbations
+    }
+
+    /// The BVH over the perturbations' supports.
+    pub fn bvh(&self) -> &Bvh {
+        &self.bvh
+    }
+
+    /// The range [lo, hi] of [t_min, t_max] inside the bounds, and the sign of F' just
+    /// after lo when known (−1 where the ray enters the bounds from outside, where F' < 0).
+    fn clip(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<(f64, f64, f64)> {
+        if t_min.is_nan() || t_max.is_nan() || t_min >= t_max || self.bounds.is_empty() {
+            return None;
+        }
+        let (lo, hi) = self.bounds.clip(ray, t_min, t_max)?;
+        Some((lo, hi, if lo > t_min { -1.0 } else { 0.0 }))
+    }
+
+    /// The first t in (t_min, t_max) where F' changes sign, computed in f32 throughout
+    /// the polynomial scan (the GPU path's arithmetic; RESEARCH.md §4 measures it). The
+    /// BVH and the bounds clip run in f64, which only selects what the scan sees.
+    pub fn first_crossing_f32(&self, o: Vec3, d: Vec3, t_min: f32, t_max: f32) -> Option<f32> {
+        let ray = Ray::new(o.as_dvec3(), d.as_dvec3());
+        let (lo, hi, sign) = self.clip(&ray, t_min as f64, t_max as f64)?;
+        let mut cand = Vec::new();
+        self.bvh.collect(&ray, lo, hi, &mut cand);
+        let to32 = |c: &[f64; 10]| c.map(|v| v as f32);
+        let perts = cand.iter().map(|&i| {
+            let p = &self.perturbations[i as usize];
+            (p.f as f32, to32(&p.q.c))
+        });
+        scan::first_crossing::<f32>(
+            &to32(&self.base.c),
+            perts,
+            o.to_array(),
+            d.to_array(),
+            (lo as f32, hi as f32),
+            t_min,
+            t_max,
+            sign as f32,
+        )
+    }
+}
+
+impl Surface for PerturbedSurface {
+    /// F' at p, summing only the perturbations whose support box holds p.
+    fn value(&self, p: DVec3) -> f64 {
+        let mut v = self.base.eval(p);
+        self.bvh.for_each_containing(p, |i| {
+            let pt = &self.perturbations[i];
+            let q = pt.q.eval(p);
+            if q > 0.0 {
+                v += pt.f * q * q * q;
+            }
+        });
+        v
+    }
+
+    /// ∇F' = ∇F + Σ_{q_i>0} 3·f_i·q_i²·∇q_i (RESEARCH.md §4).
+    fn gradient(&self, p: DVec3) -> DVec3 {
+        let mut g = self.base.gradient(p);
+        self.bvh.for_each_containing(p, |i| {
+            let pt = &self.perturbations[i];
+            let q = pt.q.eval(p);
+            if q > 0.0 {
+                g += (3.0 * pt.f * q * q) * pt.q.gradient(p);
+            }
+        });
+        g
+    }
+
+    fn first_crossing(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<f64> {
+        let (lo, hi, sign) = self.clip(ray, t_min, t_max)?;
+        let mut cand = Vec::new();
+        self.bvh.collect(ray, lo, hi, &mut cand);
+        let perts = cand.iter().map(|&i| {
+            let p = &self.perturbations[i as usize];
+            (p.f, p.q.c)
+        });
+        let base: &Coeffs<f64> = &self.base.c;
+        scan::first_crossing(
+            base,
+            perts,
+            ray.o.to_array(),
+            ray.d.to_array(),
+            (lo, hi),
+            t_min,
+            t_max,
+            sign,
+        )
+    }
+
+    /// The base's support box united with the support boxes of every perturbation that
+    /// adds material (f_i > 0): outside them F < 0 and every term f_i·r_i ≤ 0.
+    fn bounds(&self) -> Aabb {
+        self.bounds
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::transform::Affine;
+
+    fn ball() -> Quadric {
+        Quadric::sphere(DVec3::ZERO, 1.0)
+    }
+
+    /// The roots of the quadratic a0 + a1·t + a2·t² in (t_min, t_max), ascending.
+    fn quadratic_roots(a: [f64; 3], t_min: f64, t_max: f64) -> Vec<f64> {
+        let [c, b, a] = a;
+        let disc = b * b - 4.0 * a * c;
+        let mut r = if a == 0.0 {
+            vec![-c / b]
+        } else if disc > 0.0 {
+            vec![
+                (-b - disc.sqrt()) / (2.0 * a),
+                (-b + disc.sqrt()) / (2.0 * a),
+            ]
+        } else {
+            vec![]
+        };
+        r.sort_by(f64::total_cmp);
+        r.retain(|&t| t > t_min && t < t_max);
+        r
+    }
+
+    #[test]
+    fn unperturbed_quadrics_give_their_closed_form_roots() {
+        let axis = DVec3::new(0.3, 1.0, -0.2);
+        let quadrics = [
+            ball(),
+            Quadric::ellipsoid(DVec3::new(0.1, 0.2, -0.3), DVec3::new(0.5, 1.2, 0.8)),
+            Quadric::cylinder(DVec3::new(0.0, 0.1, 0.0), axis, 0.7),
+            Quadric::cone(DVec3::ZERO, axis, 0.5),
+            Quadric::paraboloid(DVec3::new(0.0, -1.0, 0.0), axis, 1.5),
+            Quadric::plane(DVec3::new(0.2, 0.9, 0.1), 0.3),
+        ];
+        let mut checked = 0;
+        for q in quadrics {
+            let s = PerturbedQuadric::new(q).surface();
+            for k in 0..400 {
+                let a = k as f64 * 0.7;
+                let o = DVec3::new(3.0 * a.cos(), 1.5 * (0.3 * a).sin(), 3.0 * a.sin());
+                let d =
+                    (DVec3::new(0.2 * (1.3 * a).cos(), 0.3 * (0.9 * a).sin(), 0.1) - o).normalize();
+                let ray = Ray::new(o, d);
+                for (t_min, t_max) in [(0.0, f64::INFINITY), (-5.0, 4.0), (3.1, 3.5)] {
+                    let a = q.along(o, d);
+                    let want = quadratic_roots(a, t_min, t_max).first().copied();
+                    let got = s.first_crossing(&ray, t_min, t_max);
+                    match (got, want) {
+                        (Some(g), Some(w)) => {
+                            // Rounding of the quadratic's terms over its slope.
+                            let terms = 1.0 + a[0].abs() + (a[1] * w).abs() + (a[2] * w * w).abs();
+                            let tol = 1e-14 * terms / (a[1] + 2.0 * a[2] * w).abs();
+                            assert!((g - w).abs() < tol, "{q:?}: {g} vs {w}, tol {tol}")
+                        }
+                        (None, None) => {}
+                        _ => panic!("{q:?} {ray:?} [{t_min}, {t_max}]: {got:?} vs {want:?}"),
+                    }
+                    checked += got.is_some() as usize;
+                }
+            }
+        }
+        assert!(checked > 1000, "{checked}");
+    }
+
+    #[test]
+    fn rays_from_inside_leave_and_repeated_calls_walk_every_crossing() {
+        // A ball hollowed by a strong negative perturbation at its centre: the ray along
+        // x meets the surface four times.
+        let solid = PerturbedQuadric::new(ball()).with(-200.0, Quadric::sphere(DVec3::ZERO, 0.5));
+        let s = solid.surface();
+        let ray = Ray::new(DVec3::new(-3.0, 0.0, 0.0), DVec3::X);
+        let mut t = 0.0;
+        let mut hits = Vec::new();
+        while let Some(h) = s.first_crossing(&ray, t, f64::INFINITY) {
+            assert!(h > t);
+            hits.push(h);
+            t = h;
+        }
+        assert_eq!(hits.len(), 4, "{hits:?}");
+        // The crossings alternate in, out, in, out, and the solid's value agrees.
+        for (k, &h) in hits.iter().enumerate() {
+            assert!(solid.eval(ray.at(h)).abs() < 1e-9);
+            let inside_after = solid.eval(ray.at(h + 1e-6)) > 0.0;
+            assert_eq!(inside_after, k % 2 == 0);
+        }
+        // Starting inside the shell (between the first two crossings).
+        let mid = 0.5 * (hits[0] + hits[1]);
+        let from_inside = Ray::new(ray.at(mid), DVec3::X);
+        let exit = s.first_crossing(&from_inside, 0.0, f64::INFINITY).unwrap();
+        assert!((exit - (hits[1] - mid)).abs() < 1e-9);
+    }
+
+    #[test]
+    fn unbounded_base_with_infinite_range_finds_far_crossings() {
+        // The plane y = 0 (solid below) with a bump: a nearly parallel ray from above
+        // crosses the plane a million units away; with t_min = −∞ it also has a crossing
+        // behind its origin.
+        let bumps = PerturbedQuadric::new(Quadric::plane(DVec3::Y, 0.0))
+            .with(10.0, Quadric::sphere(DVec3::new(1.0, 0.0, 0.0), 0.5));
+        let s = bumps.surface();
+        assert_eq!(s.bounds(), Aabb::EVERYTHING);
+        let ray = Ray::new(DVec3::new(-2.0, 1.0, 0.3), DVec3::new(1.0, -1e-6, 0.0));
+        let t = s.first_crossing(&ray, 0.0, f64::INFINITY).unwrap();
+        assert!((t - 1e6).abs() < 1e-6, "{t}");
+        let up = Ray::new(DVec3::new(5.0, 1.0, 0.0), DVec3::new(0.0, 1.0, 0.0));
+        assert_eq!(s.first_crossing(&up, 0.0, f64::INFINITY), None);
+        let t = s
+            .first_crossing(&up, f64::NEG_INFINITY, f64::INFINITY)
+            .unwrap();
+        assert!((t + 1.0).abs() < 1e-12, "{t}");
+        // Straight down through the bump: F' = −y + 10·(1 − 4y²)³ on the axis (the
+        // sphere helper is 1 − |x − c|²/r²).
+        let down = Ray::new(DVec3::new(1.0, 2.0, 0.0), -DVec3::Y);
+        let t = s
+            .first_crossing(&down, f64::NEG_INFINITY, f64::INFINITY)
+            .unwrap();
+        let y = 2.0 - t;
+        assert!(
+            (-y + 10.0 * (1.0 - 4.0 * y * y).powi(3)).abs() < 1e-12,
+            "y = {y}"
+        );
+        assert!(y > 0.0);
+    }
+
+    #[test]
+    fn value_gradient_and_bounds_agree_with_the_definition() {
+        let mut pq =
+            PerturbedQuadric::new(Quadric::ellipsoid(DVec3::ZERO, DVec3::new(1.0, 0.7, 0.5)));
+        for k in 0..40 {
+            let a = k as f64 * 2.4;
+            let c = DVec3::new(
+                a.cos() * (0.4 * a).cos(),
+                0.7 * a.sin(),
+                0.5 * (0.4 * a).sin(),
+            );
+            let f = if k % 3 == 0 { -30.0 } else { 50.0 };
+            pq.push(f, Quadric::sphere(c, 0.2 + 0.01 * k as f64));
+        }
+        let s = pq.surface();
+        let b = s.bounds();
+        for i in 0..4000 {
+            let u = i as f64;
+            let p = 1.4 * DVec3::new((0.37 * u).sin(), (0.71 * u).cos(), (1.13 * u).sin());
+            assert!((s.value(p) - pq.eval(p)).abs() < 1e-12 * (1.0 + pq.eval(p).abs()));
+            let h = 1e-6;
+            let fd = DVec3::new(
+                pq.eval(p + DVec3::X * h) - pq.eval(p - DVec3::X * h),
+                pq.eval(p + DVec3::Y * h) - pq.eval(p - DVec3::Y * h),
+                pq.eval(p + DVec3::Z * h) - pq.eval(p - DVec3::Z * h),
+            ) / (2.0 * h);
+            let g = s.gradient(p);
+            assert!((g - fd).length() < 1e-6 * (1.0 + g.length()), "{g} vs {fd}");
+            if pq.eval(p) >= 0.0 {
+                assert!(b.contains(p));
+            }
+        }
+    }
+
+    #[test]
+    fn transformed_solid_meets_the_transformed_ray_at_the_same_t() {
+        let pq = PerturbedQuadric::new(ball())
+            .with(40.0, Quadric::sphere(DVec3::new(0.0, 1.0, 0.0), 0.4))
+            .with(-40.0, Quadric::sphere(DVec3::new(1.0, 0.0, 0.0), 0.3));
+        let a = Affine::scale(DVec3::new(2.0, 1.0, 0.5))
+            .then(&Affine::rotate(DVec3::new(1.0, 1.0, 0.0), 0.7))
+            .then(&Affine::translate(DVec3::new(0.5, -1.0, 3.0)));
+        let moved = pq.transformed(&a).unwrap().surface();
+        let s = pq.surface();
+        for k in 0..200 {
+            let u = k as f64 * 0.31;
+            let o = DVec3::new(3.0 * u.cos(), 2.0 * u.sin(), 0.5);
+            let d = -o + 0.3 * DVec3::new(u.sin(), 0.0, u.cos());
+            let ray = Ray::new(o, d);
+            let moved_ray = Ray::new(a.point(o), a.m * d);
+            let (t0, t1) = (
+                s.first_crossing(&ray, 0.0, f64::INFINITY),
+                moved.first_crossing(&moved_ray, 0.0, f64::INFINITY),
+            );
+            assert_eq!(t0.is_some(), t1.is_some());
+            if let (Some(t0), Some(t1)) = (t0, t1) {
+                assert!((t0 - t1).abs() < 1e-9, "{t0} vs {t1}");
+            }
+        }
+        assert!(pq.transformed(&Affine::scale(DVec3::ZERO)).is_none());
+    }
+}
