@@ -35,6 +35,7 @@ pub mod light;
 pub mod material;
 pub mod output;
 pub mod sampler;
+pub mod scene;
 pub mod technique;
 #[cfg(test)]
 mod testutil;

@@ -1,0 +1,118 @@
+//! A scene ready to render: camera, objects (FRep solids with materials), lights,
+//! environment and render settings.
+//!
+//! Objects sit in a BVH over their bounds ([`frep::Bvh`]); each object's solid answers
+//! its own ray queries through the one intersection contract (DESIGN.md §4). Area
+//! lights are analytic shapes kept in [`Lights`], which integrators query beside the
+//! objects.
+
+use crate::camera::Camera;
+use crate::light::Lights;
+use crate::material::Material;
+use crate::texture::TexCoord;
+use frep::{Aabb, Bvh, Ray, Solid, Surface};
+use glam::DVec3;
+
+/// One solid with its material.
+pub struct Object {
+    /// Name, for messages.
+    pub name: String,
+    /// The solid (transforms already folded in).
+    pub solid: Solid,
+    /// Index into [`Scene::materials`].
+    pub material: usize,
+}
+
+/// The nearest surface a ray meets.
+#[derive(Clone, Copy, Debug)]
+pub struct SurfaceHit {
+    /// Ray parameter.
+    pub t: f64,
+    /// The hit point.
+    pub p: DVec3,
+    /// Outward unit normal of the solid at p.
+    pub n: DVec3,
+    /// Index into [`Scene::objects`].
+    pub object: usize,
+    /// Index into [`Scene::materials`].
+    pub material: usize,
+}
+
+impl SurfaceHit {
+    /// Where textures are evaluated.
+    pub fn tex_coord(&self) -> TexCoord {
+        TexCoord {
+            p: self.p,
+            ..Default::default()
+        }
+    }
+}
+
+/// A scene ready to render (see the module docs).
+pub struct Scene {
+    /// The camera.
+    pub camera: Camera,
+    /// Materials, referred to by index.
+    pub materials: Vec<Material>,
+    /// The solids.
+    pub objects: Vec<Object>,
+    /// Area, point/spot and environment lights.
+    pub lights: Lights,
+    bvh: Bvh,
+    bounds: Aabb,
+}
+
+impl Scene {
+    /// Assembles a scene and builds its BVH.
+    pub fn new(camera: Camera, materials: Vec<Material>, objects: Vec<Object>, lights: Lights) -> Self {
+        let boxes: Vec<Aabb> = objects.iter().map(|o| o.solid.bounds()).collect();
+        let bvh = Bvh::new(&boxes);
+        let bounds = boxes
+            .iter()
+            .filter(|b| b.is_finite())
+            .fold(Aabb::EMPTY, |a, b| a.union(b));
+        Self {
+            camera,
+            materials,
+            objects,
+            lights,
+            bvh,
+            bounds,
+        }
+    }
+
+    /// The union of the finite object bounds (empty if there is none).
+    pub fn bounds(&self) -> Aabb {
+        self.bounds
+    }
+
+    /// The nearest object surface in (t_min, t_max).
+    pub fn intersect(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<SurfaceHit> {
+        let mut normal = DVec3::ZERO;
+        let (k, t) = self.bvh.nearest(ray, t_min, t_max, |i, t_max| {
+            let h = self.objects[i].solid.intersect(ray, t_min, t_max)?;
+            normal = h.normal;
+            Some(h.t)
+        })?;
+        // `normal` belongs to the last accepted hit, which is the nearest: `nearest`
+        // only accepts hits below the shrinking t_max.
+        Some(SurfaceHit {
+            t,
+            p: ray.at(t),
+            n: normal,
+            object: k,
+            material: self.objects[k].material,
+        })
+    }
+
+    /// Whether any object surface lies in (t_min, t_max) (shadow rays).
+    pub fn occluded(&self, ray: &Ray, t_min: f64, t_max: f64) -> bool {
+        let mut hit = false;
+        self.bvh.for_each_hit(ray, t_min, t_max, |i| {
+            if !hit && self.objects[i].solid.intersect(ray, t_min, t_max).is_some() {
+                hit = true;
+            }
+        });
+        hit
+    }
+}
