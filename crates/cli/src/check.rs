@@ -32,7 +32,10 @@ pub fn run(file: &Path) -> Result<(), String> {
     if let Some(n) = &model.name {
         println!("model:         {n}");
     }
-    println!("nodes:         {} (deduplicated expression DAG)", expr.len());
+    println!(
+        "nodes:         {} (deduplicated expression DAG)",
+        expr.len()
+    );
     println!("perturbed quadrics: {quadrics}, perturbations: {perts}");
     if b.is_empty() {
         println!("bounds:        empty (F < 0 everywhere in the search domain)");

@@ -43,6 +43,9 @@ struct RenderArgs {
     /// Image height in pixels.
     #[arg(long, default_value_t = 512)]
     height: u32,
+    /// The model's vertical axis.
+    #[arg(long, value_enum, default_value_t = preview::Up::Z)]
+    up: preview::Up,
     /// Worker threads (0: one per core). The image does not depend on it.
     #[arg(long, default_value_t = 0)]
     threads: usize,
@@ -79,9 +82,15 @@ fn render(args: RenderArgs) -> Result<(), String> {
     }
     let start = std::time::Instant::now();
     let model = frep::read::read_file(&args.input).map_err(|e| e.to_string())?;
-    let solid = frep::Solid::build(&model.shape).map_err(|e| format!("{}: {e}", args.input.display()))?;
+    let solid =
+        frep::Solid::build(&model.shape).map_err(|e| format!("{}: {e}", args.input.display()))?;
     let setup = start.elapsed();
-    let cam = preview::framing(&preview::view_bounds(&solid), args.width, args.height);
+    let cam = preview::framing(
+        &preview::view_bounds(&solid),
+        args.up.vector(),
+        args.width,
+        args.height,
+    );
 
     let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
     {
@@ -93,8 +102,10 @@ fn render(args: RenderArgs) -> Result<(), String> {
         indicatif::ProgressBar::hidden()
     } else {
         indicatif::ProgressBar::new(args.height as u64).with_style(
-            indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} rows  {elapsed} (eta {eta})")
-                .expect("valid template"),
+            indicatif::ProgressStyle::with_template(
+                "{bar:40} {pos}/{len} rows  {elapsed} (eta {eta})",
+            )
+            .expect("valid template"),
         )
     };
     let t0 = std::time::Instant::now();

@@ -10,6 +10,28 @@ use rayon::prelude::*;
 use render::{Camera, Film};
 use std::sync::atomic::{AtomicBool, Ordering};
 
+/// The vertical axis of a model.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Up {
+    /// x up.
+    X,
+    /// y up.
+    Y,
+    /// z up (the default; Fidget's colonnade.vm is modelled z-up too).
+    Z,
+}
+
+impl Up {
+    /// The axis as a vector.
+    pub fn vector(self) -> DVec3 {
+        match self {
+            Up::X => DVec3::X,
+            Up::Y => DVec3::Y,
+            Up::Z => DVec3::Z,
+        }
+    }
+}
+
 /// What each pixel shows.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum Look {
@@ -21,9 +43,10 @@ pub enum Look {
     Normals,
 }
 
-/// A camera that frames a box: from the front-right-above diagonal, far enough that
-/// the box's bounding sphere fits the narrower field of view.
-pub fn framing(b: &Aabb, width: u32, height: u32) -> Camera {
+/// A camera that frames a box: from the front-right-above diagonal (with `up` the
+/// vertical axis), far enough that the box's bounding sphere fits the narrower field of
+/// view.
+pub fn framing(b: &Aabb, up: DVec3, width: u32, height: u32) -> Camera {
     let fov = 30.0f64;
     let c = b.center();
     let r = (0.5 * b.extent().length()).max(1e-9);
@@ -31,8 +54,15 @@ pub fn framing(b: &Aabb, width: u32, height: u32) -> Camera {
     let half = (fov.to_radians() * 0.5).tan();
     let half_min = if aspect < 1.0 { half * aspect } else { half };
     let dist = r / half_min.atan().sin();
-    let dir = DVec3::new(0.55, -1.0, 0.6).normalize();
-    Camera::look_at(c - dir * dist, c, DVec3::Z, fov, width, height)
+    // Right, front and up in a right-handed frame around `up`.
+    let front = if up.z.abs() > 0.5 {
+        -DVec3::Y
+    } else {
+        DVec3::Z
+    };
+    let right = front.cross(up).normalize();
+    let offset = (0.55 * right + front + 0.6 * up).normalize();
+    Camera::look_at(c + offset * dist, c, up, fov, width, height)
 }
 
 /// The AOV channels each look writes beside R, G, B.
@@ -47,7 +77,13 @@ pub fn aov_names(look: Look) -> &'static [&'static str] {
 /// Renders one sample per pixel centre into a film (rows in parallel; each pixel
 /// depends only on its position, so the image is the same at any thread count). Rows
 /// not reached before `stop` is set keep no samples.
-pub fn render(solid: &Solid, cam: &Camera, look: Look, stop: &AtomicBool, progress: &(dyn Fn(u64) + Sync)) -> Film {
+pub fn render(
+    solid: &Solid,
+    cam: &Camera,
+    look: Look,
+    stop: &AtomicBool,
+    progress: &(dyn Fn(u64) + Sync),
+) -> Film {
     let names = aov_names(look);
     let key = DVec3::new(-0.4, -0.6, 1.0).normalize();
     let rows: Vec<Film> = (0..cam.height)
@@ -68,7 +104,11 @@ pub fn render(solid: &Solid, cam: &Camera, look: Look, stop: &AtomicBool, progre
                     }
                     None => {
                         let s = 0.5 * (ray.d.z + 1.0);
-                        (DVec3::new(0.18, 0.2, 0.24) * (0.6 + 0.4 * s), f64::INFINITY, DVec3::ZERO)
+                        (
+                            DVec3::new(0.18, 0.2, 0.24) * (0.6 + 0.4 * s),
+                            f64::INFINITY,
+                            DVec3::ZERO,
+                        )
                     }
                 };
                 row.add_sample(x, 0, rgb);

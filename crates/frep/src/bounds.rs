@@ -18,35 +18,64 @@ pub const DEFAULT_DOMAIN: f64 = 100.0;
 pub fn expr_bounds(expr: &Expr, domain: Aabb) -> Aabb {
     let mut scratch = Vec::with_capacity(expr.len());
     let mut b = domain;
-    // Each pass searches the previous result; stop when it no longer shrinks.
-    for _ in 0..8 {
+    let mut depth = START_DEPTH;
+    // Each pass searches the previous result. When a pass no longer shrinks it, cells
+    // may be too coarse for interval arithmetic to prove them empty (a twist couples
+    // the coordinates), so the next pass goes deeper, within an evaluation budget.
+    for _ in 0..16 {
         let mut out = Aabb::EMPTY;
-        refine(expr, b, 0, &mut out, &mut scratch);
+        let mut budget = BUDGET / expr.len().max(1);
+        refine(expr, b, depth, &mut out, &mut scratch, &mut budget);
         if out.is_empty() {
             return out;
         }
         let shrunk = out.extent().max_element() < 0.9 * b.extent().max_element();
-        b = out;
-        if !shrunk {
-            break;
+        let exhausted = budget == 0;
+        if !exhausted {
+            // A pass cut short by the budget proves nothing beyond its start box.
+            b = out;
+        }
+        if !shrunk || exhausted {
+            if exhausted || depth >= MAX_DEPTH {
+                break;
+            }
+            depth += 2;
         }
     }
     b
 }
 
-const MAX_DEPTH: u32 = 6;
+/// Octree depth of the first pass (64³ cells at most).
+const START_DEPTH: u32 = 6;
+/// Deepest octree tried when passes stop shrinking the box.
+const MAX_DEPTH: u32 = 12;
+/// Node evaluations one pass may spend (about a second for any expression).
+const BUDGET: usize = 200_000_000;
 
-fn refine(expr: &Expr, cell: Aabb, depth: u32, out: &mut Aabb, scratch: &mut Vec<Interval>) {
+fn refine(
+    expr: &Expr,
+    cell: Aabb,
+    depth: u32,
+    out: &mut Aabb,
+    scratch: &mut Vec<Interval>,
+    budget: &mut usize,
+) {
     // Cells already inside the result cannot grow it.
     if out.lo.cmple(cell.lo).all() && out.hi.cmpge(cell.hi).all() {
         return;
     }
+    if *budget == 0 {
+        // Out of budget: keep the cell whole, which stays conservative.
+        *out = out.union(&cell);
+        return;
+    }
+    *budget -= 1;
     let i = |k: usize| Interval::new(cell.lo[k], cell.hi[k]);
     let v = expr.eval_with(i(0), i(1), i(2), scratch);
     if v.hi < 0.0 {
         return;
     }
-    if depth == MAX_DEPTH || v.lo >= 0.0 {
+    if depth == 0 || v.lo >= 0.0 {
         *out = out.union(&cell);
         return;
     }
@@ -61,7 +90,7 @@ fn refine(expr: &Expr, cell: Aabb, depth: u32, out: &mut Aabb, scratch: &mut Vec
         };
         let (x, y, z) = (pick(0, 0), pick(1, 1), pick(2, 2));
         let sub = Aabb::new(DVec3::new(x.0, y.0, z.0), DVec3::new(x.1, y.1, z.1));
-        refine(expr, sub, depth + 1, out, scratch);
+        refine(expr, sub, depth - 1, out, scratch, budget);
     }
 }
 
@@ -82,6 +111,27 @@ mod tests {
             "{b:?}"
         );
         assert!((b.extent() - want.extent()).max_element() < 0.1, "{b:?}");
+    }
+
+    /// A twisted bar: intervals cannot prove big cells empty (x and y are coupled
+    /// through the twist), so the search must go deeper than its first pass.
+    #[test]
+    fn twisted_bar_is_bounded_tightly() {
+        let (x, y, z) = (Tree::x(), Tree::y(), Tree::z());
+        let w = 1.2 * &z;
+        let xt = &x * w.cos() + &y * w.sin();
+        let yt = -(&x * w.sin()) + &y * w.cos();
+        let bar = -((xt.abs() - 0.35)
+            .max(&(yt.abs() - 0.35))
+            .max(&(z.abs() - 1.1)));
+        let d = Aabb::new(DVec3::splat(-DEFAULT_DOMAIN), DVec3::splat(DEFAULT_DOMAIN));
+        let b = expr_bounds(&Expr::new(&bar), d);
+        // The bar's cross-section has half-diagonal 0.35·√2 ≈ 0.495.
+        assert!(
+            b.hi.x >= 0.49 && b.hi.x < 1.0 && b.lo.y <= -0.49 && b.lo.y > -1.0,
+            "{b:?}"
+        );
+        assert!(b.hi.z >= 1.1 && b.hi.z < 1.3, "{b:?}");
     }
 
     #[test]

@@ -32,7 +32,7 @@ pub enum Solid {
     /// Inside every part.
     Intersection(Vec<Solid>, Aabb),
     /// Inside the first part and outside the second.
-    Difference(Box<Solid>, Box<Solid>),
+    Difference(Box<Solid>, Box<Solid>, Aabb),
 }
 
 /// How a CSG node combines its parts' inside states.
@@ -87,6 +87,7 @@ impl Solid {
                     .map(|s| Self::build_moved(s, m))
                     .collect::<Result<Vec<_>, _>>()?;
                 let b = parts.iter().fold(Aabb::EMPTY, |b, p| b.union(&p.bounds()));
+                let b = tighten(shape, m, b)?;
                 Solid::Union(parts, b)
             }
             Shape::Intersection(v) => {
@@ -97,12 +98,14 @@ impl Solid {
                 let b = parts
                     .iter()
                     .fold(Aabb::EVERYTHING, |b, p| b.intersection(&p.bounds()));
+                let b = tighten(shape, m, b)?;
                 Solid::Intersection(parts, b)
             }
-            Shape::Difference(a, b) => Solid::Difference(
-                Box::new(Self::build_moved(a, m)?),
-                Box::new(Self::build_moved(b, m)?),
-            ),
+            Shape::Difference(a, b) => {
+                let (a, b) = (Self::build_moved(a, m)?, Self::build_moved(b, m)?);
+                let bounds = tighten(shape, m, a.bounds())?;
+                Solid::Difference(Box::new(a), Box::new(b), bounds)
+            }
             Shape::Transformed(inner, s) => Self::build_moved(s, &inner.then(m))?,
         })
     }
@@ -119,9 +122,9 @@ impl Solid {
             }
             Solid::Union(parts, b) => combine(parts, b, Rule::Any, ray, t_min, t_max),
             Solid::Intersection(parts, b) => combine(parts, b, Rule::All, ray, t_min, t_max),
-            Solid::Difference(a, b) => {
+            Solid::Difference(a, b, bounds) => {
                 let parts = [a.as_ref(), b.as_ref()];
-                combine_refs(&parts, &a.bounds(), Rule::FirstNotSecond, ray, t_min, t_max)
+                combine_refs(&parts, bounds, Rule::FirstNotSecond, ray, t_min, t_max)
             }
         }
     }
@@ -130,6 +133,23 @@ impl Solid {
     pub fn inside(&self, p: DVec3) -> bool {
         Surface::value(self, p) >= 0.0
     }
+}
+
+/// A CSG node's bounds from its parts can be infinite (half-spaces cut into a box);
+/// then the whole node's expression is bounded by interval octree refinement, which
+/// sees how the parts combine.
+fn tighten(shape: &Shape, m: &Affine, from_parts: Aabb) -> Result<Aabb, String> {
+    if from_parts.is_finite() || from_parts.is_empty() {
+        return Ok(from_parts);
+    }
+    let tree = m
+        .apply(&shape.to_tree()?)
+        .ok_or_else(|| format!("singular transform {m:?}"))?;
+    let domain = Aabb::new(DVec3::splat(-DEFAULT_DOMAIN), DVec3::splat(DEFAULT_DOMAIN));
+    let b = expr_bounds(&Expr::new(&tree), domain.intersection(&from_parts));
+    // What touches the search domain's faces may go on beyond it: keep it unbounded.
+    let touches = (0..3).any(|k| b.lo[k] <= -DEFAULT_DOMAIN || b.hi[k] >= DEFAULT_DOMAIN);
+    Ok(if touches { from_parts } else { b })
 }
 
 /// Bounding box of a box's image.
@@ -204,7 +224,7 @@ impl Surface for Solid {
                 .map(|s| s.value(p))
                 .fold(f64::NEG_INFINITY, f64::max),
             Solid::Intersection(v, _) => v.iter().map(|s| s.value(p)).fold(f64::INFINITY, f64::min),
-            Solid::Difference(a, b) => a.value(p).min(-b.value(p)),
+            Solid::Difference(a, b, _) => a.value(p).min(-b.value(p)),
         }
     }
 
@@ -225,7 +245,7 @@ impl Surface for Solid {
             Solid::Leaf(s) => s.gradient(p),
             Solid::Union(v, _) => pick(v, true),
             Solid::Intersection(v, _) => pick(v, false),
-            Solid::Difference(a, b) => {
+            Solid::Difference(a, b, _) => {
                 if a.value(p) <= -b.value(p) {
                     a.gradient(p)
                 } else {
@@ -242,8 +262,7 @@ impl Surface for Solid {
     fn bounds(&self) -> Aabb {
         match self {
             Solid::Leaf(s) => s.bounds(),
-            Solid::Union(_, b) | Solid::Intersection(_, b) => *b,
-            Solid::Difference(a, _) => a.bounds(),
+            Solid::Union(_, b) | Solid::Intersection(_, b) | Solid::Difference(_, _, b) => *b,
         }
     }
 }

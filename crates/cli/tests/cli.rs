@@ -1,0 +1,141 @@
+//! The `frepray` command end to end: pictures of every shared 3-D model and canonical
+//! scene, `check` summaries, and clear errors on bad input.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn frepray() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_frepray"))
+}
+
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+fn out_dir(name: &str) -> PathBuf {
+    let d = Path::new(env!("CARGO_TARGET_TMPDIR")).join(name);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// Reads one channel of an EXR written by frepray.
+fn channel(path: &Path, name: &str) -> Vec<f32> {
+    let img = exr::prelude::read_all_flat_layers_from_file(path).unwrap();
+    let layer = &img.layer_data[0];
+    let ch = layer
+        .channel_data
+        .list
+        .iter()
+        .find(|c| c.name.to_string() == name)
+        .unwrap_or_else(|| panic!("{}: no channel {name}", path.display()));
+    match &ch.sample_data {
+        exr::prelude::FlatSamples::F32(v) => v.clone(),
+        _ => panic!("channel {name} is not f32"),
+    }
+}
+
+/// Every 3-D model renders, with the camera that frames its bounds: part of the image
+/// is the object (finite depth, unit normals) and part is background.
+#[test]
+fn renders_every_model_framed() {
+    let models = [
+        "../shared/models/fidget/colonnade.vm",
+        "../shared/models/fidget/tanglecube.vm",
+        "models/canonical/s1_sphere.hf",
+        "models/canonical/s2_csg.hf",
+        "models/canonical/s3_blend.hf",
+        "models/canonical/s4_gyroid.hf",
+        "models/canonical/s5_twist.hf",
+        "models/examples/bumpy_ball.frep",
+        "models/examples/machined_part.frep",
+        "models/examples/smooth_blob.frep",
+    ];
+    let dir = out_dir("models");
+    for m in models {
+        let input = root().join(m);
+        let name = input.file_name().unwrap().to_string_lossy().to_string();
+        for (look, chans) in [("depth", vec!["Z"]), ("normals", vec!["N.X", "N.Y", "N.Z"])] {
+            let out = dir.join(format!("{name}.{look}.exr"));
+            let st = frepray()
+                .args(["render", "--quiet", "--width", "40", "--height", "32"])
+                .args(["--integrator", look, "-o"])
+                .arg(&out)
+                .arg(&input)
+                .output()
+                .unwrap();
+            assert!(st.status.success(), "{m}: {}", String::from_utf8_lossy(&st.stderr));
+            let planes: Vec<Vec<f32>> = chans.iter().map(|c| channel(&out, c)).collect();
+            assert_eq!(planes[0].len(), 40 * 32);
+            if look == "depth" {
+                let hits = planes[0].iter().filter(|d| d.is_finite()).count();
+                let frac = hits as f64 / planes[0].len() as f64;
+                assert!((0.05..0.95).contains(&frac), "{m}: {frac} of the image is the object");
+                assert!(planes[0].iter().all(|d| d.is_infinite() || *d > 0.0));
+            } else {
+                for i in 0..planes[0].len() {
+                    let n2: f32 = planes.iter().map(|p| p[i] * p[i]).sum();
+                    assert!(n2 == 0.0 || (n2 - 1.0).abs() < 1e-4, "{m}: |n|² = {n2}");
+                }
+            }
+        }
+    }
+}
+
+/// Same picture at any thread count.
+#[test]
+fn thread_count_does_not_change_the_image() {
+    let dir = out_dir("threads");
+    let input = root().join("models/canonical/s4_gyroid.hf");
+    let mut planes = vec![];
+    for t in ["1", "2"] {
+        let out = dir.join(format!("g{t}.exr"));
+        let st = frepray()
+            .args(["render", "--quiet", "--width", "32", "--height", "32", "--threads", t, "-o"])
+            .arg(&out)
+            .arg(&input)
+            .status()
+            .unwrap();
+        assert!(st.success());
+        planes.push(channel(&out, "R"));
+    }
+    assert_eq!(planes[0], planes[1]);
+}
+
+#[test]
+fn check_summarises_a_model() {
+    let st = frepray()
+        .arg("check")
+        .arg(root().join("models/examples/bumpy_ball.frep"))
+        .output()
+        .unwrap();
+    assert!(st.status.success());
+    let text = String::from_utf8_lossy(&st.stdout);
+    assert!(text.contains("perturbed quadrics: 1, perturbations: 3"), "{text}");
+    assert!(text.contains("bounds:"), "{text}");
+}
+
+/// A malformed model names file, line and column, exits non-zero, writes nothing.
+#[test]
+fn malformed_input_is_a_clear_error() {
+    let dir = out_dir("bad");
+    let bad = dir.join("bad.vm");
+    std::fs::write(&bad, "_x var-x\n_y frobnicate _x\n").unwrap();
+    let out = dir.join("never.png");
+    for args in [vec!["check"], vec!["render", "-o", out.to_str().unwrap()]] {
+        let st = frepray().args(&args).arg(&bad).output().unwrap();
+        assert!(!st.status.success());
+        let err = String::from_utf8_lossy(&st.stderr);
+        assert!(err.contains("bad.vm:2:"), "{err}");
+        assert!(!err.contains("panicked"), "{err}");
+    }
+    assert!(!out.exists());
+    // An unknown output format is refused before any work.
+    let st = frepray()
+        .args(["render", "-o"])
+        .arg(dir.join("x.jpg"))
+        .arg(root().join("models/canonical/s1_sphere.hf"))
+        .output()
+        .unwrap();
+    assert!(!st.status.success());
+    assert!(String::from_utf8_lossy(&st.stderr).contains("expected a .png or .exr"));
+}
