@@ -1,0 +1,76 @@
+//! Helpers shared by the reader tests.
+#![allow(dead_code, unused_imports)]
+
+pub use frep::read::{read_file, read_str, write_vm, Format, Model, ReadError};
+pub use frep::shape::Shape;
+pub use frep::{BinaryOp, Expr, Tree, UnaryOp};
+pub use rand::{Rng, SeedableRng};
+pub use std::path::PathBuf;
+
+pub fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+pub fn shared(p: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../../shared/models")
+        .join(p)
+}
+
+pub fn expr(m: &Model) -> Expr {
+    Expr::new(&m.shape.to_tree().expect("a regular shape"))
+}
+
+/// A function of a point.
+pub type Field = dyn Fn([f64; 3]) -> f64;
+
+pub fn close(a: f64, b: f64) -> bool {
+    (a.is_nan() && b.is_nan()) || a == b || (a - b).abs() <= 1e-9 * (1.0 + a.abs().max(b.abs()))
+}
+
+/// Random points in [-r, r]³ from a fixed seed.
+pub fn points(n: usize, r: f64, seed: u64) -> Vec<[f64; 3]> {
+    let mut rng = rand_pcg::Pcg64::seed_from_u64(seed);
+    (0..n)
+        .map(|_| [0; 3].map(|_| rng.gen_range(-r..r)))
+        .collect()
+}
+
+pub fn agree(m: &Model, f: impl Fn([f64; 3]) -> f64, r: f64, what: &str) {
+    let e = expr(m);
+    for p in points(400, r, 7) {
+        let (got, want) = (e.eval(p), f(p));
+        assert!(
+            close(got, want),
+            "{what} at {p:?}: read {got}, formula {want}"
+        );
+    }
+}
+
+pub fn err(text: &str, format: Format) -> ReadError {
+    match read_str(text, format, "t") {
+        Ok(_) => panic!("expected an error for:\n{text}"),
+        Err(e) => e,
+    }
+}
+
+/// Each case: input, expected line and column, and a piece of the message.
+pub fn check_errors(format: Format, cases: &[(&str, usize, usize, &str)]) {
+    for (text, line, col, msg) in cases {
+        let e = err(text, format);
+        assert_eq!(
+            (e.line, e.column),
+            (*line, *col),
+            "position for {text:?}: {e}"
+        );
+        assert!(e.message.contains(msg), "message for {text:?}: {e}");
+        assert!(
+            e.to_string().starts_with(&format!("t:{line}:{col}: ")),
+            "{e}"
+        );
+    }
+}
+
+pub fn norm(p: [f64; 3]) -> f64 {
+    (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt()
+}

@@ -1,0 +1,245 @@
+//! The frepray `.frep` syntax: the documented examples, the shapes each construct
+//! builds, and errors with positions.
+
+mod common;
+use common::*;
+
+/// The code blocks marked `frep` in docs/frep-syntax.md.
+fn doc_examples() -> Vec<String> {
+    let doc = std::fs::read_to_string(root().join("docs/frep-syntax.md")).unwrap();
+    let mut out = Vec::new();
+    let mut cur: Option<String> = None;
+    for line in doc.lines() {
+        match (&mut cur, line.trim_start()) {
+            (None, "```frep") => cur = Some(String::new()),
+            (Some(_), "```") => out.push(cur.take().unwrap()),
+            (Some(s), _) => {
+                s.push_str(line);
+                s.push('\n');
+            }
+            _ => {}
+        }
+    }
+    out
+}
+
+#[test]
+fn frep_doc_and_example_files_load() {
+    let examples = doc_examples();
+    assert!(examples.len() >= 5, "found {} examples", examples.len());
+    for (i, text) in examples.iter().enumerate() {
+        let m = read_str(text, Format::Frep, &format!("doc example {i}"))
+            .unwrap_or_else(|e| panic!("{e}\n{text}"));
+        assert!(expr(&m).eval([0.05, 0.1, 0.2]).is_finite(), "{text}");
+    }
+    let mut n = 0;
+    for entry in std::fs::read_dir(root().join("models/examples")).unwrap() {
+        let path = entry.unwrap().path();
+        if path.extension().is_some_and(|e| e == "frep") {
+            let m = read_file(&path).unwrap_or_else(|e| panic!("{e}"));
+            assert!(m.domain.is_some(), "{path:?} declares bounds");
+            n += 1;
+        }
+    }
+    assert!(n >= 3);
+}
+
+fn frep(text: &str) -> Model {
+    read_str(text, Format::Frep, "t.frep").unwrap_or_else(|e| panic!("{e}\n{text}"))
+}
+
+#[test]
+fn frep_builds_the_right_shapes() {
+    // The bumpy ball stays a perturbed quadric with its two perturbations.
+    let m = frep(doc_examples().iter().find(|t| t.contains("bumpy")).unwrap());
+    let Shape::Perturbed(pq) = &m.shape else {
+        panic!("{:?}", m.shape)
+    };
+    assert_eq!(pq.perturbations().len(), 2);
+    assert_eq!(
+        (pq.perturbations()[0].f, pq.perturbations()[1].f),
+        (0.4, -0.8)
+    );
+    agree(
+        &m,
+        |p| pq.eval(glam::DVec3::from_array(p)),
+        1.5,
+        "bumpy ball",
+    );
+    // Exact CSG keeps its structure; R-functions and arithmetic lower to functions.
+    let m = frep("let a = sphere([0,0,0], 1)\nlet b = plane(z, 0.5)\noutput difference(a, b)");
+    assert!(matches!(m.shape, Shape::Difference(..)));
+    agree(
+        &m,
+        |[x, y, z]| (1.0 - x * x - y * y - z * z).min(-(0.5 - z)),
+        1.5,
+        "difference",
+    );
+    let m = frep("output r_union(sphere([0,0,0], 1), x, alpha = 0.5)");
+    assert!(matches!(m.shape, Shape::Function { .. }));
+    agree(
+        &m,
+        |[x, y, z]| {
+            let a = 1.0 - x * x - y * y - z * z;
+            (a + x + (a * a + x * x - a * x).sqrt()) / 1.5
+        },
+        1.5,
+        "r_union",
+    );
+    // Quadric arithmetic stays a quadric; transforms move the solid.
+    let m = frep("let q = 2 * ellipsoid([0,0,0], [1, 2, 3]) - 1\noutput q");
+    assert!(matches!(m.shape, Shape::Perturbed(_)));
+    agree(
+        &m,
+        |[x, y, z]| 2.0 * (1.0 - x * x - y * y / 4.0 - z * z / 9.0) - 1.0,
+        2.0,
+        "quadric arithmetic",
+    );
+    let m = frep("output rotate_z(90, translate([1, 0, 0], sphere([0,0,0], 0.5)))");
+    assert!(matches!(m.shape, Shape::Transformed(..)));
+    let e = expr(&m);
+    // The ball of radius 0.5 about (1, 0, 0) is now about (0, 1, 0).
+    assert!(e.eval([0.0, 1.0, 0.0]) > 0.0 && e.eval([1.0, 0.0, 0.0]) < 0.0);
+    assert!(e.eval([0.0, 1.5, 0.0]).abs() < 1e-12 && e.eval([-0.5, 1.0, 0.0]).abs() < 1e-12);
+    let m = frep("let s = scale([2, 1, 1], sphere([0,0,0], 1))\nlet t = affine([2,0,0, 0,1,0, 0,0,1], [0,0,1], sphere([0,0,0], 1))\noutput union(s, t)");
+    agree(
+        &m,
+        |[x, y, z]| {
+            (1.0 - x * x / 4.0 - y * y - z * z).max(1.0 - x * x / 4.0 - y * y - (z - 1.0).powi(2))
+        },
+        2.0,
+        "scale/affine",
+    );
+    // Functions, named arguments, powers, bounds.
+    let m = frep("let ring(r, w) = w^2 - (sqrt(x^2 + y^2) - r)^2 - z^2\nbounds([-2,-2,-1], [2,2,1])\noutput ring(w = 0.2, r = 1)");
+    assert_eq!(m.name, None);
+    let d = m.domain.unwrap();
+    assert_eq!((d.lo.x, d.hi.z), (-2.0, 1.0));
+    assert!(matches!(
+        m.shape,
+        Shape::Function {
+            domain: Some(_),
+            ..
+        }
+    ));
+    agree(
+        &m,
+        |[x, y, z]| 0.04 - ((x * x + y * y).sqrt() - 1.0).powi(2) - z * z,
+        2.0,
+        "user function",
+    );
+    agree(
+        &frep("output x^-2 + -y^2 + pow(2, 3) + min(x, y, z) + mod(x, 0.3)"),
+        |[x, y, z]| 1.0 / (x * x) - y * y + 8.0 + x.min(y).min(z) + x.rem_euclid(0.3),
+        2.0,
+        "math",
+    );
+}
+
+#[test]
+fn frep_errors_have_positions() {
+    let deep = format!("output {}x{}", "(".repeat(3000), ")".repeat(3000));
+    let unary = format!("output {}x", "-".repeat(3000));
+    let recursive = "let f(a) = f(a) + 1\noutput f(x)";
+    check_errors(
+        Format::Frep,
+        &[
+            (
+                "let a = 1\noutput a",
+                2,
+                8,
+                "expected a solid, found a number",
+            ),
+            (
+                "output union(sphere([0,0,0], 1), 2)",
+                1,
+                34,
+                "expected a solid, found a number",
+            ),
+            ("output spere([0,0,0], 1)", 1, 8, "unknown function 'spere'"),
+            ("let a = b + 1\noutput a", 1, 9, "undefined name 'b'"),
+            (
+                "output sphere([0,0,0], 1, 2)",
+                1,
+                27,
+                "expected at most 2 arguments for sphere(center, radius)",
+            ),
+            (
+                "output sphere([0,0,0])",
+                1,
+                8,
+                "expected an argument 'radius'",
+            ),
+            (
+                "output sphere(centre = [0,0,0], radius = 1)",
+                1,
+                24,
+                "found 'centre'",
+            ),
+            (
+                "output sphere([0,0,0], radius = 1, radius = 2)",
+                1,
+                45,
+                "found 'radius' twice",
+            ),
+            (
+                "output sphere(1, 1)",
+                1,
+                15,
+                "expected a list of 3 numbers, found a number",
+            ),
+            ("output sphere([0,0], 1)", 1, 15, "found a list of 2"),
+            ("let a = 1.2.3", 1, 9, "malformed number '1.2.3'"),
+            (
+                "output sphere([0,0,0], 1",
+                1,
+                25,
+                "expected ')', found the end of the file",
+            ),
+            (
+                "output (x + y))",
+                1,
+                15,
+                "expected 'let', 'bounds' or 'output', found ')'",
+            ),
+            (
+                "let a =",
+                1,
+                8,
+                "expected an expression, found the end of the file",
+            ),
+            ("let a = x", 1, 5, "expected an 'output' statement"),
+            ("let x = 1\noutput x", 1, 5, "'x', a coordinate"),
+            (
+                "let a = x\nlet a = y\noutput a",
+                2,
+                5,
+                "'a', already defined",
+            ),
+            ("output x^0.5", 1, 9, "expected a whole-number exponent"),
+            (
+                "output perturb(sphere([0,0,0], 1), sphere([1,0,0], 1))",
+                1,
+                36,
+                "expected a perturbation term f * q^3, found a quadric",
+            ),
+            ("output scale(0, sphere([0,0,0], 1))", 1, 8, "singular"),
+            ("output x\noutput y", 2, 1, "found a second"),
+            ("output [1, x]", 1, 12, "expected a number in a list"),
+            ("output x + [1, 2]", 1, 10, "found a list"),
+            (&deep, 1, 208, "at most 200 levels of nesting"),
+            (&unary, 1, 208, "at most 200 levels of nesting"),
+            (recursive, 1, 12, "nested at most 200 deep"),
+        ],
+    );
+}
+
+#[test]
+fn read_file_reports_unreadable_files() {
+    let e = read_file(&root().join("models/no_such_model.frep")).unwrap_err();
+    assert_eq!((e.line, e.column), (0, 0));
+    assert!(e.message.contains("cannot read"), "{e}");
+    let e = read_file(&root().join("docs/frep-syntax.md")).unwrap_err();
+    assert_eq!((e.line, e.column), (0, 0));
+    assert!(e.message.contains(".frep, .hf or .vm"), "{e}");
+}
