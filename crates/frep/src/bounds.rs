@@ -19,9 +19,11 @@ pub fn expr_bounds(expr: &Expr, domain: Aabb) -> Aabb {
     let mut scratch = Vec::with_capacity(expr.len());
     let mut b = domain;
     let mut depth = START_DEPTH;
-    // Each pass searches the previous result. When a pass no longer shrinks it, cells
-    // may be too coarse for interval arithmetic to prove them empty (a twist couples
-    // the coordinates), so the next pass goes deeper, within an evaluation budget.
+    // Each pass searches the previous result. When a pass no longer shrinks it while
+    // it still reaches the domain's faces, the cells may be too coarse for interval
+    // arithmetic to prove them empty (a twist couples the coordinates), so the next
+    // pass goes deeper, within an evaluation budget.
+    let mut deepened = false;
     for _ in 0..16 {
         let mut out = Aabb::EMPTY;
         let mut budget = BUDGET / expr.len().max(1);
@@ -30,16 +32,21 @@ pub fn expr_bounds(expr: &Expr, domain: Aabb) -> Aabb {
             return out;
         }
         let shrunk = out.extent().max_element() < 0.9 * b.extent().max_element();
-        let exhausted = budget == 0;
-        if !exhausted {
+        if budget == 0 {
             // A pass cut short by the budget proves nothing beyond its start box.
-            b = out;
+            break;
         }
-        if !shrunk || exhausted {
-            if exhausted || depth >= MAX_DEPTH {
+        b = out;
+        if shrunk {
+            deepened = false;
+        } else {
+            // Going deeper once more only pays if the last deepening helped.
+            let touches = (0..3).any(|k| b.lo[k] <= domain.lo[k] || b.hi[k] >= domain.hi[k]);
+            if !touches || deepened || depth >= MAX_DEPTH {
                 break;
             }
             depth += 2;
+            deepened = true;
         }
     }
     b
@@ -49,8 +56,8 @@ pub fn expr_bounds(expr: &Expr, domain: Aabb) -> Aabb {
 const START_DEPTH: u32 = 6;
 /// Deepest octree tried when passes stop shrinking the box.
 const MAX_DEPTH: u32 = 12;
-/// Node evaluations one pass may spend (about a second for any expression).
-const BUDGET: usize = 200_000_000;
+/// Node evaluations one pass may spend (a fraction of a second for any expression).
+const BUDGET: usize = 5_000_000;
 
 fn refine(
     expr: &Expr,

@@ -9,7 +9,13 @@ use crate::dual::Dual;
 use crate::interval::Interval;
 use crate::scalar::Scalar;
 use crate::tree::{BinaryOp, Tree, TreeOp, UnaryOp, Var};
+use std::cell::RefCell;
 use std::collections::HashMap;
+
+thread_local! {
+    /// Liveness and renumbering buffers reused by [`Expr::simplify`].
+    static SIMPLIFY: RefCell<(Vec<bool>, Vec<u32>)> = const { RefCell::new((Vec::new(), Vec::new())) };
+}
 
 /// One node of an [`Expr`]; operands are indices of earlier nodes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -368,28 +374,58 @@ impl Expr {
         if !choices.iter().any(|c| *c != Choice::Both) {
             return None;
         }
-        let mut remap: Vec<u32> = Vec::with_capacity(self.nodes.len());
-        let mut out: Vec<Node> = Vec::with_capacity(self.nodes.len());
-        for (n, c) in self.nodes.iter().zip(choices) {
-            let id = match (*n, c) {
-                (Node::Binary(_, a, _), Choice::Left) => remap[a as usize],
-                (Node::Binary(_, _, b), Choice::Right) => remap[b as usize],
-                (n, _) => {
-                    out.push(match n {
-                        Node::Unary(op, a) => Node::Unary(op, remap[a as usize]),
-                        Node::PowI(a, k) => Node::PowI(remap[a as usize], k),
-                        Node::Binary(op, a, b) => {
-                            Node::Binary(op, remap[a as usize], remap[b as usize])
-                        }
-                        n => n,
-                    });
-                    out.len() as u32 - 1
+        SIMPLIFY.with_borrow_mut(|(live, remap)| {
+            let n = self.nodes.len();
+            // Backward: what the root still needs, following only the chosen operands.
+            live.clear();
+            live.resize(n, false);
+            live[n - 1] = true;
+            let mut count = 0;
+            for i in (0..n).rev() {
+                if !live[i] {
+                    continue;
                 }
-            };
-            remap.push(id);
-        }
-        let root = *remap.last().expect("an expression has a root");
-        Some(Self::compact(out, root))
+                count += 1;
+                match (self.nodes[i], choices[i]) {
+                    (Node::Binary(_, a, _), Choice::Left) => live[a as usize] = true,
+                    (Node::Binary(_, _, b), Choice::Right) => live[b as usize] = true,
+                    (Node::Binary(_, a, b), _) => {
+                        live[a as usize] = true;
+                        live[b as usize] = true;
+                    }
+                    (Node::Unary(_, a) | Node::PowI(a, _), _) => live[a as usize] = true,
+                    _ => {}
+                }
+            }
+            // Forward: copy what is live; a decided min/max is its chosen operand.
+            remap.clear();
+            remap.resize(n, u32::MAX);
+            let mut out = Vec::with_capacity(count);
+            for i in 0..n {
+                if !live[i] {
+                    continue;
+                }
+                remap[i] = match (self.nodes[i], choices[i]) {
+                    (Node::Binary(_, a, _), Choice::Left) => remap[a as usize],
+                    (Node::Binary(_, _, b), Choice::Right) => remap[b as usize],
+                    (node, _) => {
+                        out.push(match node {
+                            Node::Unary(op, a) => Node::Unary(op, remap[a as usize]),
+                            Node::PowI(a, k) => Node::PowI(remap[a as usize], k),
+                            Node::Binary(op, a, b) => {
+                                Node::Binary(op, remap[a as usize], remap[b as usize])
+                            }
+                            other => other,
+                        });
+                        out.len() as u32 - 1
+                    }
+                };
+            }
+            // Every live node is reachable from the root through chosen operands, so the
+            // root's image is the last node written.
+            debug_assert_eq!(remap[n - 1] as usize, out.len() - 1);
+            Some(Expr { nodes: out })
+        })
     }
 
     /// F at a point, in f64.

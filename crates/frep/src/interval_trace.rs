@@ -12,7 +12,7 @@ use crate::dual::Dual;
 use crate::expr::{Choice, Expr};
 use crate::interval::Interval;
 use crate::ray::{Aabb, Ray};
-use crate::surface::Surface;
+use crate::surface::{outward, Surface};
 use glam::DVec3;
 use std::cell::RefCell;
 use std::sync::Arc;
@@ -87,6 +87,13 @@ impl ExprSurface {
         SCRATCH_F.with_borrow_mut(|s| tape.eval_with(p.x, p.y, p.z, s))
     }
 
+    /// ∇F at p by `tape`.
+    fn gradient_by(tape: &Expr, p: DVec3) -> DVec3 {
+        let v = |k: usize| Dual::<f64, 3>::var(p[k], k);
+        let r = SCRATCH_G.with_borrow_mut(|s| tape.eval_with(v(0), v(1), v(2), s));
+        DVec3::from_array(r.d)
+    }
+
     /// Finds the crossing in [a, b], where the inside predicate differs at the ends:
     /// safeguarded Newton on F(t) (a Newton step that leaves the bracket becomes a
     /// bisection), stopping when the bracket or the step is below `tol`.
@@ -128,12 +135,28 @@ impl Surface for ExprSurface {
     }
 
     fn gradient(&self, p: DVec3) -> DVec3 {
-        let v = |k: usize| Dual::<f64, 3>::var(p[k], k);
-        let r = SCRATCH_G.with_borrow_mut(|s| self.expr.eval_with(v(0), v(1), v(2), s));
-        DVec3::from_array(r.d)
+        Self::gradient_by(&self.expr, p)
     }
 
     fn first_crossing(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<f64> {
+        self.trace(ray, t_min, t_max).map(|(t, _)| t)
+    }
+
+    fn first_hit(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<(f64, DVec3)> {
+        // The normal from the tape simplified for the hit's segment: same values there,
+        // a fraction of the nodes.
+        let (t, tape) = self.trace(ray, t_min, t_max)?;
+        Some((t, outward(Self::gradient_by(&tape, ray.at(t)))))
+    }
+
+    fn bounds(&self) -> Aabb {
+        self.bounds
+    }
+}
+
+impl ExprSurface {
+    /// The first crossing and the tape that holds at it.
+    fn trace(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<(f64, Arc<Expr>)> {
         // Outside the bounds F < 0, so crossings lie inside them; widen a little so that
         // a surface on the box face is not clipped away.
         let grown = Aabb::new(self.bounds.lo - self.eps, self.bounds.hi + self.eps);
@@ -146,8 +169,10 @@ impl Surface for ExprSurface {
         let tol = eps_t * 1e-5;
         let root = self.expr.clone();
         let mut choices = Vec::new();
-        let ia = Self::inside_at(&root, ray, t0);
-        let ib = Self::inside_at(&root, ray, t1);
+        // Where the range was clipped by the grown bounds, F < 0 is known (a solid cut by
+        // its search domain is thereby capped at the domain's faces).
+        let ia = t0 <= t_min && Self::inside_at(&root, ray, t0);
+        let ib = t1 >= t_max && Self::inside_at(&root, ray, t1);
         let mut stack = vec![(t0, t1, ia, ib, root)];
         while let Some((a, b, ia, ib, tape)) = stack.pop() {
             let (v, slope) = Self::segment(&tape, ray, a, b, &mut choices);
@@ -158,7 +183,7 @@ impl Surface for ExprSurface {
                 // Monotonic (at most one crossing) or below resolution: decided by the
                 // signs at the ends.
                 if ia != ib {
-                    return Some(Self::refine(&tape, ray, a, b, ia, tol));
+                    return Some((Self::refine(&tape, ray, a, b, ia, tol), tape));
                 }
                 continue;
             }
@@ -180,10 +205,6 @@ impl Surface for ExprSurface {
             stack.push((a, m, ia, im, tape));
         }
         None
-    }
-
-    fn bounds(&self) -> Aabb {
-        self.bounds
     }
 }
 

@@ -114,11 +114,8 @@ impl Solid {
     pub fn intersect(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<Hit> {
         match self {
             Solid::Leaf(s) => {
-                let t = s.first_crossing(ray, t_min, t_max)?;
-                Some(Hit {
-                    t,
-                    normal: s.normal(ray.at(t)),
-                })
+                let (t, normal) = s.first_hit(ray, t_min, t_max)?;
+                Some(Hit { t, normal })
             }
             Solid::Union(parts, b) => combine(parts, b, Rule::Any, ray, t_min, t_max),
             Solid::Intersection(parts, b) => combine(parts, b, Rule::All, ray, t_min, t_max),

@@ -16,6 +16,11 @@ pub trait Surface: Send + Sync {
     fn gradient(&self, p: DVec3) -> DVec3;
     /// The first t in (t_min, t_max) where F changes sign along the ray, or None.
     fn first_crossing(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<f64>;
+    /// The first crossing with the outward normal there.
+    fn first_hit(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<(f64, DVec3)> {
+        let t = self.first_crossing(ray, t_min, t_max)?;
+        Some((t, self.normal(ray.at(t))))
+    }
     /// Whether F changes sign anywhere in (t_min, t_max) (shadow rays).
     fn any_crossing(&self, ray: &Ray, t_min: f64, t_max: f64) -> bool {
         self.first_crossing(ray, t_min, t_max).is_some()
@@ -24,12 +29,17 @@ pub trait Surface: Send + Sync {
     fn bounds(&self) -> Aabb;
     /// The outward unit normal at p: −∇F/|∇F| since F ≥ 0 inside.
     fn normal(&self, p: DVec3) -> DVec3 {
-        let g = self.gradient(p);
-        let l = g.length();
-        if l > 0.0 && l.is_finite() {
-            -g / l
-        } else {
-            DVec3::Z
-        }
+        outward(self.gradient(p))
+    }
+}
+
+/// The outward unit normal −g/|g| for a gradient g of F ≥ 0 inside (+z where g
+/// vanishes or is not finite).
+pub fn outward(g: DVec3) -> DVec3 {
+    let l = g.length();
+    if l > 0.0 && l.is_finite() {
+        -g / l
+    } else {
+        DVec3::Z
     }
 }
