@@ -1,0 +1,457 @@
+//! From a [`SceneDescription`] to a [`Scene`]: camera, materials, objects (solids read
+//! inline or from model files, transformed) and, via [`super::lights`], the lights.
+
+use super::desc::{
+    CameraDesc, ColorDesc, MaterialDesc, ObjectDesc, RotateDesc, SceneDescription, TransformDesc,
+};
+use super::error::{kp, KeyPath, SceneError, Seg};
+use super::lights::{environment, lights};
+use super::locate::{position_in_literal, Source};
+use super::{Object, Scene};
+use crate::bsdf::CoatTable;
+use crate::camera::Camera;
+use crate::color::Rgb;
+use crate::light::Lights;
+use crate::material::Material;
+use crate::texture::{Texture, TextureSpace};
+use frep::read::{read_file, read_str, Format};
+use frep::{Aabb, Affine, Shape, Solid, Surface};
+use glam::DVec3;
+use std::path::Path;
+
+/// Conductor presets: (name, η, k) per R, G, B channel, RGB fits of measured optical
+/// constants (Palik's tables) as commonly used by RGB renderers.
+pub const METALS: [(&str, [f64; 3], [f64; 3]); 4] = [
+    ("gold", [0.143, 0.374, 1.442], [3.983, 2.385, 1.603]),
+    ("copper", [0.200, 0.924, 1.102], [3.912, 2.452, 2.142]),
+    ("aluminium", [1.657, 0.880, 0.521], [9.224, 6.270, 4.837]),
+    ("silver", [0.155, 0.117, 0.138], [4.828, 3.122, 2.147]),
+];
+
+/// A finite vector.
+pub(crate) fn vec3(src: &Source, at: &[Seg], v: [f64; 3]) -> Result<DVec3, SceneError> {
+    let d = DVec3::from_array(v);
+    if d.is_finite() {
+        Ok(d)
+    } else {
+        Err(src.at_value(at, "expected finite numbers"))
+    }
+}
+
+/// A finite number within `lo..=hi`.
+pub(crate) fn number(
+    src: &Source,
+    at: &[Seg],
+    v: f64,
+    lo: f64,
+    hi: f64,
+) -> Result<f64, SceneError> {
+    if v.is_finite() && v >= lo && v <= hi {
+        Ok(v)
+    } else {
+        let range = match (lo == f64::NEG_INFINITY, hi == f64::INFINITY) {
+            (true, true) => "finite".to_string(),
+            (false, true) => format!("≥ {lo}"),
+            (true, false) => format!("≤ {hi}"),
+            (false, false) => format!("in [{lo}, {hi}]"),
+        };
+        Err(src.at_value(at, format!("expected a number {range}, found {v}")))
+    }
+}
+
+/// Rejects keys given for a `kind` that does not take them.
+pub(crate) fn check_keys(
+    src: &Source,
+    at: &[Seg],
+    what: &str,
+    present: &[(&str, bool)],
+    allowed: &[&str],
+) -> Result<(), SceneError> {
+    for &(key, given) in present {
+        if given && !allowed.contains(&key) {
+            let mut p = at.to_vec();
+            p.push(key.into());
+            let valid = allowed.join(", ");
+            return Err(src.at_key(
+                &p,
+                format!("{what} takes no key {key:?} (its keys: {valid})"),
+            ));
+        }
+    }
+    Ok(())
+}
+
+fn camera(src: &Source, c: &CameraDesc) -> Result<Camera, SceneError> {
+    let eye = vec3(src, &kp!["camera", "eye"], c.eye)?;
+    let target = vec3(src, &kp!["camera", "target"], c.target)?;
+    let up = vec3(src, &kp!["camera", "up"], c.up.unwrap_or([0.0, 0.0, 1.0]))?;
+    let fov = number(
+        src,
+        &kp!["camera", "fov"],
+        c.fov.unwrap_or(40.0),
+        0.0,
+        180.0,
+    )?;
+    if fov == 0.0 || fov == 180.0 {
+        return Err(src.at_value(
+            &kp!["camera", "fov"],
+            "the field of view must lie strictly between 0 and 180 degrees",
+        ));
+    }
+    let [w, h] = c.resolution.unwrap_or([320, 240]);
+    if w == 0 || h == 0 {
+        return Err(src.at_value(
+            &kp!["camera", "resolution"],
+            format!("the image must have pixels, found {w} × {h}"),
+        ));
+    }
+    let forward = target - eye;
+    if forward.length() == 0.0 || !forward.length().is_finite() {
+        let why = if forward.length() == 0.0 {
+            "the target is the eye"
+        } else {
+            "the target is too far from the eye"
+        };
+        return Err(src.at_value(&kp!["camera", "target"], why));
+    }
+    let side = forward.normalize().cross(up.normalize()).length();
+    if side.is_nan() || side < 1e-9 {
+        return Err(src.at_value(&kp!["camera", "up"], "up is parallel to the view direction"));
+    }
+    Ok(Camera::look_at(eye, target, up, fov, w, h))
+}
+
+/// A texture; `max` bounds every channel (1 for reflectances).
+fn texture(src: &Source, at: &[Seg], c: &ColorDesc, max: f64) -> Result<Texture, SceneError> {
+    let rgb = |at: &[Seg], a: &[f64; 3]| -> Result<Rgb, SceneError> {
+        for &x in a {
+            number(src, at, x, 0.0, max)?;
+        }
+        Ok(Rgb::from_array(*a))
+    };
+    match c {
+        ColorDesc::Rgb(a) => Ok(Texture::Constant(rgb(at, a)?)),
+        ColorDesc::Checker(k) => {
+            let mut p = at.to_vec();
+            p.push("checker".into());
+            let sub = |key: &str| [p.clone(), kp![key]].concat();
+            let scale = number(
+                src,
+                &sub("scale"),
+                k.scale.unwrap_or(1.0),
+                0.0,
+                f64::INFINITY,
+            )?;
+            if scale == 0.0 {
+                return Err(src.at_value(&sub("scale"), "a checker's scale must be positive"));
+            }
+            let space = match k.space.as_deref() {
+                None | Some("point") => TextureSpace::Point,
+                Some("uv") => TextureSpace::Uv,
+                Some(s) => {
+                    return Err(src.at_value(
+                        &sub("space"),
+                        format!("unknown checker space {s:?}; valid: point, uv"),
+                    ))
+                }
+            };
+            Ok(Texture::Checker {
+                a: rgb(&sub("a"), &k.a.0)?,
+                b: rgb(&sub("b"), &k.b.0)?,
+                scale,
+                space,
+            })
+        }
+    }
+}
+
+/// A number given as a colour with equal channels (a dielectric's η).
+fn scalar(src: &Source, at: &[Seg], c: &ColorDesc, lo: f64) -> Result<f64, SceneError> {
+    match c {
+        ColorDesc::Rgb([a, b, c]) if a == b && b == c => number(src, at, *a, lo, f64::INFINITY),
+        _ => Err(src.at_value(at, "expected a number")),
+    }
+}
+
+fn material(src: &Source, name: &String, m: &MaterialDesc) -> Result<Material, SceneError> {
+    let at = kp!["materials", name];
+    let key = |k: &str| [at.clone(), kp![k]].concat();
+    let present = [
+        ("reflectance", m.reflectance.is_some()),
+        ("diffuse", m.diffuse.is_some()),
+        ("metal", m.metal.is_some()),
+        ("eta", m.eta.is_some()),
+        ("k", m.k.is_some()),
+        ("roughness", m.roughness.is_some()),
+    ];
+    let allowed: &[&str] = match m.kind.as_str() {
+        "diffuse" => &["type", "reflectance"],
+        "conductor" => &["type", "metal", "eta", "k", "roughness"],
+        "dielectric" => &["type", "eta", "roughness"],
+        "plastic" => &["type", "diffuse", "eta", "roughness"],
+        other => {
+            return Err(src.at_value(&key("type"), format!("unknown material type {other:?}; valid types: diffuse, conductor, dielectric, plastic")))
+        }
+    };
+    check_keys(
+        src,
+        &at,
+        &format!("a {} material", m.kind),
+        &present,
+        allowed,
+    )?;
+    let roughness = number(src, &key("roughness"), m.roughness.unwrap_or(0.0), 0.0, 1.0)?;
+    let grey = ColorDesc::Rgb([0.5; 3]);
+    let eta = |default: f64| match &m.eta {
+        Some(e) => scalar(src, &key("eta"), e, f64::MIN_POSITIVE),
+        None => Ok(default),
+    };
+    Ok(match m.kind.as_str() {
+        "diffuse" => Material::Diffuse {
+            reflectance: texture(
+                src,
+                &key("reflectance"),
+                m.reflectance.as_ref().unwrap_or(&grey),
+                1.0,
+            )?,
+        },
+        "dielectric" => Material::Dielectric {
+            eta: eta(1.5)?,
+            roughness,
+        },
+        "plastic" => Material::Plastic {
+            diffuse: texture(
+                src,
+                &key("diffuse"),
+                m.diffuse.as_ref().unwrap_or(&grey),
+                1.0,
+            )?,
+            coat: CoatTable::new(eta(1.5)?, roughness),
+        },
+        _ => {
+            let (eta, k) = match (&m.metal, &m.eta, &m.k) {
+                (Some(metal), None, None) => {
+                    let (_, e, k) =
+                        METALS.iter().find(|(n, _, _)| n == metal).ok_or_else(|| {
+                            let names: Vec<&str> = METALS.iter().map(|m| m.0).collect();
+                            src.at_value(
+                                &key("metal"),
+                                format!(
+                                    "unknown metal {metal:?}; valid names: {}",
+                                    names.join(", ")
+                                ),
+                            )
+                        })?;
+                    (
+                        Texture::Constant(Rgb::from_array(*e)),
+                        Texture::Constant(Rgb::from_array(*k)),
+                    )
+                }
+                (None, Some(e), Some(k)) => (
+                    texture(src, &key("eta"), e, f64::INFINITY)?,
+                    texture(src, &key("k"), k, f64::INFINITY)?,
+                ),
+                (Some(_), _, _) => {
+                    let extra = if m.eta.is_some() { "eta" } else { "k" };
+                    return Err(src.at_key(&key(extra), "give either metal or eta and k, not both"));
+                }
+                _ => return Err(src.at_key(&at, "a conductor needs metal, or eta and k")),
+            };
+            Material::Conductor { eta, k, roughness }
+        }
+    })
+}
+
+/// A rotation by `degrees` about `axis`.
+pub(crate) fn rotation(src: &Source, at: &[Seg], r: &RotateDesc) -> Result<Affine, SceneError> {
+    let key = |k: &str| [at.to_vec(), kp![k]].concat();
+    let axis = vec3(src, &key("axis"), r.axis)?;
+    if axis.length() == 0.0 {
+        return Err(src.at_value(&key("axis"), "the rotation axis is zero"));
+    }
+    let deg = number(
+        src,
+        &key("degrees"),
+        r.degrees,
+        f64::NEG_INFINITY,
+        f64::INFINITY,
+    )?;
+    Ok(Affine::rotate(axis, deg.to_radians()))
+}
+
+/// Steps applied first to last.
+pub(crate) fn transform(src: &Source, at: &[Seg], t: &TransformDesc) -> Result<Affine, SceneError> {
+    let mut acc = Affine::IDENTITY;
+    for (j, s) in t.steps.iter().enumerate() {
+        let mut p = at.to_vec();
+        if t.list {
+            p.push(j.into());
+        }
+        let key = |k: &str| [p.clone(), kp![k]].concat();
+        let step = match (s.translate, s.rotate, s.scale) {
+            (Some(v), None, None) => Affine::translate(vec3(src, &key("translate"), v)?),
+            (None, Some(r), None) => rotation(src, &key("rotate"), &r)?,
+            (None, None, Some(sc)) => {
+                let v = vec3(src, &key("scale"), sc.0)?;
+                if v.x * v.y * v.z == 0.0 {
+                    return Err(src.at_value(&key("scale"), "a scale factor is zero"));
+                }
+                Affine::scale(v)
+            }
+            _ => {
+                return Err(src.at_value(&p, "a transform step takes exactly one of translate, rotate, scale (use a list for several)"))
+            }
+        };
+        acc = acc.then(&step);
+    }
+    Ok(acc)
+}
+
+/// Whether a `.frep` text has an `output` statement (else it is one expression).
+fn has_output(text: &str) -> bool {
+    text.lines().any(|l| {
+        let code = l.split('#').next().unwrap_or("");
+        code.match_indices("output").any(|(i, _)| {
+            let word = |c: char| c.is_alphanumeric() || c == '_';
+            !code[..i].chars().next_back().is_some_and(word)
+                && !code[i + 6..].chars().next().is_some_and(word)
+        })
+    })
+}
+
+fn shape(src: &Source, base: &Path, i: usize, o: &ObjectDesc) -> Result<Shape, SceneError> {
+    match (&o.solid, &o.model) {
+        (Some(text), None) => {
+            let at = kp!["objects", i, "solid"];
+            let program = has_output(text);
+            let full = if program {
+                text.clone()
+            } else {
+                format!("output\n{text}")
+            };
+            let label = format!("{} ({})", src.file, super::error::path_string(&at));
+            read_str(&full, Format::Frep, &label)
+                .map(|m| m.shape)
+                .map_err(|e| {
+                    let span = src.locate(&at).value;
+                    let line = if program {
+                        e.line
+                    } else {
+                        e.line.saturating_sub(1)
+                    };
+                    let off = if line == 0 {
+                        span.start
+                    } else {
+                        span.start + position_in_literal(&src.text[span.clone()], line, e.column)
+                    };
+                    src.error_at(off, &at, format!("in the solid: {}", e.message))
+                })
+        }
+        (None, Some(file)) => {
+            let at = kp!["objects", i, "model"];
+            let full = base.join(file);
+            read_file(&full).map(|m| m.shape).map_err(|e| {
+                if e.line == 0 {
+                    src.at_value(&at, format!("{}: {}", full.display(), e.message))
+                } else {
+                    let here = src.at_value(&at, "");
+                    SceneError {
+                        file: e.file,
+                        line: e.line,
+                        column: e.column,
+                        key: here.key,
+                        message: format!(
+                            "{} (model of {}:{}:{})",
+                            e.message, here.file, here.line, here.column
+                        ),
+                    }
+                }
+            })
+        }
+        (Some(_), Some(_)) => Err(src.at_key(
+            &kp!["objects", i, "model"],
+            "give either solid or model, not both",
+        )),
+        (None, None) => Err(src.at_value(
+            &kp!["objects", i],
+            "an object needs solid (inline) or model (a file)",
+        )),
+    }
+}
+
+fn object(
+    src: &Source,
+    base: &Path,
+    i: usize,
+    o: &ObjectDesc,
+    names: &[&String],
+) -> Result<Object, SceneError> {
+    let material = names
+        .iter()
+        .position(|n| **n == o.material)
+        .ok_or_else(|| {
+            let defined: Vec<&str> = names.iter().map(|s| s.as_str()).collect();
+            let list = if defined.is_empty() {
+                "none".to_string()
+            } else {
+                defined.join(", ")
+            };
+            src.at_value(
+                &kp!["objects", i, "material"],
+                format!("unknown material {:?}; defined: {list}", o.material),
+            )
+        })?;
+    let mut shape = shape(src, base, i, o)?;
+    let tp: KeyPath = kp!["objects", i, "transform"];
+    if let Some(t) = &o.transform {
+        shape = Shape::Transformed(transform(src, &tp, t)?, Box::new(shape));
+    }
+    let solid = Solid::build(&shape).map_err(|e| src.at_value(&tp, e))?;
+    Ok(Object {
+        name: o.name.clone().unwrap_or_else(|| format!("objects[{i}]")),
+        solid,
+        material,
+    })
+}
+
+/// Builds the scene; relative files are looked up beside `src.file`'s directory `base`.
+pub(crate) fn build(src: &Source, base: &Path, d: &SceneDescription) -> Result<Scene, SceneError> {
+    let camera = camera(src, &d.camera)?;
+    let names: Vec<&String> = d.materials.keys().collect();
+    let materials = d
+        .materials
+        .iter()
+        .map(|(n, m)| material(src, n, m))
+        .collect::<Result<Vec<_>, _>>()?;
+    let objects = d
+        .objects
+        .iter()
+        .enumerate()
+        .map(|(i, o)| object(src, base, i, o, &names))
+        .collect::<Result<Vec<_>, _>>()?;
+    let (area, delta) = lights(src, &d.lights)?;
+    let env = match &d.environment {
+        Some(e) => Some(environment(src, base, e)?),
+        None => None,
+    };
+    // The scene's extent sets the environment's share of light selection.
+    let mut b = objects
+        .iter()
+        .map(|o| o.solid.bounds())
+        .filter(Aabb::is_finite)
+        .fold(Aabb::EMPTY, |a, b| a.union(&b));
+    for l in &area {
+        let (c, r) = super::lights::bounding_sphere(&l.shape);
+        b = b.union(&Aabb::new(c - r, c + r));
+    }
+    for l in &delta {
+        b.include(l.position());
+    }
+    let radius = if b.is_empty() {
+        1.0
+    } else {
+        (b.extent().length() / 2.0).max(1e-3)
+    };
+    let lights = Lights::new(area, delta, env, radius);
+    Ok(Scene::new(camera, materials, objects, lights))
+}

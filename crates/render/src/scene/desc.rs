@@ -1,0 +1,378 @@
+//! The scene file schema: serde structs shared by the TOML and JSON forms
+//! (docs/scene-format.md). Every struct rejects unknown keys; per-type checks (which
+//! keys a material or light of a given `type` takes) happen when the scene is built.
+
+use serde::de::{self, Deserializer, MapAccess, SeqAccess, Visitor};
+use serde::Deserialize;
+use std::collections::BTreeMap;
+use std::fmt;
+
+/// A whole scene file.
+#[derive(Clone, Debug, Default, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct SceneDescription {
+    /// The camera.
+    pub camera: CameraDesc,
+    /// Integrator, samples and estimator.
+    #[serde(default)]
+    pub render: RenderDesc,
+    /// Materials by name.
+    #[serde(default)]
+    pub materials: BTreeMap<String, MaterialDesc>,
+    /// The solids.
+    #[serde(default)]
+    pub objects: Vec<ObjectDesc>,
+    /// Area, point and spot lights.
+    #[serde(default)]
+    pub lights: Vec<LightDesc>,
+    /// Light from infinitely far away.
+    pub environment: Option<EnvironmentDesc>,
+}
+
+/// A perspective look-at camera.
+#[derive(Clone, Debug, Default, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct CameraDesc {
+    /// Position of the pinhole.
+    pub eye: [f64; 3],
+    /// A point the camera looks at.
+    pub target: [f64; 3],
+    /// The image's up direction (default +z).
+    pub up: Option<[f64; 3]>,
+    /// Full vertical field of view in degrees (default 40).
+    pub fov: Option<f64>,
+    /// Width and height in pixels (default 320 × 240).
+    pub resolution: Option<[u32; 2]>,
+}
+
+/// Render settings; every key is optional.
+#[derive(Clone, Debug, Default, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct RenderDesc {
+    /// "direct", "path", "depth", "normals" or "albedo" (default "path").
+    pub integrator: Option<String>,
+    /// Samples (camera rays) per pixel (default 16).
+    pub spp: Option<u32>,
+    /// MIS estimator name, as `mis::Method` parses it (default "balance").
+    pub estimator: Option<String>,
+    /// Power-heuristic exponent.
+    pub beta: Option<f64>,
+    /// Cutoff-heuristic threshold.
+    pub cutoff: Option<f64>,
+    /// Ridge of the optimal solve.
+    pub ridge: Option<f64>,
+    /// Warm-up iterations of the progressive estimator.
+    pub warmup: Option<u64>,
+    /// Training iterations of the full-weights estimator.
+    pub train: Option<u64>,
+    /// Sampling techniques and their sample counts.
+    pub techniques: Option<Vec<TechniqueDesc>>,
+    /// Seed of the random streams (default 0).
+    pub seed: Option<u64>,
+    /// Longest path, in bounces (default 5).
+    pub max_depth: Option<u32>,
+    /// Depth at which Russian roulette starts (default 3).
+    pub rr_depth: Option<u32>,
+    /// Extra output channels (AOVs) by name.
+    pub aovs: Option<Vec<String>>,
+}
+
+/// One sampling technique with its number of samples per camera sample.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct TechniqueDesc {
+    /// "bsdf", "light", "light-area", "environment" or "cosine".
+    pub technique: String,
+    /// n_i (default 1).
+    pub samples: Option<u32>,
+}
+
+/// A material; `type` says which other keys apply.
+#[derive(Clone, Debug, Default, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct MaterialDesc {
+    /// "diffuse", "conductor", "dielectric" or "plastic".
+    #[serde(rename = "type")]
+    pub kind: String,
+    /// Diffuse reflectance.
+    pub reflectance: Option<ColorDesc>,
+    /// Plastic base colour.
+    pub diffuse: Option<ColorDesc>,
+    /// Conductor preset ("gold", "copper", "aluminium", "silver").
+    pub metal: Option<String>,
+    /// Index of refraction: a colour for conductors, a number otherwise.
+    pub eta: Option<ColorDesc>,
+    /// Conductor absorption.
+    pub k: Option<ColorDesc>,
+    /// GGX α.
+    pub roughness: Option<f64>,
+}
+
+/// An object: a solid (inline or from a model file), a transform and a material.
+#[derive(Clone, Debug, Default, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct ObjectDesc {
+    /// Name for messages (default `objects[i]`).
+    pub name: Option<String>,
+    /// A `.frep` program or a single expression.
+    pub solid: Option<String>,
+    /// A `.frep`, `.hf` or `.vm` file, relative to the scene file.
+    pub model: Option<String>,
+    /// Transforms applied in order.
+    pub transform: Option<TransformDesc>,
+    /// A key of `materials`.
+    pub material: String,
+}
+
+/// A light; `type` says which other keys apply.
+#[derive(Clone, Debug, Default, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct LightDesc {
+    /// "sphere", "rect" (or "rectangle"), "disk", "point" or "spot".
+    #[serde(rename = "type")]
+    pub kind: String,
+    /// Centre of a sphere, disk or rect.
+    pub center: Option<[f64; 3]>,
+    /// Radius of a sphere or disk.
+    pub radius: Option<f64>,
+    /// Emitting side of a disk or rect (default −z, facing down).
+    pub normal: Option<[f64; 3]>,
+    /// Width and height of a rect given by its centre.
+    pub size: Option<[f64; 2]>,
+    /// Corner of a rect given by its edges.
+    pub corner: Option<[f64; 3]>,
+    /// First edge of a rect.
+    pub edge_u: Option<[f64; 3]>,
+    /// Second edge of a rect.
+    pub edge_v: Option<[f64; 3]>,
+    /// Emitted radiance of an area light.
+    pub radiance: Option<ColorDesc>,
+    /// Radiant intensity of a point or spot light (W/sr).
+    pub intensity: Option<ColorDesc>,
+    /// Total emitted power in watts (instead of radiance / intensity).
+    pub power: Option<f64>,
+    /// Colour that scales `power` per channel (default white).
+    pub color: Option<ColorDesc>,
+    /// Whether a rect or disk emits on both sides.
+    pub two_sided: Option<bool>,
+    /// Position of a point or spot light.
+    pub position: Option<[f64; 3]>,
+    /// Axis of a spot light.
+    pub direction: Option<[f64; 3]>,
+    /// A point the spot light aims at (instead of `direction`).
+    pub target: Option<[f64; 3]>,
+    /// Total half-angle of a spot light's cone, degrees.
+    pub cone: Option<f64>,
+    /// Half-angle where a spot light starts to fall off, degrees (default `cone`).
+    pub falloff_start: Option<f64>,
+}
+
+/// A constant dome or a lat-long EXR map.
+#[derive(Clone, Debug, Default, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct EnvironmentDesc {
+    /// Constant radiance from every direction.
+    pub radiance: Option<ColorDesc>,
+    /// A lat-long EXR file, relative to the scene file.
+    pub map: Option<String>,
+    /// Multiplies the map (default 1).
+    pub scale: Option<f64>,
+    /// A rotation of the map (its +z is up before rotation).
+    pub rotate: Option<RotateDesc>,
+}
+
+/// A colour: an RGB triple (a number means grey) or a checker texture.
+#[derive(Clone, Debug, PartialEq)]
+pub enum ColorDesc {
+    /// A constant colour.
+    Rgb([f64; 3]),
+    /// `{ checker = { a, b, scale, space } }`.
+    Checker(CheckerDesc),
+}
+
+/// A constant colour: [r, g, b], or a number for grey.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RgbDesc(pub [f64; 3]);
+
+struct RgbVisitor;
+
+impl<'de> Visitor<'de> for RgbVisitor {
+    type Value = RgbDesc;
+    fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+        f.write_str("a colour: a number or [r, g, b]")
+    }
+    fn visit_f64<E: de::Error>(self, v: f64) -> Result<RgbDesc, E> {
+        Ok(RgbDesc([v; 3]))
+    }
+    fn visit_i64<E: de::Error>(self, v: i64) -> Result<RgbDesc, E> {
+        self.visit_f64(v as f64)
+    }
+    fn visit_u64<E: de::Error>(self, v: u64) -> Result<RgbDesc, E> {
+        self.visit_f64(v as f64)
+    }
+    fn visit_seq<A: SeqAccess<'de>>(self, seq: A) -> Result<RgbDesc, A::Error> {
+        Ok(RgbDesc(triple(seq, &self)?))
+    }
+}
+
+impl<'de> Deserialize<'de> for RgbDesc {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        d.deserialize_any(RgbVisitor)
+    }
+}
+
+/// A checker texture.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct CheckerDesc {
+    /// Colour of even cells.
+    pub a: RgbDesc,
+    /// Colour of odd cells.
+    pub b: RgbDesc,
+    /// Checks per unit length (default 1).
+    pub scale: Option<f64>,
+    /// "point" (3-D cells, default) or "uv".
+    pub space: Option<String>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct CheckerWrap {
+    checker: CheckerDesc,
+}
+
+struct ColorVisitor;
+
+impl<'de> Visitor<'de> for ColorVisitor {
+    type Value = ColorDesc;
+    fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+        f.write_str("a colour: a number, [r, g, b] or { checker = { a, b, scale } }")
+    }
+    fn visit_f64<E: de::Error>(self, v: f64) -> Result<ColorDesc, E> {
+        Ok(ColorDesc::Rgb([v; 3]))
+    }
+    fn visit_i64<E: de::Error>(self, v: i64) -> Result<ColorDesc, E> {
+        self.visit_f64(v as f64)
+    }
+    fn visit_u64<E: de::Error>(self, v: u64) -> Result<ColorDesc, E> {
+        self.visit_f64(v as f64)
+    }
+    fn visit_seq<A: SeqAccess<'de>>(self, seq: A) -> Result<ColorDesc, A::Error> {
+        Ok(ColorDesc::Rgb(triple(seq, &self)?))
+    }
+    fn visit_map<A: MapAccess<'de>>(self, map: A) -> Result<ColorDesc, A::Error> {
+        let w = CheckerWrap::deserialize(de::value::MapAccessDeserializer::new(map))?;
+        Ok(ColorDesc::Checker(w.checker))
+    }
+}
+
+/// Exactly three numbers from a sequence.
+fn triple<'de, A: SeqAccess<'de>>(
+    mut seq: A,
+    exp: &dyn de::Expected,
+) -> Result<[f64; 3], A::Error> {
+    let mut v = [0.0; 3];
+    for (i, slot) in v.iter_mut().enumerate() {
+        *slot = seq
+            .next_element()?
+            .ok_or_else(|| de::Error::invalid_length(i, exp))?;
+    }
+    if seq.next_element::<de::IgnoredAny>()?.is_some() {
+        return Err(de::Error::invalid_length(4, exp));
+    }
+    Ok(v)
+}
+
+impl<'de> Deserialize<'de> for ColorDesc {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        d.deserialize_any(ColorVisitor)
+    }
+}
+
+/// A scale factor: one number for all axes, or one per axis.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ScaleDesc(pub [f64; 3]);
+
+struct ScaleVisitor;
+
+impl<'de> Visitor<'de> for ScaleVisitor {
+    type Value = ScaleDesc;
+    fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+        f.write_str("a scale: a number or [sx, sy, sz]")
+    }
+    fn visit_f64<E: de::Error>(self, v: f64) -> Result<ScaleDesc, E> {
+        Ok(ScaleDesc([v; 3]))
+    }
+    fn visit_i64<E: de::Error>(self, v: i64) -> Result<ScaleDesc, E> {
+        self.visit_f64(v as f64)
+    }
+    fn visit_u64<E: de::Error>(self, v: u64) -> Result<ScaleDesc, E> {
+        self.visit_f64(v as f64)
+    }
+    fn visit_seq<A: SeqAccess<'de>>(self, seq: A) -> Result<ScaleDesc, A::Error> {
+        Ok(ScaleDesc(triple(seq, &self)?))
+    }
+}
+
+impl<'de> Deserialize<'de> for ScaleDesc {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        d.deserialize_any(ScaleVisitor)
+    }
+}
+
+/// A rotation about an axis through the origin (right-handed).
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct RotateDesc {
+    /// The axis.
+    pub axis: [f64; 3],
+    /// The angle in degrees.
+    pub degrees: f64,
+}
+
+/// One transform step; exactly one key may be given.
+#[derive(Clone, Copy, Debug, Default, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct TransformStep {
+    /// Move by an offset.
+    pub translate: Option<[f64; 3]>,
+    /// Rotate about an axis through the origin.
+    pub rotate: Option<RotateDesc>,
+    /// Scale about the origin.
+    pub scale: Option<ScaleDesc>,
+}
+
+/// One transform step, or a list of them applied first to last.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TransformDesc {
+    /// The steps in order.
+    pub steps: Vec<TransformStep>,
+    /// Whether the file gave a list (for key paths: `transform[1]` vs `transform`).
+    pub list: bool,
+}
+
+struct TransformVisitor;
+
+impl<'de> Visitor<'de> for TransformVisitor {
+    type Value = TransformDesc;
+    fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+        f.write_str("a transform ({ translate | rotate | scale = … }) or a list of them")
+    }
+    fn visit_map<A: MapAccess<'de>>(self, map: A) -> Result<TransformDesc, A::Error> {
+        let step = TransformStep::deserialize(de::value::MapAccessDeserializer::new(map))?;
+        Ok(TransformDesc {
+            steps: vec![step],
+            list: false,
+        })
+    }
+    fn visit_seq<A: SeqAccess<'de>>(self, seq: A) -> Result<TransformDesc, A::Error> {
+        let steps = Vec::<TransformStep>::deserialize(de::value::SeqAccessDeserializer::new(seq))?;
+        Ok(TransformDesc { steps, list: true })
+    }
+}
+
+impl<'de> Deserialize<'de> for TransformDesc {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        d.deserialize_any(TransformVisitor)
+    }
+}
