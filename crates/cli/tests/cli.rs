@@ -63,13 +63,20 @@ fn renders_every_model_framed() {
                 .arg(&input)
                 .output()
                 .unwrap();
-            assert!(st.status.success(), "{m}: {}", String::from_utf8_lossy(&st.stderr));
+            assert!(
+                st.status.success(),
+                "{m}: {}",
+                String::from_utf8_lossy(&st.stderr)
+            );
             let planes: Vec<Vec<f32>> = chans.iter().map(|c| channel(&out, c)).collect();
             assert_eq!(planes[0].len(), 40 * 32);
             if look == "depth" {
                 let hits = planes[0].iter().filter(|d| d.is_finite()).count();
                 let frac = hits as f64 / planes[0].len() as f64;
-                assert!((0.05..0.95).contains(&frac), "{m}: {frac} of the image is the object");
+                assert!(
+                    (0.05..0.95).contains(&frac),
+                    "{m}: {frac} of the image is the object"
+                );
                 assert!(planes[0].iter().all(|d| d.is_infinite() || *d > 0.0));
             } else {
                 for i in 0..planes[0].len() {
@@ -90,7 +97,17 @@ fn thread_count_does_not_change_the_image() {
     for t in ["1", "2"] {
         let out = dir.join(format!("g{t}.exr"));
         let st = frepray()
-            .args(["render", "--quiet", "--width", "32", "--height", "32", "--threads", t, "-o"])
+            .args([
+                "render",
+                "--quiet",
+                "--width",
+                "32",
+                "--height",
+                "32",
+                "--threads",
+                t,
+                "-o",
+            ])
             .arg(&out)
             .arg(&input)
             .status()
@@ -110,7 +127,10 @@ fn check_summarises_a_model() {
         .unwrap();
     assert!(st.status.success());
     let text = String::from_utf8_lossy(&st.stdout);
-    assert!(text.contains("perturbed quadrics: 1, perturbations: 3"), "{text}");
+    assert!(
+        text.contains("perturbed quadrics: 1, perturbations: 3"),
+        "{text}"
+    );
     assert!(text.contains("bounds:"), "{text}");
 }
 
