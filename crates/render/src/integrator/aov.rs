@@ -1,0 +1,131 @@
+//! First-hit arbitrary output variables (AOVs): depth, normal and albedo, as extra film
+//! channels beside any integrator or as the image of the `depth`, `normals` and `albedo`
+//! integrators.
+//!
+//! The first hit is the nearest of objects and area lights along the camera ray. Depth is
+//! the distance along the (unit) camera ray, the normal the outward unit normal there
+//! (world space), and the albedo the BSDF's directional albedo toward the camera,
+//! `ρ(ωo) = ∫ f_s(ωo, ω)|cos θ| dω`, estimated by one BSDF draw per sample (its weight
+//! `f_s|cos|/pdf`; exact for Lambertian surfaces). All three are 0 where the ray escapes;
+//! a light has albedo 0. Each is averaged over the pixel's samples. The albedo draw takes
+//! its random numbers from fixed far dimensions of the sample's stream, so that asking
+//! for AOVs changes no other random number of the render.
+
+use super::vertex::{trace, Trace, Vertex};
+use super::{Integrator, IntegratorKind, PixelState, RayCounts};
+use crate::color::Rgb;
+use crate::sampler::SampleStream;
+use crate::scene::Scene;
+use frep::Ray;
+use glam::DVec2;
+
+/// Stream dimension of the albedo draw (far beyond any path's use).
+const ALBEDO_DIM: u64 = 1 << 40;
+
+/// An extra film channel group.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Aov {
+    /// Channel `depth`.
+    Depth,
+    /// Channels `normal.X`, `normal.Y`, `normal.Z`.
+    Normal,
+    /// Channels `albedo.R`, `albedo.G`, `albedo.B`.
+    Albedo,
+}
+
+impl Aov {
+    /// Every AOV.
+    pub const ALL: [Aov; 3] = [Aov::Depth, Aov::Normal, Aov::Albedo];
+    /// The name (for scene files and the CLI).
+    pub const fn name(self) -> &'static str {
+        match self {
+            Aov::Depth => "depth",
+            Aov::Normal => "normal",
+            Aov::Albedo => "albedo",
+        }
+    }
+    /// Its film channel names.
+    pub const fn channels(self) -> &'static [&'static str] {
+        match self {
+            Aov::Depth => &["depth"],
+            Aov::Normal => &["normal.X", "normal.Y", "normal.Z"],
+            Aov::Albedo => &["albedo.R", "albedo.G", "albedo.B"],
+        }
+    }
+    /// Index of its first value in the per-pixel AOV sums.
+    pub(crate) const fn offset(self) -> usize {
+        match self {
+            Aov::Depth => 0,
+            Aov::Normal => 1,
+            Aov::Albedo => 4,
+        }
+    }
+}
+
+impl std::str::FromStr for Aov {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        let key = s.trim().to_ascii_lowercase();
+        Self::ALL
+            .into_iter()
+            .find(|a| a.name() == key || (key == "normals" && *a == Aov::Normal))
+            .ok_or_else(|| format!("unknown AOV {s:?}; valid names: depth, normal, albedo"))
+    }
+}
+
+/// Depth, normal and albedo of a camera ray's first hit.
+fn first_hit(scene: &Scene, t: &Trace, ray: &Ray, rng: &SampleStream) -> [f64; 7] {
+    match t {
+        Trace::Escape => [0.0; 7],
+        Trace::Light(l) => [l.t, l.n.x, l.n.y, l.n.z, 0.0, 0.0, 0.0],
+        Trace::Surface(h) => {
+            let v = Vertex::new(scene, h, -ray.d);
+            let u = DVec2::new(rng.get(ALBEDO_DIM + 1), rng.get(ALBEDO_DIM + 2));
+            let a = v
+                .bsdf
+                .sample_f(v.wo, rng.get(ALBEDO_DIM), u)
+                .map_or(Rgb::ZERO, |s| s.weight);
+            [h.t, h.n.x, h.n.y, h.n.z, a.x, a.y, a.z]
+        }
+    }
+}
+
+impl Integrator {
+    /// Adds the first hit's AOVs to the pixel's sums.
+    pub(crate) fn add_aovs(
+        &self,
+        scene: &Scene,
+        t: &Trace,
+        ray: &Ray,
+        rng: &SampleStream,
+        px: &mut PixelState,
+    ) {
+        for (s, v) in px.aov.iter_mut().zip(first_hit(scene, t, ray, rng)) {
+            *s += v;
+        }
+    }
+
+    /// One sample of the `depth`, `normals` or `albedo` integrator.
+    pub(crate) fn aov_sample(
+        &self,
+        scene: &Scene,
+        x: u32,
+        y: u32,
+        rng: &mut SampleStream,
+        px: &mut PixelState,
+        rays: &mut RayCounts,
+    ) {
+        let ray = scene.camera.ray(x, y, rng.next_2d());
+        rays.camera += 1;
+        let t = trace(scene, &ray);
+        let a = first_hit(scene, &t, &ray, rng);
+        px.sum += match self.kind {
+            IntegratorKind::Depth => Rgb::splat(a[0]),
+            IntegratorKind::Normals => Rgb::new(a[1], a[2], a[3]),
+            _ => Rgb::new(a[4], a[5], a[6]),
+        };
+        for (s, v) in px.aov.iter_mut().zip(a) {
+            *s += v;
+        }
+    }
+}

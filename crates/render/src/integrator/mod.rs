@@ -1,0 +1,313 @@
+//! Integrators: what one sample of a pixel computes (Veach 1997, ch. 9; Kondapaneni et al.
+//! 2019; pbrt-v4 ch. 13).
+//!
+//! - [`IntegratorKind::Direct`]: the paper's direct-illumination estimator. Per iteration
+//!   (one *sample*): one camera ray and `n_i` draws of each chosen [`Technique`] at the
+//!   first hit, every technique's pdf evaluated for every draw, and `(f, pdfs)` handed to
+//!   a per-pixel [`mis`] estimator; the pixel value is its estimate.
+//! - [`IntegratorKind::Path`]: path tracing with the same per-vertex technique mix at every
+//!   vertex, Russian roulette and a maximum depth; optimal MIS keeps one estimator per
+//!   pixel and depth (the estimator and why it is consistent: `integrator/path.rs`).
+//! - [`IntegratorKind::Depth`], [`IntegratorKind::Normals`], [`IntegratorKind::Albedo`]:
+//!   first-hit arbitrary output variables as the image (also available as extra film
+//!   channels beside any integrator, [`Aov`]).
+//!
+//! **Integrand.** At a shading point the direct-lighting integrand of a direction ω is
+//! `f(ω) = β · f_s(ωo, ω) · |cos θ| · Li(ω)`, with `Li(ω)` the radiance arriving from ω:
+//! the first thing along the ray among objects (which give 0: that light is indirect),
+//! area lights (their emission) and, if nothing is met, the environment. It depends on
+//! the direction only, as MIS needs (the light techniques' pdfs sum over every way a
+//! direction can be drawn). β is the path throughput (1 for `direct`).
+//!
+//! **Outside MIS** (added to the pixel directly, as the paper does): emission and
+//! environment seen by the camera ray; point and spot lights (a shadow ray to each, every
+//! sample); and delta BSDF lobes. A delta lobe (mirror, smooth glass, a smooth coat) can be
+//! reached by BSDF sampling only: a BSDF draw that lands on one is counted as a *failed*
+//! draw in the MIS estimator (its continuous density is 0) and its `weight · Li / n` is
+//! added outside. Purely specular surfaces skip MIS altogether (every continuous pdf is 0
+//! there): their BSDF draws are all outside. Without a BSDF technique in the list, one
+//! extra BSDF draw per vertex serves the delta lobes (and the path's continuation).
+//!
+//! **Surfaces missed.** An iteration whose camera ray reaches no surface (or, in `path`,
+//! whose path ended before depth d) gives no sample to that depth's estimator and is not
+//! counted in its iterations `N_d`; the pixel value is `Σ_d (N_d/N)·estimate_d` plus the
+//! outside-MIS sum over N. This is the estimator of the depth-d integral conditioned on the
+//! path reaching depth d, times the exact fraction that did: consistent for every method,
+//! unbiased where the method is, and the optimal α is then the one for the paths that
+//! exist (adding failures instead would shrink α towards 0).
+
+mod aov;
+mod path;
+mod state;
+mod vertex;
+
+pub use aov::Aov;
+pub(crate) use state::PixelState;
+pub use state::RayCounts;
+
+use crate::sampler::Sampler;
+pub use crate::scene::IntegratorKind;
+use crate::scene::{RenderSettings, Scene};
+use crate::technique::Technique;
+use mis::{Heuristic, Layout, Method, Params};
+use std::sync::Arc;
+
+/// Whether the integrator draws techniques and combines them by MIS.
+pub const fn uses_mis(kind: IntegratorKind) -> bool {
+    matches!(kind, IntegratorKind::Direct | IntegratorKind::Path)
+}
+
+/// Everything a render needs besides the scene.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RenderOptions {
+    /// The integrator.
+    pub integrator: IntegratorKind,
+    /// Samples (iterations) per pixel.
+    pub spp: u32,
+    /// Seed of the random streams (DESIGN.md §4: the image depends on it alone).
+    pub seed: u64,
+    /// How the techniques' draws are combined.
+    pub method: Method,
+    /// The method's parameters.
+    pub params: Params,
+    /// The techniques with their draws per iteration `n_i` ≥ 1, each at most once.
+    pub techniques: Vec<(Technique, u32)>,
+    /// Maximum number of scattering vertices of `path` (1: direct lighting only; 0: only
+    /// what the camera sees directly).
+    pub max_depth: u32,
+    /// Russian roulette is played after this many vertices.
+    pub rr_depth: u32,
+    /// Extra film channels.
+    pub aovs: Vec<Aov>,
+    /// Tile side in pixels.
+    pub tile_size: u32,
+    /// Samples per pixel per pass (0: spp/16 rounded up). The stop flag and the progress
+    /// callback act between tiles of a pass.
+    pub pass_spp: u32,
+    /// Worker threads (0: the current rayon pool).
+    pub threads: usize,
+}
+
+impl Default for RenderOptions {
+    /// `direct`, 16 spp, balance heuristic over one BSDF and one light draw, depth 5 with
+    /// roulette after 3, 16-pixel tiles.
+    fn default() -> Self {
+        Self {
+            integrator: IntegratorKind::Direct,
+            spp: 16,
+            seed: 0,
+            method: Method::Balance,
+            params: Params::default(),
+            techniques: vec![(Technique::Bsdf, 1), (Technique::LightPower, 1)],
+            max_depth: 5,
+            rr_depth: 3,
+            aovs: Vec::new(),
+            tile_size: 16,
+            pass_spp: 0,
+            threads: 0,
+        }
+    }
+}
+
+impl RenderOptions {
+    /// The options of a scene file's `[render]` table, with the loop's own settings (tile
+    /// size, passes, threads) at their defaults. Errors on an AOV name other than
+    /// `depth`, `normal` or `albedo`.
+    pub fn from_settings(s: &RenderSettings) -> Result<Self, String> {
+        Ok(Self {
+            integrator: s.integrator,
+            spp: s.spp,
+            seed: s.seed,
+            method: s.method,
+            params: s.params,
+            techniques: s.techniques.clone(),
+            max_depth: s.max_depth,
+            rr_depth: s.rr_depth,
+            aovs: s.aovs.iter().map(|a| a.parse()).collect::<Result<_, _>>()?,
+            ..Self::default()
+        })
+    }
+
+    /// Checks the options: spp, tile size, techniques (non-empty for MIS integrators,
+    /// counts ≥ 1, none twice, at most [`MAX_TECHNIQUES`]), method parameters, AOVs once.
+    pub fn validate(&self) -> Result<(), String> {
+        if self.spp == 0 {
+            return Err("spp must be at least 1".into());
+        }
+        if self.tile_size == 0 {
+            return Err("tile size must be at least 1".into());
+        }
+        if uses_mis(self.integrator) && self.techniques.is_empty() {
+            return Err(format!(
+                "integrator {} needs at least one technique",
+                self.integrator
+            ));
+        }
+        if self.techniques.len() > MAX_TECHNIQUES {
+            return Err(format!("at most {MAX_TECHNIQUES} techniques"));
+        }
+        for (i, (t, n)) in self.techniques.iter().enumerate() {
+            if *n == 0 {
+                return Err(format!("technique {} needs at least 1 draw", t.name()));
+            }
+            if self.techniques[..i].iter().any(|(u, _)| u == t) {
+                return Err(format!("technique {} listed twice", t.name()));
+            }
+        }
+        for (i, a) in self.aovs.iter().enumerate() {
+            if self.aovs[..i].contains(a) {
+                return Err(format!("AOV {} listed twice", a.name()));
+            }
+        }
+        self.params.validate()
+    }
+}
+
+/// At most this many techniques (every [`Technique`] once).
+pub const MAX_TECHNIQUES: usize = Technique::ALL.len();
+
+/// How the draws at a vertex are combined.
+#[derive(Clone, Debug)]
+pub(crate) enum Combine {
+    /// Heuristic weights applied per draw, summed into the pixel (path, heuristics).
+    Heuristic(Heuristic),
+    /// One [`mis`] estimator per pixel and depth.
+    Estimator,
+}
+
+/// An integrator ready to run: the options digested once per render.
+#[derive(Clone, Debug)]
+pub(crate) struct Integrator {
+    pub kind: IntegratorKind,
+    pub sampler: Sampler,
+    pub techniques: Vec<Technique>,
+    pub counts: Vec<u32>,
+    pub layout: Arc<Layout>,
+    pub method: Method,
+    pub params: Params,
+    pub combine: Combine,
+    /// Index of [`Technique::Bsdf`] in the list.
+    pub bsdf_index: Option<usize>,
+    pub max_depth: u32,
+    pub rr_depth: u32,
+    /// Whether AOVs are gathered.
+    pub aovs: bool,
+}
+
+impl Integrator {
+    /// Digests validated options.
+    pub fn new(o: &RenderOptions) -> Result<Self, String> {
+        o.validate()?;
+        let techniques: Vec<Technique> = o.techniques.iter().map(|t| t.0).collect();
+        let counts: Vec<u32> = o.techniques.iter().map(|t| t.1).collect();
+        // A layout needs one technique; AOV integrators never use it.
+        let layout = if counts.is_empty() {
+            Layout::new(&[1], 3)
+        } else {
+            Layout::new(&counts, 3)
+        };
+        let heuristic = match o.method {
+            Method::Balance => Some(Heuristic::Balance),
+            Method::Power => Some(Heuristic::Power {
+                beta: o.params.beta,
+            }),
+            Method::Maximum => Some(Heuristic::Maximum),
+            Method::Cutoff => Some(Heuristic::Cutoff { c: o.params.cutoff }),
+            _ => None,
+        };
+        // `direct` always keeps the per-pixel estimator (the paper's setting); `path`
+        // applies heuristic weights per draw and keeps estimators only for optimal MIS.
+        let combine = match (o.integrator, heuristic) {
+            (IntegratorKind::Path, Some(h)) => Combine::Heuristic(h),
+            _ => Combine::Estimator,
+        };
+        Ok(Self {
+            kind: o.integrator,
+            sampler: Sampler::new(o.seed),
+            bsdf_index: techniques.iter().position(|&t| t == Technique::Bsdf),
+            techniques,
+            counts,
+            layout,
+            method: o.method,
+            params: o.params,
+            combine,
+            max_depth: o.max_depth,
+            rr_depth: o.rr_depth,
+            aovs: !o.aovs.is_empty(),
+        })
+    }
+
+    /// A fresh pixel state.
+    pub fn pixel_state(&self) -> PixelState {
+        PixelState::default()
+    }
+
+    /// Runs sample `index` of pixel (x, y) into `px`.
+    pub fn sample(
+        &self,
+        scene: &Scene,
+        x: u32,
+        y: u32,
+        index: u64,
+        px: &mut PixelState,
+        rays: &mut RayCounts,
+    ) {
+        let mut rng = self.sampler.stream(x, y, index);
+        match self.kind {
+            IntegratorKind::Direct | IntegratorKind::Path => {
+                self.path_sample(scene, x, y, &mut rng, px, rays)
+            }
+            IntegratorKind::Depth | IntegratorKind::Normals | IntegratorKind::Albedo => {
+                self.aov_sample(scene, x, y, &mut rng, px, rays)
+            }
+        }
+        px.iterations += 1;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn options_validate_and_map_from_settings() {
+        let ok = RenderOptions::default();
+        assert!(ok.validate().is_ok());
+        let twice = RenderOptions {
+            techniques: vec![(Technique::Bsdf, 1), (Technique::Bsdf, 2)],
+            ..ok.clone()
+        };
+        assert!(twice.validate().unwrap_err().contains("twice"));
+        let zero = RenderOptions {
+            techniques: vec![(Technique::Bsdf, 0)],
+            ..ok.clone()
+        };
+        assert!(zero.validate().is_err());
+        let none = RenderOptions {
+            techniques: vec![],
+            ..ok.clone()
+        };
+        assert!(none.validate().is_err());
+        let aov = RenderOptions {
+            integrator: IntegratorKind::Depth,
+            techniques: vec![],
+            ..ok.clone()
+        };
+        assert!(aov.validate().is_ok());
+        assert!(RenderOptions {
+            spp: 0,
+            ..ok.clone()
+        }
+        .validate()
+        .is_err());
+        let mut settings = RenderSettings {
+            aovs: vec!["albedo".into(), "depth".into()],
+            ..RenderSettings::default()
+        };
+        let o = RenderOptions::from_settings(&settings).unwrap();
+        assert_eq!(o.aovs, vec![Aov::Albedo, Aov::Depth]);
+        assert_eq!((o.integrator, o.spp), (settings.integrator, settings.spp));
+        settings.aovs = vec!["position".into()];
+        assert!(RenderOptions::from_settings(&settings).is_err());
+    }
+}

@@ -1,0 +1,244 @@
+//! One scattering vertex: delta lights, the MIS draws of every technique, delta lobes and
+//! the path's continuation (module docs of [`crate::integrator`]).
+
+use super::{Integrator, PixelState, RayCounts, MAX_TECHNIQUES};
+use crate::bsdf::{Bsdf, BsdfSample};
+use crate::color::Rgb;
+use crate::light::LightHit;
+use crate::sampler::SampleStream;
+use crate::scene::{Scene, SurfaceHit};
+use crate::technique::{ShadingPoint, Technique};
+use frep::Ray;
+use glam::DVec3;
+
+/// Relative offset of secondary ray origins off the surface, along the normal toward the
+/// ray's side, so that the surface just left is never found again.
+const RAY_OFFSET: f64 = 1e-7;
+
+/// What a ray met first.
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum Trace {
+    /// An object's surface.
+    Surface(SurfaceHit),
+    /// An area light.
+    Light(LightHit),
+    /// Nothing: the ray escapes to the environment.
+    Escape,
+}
+
+/// The nearest of objects and area lights along `ray` (a nearest-hit query).
+pub(crate) fn trace(scene: &Scene, ray: &Ray) -> Trace {
+    let hit = scene.intersect(ray, 0.0, f64::INFINITY);
+    let t_max = hit.map_or(f64::INFINITY, |h| h.t);
+    if let Some(l) = scene.lights.intersect(ray, 0.0, t_max) {
+        return Trace::Light(l);
+    }
+    hit.map_or(Trace::Escape, Trace::Surface)
+}
+
+/// Emitted radiance arriving along a traced ray of direction `d`: the light's, the
+/// environment's on escape, 0 at an object.
+pub(crate) fn emitted(scene: &Scene, t: &Trace, d: DVec3) -> Rgb {
+    match t {
+        Trace::Light(l) => l.radiance,
+        Trace::Escape => scene.lights.environment_radiance(d),
+        Trace::Surface(_) => Rgb::ZERO,
+    }
+}
+
+/// A ray leaving surface point `p` (normal `n`) in unit direction `wi`, its origin moved
+/// off the surface to the side of `wi`.
+pub(crate) fn spawn(p: DVec3, n: DVec3, wi: DVec3) -> Ray {
+    let side = if wi.dot(n) >= 0.0 { n } else { -n };
+    let scale = 1.0 + p.abs().max_element();
+    Ray::new(p + side * (RAY_OFFSET * scale), wi)
+}
+
+/// `Li(ω)` by one shadow ray: the nearest area light along the ray (or the environment)
+/// if no object lies before it. No ray is traced when there is nothing to see.
+pub(crate) fn incident(scene: &Scene, ray: &Ray, rays: &mut RayCounts) -> Rgb {
+    let (t_max, le) = match scene.lights.intersect(ray, 0.0, f64::INFINITY) {
+        Some(h) => (h.t, h.radiance),
+        None => (f64::INFINITY, scene.lights.environment_radiance(ray.d)),
+    };
+    if le == Rgb::ZERO {
+        return Rgb::ZERO;
+    }
+    rays.shadow += 1;
+    if scene.occluded(ray, 0.0, t_max) {
+        Rgb::ZERO
+    } else {
+        le
+    }
+}
+
+/// A shading point: the hit, its BSDF and the direction toward the viewer.
+pub(crate) struct Vertex<'s> {
+    pub p: DVec3,
+    pub n: DVec3,
+    pub wo: DVec3,
+    pub bsdf: Bsdf<'s>,
+}
+
+impl<'s> Vertex<'s> {
+    pub fn new(scene: &'s Scene, hit: &SurfaceHit, wo: DVec3) -> Self {
+        let bsdf = scene.materials[hit.material].bsdf(&hit.tex_coord(), hit.n);
+        Self {
+            p: hit.p,
+            n: hit.n,
+            wo,
+            bsdf,
+        }
+    }
+}
+
+/// The BSDF draw that extends a path, with what its ray met.
+pub(crate) struct Continuation {
+    /// f·|cos|/pdf of the draw.
+    pub weight: Rgb,
+    /// What the continuation ray met first.
+    pub trace: Trace,
+    /// Its direction.
+    pub wi: DVec3,
+}
+
+impl Integrator {
+    /// Point and spot lights at `v`: Σ f·|cos|·I/d² over the visible ones (outside MIS).
+    fn delta_lights(&self, scene: &Scene, v: &Vertex, rays: &mut RayCounts) -> Rgb {
+        let mut sum = Rgb::ZERO;
+        for l in scene.lights.delta() {
+            let Some(ls) = l.sample_li(v.p) else { continue };
+            let fc = v.bsdf.f(v.wo, ls.wi) * ls.wi.dot(v.n).abs();
+            if fc == Rgb::ZERO || ls.radiance == Rgb::ZERO {
+                continue;
+            }
+            let ray = spawn(v.p, v.n, ls.wi);
+            let dist = (l.position() - ray.o).length();
+            if scene.lights.intersect(&ray, 0.0, dist).is_some() {
+                continue;
+            }
+            rays.shadow += 1;
+            if !scene.occluded(&ray, 0.0, dist) {
+                sum += fc * ls.radiance;
+            }
+        }
+        sum
+    }
+
+    /// Traces a BSDF draw's ray (nearest hit) when it extends the path, else evaluates
+    /// `Li` by a shadow ray; returns `Li` and records the continuation.
+    #[allow(clippy::too_many_arguments)]
+    fn li_of_bsdf_draw(
+        &self,
+        scene: &Scene,
+        v: &Vertex,
+        s: &BsdfSample,
+        extends: bool,
+        needed: bool,
+        next: &mut Option<Continuation>,
+        rays: &mut RayCounts,
+    ) -> Rgb {
+        let ray = spawn(v.p, v.n, s.wi);
+        if extends {
+            rays.secondary += 1;
+            let t = trace(scene, &ray);
+            let li = emitted(scene, &t, s.wi);
+            *next = Some(Continuation {
+                weight: s.weight,
+                trace: t,
+                wi: s.wi,
+            });
+            li
+        } else if needed {
+            incident(scene, &ray, rays)
+        } else {
+            Rgb::ZERO
+        }
+    }
+
+    /// Shades vertex `depth` (0: the camera ray's hit) with throughput `beta`: delta
+    /// lights and delta lobes into `px.sum`, the techniques' draws into the depth's MIS
+    /// combination. With `extend`, returns the BSDF draw that continues the path (the
+    /// first draw of [`Technique::Bsdf`], or an extra BSDF draw without one).
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn shade(
+        &self,
+        scene: &Scene,
+        v: &Vertex,
+        beta: Rgb,
+        depth: usize,
+        extend: bool,
+        rng: &mut SampleStream,
+        px: &mut PixelState,
+        rays: &mut RayCounts,
+    ) -> Option<Continuation> {
+        px.sum += beta * self.delta_lights(scene, v, rays);
+        let mut next = None;
+        if v.bsdf.bxdf.is_pure_specular() {
+            // No continuous density anywhere: every BSDF draw is outside MIS.
+            let nb = self.bsdf_index.map_or(1, |k| self.counts[k]);
+            for j in 0..nb {
+                let uc = rng.next_1d();
+                let u = rng.next_2d();
+                if let Some(s) = v.bsdf.sample_f(v.wo, uc, u) {
+                    let li =
+                        self.li_of_bsdf_draw(scene, v, &s, extend && j == 0, true, &mut next, rays);
+                    px.sum += beta * s.weight * li / f64::from(nb);
+                }
+            }
+            return next;
+        }
+        let ctx = ShadingPoint {
+            p: v.p,
+            n: v.n,
+            wo: v.wo,
+            bsdf: &v.bsdf,
+            lights: &scene.lights,
+        };
+        let t_count = self.techniques.len();
+        let mut pdfs = [0.0; MAX_TECHNIQUES];
+        for (k, (&tech, &n_k)) in self.techniques.iter().zip(&self.counts).enumerate() {
+            for j in 0..n_k {
+                let uc = rng.next_1d();
+                let u = rng.next_2d();
+                let Some(s) = tech.sample(&ctx, uc, u) else {
+                    px.add_failed(self, depth, k);
+                    continue;
+                };
+                let carries = extend && j == 0 && tech == Technique::Bsdf;
+                if s.specular {
+                    // A delta lobe: a failed draw for MIS, its own estimate outside.
+                    px.add_failed(self, depth, k);
+                    let bs = s.bsdf.expect("specular draws come from the BSDF");
+                    let li = self.li_of_bsdf_draw(scene, v, &bs, carries, true, &mut next, rays);
+                    px.sum += beta * bs.weight * li / f64::from(n_k);
+                    continue;
+                }
+                let fc = v.bsdf.f(v.wo, s.wi) * s.wi.dot(v.n).abs();
+                let li = match &s.bsdf {
+                    Some(bs) if carries => {
+                        self.li_of_bsdf_draw(scene, v, bs, true, true, &mut next, rays)
+                    }
+                    _ if fc != Rgb::ZERO => incident(scene, &spawn(v.p, v.n, s.wi), rays),
+                    _ => Rgb::ZERO,
+                };
+                crate::technique::pdfs(&self.techniques, &ctx, s.wi, &mut pdfs[..t_count]);
+                px.add_draw(self, depth, k, beta * fc * li, &pdfs[..t_count]);
+            }
+        }
+        px.end_vertex(self, depth);
+        if self.bsdf_index.is_none() && (extend || v.bsdf.bxdf.has_specular()) {
+            // No BSDF technique: one extra draw for the delta lobes and the continuation;
+            // its continuous outcomes are already covered by the techniques.
+            let uc = rng.next_1d();
+            let u = rng.next_2d();
+            if let Some(s) = v.bsdf.sample_f(v.wo, uc, u) {
+                let li = self.li_of_bsdf_draw(scene, v, &s, extend, s.specular, &mut next, rays);
+                if s.specular {
+                    px.sum += beta * s.weight * li;
+                }
+            }
+        }
+        next
+    }
+}
