@@ -1,12 +1,17 @@
 //! `frepray`: render functionally defined scenes, check model files.
 
 mod check;
+mod experiment;
+mod experiment_cmd;
 mod output;
 mod preview;
+mod scene_render;
 
 use clap::{Parser, Subcommand};
 use std::path::PathBuf;
 use std::process::ExitCode;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
 
 /// A physically based renderer for functionally defined (FRep) scenes.
 #[derive(Parser)]
@@ -18,8 +23,13 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Render a model file (.frep, .hf, .vm) to an image (.png or .exr).
+    /// Render a scene (.toml, .json) or a bare model (.frep, .hf, .vm) to .png or .exr.
     Render(RenderArgs),
+    /// Measure MSamples/s and MRays/s of `direct` and `path` on a scene.
+    Bench(BenchArgs),
+    /// Compare estimators against a reference: RMSE against samples and time, plots,
+    /// Improvement / Speed Up / Overhead tables; resumable.
+    Experiment(experiment_cmd::ExperimentArgs),
     /// Validate a model file and print a summary (bounds, node count, perturbations).
     Check {
         /// The model file.
@@ -29,21 +39,41 @@ enum Command {
 
 #[derive(clap::Args)]
 struct RenderArgs {
-    /// The model file (.frep, .hf or .vm).
+    /// A scene file (.toml or .json) or a model file (.frep, .hf or .vm).
     input: PathBuf,
-    /// Output image: .png (sRGB) or .exr (linear, with AOV channels).
+    /// Output image: .png (sRGB, display) or .exr (linear, with AOV channels).
     #[arg(short, long)]
     output: PathBuf,
-    /// What to show: shaded, depth or normals (depth and normals are EXR channels).
-    #[arg(long, value_enum, default_value_t = preview::Look::Shaded)]
-    integrator: preview::Look,
-    /// Image width in pixels.
-    #[arg(long, default_value_t = 512)]
-    width: u32,
-    /// Image height in pixels.
-    #[arg(long, default_value_t = 512)]
-    height: u32,
-    /// The model's vertical axis.
+    /// Scenes: direct, path, depth, normals or albedo. Models: shaded, depth or normals.
+    #[arg(long)]
+    integrator: Option<String>,
+    /// Samples per pixel (scenes).
+    #[arg(long)]
+    spp: Option<u32>,
+    /// MIS heuristic or estimator (scenes): balance, power, maximum, cutoff,
+    /// optimal-direct, optimal-uncorrelated, optimal-progressive, optimal-full.
+    #[arg(long)]
+    mis: Option<String>,
+    /// Sampling techniques and samples of each (scenes), e.g. `light:1,bsdf:1`; names:
+    /// bsdf, light, light-area, environment, cosine.
+    #[arg(long)]
+    techniques: Option<String>,
+    /// Random seed (scenes): the same seed gives the same image at any thread count.
+    #[arg(long)]
+    seed: Option<u64>,
+    /// Maximum path depth (scenes, `path`).
+    #[arg(long)]
+    max_depth: Option<u32>,
+    /// Extra EXR channels (scenes), e.g. `depth,normal,albedo`.
+    #[arg(long)]
+    aovs: Option<String>,
+    /// Image width in pixels [scene's, or 512 for models].
+    #[arg(long)]
+    width: Option<u32>,
+    /// Image height in pixels [scene's, or 512 for models].
+    #[arg(long)]
+    height: Option<u32>,
+    /// A model's vertical axis (models).
     #[arg(long, value_enum, default_value_t = preview::Up::Z)]
     up: preview::Up,
     /// Worker threads (0: one per core). The image does not depend on it.
@@ -54,10 +84,36 @@ struct RenderArgs {
     quiet: bool,
 }
 
+#[derive(clap::Args)]
+struct BenchArgs {
+    /// The scene file (.toml or .json).
+    scene: PathBuf,
+    /// Samples per pixel.
+    #[arg(long)]
+    spp: Option<u32>,
+    /// MIS heuristic or estimator.
+    #[arg(long)]
+    mis: Option<String>,
+    /// Sampling techniques, e.g. `light:1,bsdf:1`.
+    #[arg(long)]
+    techniques: Option<String>,
+    /// Image width.
+    #[arg(long)]
+    width: Option<u32>,
+    /// Image height.
+    #[arg(long)]
+    height: Option<u32>,
+    /// Worker threads (0: one per core).
+    #[arg(long, default_value_t = 0)]
+    threads: usize,
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Render(args) => render(args),
+        Command::Bench(args) => bench(args),
+        Command::Experiment(args) => experiment_cmd::run(args),
         Command::Check { file } => check::run(&file),
     };
     match result {
@@ -69,16 +125,81 @@ fn main() -> ExitCode {
     }
 }
 
-fn render(args: RenderArgs) -> Result<(), String> {
-    let format = output::format_for(&args.output, args.integrator)?;
-    if args.width == 0 || args.height == 0 {
-        return Err("--width and --height must be at least 1".into());
-    }
-    if args.threads > 0 {
+/// Sets the global thread pool's size (0 keeps one thread per core).
+pub fn set_threads(n: usize) -> Result<(), String> {
+    if n > 0 {
         rayon::ThreadPoolBuilder::new()
-            .num_threads(args.threads)
+            .num_threads(n)
             .build_global()
             .map_err(|e| e.to_string())?;
+    }
+    Ok(())
+}
+
+/// A flag that Ctrl-C sets, so that a render stops and keeps what it has.
+pub fn stop_on_ctrl_c() -> Arc<AtomicBool> {
+    let stop = Arc::new(AtomicBool::new(false));
+    let s = stop.clone();
+    // Only one handler can be set per process; a second call keeps the first.
+    let _ = ctrlc::set_handler(move || s.store(true, Ordering::SeqCst));
+    stop
+}
+
+/// A progress bar (hidden when `quiet`).
+pub fn progress_bar(quiet: bool, unit: &str) -> indicatif::ProgressBar {
+    if quiet {
+        return indicatif::ProgressBar::hidden();
+    }
+    let template = format!("{{bar:40}} {{pos}}/{{len}} {unit}  {{elapsed}} (eta {{eta}})");
+    indicatif::ProgressBar::new(0)
+        .with_style(indicatif::ProgressStyle::with_template(&template).expect("a valid template"))
+}
+
+fn render(args: RenderArgs) -> Result<(), String> {
+    set_threads(args.threads)?;
+    if scene_render::is_scene(&args.input) {
+        let o = scene_render::Overrides {
+            spp: args.spp,
+            mis: args.mis,
+            techniques: args.techniques,
+            seed: args.seed,
+            integrator: args.integrator,
+            width: args.width,
+            height: args.height,
+            max_depth: args.max_depth,
+            aovs: args.aovs,
+            threads: 0,
+        };
+        return scene_render::run(&args.input, &args.output, &o, args.quiet);
+    }
+    let scene_only = [
+        ("--spp", args.spp.is_some()),
+        ("--mis", args.mis.is_some()),
+        ("--techniques", args.techniques.is_some()),
+        ("--seed", args.seed.is_some()),
+        ("--max-depth", args.max_depth.is_some()),
+        ("--aovs", args.aovs.is_some()),
+    ];
+    if let Some((flag, _)) = scene_only.iter().find(|(_, set)| *set) {
+        return Err(format!(
+            "{flag} applies to scene files (.toml, .json); {} is a model",
+            args.input.display()
+        ));
+    }
+    let look = match args.integrator.as_deref() {
+        None | Some("shaded") => preview::Look::Shaded,
+        Some("depth") => preview::Look::Depth,
+        Some("normals") => preview::Look::Normals,
+        Some(other) => {
+            return Err(format!(
+                "--integrator {other}: a model is shown with shaded, depth or normals"
+            ))
+        }
+    };
+    let (width, height) = (args.width.unwrap_or(512), args.height.unwrap_or(512));
+    let format = output::format_for(&args.output, look)?;
+    if width == 0 || height == 0 {
+        return Err("--width and --height must be at least 1".into());
     }
     let start = std::time::Instant::now();
     let model = frep::read::read_file(&args.input).map_err(|e| e.to_string())?;
@@ -88,43 +209,42 @@ fn render(args: RenderArgs) -> Result<(), String> {
     let cam = preview::framing(
         &preview::view_bounds(&solid),
         args.up.vector(),
-        args.width,
-        args.height,
+        width,
+        height,
     );
-
-    let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
-    {
-        let stop = stop.clone();
-        // A second Ctrl-C while the first is honoured falls through to the default.
-        let _ = ctrlc::set_handler(move || stop.store(true, std::sync::atomic::Ordering::SeqCst));
-    }
-    let bar = if args.quiet {
-        indicatif::ProgressBar::hidden()
-    } else {
-        indicatif::ProgressBar::new(args.height as u64).with_style(
-            indicatif::ProgressStyle::with_template(
-                "{bar:40} {pos}/{len} rows  {elapsed} (eta {eta})",
-            )
-            .expect("valid template"),
-        )
-    };
+    let stop = stop_on_ctrl_c();
+    let bar = progress_bar(args.quiet, "rows");
+    bar.set_length(height as u64);
     let t0 = std::time::Instant::now();
-    let film = preview::render(&solid, &cam, args.integrator, &stop, &|n| bar.inc(n));
+    let film = preview::render(&solid, &cam, look, &stop, &|n| bar.inc(n));
     let trace = t0.elapsed();
     bar.finish_and_clear();
-    let stopped = stop.load(std::sync::atomic::Ordering::SeqCst);
+    let stopped = stop.load(Ordering::SeqCst);
     output::write(&args.output, &film, format)?;
-    let rays = args.width as f64 * args.height as f64;
+    let rays = width as f64 * height as f64;
     eprintln!(
         "{}{} {}x{}: setup {:.2} s, trace {:.2} s, {:.3} MRays/s (camera), written {}",
         if stopped { "interrupted: " } else { "" },
         args.input.display(),
-        args.width,
-        args.height,
+        width,
+        height,
         setup.as_secs_f64(),
         trace.as_secs_f64(),
         rays / trace.as_secs_f64().max(1e-9) / 1e6,
         args.output.display()
     );
     Ok(())
+}
+
+fn bench(args: BenchArgs) -> Result<(), String> {
+    set_threads(args.threads)?;
+    let o = scene_render::Overrides {
+        spp: args.spp,
+        mis: args.mis,
+        techniques: args.techniques,
+        width: args.width,
+        height: args.height,
+        ..Default::default()
+    };
+    scene_render::bench(&args.scene, &o)
 }

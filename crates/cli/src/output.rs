@@ -13,25 +13,32 @@ pub enum Format {
     Exr,
 }
 
-/// The format for `path`, or an error naming what is expected — checked before any
-/// work is done.
-pub fn format_for(path: &Path, look: Look) -> Result<Format, String> {
+/// The format for a scene render's output, or an error naming what is expected —
+/// checked before any work is done.
+pub fn format_for_scene(path: &Path) -> Result<Format, String> {
     let ext = path
         .extension()
         .and_then(|e| e.to_str())
         .map(|e| e.to_ascii_lowercase());
     match ext.as_deref() {
         Some("exr") => Ok(Format::Exr),
-        Some("png") if look == Look::Shaded => Ok(Format::Png),
-        Some("png") => Err(format!(
-            "{}: --integrator {} writes EXR channels; use a .exr output",
-            path.display(),
-            format!("{look:?}").to_lowercase()
-        )),
+        Some("png") => Ok(Format::Png),
         _ => Err(format!(
             "{}: unknown output format (expected a .png or .exr file name)",
             path.display()
         )),
+    }
+}
+
+/// The format for a model preview: depth and normals are EXR channels.
+pub fn format_for(path: &Path, look: Look) -> Result<Format, String> {
+    match format_for_scene(path)? {
+        Format::Png if look != Look::Shaded => Err(format!(
+            "{}: --integrator {} writes EXR channels; use a .exr output",
+            path.display(),
+            format!("{look:?}").to_lowercase()
+        )),
+        f => Ok(f),
     }
 }
 

@@ -1,0 +1,107 @@
+//! Error of an image against the reference, in f64 over all pixels and channels,
+//! unclamped (negative pixel values are legitimate for optimal MIS, RESEARCH.md §2).
+
+use super::Image;
+
+/// The ε of relMSE = mean over pixels and channels of (x − ref)² / (ref² + ε): it keeps
+/// near-black pixels from dominating the relative error.
+pub const REL_EPSILON: f64 = 1e-2;
+
+/// The error of one image.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Metrics {
+    /// Mean squared error.
+    pub mse: f64,
+    /// Mean relative squared error, with [`REL_EPSILON`].
+    pub relmse: f64,
+    /// How many channel values of the image are NaN or infinite (they make MSE non-finite).
+    pub nonfinite: u64,
+}
+
+impl Image {
+    /// An error unless the image has at least one pixel and `width × height` of them.
+    pub fn validate(&self) -> Result<(), String> {
+        let n = self.width as u64 * self.height as u64;
+        if n == 0 {
+            return Err(format!("empty image ({}x{})", self.width, self.height));
+        }
+        if self.rgb.len() as u64 != n {
+            return Err(format!(
+                "image of {}x{} pixels holds {} values",
+                self.width,
+                self.height,
+                self.rgb.len()
+            ));
+        }
+        Ok(())
+    }
+
+    /// The image with every value rounded to f32, as an EXR file stores it: the
+    /// reference is always used in this form, so that a reference rendered now and one
+    /// reloaded on resume give the same numbers.
+    pub fn rounded_to_f32(&self) -> Image {
+        let rgb = self
+            .rgb
+            .iter()
+            .map(|p| p.map(|v| v as f32 as f64))
+            .collect();
+        Image {
+            width: self.width,
+            height: self.height,
+            rgb,
+        }
+    }
+
+    /// A 64-bit FNV-1a hash of the size and the f32 bits of every value, as hex: tells
+    /// on resume whether the reference is still the one the results were measured against.
+    pub fn fingerprint(&self) -> String {
+        let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+        let mut eat = |bytes: &[u8]| {
+            for &b in bytes {
+                h ^= b as u64;
+                h = h.wrapping_mul(0x0000_0100_0000_01b3);
+            }
+        };
+        eat(&self.width.to_le_bytes());
+        eat(&self.height.to_le_bytes());
+        for p in &self.rgb {
+            for v in p {
+                eat(&(*v as f32).to_bits().to_le_bytes());
+            }
+        }
+        format!("{h:016x}")
+    }
+}
+
+/// The metrics of `img` against `reference` and the per-pixel squared error
+/// (x − ref)² of each channel; an error if the sizes differ.
+pub fn measure(img: &Image, reference: &Image) -> Result<(Metrics, Vec<[f64; 3]>), String> {
+    img.validate()?;
+    reference.validate()?;
+    if (img.width, img.height) != (reference.width, reference.height) {
+        return Err(format!(
+            "image is {}x{} but the reference is {}x{}",
+            img.width, img.height, reference.width, reference.height
+        ));
+    }
+    let mut sq = Vec::with_capacity(img.rgb.len());
+    let (mut sum, mut rel, mut nonfinite) = (0.0, 0.0, 0u64);
+    for (x, r) in img.rgb.iter().zip(&reference.rgb) {
+        let mut e = [0.0; 3];
+        for c in 0..3 {
+            let d = x[c] - r[c];
+            e[c] = d * d;
+            sum += e[c];
+            rel += e[c] / (r[c] * r[c] + REL_EPSILON);
+            nonfinite += u64::from(!x[c].is_finite());
+        }
+        sq.push(e);
+    }
+    let n = 3.0 * img.rgb.len() as f64;
+    let m = Metrics {
+        mse: sum / n,
+        relmse: rel / n,
+        nonfinite,
+    };
+    Ok((m, sq))
+}

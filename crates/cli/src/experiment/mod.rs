@@ -1,0 +1,443 @@
+//! `frepray experiment`: renders (or loads) a reference, then for each estimator and a
+//! sweep of sample counts renders the scene, measures RMSE, relMSE and time, and writes
+//! into the output folder:
+//!
+//! - `results.json`: every finished render and the averaged points, also the manifest
+//!   that lets a rerun skip finished renders (rewritten whole after every render);
+//! - `results.csv`: one line per (estimator, spp) point;
+//! - `summary.md`: Improvement, Speed Up and Overhead against the baseline (DESIGN.md §4);
+//! - `rmse_vs_spp.{png,svg}`, `rmse_vs_time.{png,svg}`: log-log plots;
+//! - `reference.exr` (when rendered) and `images/EST-NNNNNspp-seedS.exr`: each image
+//!   (R, G, B) with its per-pixel squared error (`error.R`, `error.G`, `error.B`).
+//!
+//! The renderer is abstract ([`Renderer`]), so that the driver is tested with a
+//! synthetic one of known noise.
+
+mod exr_io;
+mod manifest;
+mod metrics;
+mod plot;
+mod report;
+#[cfg(test)]
+mod tests;
+
+pub use manifest::{Comparison, Row};
+
+use manifest::{Manifest, ReferenceInfo, ReferenceSource, RenderRecord, FORMAT};
+use std::path::{Path, PathBuf};
+
+/// A rendered image: linear RGB, unclamped (values may be negative), row by row from
+/// the top-left pixel.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Image {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// `width × height` pixels.
+    pub rgb: Vec<[f64; 3]>,
+}
+
+/// What the experiment renders with.
+pub trait Renderer {
+    /// Renders with the named estimator (e.g. "balance", "optimal-direct") at `spp`
+    /// samples per pixel and the given seed; returns the image and the render time in
+    /// seconds, or `None` if stopped (Ctrl-C).
+    fn render(
+        &mut self,
+        estimator: &str,
+        spp: u32,
+        seed: u64,
+    ) -> Result<Option<(Image, f64)>, String>;
+}
+
+/// What to run.
+#[derive(Clone, Debug)]
+pub struct ExperimentConfig {
+    /// The scene file: a rerun reuses finished renders only for the same scene.
+    pub scene: PathBuf,
+    /// The command line, written at the top of `summary.md`.
+    pub command_line: String,
+    /// Anything else that changes the images (integrator, resolution, depth, a hash of
+    /// the scene's content…): a rerun reuses finished renders only if it is the same.
+    pub renderer_settings: String,
+    /// The estimators to compare; the baseline is added in front if missing.
+    pub estimators: Vec<String>,
+    /// The sample counts (sorted and deduplicated before use).
+    pub spp: Vec<u32>,
+    /// Samples per pixel of a rendered reference.
+    pub reference_spp: u32,
+    /// The estimator of a rendered reference (`None`: the baseline).
+    pub reference_estimator: Option<String>,
+    /// An EXR (channels R, G, B) to load as the reference instead of rendering one.
+    pub reference: Option<PathBuf>,
+    /// The output folder (created if missing).
+    pub out_dir: PathBuf,
+    /// The seed of the first repeat; repeat r uses `seed + r`, a rendered reference
+    /// `seed ^` [`REFERENCE_SEED_MASK`].
+    pub seed: u64,
+    /// Independent seeds per point; MSE, relMSE and time are averaged over them.
+    pub repeats: u32,
+    /// The estimator the others are compared against.
+    pub baseline: String,
+}
+
+/// XORed into the seed for a rendered reference, so that its noise is independent of
+/// the measured renders'.
+pub const REFERENCE_SEED_MASK: u64 = 0x9E37_79B9_7F4A_7C15;
+
+impl ExperimentConfig {
+    /// Defaults: balance against itself, 1 to 64 spp in powers of two, a reference of
+    /// 4096 spp, seed 0, one repeat.
+    pub fn new(scene: impl Into<PathBuf>, out_dir: impl Into<PathBuf>) -> Self {
+        Self {
+            scene: scene.into(),
+            command_line: String::new(),
+            renderer_settings: String::new(),
+            estimators: vec!["balance".into()],
+            spp: vec![1, 2, 4, 8, 16, 32, 64],
+            reference_spp: 4096,
+            reference_estimator: None,
+            reference: None,
+            out_dir: out_dir.into(),
+            seed: 0,
+            repeats: 1,
+            baseline: "balance".into(),
+        }
+    }
+}
+
+/// What a run did.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Summary {
+    /// The complete points, ordered by spp then estimator.
+    pub rows: Vec<Row>,
+    /// Each point against the baseline at the same spp.
+    pub comparisons: Vec<Comparison>,
+    /// Renders done by this run (the reference included).
+    pub rendered: usize,
+    /// Finished renders reused from an earlier run (the reference included).
+    pub reused: usize,
+    /// Whether the renderer was stopped; a rerun of the same command resumes.
+    pub interrupted: bool,
+}
+
+/// An estimator name: it becomes part of file names.
+fn check_name(what: &str, name: &str) -> Result<(), String> {
+    let ok = !name.is_empty()
+        && name.len() <= 64
+        && name
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || "-_.".contains(c))
+        && !name.starts_with('.');
+    if ok {
+        Ok(())
+    } else {
+        Err(format!(
+            "{what} {name:?}: use letters, digits, '-', '_' and '.' (at most 64)"
+        ))
+    }
+}
+
+/// The validated sweep.
+struct Plan {
+    estimators: Vec<String>,
+    spp: Vec<u32>,
+    seeds: Vec<u64>,
+}
+
+impl Plan {
+    fn new(cfg: &ExperimentConfig) -> Result<Plan, String> {
+        check_name("baseline", &cfg.baseline)?;
+        let mut estimators = vec![cfg.baseline.clone()];
+        for e in &cfg.estimators {
+            check_name("estimator", e)?;
+            if !estimators.contains(e) {
+                estimators.push(e.clone());
+            }
+        }
+        if let Some(e) = &cfg.reference_estimator {
+            check_name("reference estimator", e)?;
+        }
+        let mut spp = cfg.spp.clone();
+        spp.sort_unstable();
+        spp.dedup();
+        if spp.is_empty() || spp[0] == 0 {
+            return Err("give at least one sample count, each at least 1".into());
+        }
+        if cfg.repeats == 0 {
+            return Err("repeats must be at least 1".into());
+        }
+        if cfg.reference.is_none() && cfg.reference_spp == 0 {
+            return Err("the reference needs at least 1 sample per pixel".into());
+        }
+        let seeds = (0..cfg.repeats as u64)
+            .map(|r| cfg.seed.wrapping_add(r))
+            .collect();
+        Ok(Plan {
+            estimators,
+            spp,
+            seeds,
+        })
+    }
+}
+
+/// The path made absolute where possible, as text.
+fn absolute(p: &Path) -> String {
+    std::fs::canonicalize(p)
+        .or_else(|_| std::path::absolute(p))
+        .unwrap_or_else(|_| p.to_path_buf())
+        .display()
+        .to_string()
+}
+
+/// `1h02m`, `3m05s`, `12.3s` or `0.012s`.
+fn duration(s: f64) -> String {
+    if !s.is_finite() {
+        return "?".into();
+    }
+    let t = s.round() as u64;
+    if t >= 3600 {
+        format!("{}h{:02}m", t / 3600, t % 3600 / 60)
+    } else if t >= 60 {
+        format!("{}m{:02}s", t / 60, t % 60)
+    } else if s >= 1.0 {
+        format!("{s:.1}s")
+    } else {
+        format!("{s:.3}s")
+    }
+}
+
+/// Seconds left for `todo`, from the seconds per sample of the finished renders
+/// `(estimator, spp, seconds)`: of the same estimator where there are some, else of
+/// all; `None` before any.
+fn eta(todo: &[(String, u32, u64)], done: &[(&str, u32, f64)]) -> Option<f64> {
+    let rate = |est: Option<&str>| {
+        let (t, n) = done
+            .iter()
+            .filter(|r| est.is_none_or(|e| r.0 == e) && r.2.is_finite())
+            .fold((0.0, 0.0), |(t, n), r| (t + r.2, n + r.1 as f64));
+        (n > 0.0).then(|| t / n)
+    };
+    let all = rate(None)?;
+    Some(
+        todo.iter()
+            .map(|(e, spp, _)| *spp as f64 * rate(Some(e)).unwrap_or(all))
+            .sum(),
+    )
+}
+
+/// The image file of a render, relative to the output folder.
+fn image_file(estimator: &str, spp: u32, seed: u64) -> String {
+    format!("images/{estimator}-{spp:05}spp-seed{seed}.exr")
+}
+
+/// Runs the experiment of `cfg` with `renderer`, reporting a line per render to
+/// `progress`. A stopped render ends the run early with `interrupted` set, after
+/// writing every output for what is finished; a rerun of the same configuration
+/// skips the finished renders.
+pub fn run(
+    cfg: &ExperimentConfig,
+    renderer: &mut dyn Renderer,
+    progress: &dyn Fn(&str),
+) -> Result<Summary, String> {
+    let plan = Plan::new(cfg)?;
+    let out = &cfg.out_dir;
+    std::fs::create_dir_all(out.join("images"))
+        .map_err(|e| format!("cannot create {}: {e}", out.join("images").display()))?;
+    let manifest_path = out.join("results.json");
+    let mut old = Manifest::load(&manifest_path)?;
+    let scene = absolute(&cfg.scene);
+    if let Some(m) = &old {
+        if m.scene != scene || m.renderer != cfg.renderer_settings {
+            progress(&format!(
+                "{} holds results of another scene or renderer settings: starting afresh",
+                manifest_path.display()
+            ));
+            old = None;
+        }
+    }
+    let mut summary = Summary {
+        rows: vec![],
+        comparisons: vec![],
+        rendered: 0,
+        reused: 0,
+        interrupted: false,
+    };
+
+    // The reference, always at f32 precision (see Image::rounded_to_f32).
+    let (reference, ref_info) = match &cfg.reference {
+        Some(path) => {
+            let img = exr_io::read(path)?;
+            let info = ReferenceInfo {
+                source: ReferenceSource::File {
+                    path: absolute(path),
+                },
+                width: img.width,
+                height: img.height,
+                fingerprint: img.fingerprint(),
+                time_s: None,
+            };
+            (img, info)
+        }
+        None => {
+            let estimator = cfg.reference_estimator.as_ref().unwrap_or(&cfg.baseline);
+            let (spp, seed) = (cfg.reference_spp, cfg.seed ^ REFERENCE_SEED_MASK);
+            let source = ReferenceSource::Rendered {
+                estimator: estimator.clone(),
+                spp,
+                seed,
+            };
+            let path = out.join("reference.exr");
+            let reuse = old
+                .as_ref()
+                .filter(|m| m.reference.source == source && path.is_file())
+                .and_then(|m| {
+                    let img = exr_io::read(&path).ok()?;
+                    (img.fingerprint() == m.reference.fingerprint)
+                        .then(|| (img, m.reference.clone()))
+                });
+            if let Some(r) = reuse {
+                progress(&format!("reference: reusing {}", path.display()));
+                summary.reused += 1;
+                r
+            } else {
+                progress(&format!("reference: {estimator} {spp} spp seed {seed}"));
+                let Some((img, t)) = renderer.render(estimator, spp, seed)? else {
+                    summary.interrupted = true;
+                    progress("interrupted while rendering the reference");
+                    return Ok(summary);
+                };
+                img.validate().map_err(|e| format!("reference: {e}"))?;
+                let img = img.rounded_to_f32();
+                exr_io::write(&path, &img, None)?;
+                summary.rendered += 1;
+                progress(&format!("reference: done in {}", duration(t)));
+                let info = ReferenceInfo {
+                    source,
+                    width: img.width,
+                    height: img.height,
+                    fingerprint: img.fingerprint(),
+                    time_s: Some(t),
+                };
+                (img, info)
+            }
+        }
+    };
+    // Renders measured against another reference are stale.
+    let renders = match old {
+        Some(m)
+            if m.reference.source == ref_info.source
+                && m.reference.fingerprint == ref_info.fingerprint =>
+        {
+            m.renders
+        }
+        Some(_) => {
+            progress("the reference changed: earlier renders will be redone");
+            vec![]
+        }
+        None => vec![],
+    };
+    let mut manifest = Manifest {
+        format: FORMAT,
+        command: cfg.command_line.clone(),
+        scene,
+        renderer: cfg.renderer_settings.clone(),
+        baseline: cfg.baseline.clone(),
+        reference: ref_info,
+        interrupted: false,
+        renders,
+        results: vec![],
+        comparisons: vec![],
+    };
+    let refresh = |m: &mut Manifest| {
+        m.results = report::rows(m, &plan.estimators, &plan.spp, &plan.seeds);
+        m.comparisons = report::compare(&m.results, &cfg.baseline);
+    };
+    refresh(&mut manifest);
+    manifest.save(&manifest_path)?;
+
+    let mut todo = Vec::new();
+    for &spp in &plan.spp {
+        for e in &plan.estimators {
+            for &seed in &plan.seeds {
+                let file = image_file(e, spp, seed);
+                if manifest.find(e, spp, seed).is_some() && out.join(&file).is_file() {
+                    summary.reused += 1;
+                } else {
+                    todo.push((e.clone(), spp, seed));
+                }
+            }
+        }
+    }
+    if summary.reused > 0 {
+        progress(&format!("reusing {} finished render(s)", summary.reused));
+    }
+    for (k, (est, spp, seed)) in todo.iter().enumerate() {
+        let head = format!("[{}/{}] {est} {spp} spp seed {seed}", k + 1, todo.len());
+        let mut done: Vec<(&str, u32, f64)> = manifest
+            .renders
+            .iter()
+            .map(|r| (r.estimator.as_str(), r.spp, r.time_s))
+            .collect();
+        if let (ReferenceSource::Rendered { estimator, spp, .. }, Some(t)) =
+            (&manifest.reference.source, manifest.reference.time_s)
+        {
+            done.push((estimator, *spp, t));
+        }
+        let left = eta(&todo[k..], &done).map_or("?".into(), duration);
+        progress(&format!("{head}: rendering (ETA {left})"));
+        let Some((img, time_s)) = renderer.render(est, *spp, *seed)? else {
+            summary.interrupted = true;
+            progress(&format!("{head}: interrupted"));
+            break;
+        };
+        let (m, err) = metrics::measure(&img, &reference).map_err(|e| format!("{head}: {e}"))?;
+        let file = image_file(est, *spp, *seed);
+        exr_io::write(&out.join(&file), &img, Some(&err))?;
+        manifest.upsert(RenderRecord {
+            estimator: est.clone(),
+            spp: *spp,
+            seed: *seed,
+            file,
+            time_s,
+            mse: m.mse,
+            rmse: m.mse.sqrt(),
+            relmse: m.relmse,
+            nonfinite: m.nonfinite,
+        });
+        refresh(&mut manifest);
+        manifest.save(&manifest_path)?;
+        summary.rendered += 1;
+        let warn = if m.nonfinite > 0 {
+            format!(" ({} non-finite values)", m.nonfinite)
+        } else {
+            String::new()
+        };
+        progress(&format!(
+            "{head}: done in {}, RMSE {:.4e}, relMSE {:.4e}{warn}",
+            duration(time_s),
+            m.mse.sqrt(),
+            m.relmse
+        ));
+    }
+
+    manifest.interrupted = summary.interrupted;
+    manifest.save(&manifest_path)?;
+    report::write_csv(&out.join("results.csv"), &manifest.results)?;
+    let done = if summary.interrupted {
+        format!(
+            "Interrupted: {} of {} points complete; rerun the command to resume.",
+            manifest.results.len(),
+            plan.spp.len() * plan.estimators.len()
+        )
+    } else {
+        "Complete.".to_string()
+    };
+    let md = report::summary_markdown(&manifest, &manifest.results, &manifest.comparisons, &done);
+    report::write_text(&out.join("summary.md"), &md)?;
+    plot::write_all(out, &manifest.results, &plan.estimators)?;
+    summary.rows = manifest.results;
+    summary.comparisons = manifest.comparisons;
+    Ok(summary)
+}

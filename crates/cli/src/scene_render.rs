@@ -1,0 +1,189 @@
+//! `frepray render SCENE.toml|.json`: light transport with the scene's settings, any of
+//! them overridden on the command line.
+
+use crate::output::{self, Format};
+use render::integrator::{Aov, RenderOptions};
+use render::render_loop;
+use render::scene::{load_scene, parse_technique, IntegratorKind, RenderSettings};
+use std::path::Path;
+use std::str::FromStr;
+
+/// Command-line overrides of a scene's render settings.
+#[derive(Clone, Debug, Default)]
+pub struct Overrides {
+    /// Samples per pixel.
+    pub spp: Option<u32>,
+    /// MIS heuristic or optimal estimator name.
+    pub mis: Option<String>,
+    /// Techniques as `name[:count],...`.
+    pub techniques: Option<String>,
+    /// Random seed.
+    pub seed: Option<u64>,
+    /// Integrator name.
+    pub integrator: Option<String>,
+    /// Image width.
+    pub width: Option<u32>,
+    /// Image height.
+    pub height: Option<u32>,
+    /// Path length limit.
+    pub max_depth: Option<u32>,
+    /// Extra AOV channels, comma-separated.
+    pub aovs: Option<String>,
+    /// Worker threads (0: the global pool).
+    pub threads: usize,
+}
+
+/// Parses `bsdf:2,light` into techniques with sample counts (1 when omitted).
+pub fn parse_techniques(s: &str) -> Result<Vec<(render::Technique, u32)>, String> {
+    s.split(',')
+        .map(str::trim)
+        .filter(|p| !p.is_empty())
+        .map(|p| {
+            let (name, n) = match p.split_once(':') {
+                Some((name, n)) => {
+                    let n: u32 = n
+                        .parse()
+                        .map_err(|_| format!("--techniques: '{n}' is not a sample count"))?;
+                    (name, n)
+                }
+                None => (p, 1),
+            };
+            Ok((
+                parse_technique(name).map_err(|e| format!("--techniques: {e}"))?,
+                n,
+            ))
+        })
+        .collect()
+}
+
+/// The scene's settings with the overrides applied, as render options.
+pub fn options(settings: &RenderSettings, o: &Overrides) -> Result<RenderOptions, String> {
+    let mut s = settings.clone();
+    if let Some(n) = o.spp {
+        s.spp = n;
+    }
+    if let Some(m) = &o.mis {
+        s.method = mis::Method::from_str(m).map_err(|e| format!("--mis: {e}"))?;
+    }
+    if let Some(t) = &o.techniques {
+        s.techniques = parse_techniques(t)?;
+    }
+    if let Some(seed) = o.seed {
+        s.seed = seed;
+    }
+    if let Some(i) = &o.integrator {
+        s.integrator = IntegratorKind::from_str(i).map_err(|e| format!("--integrator: {e}"))?;
+    }
+    if let Some(d) = o.max_depth {
+        s.max_depth = d;
+    }
+    if let Some(a) = &o.aovs {
+        s.aovs = a
+            .split(',')
+            .map(str::trim)
+            .filter(|x| !x.is_empty())
+            .map(String::from)
+            .collect();
+    }
+    let mut opts = RenderOptions::from_settings(&s)?;
+    opts.threads = o.threads;
+    opts.validate()?;
+    Ok(opts)
+}
+
+/// Loads, renders and writes a scene; prints statistics.
+pub fn run(input: &Path, out: &Path, o: &Overrides, quiet: bool) -> Result<(), String> {
+    let format = output::format_for_scene(out)?;
+    let (mut scene, settings) = load_scene(input).map_err(|e| e.to_string())?;
+    if let Some(w) = o.width {
+        scene.camera.width = w;
+    }
+    if let Some(h) = o.height {
+        scene.camera.height = h;
+    }
+    if scene.camera.width == 0 || scene.camera.height == 0 {
+        return Err("--width and --height must be at least 1".into());
+    }
+    let opts = options(&settings, o)?;
+    let mut check = settings.clone();
+    check.techniques = opts.techniques.clone();
+    check.check_techniques(&scene)?;
+    if format == Format::Png && !opts.aovs.is_empty() {
+        eprintln!(
+            "note: AOV channels ({}) are only written to .exr",
+            aov_list(&opts.aovs)
+        );
+    }
+
+    let stop = crate::stop_on_ctrl_c();
+    let bar = crate::progress_bar(quiet, "samples");
+    let result = render_loop::render(&scene, &opts, &stop, &|done, total| {
+        bar.set_length(total);
+        bar.set_position(done);
+    });
+    bar.finish_and_clear();
+    let (film, stats) = result?;
+    output::write(out, &film, format)?;
+    eprintln!("{stats}");
+    eprintln!(
+        "{}{} written",
+        if stats.stopped {
+            "interrupted: what was rendered is "
+        } else {
+            ""
+        },
+        out.display()
+    );
+    Ok(())
+}
+
+/// Runs `direct` and `path` with the scene's settings and prints throughput.
+pub fn bench(input: &Path, o: &Overrides) -> Result<(), String> {
+    let (mut scene, settings) = load_scene(input).map_err(|e| e.to_string())?;
+    if let Some(w) = o.width {
+        scene.camera.width = w;
+    }
+    if let Some(h) = o.height {
+        scene.camera.height = h;
+    }
+    let opts = options(&settings, o)?;
+    let stats = render_loop::bench(&scene, &opts)?;
+    println!(
+        "| scene | integrator | MIS | resolution | spp | time (s) | MSamples/s | MRays/s | camera | secondary | shadow |"
+    );
+    println!("| --- | --- | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |");
+    for s in &stats {
+        let (c, sec, sh) = s.mrays_per_s_by_kind();
+        println!(
+            "| {} | {} | {} | {}×{} | {} | {:.2} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} |",
+            input.file_name().unwrap_or_default().to_string_lossy(),
+            s.integrator,
+            opts.method.name(),
+            scene.camera.width,
+            scene.camera.height,
+            opts.spp,
+            s.wall.as_secs_f64(),
+            s.msamples_per_s(),
+            s.mrays_per_s(),
+            c,
+            sec,
+            sh
+        );
+    }
+    Ok(())
+}
+
+fn aov_list(a: &[Aov]) -> String {
+    a.iter().map(|x| x.name()).collect::<Vec<_>>().join(", ")
+}
+
+/// Whether a path names a scene file rather than a model.
+pub fn is_scene(path: &Path) -> bool {
+    matches!(
+        path.extension()
+            .and_then(|e| e.to_str())
+            .map(|e| e.to_ascii_lowercase())
+            .as_deref(),
+        Some("toml" | "json")
+    )
+}
