@@ -62,6 +62,10 @@ pub struct ExperimentArgs {
     /// Image height [default: the scene's].
     #[arg(long)]
     height: Option<u32>,
+    /// Leave emitters seen directly by the camera out of the images, so that the error
+    /// measures the estimators, not the camera's sampling of visible lights.
+    #[arg(long)]
+    hide_emitters: bool,
     /// Worker threads (0: one per core).
     #[arg(long, default_value_t = 0)]
     threads: usize,
@@ -119,6 +123,7 @@ pub fn run(a: ExperimentArgs) -> Result<(), String> {
         integrator: a.integrator.clone(),
         width: a.width,
         height: a.height,
+        hide_emitters: a.hide_emitters,
         ..Default::default()
     };
     if let Some(w) = o.width {
@@ -144,11 +149,12 @@ pub fn run(a: ExperimentArgs) -> Result<(), String> {
     let mut cfg = ExperimentConfig::new(&a.scene, &a.out);
     cfg.command_line = std::env::args().collect::<Vec<_>>().join(" ");
     cfg.renderer_settings = format!(
-        "integrator {} techniques {:?} max_depth {} rr_depth {} resolution {}x{} params {:?} scene-hash {:016x}",
+        "integrator {} techniques {:?} max_depth {} rr_depth {} hide_emitters {} resolution {}x{} params {:?} scene-hash {:016x}",
         base.integrator,
         base.techniques.iter().map(|(t, n)| format!("{}:{n}", t.name())).collect::<Vec<_>>(),
         base.max_depth,
         base.rr_depth,
+        base.hide_emitters,
         scene.camera.width,
         scene.camera.height,
         base.params,

@@ -64,6 +64,9 @@ struct RenderArgs {
     /// Maximum path depth (scenes, `path`).
     #[arg(long)]
     max_depth: Option<u32>,
+    /// Leave emitters seen directly by the camera out of the image (scenes).
+    #[arg(long)]
+    hide_emitters: bool,
     /// Extra EXR channels (scenes), e.g. `depth,normal,albedo`.
     #[arg(long)]
     aovs: Option<String>,
@@ -169,6 +172,7 @@ fn render(args: RenderArgs) -> Result<(), String> {
             max_depth: args.max_depth,
             aovs: args.aovs,
             threads: 0,
+            hide_emitters: args.hide_emitters,
         };
         return scene_render::run(&args.input, &args.output, &o, args.quiet);
     }

@@ -31,6 +31,8 @@ pub struct Overrides {
     pub aovs: Option<String>,
     /// Worker threads (0: the global pool).
     pub threads: usize,
+    /// Leave emitters seen directly by the camera out of the image.
+    pub hide_emitters: bool,
 }
 
 /// Parses `bsdf:2,light` into techniques with sample counts (1 when omitted).
@@ -73,6 +75,9 @@ pub fn options(settings: &RenderSettings, o: &Overrides) -> Result<RenderOptions
     }
     if let Some(i) = &o.integrator {
         s.integrator = IntegratorKind::from_str(i).map_err(|e| format!("--integrator: {e}"))?;
+    }
+    if o.hide_emitters {
+        s.hide_emitters = true;
     }
     if let Some(d) = o.max_depth {
         s.max_depth = d;

@@ -547,3 +547,37 @@ fn path_optimal_per_depth_agrees_with_heuristic() {
         assert!(stats.rays.secondary > stats.rays.camera);
     }
 }
+
+/// `hide_emitters` blacks out exactly the pixels whose camera ray meets an emitter (here
+/// the dome) and leaves every other pixel bit-identical.
+#[test]
+fn hide_emitters_only_hides_what_the_camera_sees() {
+    let scene = furnace(12, 0.75);
+    let o = options(IntegratorKind::Path, Method::Balance, &ENV_MIX, 4, 5);
+    let hidden = RenderOptions {
+        hide_emitters: true,
+        ..o.clone()
+    };
+    let (a, _) = run(&scene, &o);
+    let (b, _) = run(&scene, &hidden);
+    let (mut sky, mut object) = (0, 0);
+    for y in 0..12 {
+        for x in 0..12 {
+            let (u, v) = (a.rgb(x, y), b.rgb(x, y));
+            if u == Rgb::splat(0.75) {
+                // Every sample of this pixel saw the dome directly.
+                sky += 1;
+                assert_eq!(v, Rgb::ZERO, "pixel ({x}, {y})");
+            } else if v == u {
+                object += 1;
+            } else {
+                // Mixed pixels: the object's part is kept, the dome's part is gone.
+                assert!(
+                    v.max_element() < u.max_element(),
+                    "pixel ({x}, {y}): {u} -> {v}"
+                );
+            }
+        }
+    }
+    assert!(sky > 10 && object > 10, "sky {sky}, object {object}");
+}

@@ -77,6 +77,9 @@ pub struct RenderOptions {
     pub max_depth: u32,
     /// Russian roulette is played after this many vertices.
     pub rr_depth: u32,
+    /// Leave emitters (area lights, environment) seen directly by the camera out of the
+    /// image, as Mitsuba's `hide_emitters`: their pixels then carry no emitter noise.
+    pub hide_emitters: bool,
     /// Extra film channels.
     pub aovs: Vec<Aov>,
     /// Tile side in pixels.
@@ -101,6 +104,7 @@ impl Default for RenderOptions {
             techniques: vec![(Technique::Bsdf, 1), (Technique::LightPower, 1)],
             max_depth: 5,
             rr_depth: 3,
+            hide_emitters: false,
             aovs: Vec::new(),
             tile_size: 16,
             pass_spp: 0,
@@ -123,6 +127,7 @@ impl RenderOptions {
             techniques: s.techniques.clone(),
             max_depth: s.max_depth,
             rr_depth: s.rr_depth,
+            hide_emitters: s.hide_emitters,
             aovs: s.aovs.iter().map(|a| a.parse()).collect::<Result<_, _>>()?,
             ..Self::default()
         })
@@ -190,6 +195,8 @@ pub(crate) struct Integrator {
     pub bsdf_index: Option<usize>,
     pub max_depth: u32,
     pub rr_depth: u32,
+    /// Whether emitters seen by the camera are left out.
+    pub hide_emitters: bool,
     /// Whether AOVs are gathered.
     pub aovs: bool,
 }
@@ -233,6 +240,7 @@ impl Integrator {
             combine,
             max_depth: o.max_depth,
             rr_depth: o.rr_depth,
+            hide_emitters: o.hide_emitters,
             aovs: !o.aovs.is_empty(),
         })
     }

@@ -62,11 +62,15 @@ impl Integrator {
         }
         let mut hit = match first {
             Trace::Light(l) => {
-                px.sum += l.radiance;
+                if !self.hide_emitters {
+                    px.sum += l.radiance;
+                }
                 return;
             }
             Trace::Escape => {
-                px.sum += scene.lights.environment_radiance(ray.d);
+                if !self.hide_emitters {
+                    px.sum += scene.lights.environment_radiance(ray.d);
+                }
                 return;
             }
             Trace::Surface(h) => h,

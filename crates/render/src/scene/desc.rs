@@ -73,6 +73,9 @@ pub struct RenderDesc {
     pub max_depth: Option<u32>,
     /// Depth at which Russian roulette starts (default 3).
     pub rr_depth: Option<u32>,
+    /// Whether emitters (area lights, the environment) seen directly by the camera are
+    /// left out of the image, as Mitsuba's `hide_emitters` (default false).
+    pub hide_emitters: Option<bool>,
     /// Extra output channels (AOVs) by name.
     pub aovs: Option<Vec<String>>,
 }

@@ -108,6 +108,8 @@ pub struct RenderSettings {
     pub max_depth: u32,
     /// Bounce from which Russian roulette may end paths (default 3).
     pub rr_depth: u32,
+    /// Leave emitters seen directly by the camera out of the image (default false).
+    pub hide_emitters: bool,
     /// Extra output channels to write beside R, G, B, from [`AOV_NAMES`] (default none).
     pub aovs: Vec<String>,
 }
@@ -123,6 +125,7 @@ impl Default for RenderSettings {
             seed: 0,
             max_depth: 5,
             rr_depth: 3,
+            hide_emitters: false,
             aovs: Vec::new(),
         }
     }
@@ -233,6 +236,7 @@ pub(crate) fn settings(
     s.seed = r.seed.unwrap_or(s.seed);
     s.max_depth = r.max_depth.unwrap_or(s.max_depth);
     s.rr_depth = r.rr_depth.unwrap_or(s.rr_depth);
+    s.hide_emitters = r.hide_emitters.unwrap_or(s.hide_emitters);
     if let Some(aovs) = &r.aovs {
         for (i, a) in aovs.iter().enumerate() {
             let at = kp!["render", "aovs", i];
