@@ -173,6 +173,20 @@ fn eval_binary(op: BinaryOp, a: f64, b: f64) -> f64 {
     apply_binary(op, a, b)
 }
 
+/// One node's value from its operands' values in `scratch`.
+#[inline(always)]
+fn eval_node<S: Scalar>(n: Node, scratch: &[S], x: S, y: S, z: S) -> S {
+    match n {
+        Node::Const(b) => S::constant(f64::from_bits(b)),
+        Node::Var(Var::X) => x,
+        Node::Var(Var::Y) => y,
+        Node::Var(Var::Z) => z,
+        Node::Unary(op, a) => apply_unary(op, scratch[a as usize]),
+        Node::Binary(op, a, b) => apply_binary(op, scratch[a as usize], scratch[b as usize]),
+        Node::PowI(a, k) => scratch[a as usize].powi(k),
+    }
+}
+
 #[inline(always)]
 fn apply_unary<S: Scalar>(op: UnaryOp, a: S) -> S {
     match op {
@@ -303,17 +317,7 @@ impl Expr {
     pub fn eval_with<S: Scalar>(&self, x: S, y: S, z: S, scratch: &mut Vec<S>) -> S {
         scratch.clear();
         for n in &self.nodes {
-            let v = match *n {
-                Node::Const(b) => S::constant(f64::from_bits(b)),
-                Node::Var(Var::X) => x,
-                Node::Var(Var::Y) => y,
-                Node::Var(Var::Z) => z,
-                Node::Unary(op, a) => apply_unary(op, scratch[a as usize]),
-                Node::Binary(op, a, b) => {
-                    apply_binary(op, scratch[a as usize], scratch[b as usize])
-                }
-                Node::PowI(a, k) => scratch[a as usize].powi(k),
-            };
+            let v = eval_node(*n, scratch, x, y, z);
             scratch.push(v);
         }
         *scratch.last().expect("an expression has a root")
@@ -351,15 +355,7 @@ impl Expr {
                         Choice::Both => apply_binary(op, u, w),
                     }
                 }
-                Node::Const(b) => S::constant(f64::from_bits(b)),
-                Node::Var(Var::X) => x,
-                Node::Var(Var::Y) => y,
-                Node::Var(Var::Z) => z,
-                Node::Unary(op, a) => apply_unary(op, scratch[a as usize]),
-                Node::Binary(op, a, b) => {
-                    apply_binary(op, scratch[a as usize], scratch[b as usize])
-                }
-                Node::PowI(a, k) => scratch[a as usize].powi(k),
+                node => eval_node(node, scratch, x, y, z),
             };
             scratch.push(v);
             choices.push(choice);
