@@ -8,7 +8,5 @@ bash scripts/setup.sh
 mkdir -p out
 cargo build --release -p frepray
 ./target/release/frepray render scenes/many-lights.toml -o out/many-lights.exr \
-  --mis optimal-direct --spp 64 --aovs depth,normal,albedo
-./target/release/frepray render scenes/many-lights.toml -o out/many-lights.png \
-  --mis optimal-direct --spp 64 --quiet
+  -o out/many-lights.png --mis optimal-direct --spp 64 --aovs depth,normal,albedo
 echo "wrote out/many-lights.exr (R, G, B + AOVs) and out/many-lights.png"

@@ -41,9 +41,10 @@ enum Command {
 struct RenderArgs {
     /// A scene file (.toml or .json) or a model file (.frep, .hf or .vm).
     input: PathBuf,
-    /// Output image: .png (sRGB, display) or .exr (linear, with AOV channels).
-    #[arg(short, long)]
-    output: PathBuf,
+    /// Output image: .png (sRGB, display) or .exr (linear, with AOV channels); repeat
+    /// the flag to write several files from one render.
+    #[arg(short, long, required = true)]
+    output: Vec<PathBuf>,
     /// Scenes: direct, path, depth, normals or albedo. Models: shaded, depth or normals.
     #[arg(long)]
     integrator: Option<String>,
@@ -201,7 +202,11 @@ fn render(args: RenderArgs) -> Result<(), String> {
         }
     };
     let (width, height) = (args.width.unwrap_or(512), args.height.unwrap_or(512));
-    let format = output::format_for(&args.output, look)?;
+    let formats = args
+        .output
+        .iter()
+        .map(|p| output::format_for(p, look))
+        .collect::<Result<Vec<_>, _>>()?;
     if width == 0 || height == 0 {
         return Err("--width and --height must be at least 1".into());
     }
@@ -224,7 +229,9 @@ fn render(args: RenderArgs) -> Result<(), String> {
     let trace = t0.elapsed();
     bar.finish_and_clear();
     let stopped = stop.load(Ordering::SeqCst);
-    output::write(&args.output, &film, format)?;
+    for (p, f) in args.output.iter().zip(formats) {
+        output::write(p, &film, f)?;
+    }
     let rays = width as f64 * height as f64;
     eprintln!(
         "{}{} {}x{}: setup {:.2} s, trace {:.2} s, {:.3} MRays/s (camera), written {}",
@@ -235,7 +242,7 @@ fn render(args: RenderArgs) -> Result<(), String> {
         setup.as_secs_f64(),
         trace.as_secs_f64(),
         rays / trace.as_secs_f64().max(1e-9) / 1e6,
-        args.output.display()
+        output::list(&args.output)
     );
     Ok(())
 }

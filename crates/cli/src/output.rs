@@ -42,6 +42,15 @@ pub fn format_for(path: &Path, look: Look) -> Result<Format, String> {
     }
 }
 
+/// The paths, comma-separated, for messages.
+pub fn list(paths: &[std::path::PathBuf]) -> String {
+    paths
+        .iter()
+        .map(|p| p.display().to_string())
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
 /// Writes the film whole or not at all.
 pub fn write(path: &Path, film: &Film, format: Format) -> Result<(), String> {
     match format {

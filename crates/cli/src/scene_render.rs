@@ -5,7 +5,7 @@ use crate::output::{self, Format};
 use render::integrator::{Aov, RenderOptions};
 use render::render_loop;
 use render::scene::{load_scene, parse_technique, IntegratorKind, RenderSettings};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::str::FromStr;
 
 /// Command-line overrides of a scene's render settings.
@@ -97,8 +97,11 @@ pub fn options(settings: &RenderSettings, o: &Overrides) -> Result<RenderOptions
 }
 
 /// Loads, renders and writes a scene; prints statistics.
-pub fn run(input: &Path, out: &Path, o: &Overrides, quiet: bool) -> Result<(), String> {
-    let format = output::format_for_scene(out)?;
+pub fn run(input: &Path, outs: &[PathBuf], o: &Overrides, quiet: bool) -> Result<(), String> {
+    let formats = outs
+        .iter()
+        .map(|p| output::format_for_scene(p))
+        .collect::<Result<Vec<_>, _>>()?;
     let (mut scene, settings) = load_scene(input).map_err(|e| e.to_string())?;
     if let Some(w) = o.width {
         scene.camera.width = w;
@@ -113,7 +116,7 @@ pub fn run(input: &Path, out: &Path, o: &Overrides, quiet: bool) -> Result<(), S
     let mut check = settings.clone();
     check.techniques = opts.techniques.clone();
     check.check_techniques(&scene)?;
-    if format == Format::Png && !opts.aovs.is_empty() {
+    if !formats.contains(&Format::Exr) && !opts.aovs.is_empty() {
         eprintln!(
             "note: AOV channels ({}) are only written to .exr",
             aov_list(&opts.aovs)
@@ -128,7 +131,9 @@ pub fn run(input: &Path, out: &Path, o: &Overrides, quiet: bool) -> Result<(), S
     });
     bar.finish_and_clear();
     let (film, stats) = result?;
-    output::write(out, &film, format)?;
+    for (p, f) in outs.iter().zip(formats) {
+        output::write(p, &film, f)?;
+    }
     eprintln!("{stats}");
     eprintln!(
         "{}{} written",
@@ -137,7 +142,7 @@ pub fn run(input: &Path, out: &Path, o: &Overrides, quiet: bool) -> Result<(), S
         } else {
             ""
         },
-        out.display()
+        output::list(outs)
     );
     Ok(())
 }

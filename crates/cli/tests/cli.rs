@@ -159,3 +159,75 @@ fn malformed_input_is_a_clear_error() {
     assert!(!st.status.success());
     assert!(String::from_utf8_lossy(&st.stderr).contains("expected a .png or .exr"));
 }
+
+/// One render, several outputs: the PNG and the EXR show the same film.
+#[test]
+fn several_outputs_from_one_render() {
+    let dir = out_dir("multi");
+    let (exr, png) = (dir.join("m.exr"), dir.join("m.png"));
+    let st = frepray()
+        .args(["render", "--quiet", "--width", "24", "--height", "16", "-o"])
+        .arg(&exr)
+        .arg("-o")
+        .arg(&png)
+        .arg(root().join("models/canonical/s2_csg.hf"))
+        .output()
+        .unwrap();
+    assert!(
+        st.status.success(),
+        "{}",
+        String::from_utf8_lossy(&st.stderr)
+    );
+    assert_eq!(channel(&exr, "R").len(), 24 * 16);
+    assert!(std::fs::metadata(&png).unwrap().len() > 0);
+}
+
+/// A scene file renders through the light-transport path with overrides, and a bad
+/// override is a clear error.
+#[test]
+fn renders_a_scene_with_overrides() {
+    let dir = out_dir("scene");
+    let out = dir.join("cornell.exr");
+    let st = frepray()
+        .args([
+            "render", "--quiet", "--width", "16", "--height", "12", "--spp", "2",
+        ])
+        .args([
+            "--mis",
+            "optimal-direct",
+            "--integrator",
+            "direct",
+            "--aovs",
+            "depth",
+            "-o",
+        ])
+        .arg(&out)
+        .arg(root().join("scenes/cornell.toml"))
+        .output()
+        .unwrap();
+    assert!(
+        st.status.success(),
+        "{}",
+        String::from_utf8_lossy(&st.stderr)
+    );
+    let err = String::from_utf8_lossy(&st.stderr);
+    assert!(
+        err.contains("MSamples/s") && err.contains("shadow"),
+        "{err}"
+    );
+    let depth = channel(&out, "depth");
+    assert!(depth.iter().any(|d| d.is_finite() && *d > 0.0));
+    let bad = frepray()
+        .args(["render", "--quiet", "--mis", "optimal-guess", "-o"])
+        .arg(dir.join("never.exr"))
+        .arg(root().join("scenes/cornell.toml"))
+        .output()
+        .unwrap();
+    assert!(!bad.status.success());
+    let err = String::from_utf8_lossy(&bad.stderr);
+    assert!(
+        err.contains("optimal-direct"),
+        "lists the valid names: {err}"
+    );
+    assert!(!dir.join("never.exr").exists());
+}
