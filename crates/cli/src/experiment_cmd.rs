@@ -62,6 +62,12 @@ pub struct ExperimentArgs {
     /// Image height [default: the scene's].
     #[arg(long)]
     height: Option<u32>,
+    /// Optimal-MIS ridge λ [default: 0.1].
+    #[arg(long)]
+    ridge: Option<f64>,
+    /// Power heuristic exponent β [default: 2].
+    #[arg(long)]
+    beta: Option<f64>,
     /// Leave emitters seen directly by the camera out of the images, so that the error
     /// measures the estimators, not the camera's sampling of visible lights.
     #[arg(long)]
@@ -124,6 +130,8 @@ pub fn run(a: ExperimentArgs) -> Result<(), String> {
         width: a.width,
         height: a.height,
         hide_emitters: a.hide_emitters,
+        ridge: a.ridge,
+        beta: a.beta,
         ..Default::default()
     };
     if let Some(w) = o.width {

@@ -65,6 +65,16 @@ struct RenderArgs {
     /// Maximum path depth (scenes, `path`).
     #[arg(long)]
     max_depth: Option<u32>,
+    /// Power heuristic exponent β (scenes, `--mis power`) [default: 2].
+    #[arg(long)]
+    beta: Option<f64>,
+    /// Cutoff heuristic threshold c (scenes, `--mis cutoff`) [default: 0.5].
+    #[arg(long)]
+    cutoff: Option<f64>,
+    /// Optimal-MIS ridge λ (scenes, `--mis optimal-*`): the solve adds λ/N·tr(Â)/T to
+    /// the diagonal [default: 0.1].
+    #[arg(long)]
+    ridge: Option<f64>,
     /// Leave emitters seen directly by the camera out of the image (scenes).
     #[arg(long)]
     hide_emitters: bool,
@@ -174,6 +184,9 @@ fn render(args: RenderArgs) -> Result<(), String> {
             aovs: args.aovs,
             threads: 0,
             hide_emitters: args.hide_emitters,
+            beta: args.beta,
+            cutoff: args.cutoff,
+            ridge: args.ridge,
         };
         return scene_render::run(&args.input, &args.output, &o, args.quiet);
     }
@@ -184,6 +197,9 @@ fn render(args: RenderArgs) -> Result<(), String> {
         ("--seed", args.seed.is_some()),
         ("--max-depth", args.max_depth.is_some()),
         ("--aovs", args.aovs.is_some()),
+        ("--beta", args.beta.is_some()),
+        ("--cutoff", args.cutoff.is_some()),
+        ("--ridge", args.ridge.is_some()),
     ];
     if let Some((flag, _)) = scene_only.iter().find(|(_, set)| *set) {
         return Err(format!(

@@ -33,6 +33,12 @@ pub struct Overrides {
     pub threads: usize,
     /// Leave emitters seen directly by the camera out of the image.
     pub hide_emitters: bool,
+    /// MIS parameters: power heuristic β, cutoff c, optimal-MIS ridge λ.
+    pub beta: Option<f64>,
+    /// Cutoff heuristic c.
+    pub cutoff: Option<f64>,
+    /// Optimal-MIS ridge λ (the solve uses λ/N · tr(Â)/T).
+    pub ridge: Option<f64>,
 }
 
 /// Parses `bsdf:2,light` into techniques with sample counts (1 when omitted).
@@ -75,6 +81,18 @@ pub fn options(settings: &RenderSettings, o: &Overrides) -> Result<RenderOptions
     }
     if let Some(i) = &o.integrator {
         s.integrator = IntegratorKind::from_str(i).map_err(|e| format!("--integrator: {e}"))?;
+    }
+    if let Some(b) = o.beta {
+        s.params.beta = b;
+    }
+    if let Some(c) = o.cutoff {
+        s.params.cutoff = c;
+    }
+    if let Some(r) = o.ridge {
+        if !(r >= 0.0 && r.is_finite()) {
+            return Err(format!("--ridge {r}: expected a finite number ≥ 0"));
+        }
+        s.params.ridge = r;
     }
     if o.hide_emitters {
         s.hide_emitters = true;
