@@ -110,38 +110,49 @@ impl Method {
         )
     }
 
+    /// The heuristic of a heuristic method (None for the optimal ones).
+    pub fn heuristic(self, params: &Params) -> Option<Heuristic> {
+        match self {
+            Method::Balance => Some(Heuristic::Balance),
+            Method::Power => Some(Heuristic::Power { beta: params.beta }),
+            Method::Maximum => Some(Heuristic::Maximum),
+            Method::Cutoff => Some(Heuristic::Cutoff { c: params.cutoff }),
+            _ => None,
+        }
+    }
+
+    /// The re-solve schedule of a progressive method (None for the others).
+    pub fn schedule(self, params: &Params) -> Option<Schedule> {
+        match self {
+            Method::OptimalProgressive => Some(Schedule::Doubling {
+                warmup: params.warmup,
+            }),
+            Method::OptimalFull => Some(Schedule::Once {
+                after: params.train,
+            }),
+            _ => None,
+        }
+    }
+
     /// A fresh (empty) estimator of this method for one pixel (or one integral).
     pub fn build(self, layout: &Arc<Layout>, params: &Params) -> Result<AnyEstimator, String> {
         params.validate()?;
         let layout = Arc::clone(layout);
         Ok(match self {
-            Method::Balance => AnyEstimator::Weighted(Weighted::new(layout, Heuristic::Balance)),
-            Method::Power => AnyEstimator::Weighted(Weighted::new(
-                layout,
-                Heuristic::Power { beta: params.beta },
-            )),
-            Method::Maximum => AnyEstimator::Weighted(Weighted::new(layout, Heuristic::Maximum)),
-            Method::Cutoff => AnyEstimator::Weighted(Weighted::new(
-                layout,
-                Heuristic::Cutoff { c: params.cutoff },
-            )),
             Method::OptimalDirect => AnyEstimator::Direct(Direct::new(layout, params.ridge)),
             Method::OptimalUncorrelated => {
                 AnyEstimator::Uncorrelated(Uncorrelated::new(layout, params.ridge))
             }
-            Method::OptimalProgressive => AnyEstimator::Progressive(Progressive::new(
+            Method::OptimalProgressive | Method::OptimalFull => {
+                AnyEstimator::Progressive(Progressive::new(
+                    layout,
+                    params.ridge,
+                    self.schedule(params).expect("progressive"),
+                ))
+            }
+            m => AnyEstimator::Weighted(Weighted::new(
                 layout,
-                params.ridge,
-                Schedule::Doubling {
-                    warmup: params.warmup,
-                },
-            )),
-            Method::OptimalFull => AnyEstimator::Progressive(Progressive::new(
-                layout,
-                params.ridge,
-                Schedule::Once {
-                    after: params.train,
-                },
+                m.heuristic(params).expect("heuristic methods"),
             )),
         })
     }

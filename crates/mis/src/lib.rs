@@ -9,6 +9,8 @@
 //! as (technique, f per channel, every technique's pdf at the sample). All state is sums
 //! and counts in f64, so estimators of the same kind [`Estimator::merge`] across threads,
 //! tiles and runs. Estimates may be negative; nothing is clamped. See `docs/mis.md`.
+//! A renderer that keeps one estimator per pixel stores their states as flat blocks of
+//! `f64` and runs them with a [`Kernel`] (module [`block`]).
 //!
 //! ```
 //! use mis::{Estimator, Layout, Method, Params};
@@ -34,6 +36,7 @@
 //! ```
 #![warn(missing_docs)]
 
+pub mod block;
 pub mod direct;
 pub mod estimator;
 pub mod heuristic;
@@ -46,6 +49,7 @@ pub mod uncorrelated;
 pub mod weighted;
 pub mod weights;
 
+pub use block::Kernel;
 pub use direct::Direct;
 pub use estimator::{
     AnyEstimator, Estimator, Method, Params, UnknownMethod, DEFAULT_RIDGE, DEFAULT_TRAIN,

@@ -7,6 +7,11 @@
 //! `A_ik = ∫ p_i p_k / s` and `b_i = ∫ f p_i / s`. Sums rather than means, so that two
 //! states merge by addition (threads, tiles, separate runs).
 //!
+//! **Storage.** `Moments<S>` is a view over any `f64` storage: `Moments` (the default,
+//! `Vec<f64>`) owns its sums, `Moments<&mut [f64]>` and `Moments<&[f64]>` are views over
+//! a slice of [`Moments::len`] words, so that a renderer can keep the sums of every pixel
+//! and depth in one flat array (`[Â packed (T(T+1)/2) | b̂ (channels × T)]`).
+//!
 //! **Failed samples.** A technique t that produces no sample (or a sample with zero own
 //! pdf) has lost probability mass `1 − m_t`. Treat the failure as a point `⊥_t` of an
 //! extended domain where `p_t = 1 − m_t`, every other pdf is 0 and f = 0: every pdf then
@@ -17,24 +22,56 @@
 use crate::linalg::{packed_index, packed_len};
 use crate::Layout;
 
-/// Sums `Â` (packed symmetric) and `b̂` (channel-major), for one problem layout.
+/// Sums `Â` (packed symmetric) and `b̂` (channel-major), for one problem layout, over
+/// storage `S` (module docs).
 #[derive(Clone, Debug, PartialEq)]
-pub struct Moments {
+pub struct Moments<S = Vec<f64>> {
     t: usize,
     /// `[Â packed (T(T+1)/2) | b̂ (channels × T)]`.
-    data: Vec<f64>,
+    data: S,
 }
 
 impl Moments {
     /// Zero sums for a layout.
     pub fn new(layout: &Layout) -> Moments {
-        let t = layout.techniques();
         Moments {
-            t,
-            data: vec![0.0; packed_len(t) + layout.channels() * t],
+            t: layout.techniques(),
+            data: vec![0.0; Moments::<()>::len(layout)],
         }
     }
+}
 
+impl Moments<()> {
+    /// Words of storage the sums of `layout` take: `T(T+1)/2 + channels·T`.
+    pub fn len(layout: &Layout) -> usize {
+        let t = layout.techniques();
+        packed_len(t) + layout.channels() * t
+    }
+}
+
+impl<'a> Moments<&'a [f64]> {
+    /// A read-only view over `data` (exactly [`Moments::len`] words).
+    pub fn view(layout: &Layout, data: &'a [f64]) -> Self {
+        assert_eq!(data.len(), Moments::len(layout), "moments storage size");
+        Moments {
+            t: layout.techniques(),
+            data,
+        }
+    }
+}
+
+impl<'a> Moments<&'a mut [f64]> {
+    /// A mutable view over `data` (exactly [`Moments::len`] words).
+    pub fn view_mut(layout: &Layout, data: &'a mut [f64]) -> Self {
+        assert_eq!(data.len(), Moments::len(layout), "moments storage size");
+        Moments {
+            t: layout.techniques(),
+            data,
+        }
+    }
+}
+
+impl<S: AsRef<[f64]> + AsMut<[f64]>> Moments<S> {
     /// Adds one sample of technique `t`; returns its mixture density `s`, or `None` when the
     /// sample is counted as failed (own pdf zero, or `s` not finite). O(T²/2 + C·T).
     #[inline]
@@ -46,16 +83,17 @@ impl Moments {
             return None;
         };
         let inv = 1.0 / s;
-        let (a, b) = self.data.split_at_mut(packed_len(self.t));
+        let tt = self.t;
+        let (a, b) = self.data.as_mut().split_at_mut(packed_len(tt));
         let mut idx = 0;
-        for i in 0..self.t {
+        for i in 0..tt {
             let qi = pdfs[i] * inv * inv;
             for &pj in &pdfs[..=i] {
                 a[idx] += qi * pj;
                 idx += 1;
             }
         }
-        for (fc, bc) in f.iter().zip(b.chunks_exact_mut(self.t)) {
+        for (fc, bc) in f.iter().zip(b.chunks_exact_mut(tt)) {
             for (bi, &pi) in bc.iter_mut().zip(pdfs) {
                 *bi += fc * pi * inv * inv;
             }
@@ -67,31 +105,30 @@ impl Moments {
     #[inline]
     pub fn add_failed(&mut self, layout: &Layout, t: usize) {
         let n = layout.counts()[t];
-        self.data[packed_index(t, t)] += 1.0 / (n * n);
+        self.data.as_mut()[packed_index(t, t)] += 1.0 / (n * n);
     }
 
     /// Adds another state's sums.
-    pub fn merge(&mut self, other: &Moments) {
-        assert_eq!(
-            self.data.len(),
-            other.data.len(),
-            "moments of different sizes"
-        );
-        for (a, b) in self.data.iter_mut().zip(&other.data) {
+    pub fn merge<O: AsRef<[f64]>>(&mut self, other: &Moments<O>) {
+        let (a, b) = (self.data.as_mut(), other.data.as_ref());
+        assert_eq!(a.len(), b.len(), "moments of different sizes");
+        for (a, b) in a.iter_mut().zip(b) {
             *a += b;
         }
     }
+}
 
+impl<S: AsRef<[f64]>> Moments<S> {
     /// `Â`, packed symmetric (see [`crate::linalg::packed_index`]).
     #[inline]
     pub fn matrix(&self) -> &[f64] {
-        &self.data[..packed_len(self.t)]
+        &self.data.as_ref()[..packed_len(self.t)]
     }
 
     /// `b̂`, one length-T column per channel.
     #[inline]
     pub fn vectors(&self) -> &[f64] {
-        &self.data[packed_len(self.t)..]
+        &self.data.as_ref()[packed_len(self.t)..]
     }
 
     /// `Â n` (length T): its mean over iterations estimates `A n = 1`.

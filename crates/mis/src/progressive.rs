@@ -21,6 +21,12 @@ use std::sync::Arc;
 use crate::linalg::{relative_ridge, solve};
 use crate::{Estimator, Layout, Moments};
 
+/// Words of a progressive estimator's block: `[N | Σ F_k (channels) | α (channels × T) |
+/// moments]`.
+pub(crate) fn block_len(layout: &Layout) -> usize {
+    1 + layout.channels() * (1 + layout.techniques()) + Moments::len(layout)
+}
+
 /// When the progressive estimator re-solves α (after iteration N, counting from 1).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Schedule {
@@ -67,20 +73,137 @@ impl Schedule {
     }
 }
 
+/// The parts of a progressive block.
+struct Parts<'a> {
+    n: &'a mut f64,
+    acc: &'a mut [f64],
+    alpha: &'a mut [f64],
+    moments: Moments<&'a mut [f64]>,
+}
+
+fn parts<'a>(layout: &Layout, block: &'a mut [f64]) -> Parts<'a> {
+    let (c, t) = (layout.channels(), layout.techniques());
+    let (n, rest) = block.split_first_mut().expect("non-empty block");
+    let (acc, rest) = rest.split_at_mut(c);
+    let (alpha, m) = rest.split_at_mut(c * t);
+    Parts {
+        n,
+        acc,
+        alpha,
+        moments: Moments::view_mut(layout, m),
+    }
+}
+
+/// The α of a block (channel-major).
+pub(crate) fn alpha<'a>(layout: &Layout, block: &'a [f64]) -> &'a [f64] {
+    let c = layout.channels();
+    &block[1 + c..1 + c + c * layout.techniques()]
+}
+
+/// Adds one sample into a block.
+#[inline]
+pub(crate) fn add_sample(
+    layout: &Layout,
+    block: &mut [f64],
+    technique: usize,
+    f: &[f64],
+    pdfs: &[f64],
+) {
+    let t = layout.techniques();
+    let mut p = parts(layout, block);
+    match p.moments.add(layout, technique, f, pdfs) {
+        Some(s) => {
+            let inv = 1.0 / s;
+            for ((acc, fc), al) in p.acc.iter_mut().zip(f).zip(p.alpha.chunks_exact(t)) {
+                let cv: f64 = al.iter().zip(pdfs).map(|(a, p)| a * p).sum();
+                *acc += (fc - cv) * inv;
+            }
+        }
+        None => fail_residual(layout, &mut p, technique),
+    }
+}
+
+/// Counts a failed sample of `technique` into a block.
+pub(crate) fn add_failed(layout: &Layout, block: &mut [f64], technique: usize) {
+    let mut p = parts(layout, block);
+    p.moments.add_failed(layout, technique);
+    fail_residual(layout, &mut p, technique);
+}
+
+/// A failed sample of technique t: `[0 − α_t (1 − m_t)] / [n_t (1 − m_t)] = −α_t/n_t`.
+#[inline]
+fn fail_residual(layout: &Layout, p: &mut Parts, technique: usize) {
+    let t = layout.techniques();
+    let n = layout.counts()[technique];
+    for (acc, al) in p.acc.iter_mut().zip(p.alpha.chunks_exact(t)) {
+        *acc -= al[technique] / n;
+    }
+}
+
+/// Re-solves α from the block's moments.
+fn resolve(layout: &Layout, ridge: f64, p: &mut Parts) {
+    solve(
+        p.moments.matrix(),
+        layout.techniques(),
+        relative_ridge(ridge, *p.n as u64),
+        p.moments.vectors(),
+        p.alpha,
+    );
+}
+
+/// Closes an iteration: adds Σα, counts it, re-solves where the schedule says.
+pub(crate) fn end_iteration(layout: &Layout, ridge: f64, schedule: Schedule, block: &mut [f64]) {
+    let t = layout.techniques();
+    let mut p = parts(layout, block);
+    for (acc, al) in p.acc.iter_mut().zip(p.alpha.chunks_exact(t)) {
+        *acc += al.iter().sum::<f64>();
+    }
+    *p.n += 1.0;
+    if schedule.solves_at(*p.n as u64) {
+        resolve(layout, ridge, &mut p);
+    }
+}
+
+/// The estimate `Σ F_k / N` of a block.
+pub(crate) fn estimate(layout: &Layout, block: &[f64], out: &mut [f64]) {
+    let n = block[0].max(1.0);
+    for (o, a) in out.iter_mut().zip(&block[1..1 + layout.channels()]) {
+        *o = a / n;
+    }
+}
+
+/// Merges block `b` into `a` (module docs): sums added, α re-solved if the schedule has
+/// started; for [`Schedule::Fixed`] both must hold the same α.
+pub(crate) fn merge(layout: &Layout, ridge: f64, schedule: Schedule, a: &mut [f64], b: &[f64]) {
+    if schedule == Schedule::Fixed {
+        assert_eq!(
+            alpha(layout, a),
+            alpha(layout, b),
+            "cannot merge estimators with different fixed α"
+        );
+    }
+    let alpha_range = {
+        let c = layout.channels();
+        1 + c..1 + c + c * layout.techniques()
+    };
+    for (k, (x, y)) in a.iter_mut().zip(b).enumerate() {
+        if !alpha_range.contains(&k) {
+            *x += y;
+        }
+    }
+    let mut p = parts(layout, a);
+    if schedule.started_by(*p.n as u64) {
+        resolve(layout, ridge, &mut p);
+    }
+}
+
 /// Optimal MIS with α from earlier iterations: progressive, full weights, or a fixed α.
 #[derive(Clone, Debug)]
 pub struct Progressive {
     layout: Arc<Layout>,
     ridge: f64,
     schedule: Schedule,
-    moments: Moments,
-    /// α per channel (channel-major, length C·T) used for the current iteration.
-    alpha: Vec<f64>,
-    /// Σ_k α_ck per channel.
-    alpha_sum: Vec<f64>,
-    /// Σ over iterations of F_k per channel.
-    acc: Vec<f64>,
-    iterations: u64,
+    block: Vec<f64>,
 }
 
 impl Progressive {
@@ -90,16 +213,12 @@ impl Progressive {
             ridge >= 0.0 && ridge.is_finite(),
             "ridge λ must be finite and ≥ 0"
         );
-        let (t, c) = (layout.techniques(), layout.channels());
+        let block = vec![0.0; block_len(&layout)];
         Progressive {
-            moments: Moments::new(&layout),
-            alpha: vec![0.0; c * t],
-            alpha_sum: vec![0.0; c],
-            acc: vec![0.0; c],
-            iterations: 0,
             layout,
             ridge,
             schedule,
+            block,
         }
     }
 
@@ -107,39 +226,20 @@ impl Progressive {
     /// `alpha` holds one length-T column per channel. Unbiased for any α.
     pub fn with_alpha(layout: Arc<Layout>, alpha: &[f64]) -> Progressive {
         let mut p = Progressive::new(layout, 0.0, Schedule::Fixed);
-        assert_eq!(alpha.len(), p.alpha.len(), "one α column per channel");
-        p.set_alpha(alpha);
+        let parts = parts(&p.layout, &mut p.block);
+        assert_eq!(alpha.len(), parts.alpha.len(), "one α column per channel");
+        parts.alpha.copy_from_slice(alpha);
         p
     }
 
     /// The α applied to the current iteration (channel-major).
     pub fn alpha(&self) -> &[f64] {
-        &self.alpha
+        alpha(&self.layout, &self.block)
     }
 
     /// The re-solve schedule.
     pub fn schedule(&self) -> Schedule {
         self.schedule
-    }
-
-    fn set_alpha(&mut self, alpha: &[f64]) {
-        self.alpha.copy_from_slice(alpha);
-        let t = self.layout.techniques();
-        for (s, col) in self.alpha_sum.iter_mut().zip(self.alpha.chunks_exact(t)) {
-            *s = col.iter().sum();
-        }
-    }
-
-    fn resolve(&mut self) {
-        let mut alpha = vec![0.0; self.alpha.len()];
-        solve(
-            self.moments.matrix(),
-            self.layout.techniques(),
-            relative_ridge(self.ridge, self.iterations),
-            self.moments.vectors(),
-            &mut alpha,
-        );
-        self.set_alpha(&alpha);
     }
 }
 
@@ -150,43 +250,23 @@ impl Estimator for Progressive {
 
     #[inline]
     fn add_sample(&mut self, technique: usize, f: &[f64], pdfs: &[f64]) {
-        let t = self.layout.techniques();
-        match self.moments.add(&self.layout, technique, f, pdfs) {
-            Some(s) => {
-                let inv = 1.0 / s;
-                for ((acc, fc), al) in self.acc.iter_mut().zip(f).zip(self.alpha.chunks_exact(t)) {
-                    let cv: f64 = al.iter().zip(pdfs).map(|(a, p)| a * p).sum();
-                    *acc += (fc - cv) * inv;
-                }
-            }
-            None => self.fail_residual(technique),
-        }
+        add_sample(&self.layout, &mut self.block, technique, f, pdfs);
     }
 
     fn add_failed(&mut self, technique: usize) {
-        self.moments.add_failed(&self.layout, technique);
-        self.fail_residual(technique);
+        add_failed(&self.layout, &mut self.block, technique);
     }
 
     fn end_iteration(&mut self) {
-        for (acc, s) in self.acc.iter_mut().zip(&self.alpha_sum) {
-            *acc += s;
-        }
-        self.iterations += 1;
-        if self.schedule.solves_at(self.iterations) {
-            self.resolve();
-        }
+        end_iteration(&self.layout, self.ridge, self.schedule, &mut self.block);
     }
 
     fn iterations(&self) -> u64 {
-        self.iterations
+        self.block[0] as u64
     }
 
     fn estimate(&self, out: &mut [f64]) {
-        let n = self.iterations.max(1) as f64;
-        for (o, a) in out.iter_mut().zip(&self.acc) {
-            *o = a / n;
-        }
+        estimate(&self.layout, &self.block, out);
     }
 
     /// Adds the sums; then α is re-solved from the merged `Â`, `b̂` if the schedule has
@@ -197,32 +277,13 @@ impl Estimator for Progressive {
             self.schedule, other.schedule,
             "cannot merge different schedules"
         );
-        if self.schedule == Schedule::Fixed {
-            assert_eq!(
-                self.alpha, other.alpha,
-                "cannot merge estimators with different fixed α"
-            );
-        }
-        self.moments.merge(&other.moments);
-        for (a, b) in self.acc.iter_mut().zip(&other.acc) {
-            *a += b;
-        }
-        self.iterations += other.iterations;
-        if self.schedule.started_by(self.iterations) {
-            self.resolve();
-        }
-    }
-}
-
-impl Progressive {
-    /// A failed sample of technique t: `[0 − α_t (1 − m_t)] / [n_t (1 − m_t)] = −α_t/n_t`.
-    #[inline]
-    fn fail_residual(&mut self, technique: usize) {
-        let t = self.layout.techniques();
-        let n = self.layout.counts()[technique];
-        for (acc, al) in self.acc.iter_mut().zip(self.alpha.chunks_exact(t)) {
-            *acc -= al[technique] / n;
-        }
+        merge(
+            &self.layout,
+            self.ridge,
+            self.schedule,
+            &mut self.block,
+            &other.block,
+        );
     }
 }
 

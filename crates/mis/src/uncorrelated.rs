@@ -7,21 +7,91 @@
 //! `F_AB = Σα_AB + n·(b̂_B/N_B − Â_A α_AB/N_A)` (which is `Σα_AB` at λ = 0), and averages
 //! them with weights N_B and N_A (the samples behind each `b̂`). While set B is still empty
 //! (one iteration) the estimate is the balance heuristic on set A. Merging adds set to set
-//! (runs are independent, so the sets stay independent); after a merge the next iteration
-//! feeds whichever set has fewer iterations.
+//! (runs are independent, so the sets stay independent). This object feeds the set with
+//! fewer iterations (parity in a single run); a renderer's flat state ([`crate::Kernel`])
+//! picks the set by the parity of the *global* sample index instead, so that two sample
+//! ranges merge into exactly the sets of one run over their union. State: one flat block
+//! `[N_A, N_B | moments A | moments B]`.
 
 use std::sync::Arc;
 
 use crate::linalg::{relative_ridge, solve};
 use crate::{Estimator, Layout, Moments};
 
+/// Words of an uncorrelated estimator's block: `[N_A, N_B | moments A | moments B]`.
+pub(crate) fn block_len(layout: &Layout) -> usize {
+    2 + 2 * Moments::len(layout)
+}
+
+/// The moments of set `k` (0 = A, 1 = B) of a block.
+#[inline]
+pub(crate) fn set_mut<'a>(
+    layout: &Layout,
+    block: &'a mut [f64],
+    k: usize,
+) -> Moments<&'a mut [f64]> {
+    let m = Moments::len(layout);
+    Moments::view_mut(layout, &mut block[2 + k * m..2 + (k + 1) * m])
+}
+
+fn set<'a>(layout: &Layout, block: &'a [f64], k: usize) -> Moments<&'a [f64]> {
+    let m = Moments::len(layout);
+    Moments::view(layout, &block[2 + k * m..2 + (k + 1) * m])
+}
+
+/// `F_XY`: α from `Â` of set `x` and `b̂` of set `y`, full form on `b̂_y`.
+fn cross(layout: &Layout, ridge: f64, block: &[f64], x: usize, y: usize, out: &mut [f64]) {
+    let t = layout.techniques();
+    let (nx, ny) = (block[x], block[y]);
+    let (sx, sy) = (set(layout, block, x), set(layout, block, y));
+    let rhs: Vec<f64> = sy.vectors().iter().map(|b| b * (nx / ny)).collect();
+    let mut alpha = vec![0.0; rhs.len()];
+    solve(
+        sx.matrix(),
+        t,
+        relative_ridge(ridge, nx as u64),
+        &rhs,
+        &mut alpha,
+    );
+    let an: Vec<f64> = sx
+        .matrix_times_counts(layout)
+        .iter()
+        .map(|v| v * (ny / nx))
+        .collect();
+    sy.full_form(layout, &an, &alpha, ny, out);
+}
+
+/// The estimate of a block (module docs).
+pub(crate) fn estimate(layout: &Layout, ridge: f64, block: &[f64], out: &mut [f64]) {
+    let (na, nb) = (block[0], block[1]);
+    if na == 0.0 || nb == 0.0 {
+        // Balance on whichever set has data: the full form with α = 0.
+        let k = usize::from(na == 0.0);
+        let n = block[k];
+        if n == 0.0 {
+            out.fill(0.0);
+            return;
+        }
+        let s = set(layout, block, k);
+        let zero = vec![0.0; s.vectors().len()];
+        let t = vec![0.0; layout.techniques()];
+        s.full_form(layout, &t, &zero, n, out);
+        return;
+    }
+    let mut ba = vec![0.0; out.len()];
+    cross(layout, ridge, block, 0, 1, out);
+    cross(layout, ridge, block, 1, 0, &mut ba);
+    for (o, v) in out.iter_mut().zip(&ba) {
+        *o = (nb * *o + na * v) / (na + nb);
+    }
+}
+
 /// Optimal MIS with `Â` and `b̂` from alternate iterations.
 #[derive(Clone, Debug)]
 pub struct Uncorrelated {
     layout: Arc<Layout>,
     ridge: f64,
-    sets: [Moments; 2],
-    counts: [u64; 2],
+    block: Vec<f64>,
 }
 
 impl Uncorrelated {
@@ -31,12 +101,11 @@ impl Uncorrelated {
             ridge >= 0.0 && ridge.is_finite(),
             "ridge λ must be finite and ≥ 0"
         );
-        let m = Moments::new(&layout);
+        let block = vec![0.0; block_len(&layout)];
         Uncorrelated {
             layout,
             ridge,
-            sets: [m.clone(), m],
-            counts: [0, 0],
+            block,
         }
     }
 
@@ -44,27 +113,7 @@ impl Uncorrelated {
     /// A on ties — iteration parity in a single run, balanced again after a merge.
     #[inline]
     fn current(&self) -> usize {
-        usize::from(self.counts[1] < self.counts[0])
-    }
-
-    /// `F_XY`: α from `Â` of set `x` and `b̂` of set `y`, full form on `b̂_y`.
-    fn cross(&self, x: usize, y: usize, out: &mut [f64]) {
-        let t = self.layout.techniques();
-        let (nx, ny) = (self.counts[x] as f64, self.counts[y] as f64);
-        let rhs: Vec<f64> = self.sets[y]
-            .vectors()
-            .iter()
-            .map(|b| b * (nx / ny))
-            .collect();
-        let mut alpha = vec![0.0; rhs.len()];
-        let ridge = relative_ridge(self.ridge, self.counts[x]);
-        solve(self.sets[x].matrix(), t, ridge, &rhs, &mut alpha);
-        let an: Vec<f64> = self.sets[x]
-            .matrix_times_counts(&self.layout)
-            .iter()
-            .map(|v| v * (ny / nx))
-            .collect();
-        self.sets[y].full_form(&self.layout, &an, &alpha, ny, out);
+        usize::from(self.block[1] < self.block[0])
     }
 }
 
@@ -75,53 +124,30 @@ impl Estimator for Uncorrelated {
 
     #[inline]
     fn add_sample(&mut self, technique: usize, f: &[f64], pdfs: &[f64]) {
-        let set = self.current();
-        self.sets[set].add(&self.layout, technique, f, pdfs);
+        let k = self.current();
+        set_mut(&self.layout, &mut self.block, k).add(&self.layout, technique, f, pdfs);
     }
 
     fn add_failed(&mut self, technique: usize) {
-        let set = self.current();
-        self.sets[set].add_failed(&self.layout, technique);
+        let k = self.current();
+        set_mut(&self.layout, &mut self.block, k).add_failed(&self.layout, technique);
     }
 
     fn end_iteration(&mut self) {
-        let set = self.current();
-        self.counts[set] += 1;
+        let k = self.current();
+        self.block[k] += 1.0;
     }
 
     fn iterations(&self) -> u64 {
-        self.counts[0] + self.counts[1]
+        (self.block[0] + self.block[1]) as u64
     }
 
     fn estimate(&self, out: &mut [f64]) {
-        let [na, nb] = self.counts;
-        if na == 0 || nb == 0 {
-            // Balance on whichever set has data: the full form with α = 0.
-            let set = usize::from(na == 0);
-            let n = self.counts[set];
-            if n == 0 {
-                out.fill(0.0);
-                return;
-            }
-            let zero = vec![0.0; self.sets[set].vectors().len()];
-            let t = vec![0.0; self.layout.techniques()];
-            self.sets[set].full_form(&self.layout, &t, &zero, n as f64, out);
-            return;
-        }
-        let mut ba = vec![0.0; out.len()];
-        self.cross(0, 1, out);
-        self.cross(1, 0, &mut ba);
-        let (wa, wb) = (na as f64, nb as f64);
-        for (o, v) in out.iter_mut().zip(&ba) {
-            *o = (wb * *o + wa * v) / (wa + wb);
-        }
+        estimate(&self.layout, self.ridge, &self.block, out);
     }
 
     fn merge(&mut self, other: &Uncorrelated) {
         self.layout.assert_same(&other.layout);
-        for k in 0..2 {
-            self.sets[k].merge(&other.sets[k]);
-            self.counts[k] += other.counts[k];
-        }
+        crate::block::add(&mut self.block, &other.block);
     }
 }

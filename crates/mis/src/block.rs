@@ -1,0 +1,253 @@
+//! Every estimator's state as one flat block of `f64` words, and the code that runs on it.
+//!
+//! A renderer keeps one estimator per pixel (and per path depth); as objects with their own
+//! allocations these cost memory and cannot be copied to a GPU, written to a file or merged
+//! across machines as plain data. A [`Kernel`] is the estimator's code for one method and
+//! problem layout; its state is a `&mut [f64]` of [`Kernel::block_len`] words that the
+//! caller stores anywhere, e.g. at a fixed stride in one array for a whole image. The
+//! object estimators ([`crate::Direct`], …) are the same code over a block they own.
+//!
+//! Layouts (N: iterations, stored as an exact integer-valued f64; C channels, T techniques,
+//! M = [`crate::Moments::len`]):
+//!
+//! | method | block |
+//! |---|---|
+//! | heuristics | `[N \| Σ (C)]` |
+//! | optimal-direct | `[N \| Â, b̂ (M)]` |
+//! | optimal-uncorrelated | `[N_A, N_B \| moments A (M) \| moments B (M)]` |
+//! | optimal-progressive, -full | `[N \| Σ F_k (C) \| α (C·T) \| moments (M)]` |
+//!
+//! **Merging.** Blocks of the heuristics and of the direct and uncorrelated estimators are
+//! sums: [`Kernel::merge`] adds them word by word, so two disjoint sample ranges merge into
+//! the state of one run over their union (to the rounding of the summation order). The
+//! uncorrelated estimator puts the iteration with global key k into set `k mod 2`, so its
+//! sets, too, are those of the single run. The progressive estimators merge into an equally
+//! valid estimate, not the single run's (see [`crate::progressive`]).
+//!
+//! ```
+//! use mis::{Kernel, Layout, Method, Params};
+//! let layout = Layout::new(&[1, 1], 1);
+//! let k = Kernel::new(Method::OptimalDirect, &layout, &Params { ridge: 0.0, ..Params::default() }).unwrap();
+//! // Two halves of a run in separate blocks, merged: the same as one block.
+//! let (mut a, mut b, mut whole) = (vec![0.0; k.block_len()], vec![0.0; k.block_len()], vec![0.0; k.block_len()]);
+//! for i in 0..8u64 {
+//!     let x = (i as f64 + 0.5) / 8.0;
+//!     let half = if i < 4 { &mut a } else { &mut b };
+//!     for block in [half, &mut whole] {
+//!         k.add_sample(block, i, 0, &[3.0 + 2.0 * x], &[1.0, 2.0 * x]);
+//!         k.add_sample(block, i, 1, &[3.0 + 2.0 * x.sqrt()], &[1.0, 2.0 * x.sqrt()]);
+//!         k.end_iteration(block, i);
+//!     }
+//! }
+//! k.merge(&mut a, &b);
+//! assert_eq!(k.iterations(&a), 8);
+//! let (mut e, mut w) = ([0.0], [0.0]);
+//! k.estimate(&a, &mut e);
+//! k.estimate(&whole, &mut w);
+//! assert!((e[0] - 4.0).abs() < 1e-12 && (w[0] - 4.0).abs() < 1e-12);
+//! ```
+
+use std::sync::Arc;
+
+use crate::progressive::Schedule;
+use crate::{direct, progressive, uncorrelated, weighted};
+use crate::{Heuristic, Layout, Method, Moments, Params};
+
+/// Adds block `b` to block `a` word by word.
+pub(crate) fn add(a: &mut [f64], b: &[f64]) {
+    assert_eq!(a.len(), b.len(), "blocks of different sizes");
+    for (x, y) in a.iter_mut().zip(b) {
+        *x += y;
+    }
+}
+
+/// What a kernel runs.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Code {
+    Weighted(Heuristic),
+    Direct,
+    Uncorrelated,
+    Progressive(Schedule),
+}
+
+/// One estimator method's code for one layout, over flat blocks (module docs).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Kernel {
+    method: Method,
+    layout: Arc<Layout>,
+    params: Params,
+    code: Code,
+    len: usize,
+}
+
+impl Kernel {
+    /// The kernel of `method` with `params` (checked) for `layout`.
+    pub fn new(method: Method, layout: &Arc<Layout>, params: &Params) -> Result<Kernel, String> {
+        params.validate()?;
+        let code = match method {
+            Method::OptimalDirect => Code::Direct,
+            Method::OptimalUncorrelated => Code::Uncorrelated,
+            Method::OptimalProgressive | Method::OptimalFull => {
+                Code::Progressive(method.schedule(params).expect("progressive methods"))
+            }
+            m => Code::Weighted(m.heuristic(params).expect("heuristic methods")),
+        };
+        let len = match code {
+            Code::Weighted(_) => weighted::block_len(layout),
+            Code::Direct => direct::block_len(layout),
+            Code::Uncorrelated => uncorrelated::block_len(layout),
+            Code::Progressive(_) => progressive::block_len(layout),
+        };
+        Ok(Kernel {
+            method,
+            layout: Arc::clone(layout),
+            params: *params,
+            code,
+            len,
+        })
+    }
+
+    /// The method.
+    pub fn method(&self) -> Method {
+        self.method
+    }
+
+    /// The problem layout.
+    pub fn layout(&self) -> &Arc<Layout> {
+        &self.layout
+    }
+
+    /// The method's parameters.
+    pub fn params(&self) -> &Params {
+        &self.params
+    }
+
+    /// Words of one block. A zero-filled block is an empty estimator.
+    pub fn block_len(&self) -> usize {
+        self.len
+    }
+
+    /// One sample of `technique` in the iteration with global key `key` (the sample
+    /// index: it picks the uncorrelated estimator's set); see [`crate::Estimator::add_sample`].
+    #[inline]
+    pub fn add_sample(
+        &self,
+        block: &mut [f64],
+        key: u64,
+        technique: usize,
+        f: &[f64],
+        pdfs: &[f64],
+    ) {
+        debug_assert_eq!(block.len(), self.len);
+        let l = &*self.layout;
+        match self.code {
+            Code::Weighted(h) => weighted::add_sample(l, h, block, technique, f, pdfs),
+            Code::Direct => {
+                Moments::view_mut(l, &mut block[1..]).add(l, technique, f, pdfs);
+            }
+            Code::Uncorrelated => {
+                uncorrelated::set_mut(l, block, (key & 1) as usize).add(l, technique, f, pdfs);
+            }
+            Code::Progressive(_) => progressive::add_sample(l, block, technique, f, pdfs),
+        }
+    }
+
+    /// `technique` produced no sample in the iteration with key `key`.
+    #[inline]
+    pub fn add_failed(&self, block: &mut [f64], key: u64, technique: usize) {
+        let l = &*self.layout;
+        match self.code {
+            Code::Weighted(_) => {}
+            Code::Direct => Moments::view_mut(l, &mut block[1..]).add_failed(l, technique),
+            Code::Uncorrelated => {
+                uncorrelated::set_mut(l, block, (key & 1) as usize).add_failed(l, technique)
+            }
+            Code::Progressive(_) => progressive::add_failed(l, block, technique),
+        }
+    }
+
+    /// Closes the iteration with key `key`.
+    #[inline]
+    pub fn end_iteration(&self, block: &mut [f64], key: u64) {
+        match self.code {
+            Code::Weighted(_) | Code::Direct => block[0] += 1.0,
+            Code::Uncorrelated => block[(key & 1) as usize] += 1.0,
+            Code::Progressive(s) => {
+                progressive::end_iteration(&self.layout, self.params.ridge, s, block)
+            }
+        }
+    }
+
+    /// Completed iterations N of a block.
+    pub fn iterations(&self, block: &[f64]) -> u64 {
+        match self.code {
+            Code::Uncorrelated => (block[0] + block[1]) as u64,
+            _ => block[0] as u64,
+        }
+    }
+
+    /// The estimate of a block, one value per channel (0 before the first iteration).
+    pub fn estimate(&self, block: &[f64], out: &mut [f64]) {
+        let (l, ridge) = (&*self.layout, self.params.ridge);
+        match self.code {
+            Code::Weighted(_) => weighted::estimate(block, out),
+            Code::Direct => direct::estimate(l, ridge, block, out),
+            Code::Uncorrelated => uncorrelated::estimate(l, ridge, block, out),
+            Code::Progressive(_) => progressive::estimate(l, block, out),
+        }
+    }
+
+    /// Adds block `b` into block `a` (module docs).
+    pub fn merge(&self, a: &mut [f64], b: &[f64]) {
+        match self.code {
+            Code::Progressive(s) => progressive::merge(&self.layout, self.params.ridge, s, a, b),
+            _ => add(a, b),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::Estimator;
+
+    /// The kernel over a block and the object estimator run the same code: equal
+    /// estimates bit for bit, for every method, on the same samples.
+    #[test]
+    fn kernel_matches_the_object_estimators() {
+        let layout = Layout::new(&[2, 1, 1], 2);
+        for m in Method::ALL {
+            let params = Params::default();
+            let k = Kernel::new(m, &layout, &params).unwrap();
+            let mut obj = m.build(&layout, &params).unwrap();
+            let mut block = vec![0.0; k.block_len()];
+            let mut key = 0u64;
+            for i in 0..20u64 {
+                // Uncorrelated objects feed the set with fewer iterations: in one run
+                // that is the parity of the iteration, as the kernel's key.
+                key = i;
+                for (t, reps) in [(0usize, 2), (1, 1), (2, 1)] {
+                    for j in 0..reps {
+                        let x = ((i * 7 + j * 3 + t as u64) % 11) as f64 / 11.0 + 0.03;
+                        let pdfs = [1.0, 2.0 * x, 0.5 + x];
+                        let f = [x * x + 0.1, 1.0 - x];
+                        if (i + t as u64) % 7 == 3 {
+                            obj.add_failed(t);
+                            k.add_failed(&mut block, key, t);
+                        } else {
+                            obj.add_sample(t, &f, &pdfs);
+                            k.add_sample(&mut block, key, t, &f, &pdfs);
+                        }
+                    }
+                }
+                obj.end_iteration();
+                k.end_iteration(&mut block, key);
+            }
+            let _ = key;
+            let mut e = [0.0; 2];
+            k.estimate(&block, &mut e);
+            assert_eq!(e.to_vec(), obj.estimate_vec(), "{m}");
+            assert_eq!(k.iterations(&block), 20);
+        }
+    }
+}
