@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Sets up and runs every check and test: formatting, clippy, the docs (warnings are
-# errors: broken intra-doc links fail), the whole test suite.
+# errors: broken intra-doc links fail), the dependencies' licences, the whole test suite.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
@@ -8,4 +8,5 @@ bash scripts/setup.sh
 cargo fmt --all -- --check
 cargo clippy --workspace --all-targets -- -D warnings
 RUSTDOCFLAGS="-D warnings" cargo doc --workspace --no-deps
+python3 scripts/check-licenses.py
 cargo test --workspace

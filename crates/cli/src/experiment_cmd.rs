@@ -100,14 +100,15 @@ impl Renderer for SceneRenderer {
             seed,
             ..self.base.clone()
         };
-        let (film, stats) = render_loop::render(&self.scene, &o, &self.stop, &|_, _| {})?;
+        let (state, stats) = render_loop::render(&self.scene, &o, &self.stop, &|_, _| {})?;
         if stats.stopped {
             return Ok(None);
         }
-        let (w, h) = (film.width(), film.height());
+        let img = state.image();
+        let (w, h) = (img.width(), img.height());
         let rgb = (0..h)
             .flat_map(|y| (0..w).map(move |x| (x, y)))
-            .map(|(x, y)| film.rgb(x, y).to_array())
+            .map(|(x, y)| img.rgb(x, y).to_array())
             .collect();
         Ok(Some((
             Image {

@@ -3,6 +3,7 @@
 mod check;
 mod experiment;
 mod experiment_cmd;
+mod merge_cmd;
 mod output;
 mod preview;
 mod scene_render;
@@ -30,6 +31,9 @@ enum Command {
     /// Compare estimators against a reference: RMSE against samples and time, plots,
     /// Improvement / Speed Up / Overhead tables; resumable.
     Experiment(experiment_cmd::ExperimentArgs),
+    /// Merge render states (.state) of disjoint sample ranges of one render into one
+    /// image (.png, .exr) or state.
+    Merge(merge_cmd::MergeArgs),
     /// Validate a model file and print a summary (bounds, node count, perturbations).
     Check {
         /// The model file.
@@ -41,10 +45,15 @@ enum Command {
 struct RenderArgs {
     /// A scene file (.toml or .json) or a model file (.frep, .hf or .vm).
     input: PathBuf,
-    /// Output image: .png (sRGB, display) or .exr (linear, with AOV channels); repeat
-    /// the flag to write several files from one render.
+    /// Output: .png (sRGB, display), .exr (linear, with AOV channels) or .state (scenes:
+    /// every pixel's sums, for `frepray merge`); repeat the flag to write several files
+    /// from one render.
     #[arg(short, long, required = true)]
     output: Vec<PathBuf>,
+    /// Render samples START..END of every pixel (scenes) instead of 0..spp; states of
+    /// disjoint ranges merge into the render of their union (`frepray merge`).
+    #[arg(long, value_name = "START..END")]
+    samples: Option<String>,
     /// Scenes: direct, path, depth, normals or albedo. Models: shaded, depth or normals.
     #[arg(long)]
     integrator: Option<String>,
@@ -128,6 +137,7 @@ fn main() -> ExitCode {
         Command::Render(args) => render(args),
         Command::Bench(args) => bench(args),
         Command::Experiment(args) => experiment_cmd::run(args),
+        Command::Merge(args) => merge_cmd::run(args),
         Command::Check { file } => check::run(&file),
     };
     match result {
@@ -188,7 +198,12 @@ fn render(args: RenderArgs) -> Result<(), String> {
             cutoff: args.cutoff,
             ridge: args.ridge,
         };
-        return scene_render::run(&args.input, &args.output, &o, args.quiet);
+        let samples = args
+            .samples
+            .as_deref()
+            .map(scene_render::parse_samples)
+            .transpose()?;
+        return scene_render::run(&args.input, &args.output, &o, samples, args.quiet);
     }
     let scene_only = [
         ("--spp", args.spp.is_some()),
@@ -200,6 +215,7 @@ fn render(args: RenderArgs) -> Result<(), String> {
         ("--beta", args.beta.is_some()),
         ("--cutoff", args.cutoff.is_some()),
         ("--ridge", args.ridge.is_some()),
+        ("--samples", args.samples.is_some()),
     ];
     if let Some((flag, _)) = scene_only.iter().find(|(_, set)| *set) {
         return Err(format!(

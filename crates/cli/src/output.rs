@@ -1,7 +1,7 @@
 //! Choosing the output format from the file name.
 
 use crate::preview::Look;
-use render::Film;
+use render::{Image, RenderState};
 use std::path::Path;
 
 /// An image format frepray writes.
@@ -11,6 +11,9 @@ pub enum Format {
     Png,
     /// Linear f32 OpenEXR with AOV channels.
     Exr,
+    /// The render state: every pixel's sums, to merge with other sample ranges
+    /// (`frepray merge`).
+    State,
 }
 
 /// The format for a scene render's output, or an error naming what is expected —
@@ -23,8 +26,9 @@ pub fn format_for_scene(path: &Path) -> Result<Format, String> {
     match ext.as_deref() {
         Some("exr") => Ok(Format::Exr),
         Some("png") => Ok(Format::Png),
+        Some("state") => Ok(Format::State),
         _ => Err(format!(
-            "{}: unknown output format (expected a .png or .exr file name)",
+            "{}: unknown output format (expected a .png, .exr or .state file name)",
             path.display()
         )),
     }
@@ -32,14 +36,21 @@ pub fn format_for_scene(path: &Path) -> Result<Format, String> {
 
 /// The format for a model preview: depth and normals are EXR channels.
 pub fn format_for(path: &Path, look: Look) -> Result<Format, String> {
-    match format_for_scene(path)? {
+    match format_for_scene(path) {
+        Ok(Format::State) | Err(_) => Err(format!(
+            "{}: unknown output format for a model (expected a .png or .exr file name)",
+            path.display()
+        )),
+        Ok(f) => Ok(f),
+    }
+    .and_then(|f| match f {
         Format::Png if look != Look::Shaded => Err(format!(
             "{}: --integrator {} writes EXR channels; use a .exr output",
             path.display(),
             format!("{look:?}").to_lowercase()
         )),
         f => Ok(f),
-    }
+    })
 }
 
 /// The paths, comma-separated, for messages.
@@ -51,11 +62,31 @@ pub fn list(paths: &[std::path::PathBuf]) -> String {
         .join(", ")
 }
 
-/// Writes the film whole or not at all.
-pub fn write(path: &Path, film: &Film, format: Format) -> Result<(), String> {
+/// Writes an image whole or not at all (not as a state).
+pub fn write(path: &Path, img: &Image, format: Format) -> Result<(), String> {
     match format {
-        Format::Png => film.write_png(path),
-        Format::Exr => film.write_exr(path),
+        Format::Png => img.write_png(path),
+        Format::Exr | Format::State => img.write_exr(path),
     }
     .map_err(|e| format!("{}: {e}", path.display()))
+}
+
+/// Writes a render state's outputs: the state itself to `.state` files, its resolved
+/// image to the others (resolved once).
+pub fn write_state(
+    outs: &[std::path::PathBuf],
+    formats: &[Format],
+    state: &RenderState,
+) -> Result<(), String> {
+    let mut image = None;
+    for (p, &f) in outs.iter().zip(formats) {
+        if f == Format::State {
+            state
+                .write(p)
+                .map_err(|e| format!("{}: {e}", p.display()))?;
+        } else {
+            write(p, image.get_or_insert_with(|| state.image()), f)?;
+        }
+    }
+    Ok(())
 }

@@ -7,7 +7,7 @@
 use frep::{Aabb, Solid, Surface};
 use glam::{DVec2, DVec3};
 use rayon::prelude::*;
-use render::{Camera, Film};
+use render::{Camera, Image};
 use std::sync::atomic::{AtomicBool, Ordering};
 
 /// The vertical axis of a model.
@@ -83,13 +83,13 @@ pub fn render(
     look: Look,
     stop: &AtomicBool,
     progress: &(dyn Fn(u64) + Sync),
-) -> Film {
+) -> Image {
     let names = aov_names(look);
     let key = DVec3::new(-0.4, -0.6, 1.0).normalize();
-    let rows: Vec<Film> = (0..cam.height)
+    let rows: Vec<Image> = (0..cam.height)
         .into_par_iter()
         .map(|y| {
-            let mut row = Film::new(cam.width, 1, names);
+            let mut row = Image::new(cam.width, 1, names);
             if stop.load(Ordering::Relaxed) {
                 return row;
             }
@@ -111,22 +111,22 @@ pub fn render(
                         )
                     }
                 };
-                row.add_sample(x, 0, rgb);
+                row.set_rgb(x, 0, rgb);
                 match look {
                     Look::Shaded => {}
-                    Look::Depth => row.add_aov(x, 0, 0, depth),
-                    Look::Normals => (0..3).for_each(|k| row.add_aov(x, 0, k, n[k])),
+                    Look::Depth => row.set_aov(x, 0, 0, depth),
+                    Look::Normals => (0..3).for_each(|k| row.set_aov(x, 0, k, n[k])),
                 }
             }
             progress(1);
             row
         })
         .collect();
-    let mut film = Film::new(cam.width, cam.height, names);
+    let mut img = Image::new(cam.width, cam.height, names);
     for (y, row) in rows.iter().enumerate() {
-        film.add_tile(0, y as u32, row);
+        img.set_rows(y as u32, row);
     }
-    film
+    img
 }
 
 /// A box that always has some extent (a point or flat model still gets a view).

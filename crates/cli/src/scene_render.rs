@@ -5,6 +5,7 @@ use crate::output::{self, Format};
 use render::integrator::{Aov, RenderOptions};
 use render::render_loop;
 use render::scene::{load_scene, parse_technique, IntegratorKind, RenderSettings};
+use std::ops::Range;
 use std::path::{Path, PathBuf};
 use std::str::FromStr;
 
@@ -114,8 +115,36 @@ pub fn options(settings: &RenderSettings, o: &Overrides) -> Result<RenderOptions
     Ok(opts)
 }
 
-/// Loads, renders and writes a scene; prints statistics.
-pub fn run(input: &Path, outs: &[PathBuf], o: &Overrides, quiet: bool) -> Result<(), String> {
+/// Parses a sample range `A..B` (samples A to B−1 of every pixel).
+pub fn parse_samples(s: &str) -> Result<Range<u32>, String> {
+    let bad = || format!("--samples {s:?}: expected START..END with START < END, e.g. 0..64");
+    let (a, b) = s.split_once("..").ok_or_else(bad)?;
+    let (a, b): (u32, u32) = (
+        a.trim().parse().map_err(|_| bad())?,
+        b.trim().parse().map_err(|_| bad())?,
+    );
+    if a >= b {
+        return Err(bad());
+    }
+    Ok(a..b)
+}
+
+/// FNV-1a 64 of a file's bytes: the scene hash of the states it renders into.
+fn file_hash(path: &Path) -> Result<u64, String> {
+    let bytes = std::fs::read(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    Ok(bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| {
+        (h ^ u64::from(b)).wrapping_mul(0x0000_0100_0000_01b3)
+    }))
+}
+
+/// Loads, renders (samples `0..spp`, or `samples`) and writes a scene; prints statistics.
+pub fn run(
+    input: &Path,
+    outs: &[PathBuf],
+    o: &Overrides,
+    samples: Option<Range<u32>>,
+    quiet: bool,
+) -> Result<(), String> {
     let formats = outs
         .iter()
         .map(|p| output::format_for_scene(p))
@@ -130,7 +159,9 @@ pub fn run(input: &Path, outs: &[PathBuf], o: &Overrides, quiet: bool) -> Result
     if scene.camera.width == 0 || scene.camera.height == 0 {
         return Err("--width and --height must be at least 1".into());
     }
-    let opts = options(&settings, o)?;
+    let mut opts = options(&settings, o)?;
+    opts.scene_hash = file_hash(input)?;
+    let samples = samples.unwrap_or(0..opts.spp);
     let mut check = settings.clone();
     check.techniques = opts.techniques.clone();
     check.check_techniques(&scene)?;
@@ -143,15 +174,13 @@ pub fn run(input: &Path, outs: &[PathBuf], o: &Overrides, quiet: bool) -> Result
 
     let stop = crate::stop_on_ctrl_c();
     let bar = crate::progress_bar(quiet, "samples");
-    let result = render_loop::render(&scene, &opts, &stop, &|done, total| {
+    let result = render_loop::render_range(&scene, &opts, samples, &stop, &|done, total| {
         bar.set_length(total);
         bar.set_position(done);
     });
     bar.finish_and_clear();
-    let (film, stats) = result?;
-    for (p, f) in outs.iter().zip(formats) {
-        output::write(p, &film, f)?;
-    }
+    let (state, stats) = result?;
+    output::write_state(outs, &formats, &state)?;
     eprintln!("{stats}");
     eprintln!(
         "{}{} written",

@@ -231,3 +231,78 @@ fn renders_a_scene_with_overrides() {
     );
     assert!(!dir.join("never.exr").exists());
 }
+
+/// A render split into sample ranges in separate processes and merged through state
+/// files gives the sums of one render of the union (1e-12 relative), and the merged
+/// image equals the whole render's; merging a range twice is refused.
+#[test]
+fn split_render_merges_through_state_files() {
+    let dir = out_dir("split");
+    let scene = root().join("scenes/many-lights.toml");
+    let render = |range: Option<&str>, outs: &[&str]| {
+        let mut c = frepray();
+        c.args([
+            "render", "--quiet", "--width", "20", "--height", "14", "--spp", "6",
+        ])
+        .args(["--mis", "optimal-direct"]);
+        if let Some(r) = range {
+            c.args(["--samples", r]);
+        }
+        for o in outs {
+            c.arg("-o").arg(dir.join(o));
+        }
+        let st = c.arg(&scene).output().unwrap();
+        assert!(
+            st.status.success(),
+            "{}",
+            String::from_utf8_lossy(&st.stderr)
+        );
+    };
+    render(Some("0..2"), &["a.state"]);
+    render(Some("2..6"), &["b.state"]);
+    render(None, &["whole.state", "whole.exr"]);
+    let st = frepray()
+        .arg("merge")
+        .arg(dir.join("a.state"))
+        .arg(dir.join("b.state"))
+        .arg("-o")
+        .arg(dir.join("merged.state"))
+        .arg("-o")
+        .arg(dir.join("merged.exr"))
+        .output()
+        .unwrap();
+    assert!(
+        st.status.success(),
+        "{}",
+        String::from_utf8_lossy(&st.stderr)
+    );
+    let merged = render::RenderState::read(dir.join("merged.state")).unwrap();
+    let whole = render::RenderState::read(dir.join("whole.state")).unwrap();
+    assert_eq!(merged.samples(), std::slice::from_ref(&(0..6)));
+    for (a, b) in merged.data().iter().zip(whole.data()) {
+        assert!((a - b).abs() <= 1e-12 * a.abs().max(b.abs()), "{a} vs {b}");
+    }
+    for c in ["R", "G", "B"] {
+        let (m, w) = (
+            channel(&dir.join("merged.exr"), c),
+            channel(&dir.join("whole.exr"), c),
+        );
+        for (a, b) in m.iter().zip(&w) {
+            assert!(
+                (a - b).abs() <= 1e-6 * a.abs().max(b.abs()),
+                "{c}: {a} vs {b}"
+            );
+        }
+    }
+    let twice = frepray()
+        .arg("merge")
+        .arg(dir.join("a.state"))
+        .arg(dir.join("a.state"))
+        .arg("-o")
+        .arg(dir.join("never.exr"))
+        .output()
+        .unwrap();
+    assert!(!twice.status.success());
+    assert!(String::from_utf8_lossy(&twice.stderr).contains("overlap"));
+    assert!(!dir.join("never.exr").exists());
+}

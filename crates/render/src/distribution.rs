@@ -183,7 +183,7 @@ mod tests {
         let n = 200_000u64;
         let mut counts = vec![0u64; nu * nv];
         for i in 0..n {
-            let st = s.stream(0, 0, i);
+            let st = s.stream(0, 0, i as u32);
             let (p, pdf) = d.sample(DVec2::new(st.get(0), st.get(1)));
             assert!((pdf - d.pdf(p)).abs() < 1e-9 * pdf);
             counts[(p.y * nv as f64) as usize * nu + (p.x * nu as f64) as usize] += 1;

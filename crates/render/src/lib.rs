@@ -1,5 +1,5 @@
 //! Light transport on the CPU for frepray: sampler, camera, textures, materials and
-//! BSDFs, lights, sampling techniques and the film.
+//! BSDFs, lights, sampling techniques, the per-pixel render state and the image.
 //!
 //! Every sampling routine reports its density in solid angle for any direction, so
 //! that an integrator can draw samples from several [`technique::Technique`]s and
@@ -29,8 +29,8 @@ pub mod bsdf;
 pub mod camera;
 pub mod color;
 pub mod distribution;
-pub mod film;
 pub mod frame;
+pub mod image;
 pub mod integrator;
 pub mod light;
 pub mod material;
@@ -38,6 +38,7 @@ pub mod output;
 pub mod render_loop;
 pub mod sampler;
 pub mod scene;
+pub mod state;
 pub mod technique;
 #[cfg(test)]
 mod testutil;
@@ -46,8 +47,10 @@ pub mod warp;
 
 pub use camera::Camera;
 pub use color::Rgb;
-pub use film::Film;
+pub use image::Image;
 pub use material::Material;
+pub use render_loop::{render, render_range, RenderStats};
 pub use sampler::{SampleStream, Sampler};
+pub use state::{RenderState, StateHeader};
 pub use technique::{ShadingPoint, Technique, TechniqueSample};
 pub use texture::{TexCoord, Texture};

@@ -1,29 +1,31 @@
 //! The render loop: tiles rendered in parallel (rayon), in passes of samples, with
 //! progress, a stop flag and end-of-render statistics.
 //!
-//! **Determinism.** Sample `i` of pixel (x, y) draws from the stream (seed, pixel, i)
-//! ([`crate::Sampler`]) and each pixel's samples run in index order on its own state, so
-//! the image is the same bit for bit whatever the thread count or tile order
-//! (DESIGN.md §4).
+//! **Sample ranges.** A render sums samples `a..b` of every pixel into a [`RenderState`];
+//! sample `i` of pixel (x, y) draws from the stream (seed, x, y, i) ([`crate::Sampler`]),
+//! whatever the range it belongs to, so renders of disjoint ranges merge into the render
+//! of their union ([`RenderState::merge`]).
+//!
+//! **Determinism.** Each pixel's samples run in index order on its own record, so the
+//! state is the same bit for bit whatever the thread count or tile order (DESIGN.md §4).
 //!
 //! **Passes.** The samples are rendered in passes of `pass_spp` per pixel; within a pass
-//! every tile is one rayon task. Per-pixel state (sums, and the [`mis`] estimators of
-//! `direct` and optimal `path`) stays in its tile across passes, so the progressive
-//! optimal estimators see each pixel's iterations in order. The stop flag is read before
-//! each tile: once set, the tiles not yet started are skipped and the render ends, and
-//! each pixel's value is still the correct estimate from the samples it got (the pixels of
-//! a stopped render hold 0, 1 or more passes). At the end each pixel's value is written
-//! into the [`Film`] as one sample (its estimate), with the AOV means.
+//! every tile is one rayon task. Each tile's records stay with it across passes, so the
+//! progressive optimal estimators see each pixel's iterations in order. The stop flag is
+//! read before each tile: once set, the tiles not yet started are skipped and the render
+//! ends; the state is then marked partial, and each pixel's estimate is still correct for
+//! the samples it got (the pixels of a stopped render hold 0, 1 or more passes).
 //!
 //! **Statistics.** A *sample* is one iteration of a pixel: one camera ray with the draws
 //! of every technique (DESIGN.md §4). Rays are counted exactly by kind (per tile, then
 //! summed).
 
-use crate::film::Film;
-use crate::integrator::{Aov, Integrator, IntegratorKind, PixelState, RayCounts, RenderOptions};
+use crate::integrator::{Integrator, IntegratorKind, RayCounts, RenderOptions};
 use crate::scene::Scene;
+use crate::state::{RenderState, StateHeader};
 use rayon::prelude::*;
 use std::fmt;
+use std::ops::Range;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::time::{Duration, Instant};
 
@@ -97,13 +99,13 @@ impl fmt::Display for RenderStats {
     }
 }
 
-/// A rectangle of pixels with their states.
+/// A rectangle of pixels with their records.
 struct Tile {
     x0: u32,
     y0: u32,
     w: u32,
     h: u32,
-    pixels: Vec<PixelState>,
+    records: Vec<f64>,
     rays: RayCounts,
     samples: u64,
 }
@@ -111,37 +113,54 @@ struct Tile {
 impl Tile {
     /// Samples `start..end` of every pixel, each pixel's in index order.
     fn render(&mut self, it: &Integrator, scene: &Scene, start: u32, end: u32) {
-        for j in 0..self.h {
-            for i in 0..self.w {
-                let px = &mut self.pixels[(j * self.w + i) as usize];
-                for s in start..end {
-                    it.sample(
-                        scene,
-                        self.x0 + i,
-                        self.y0 + j,
-                        u64::from(s),
-                        px,
-                        &mut self.rays,
-                    );
-                }
+        let stride = it.record.stride();
+        for (k, rec) in self.records.chunks_exact_mut(stride).enumerate() {
+            let (i, j) = (k as u32 % self.w, k as u32 / self.w);
+            for s in start..end {
+                it.sample(scene, self.x0 + i, self.y0 + j, s, rec, &mut self.rays);
             }
         }
         self.samples += u64::from(self.w * self.h) * u64::from(end - start);
     }
 }
 
-/// Renders `scene` with `options`. `progress(done, total)` is called (from worker
-/// threads) after each tile of each pass with the samples done so far; setting `stop`
-/// ends the render after the tiles in flight (module docs). Errors on invalid options.
+/// Renders samples `0..options.spp` of `scene` (see [`render_range`]).
 pub fn render(
     scene: &Scene,
     options: &RenderOptions,
     stop: &AtomicBool,
     progress: &(dyn Fn(u64, u64) + Sync),
-) -> Result<(Film, RenderStats), String> {
-    let it = Integrator::new(options)?;
+) -> Result<(RenderState, RenderStats), String> {
+    render_range(scene, options, 0..options.spp, stop, progress)
+}
+
+/// Renders samples `samples` of every pixel of `scene` with `options` (whose `spp` is
+/// ignored) into a new [`RenderState`]. `progress(done, total)` is called (from worker
+/// threads) after each tile of each pass with the samples done so far; setting `stop`
+/// ends the render after the tiles in flight (module docs). Errors on invalid options or
+/// an empty range.
+pub fn render_range(
+    scene: &Scene,
+    options: &RenderOptions,
+    samples: Range<u32>,
+    stop: &AtomicBool,
+    progress: &(dyn Fn(u64, u64) + Sync),
+) -> Result<(RenderState, RenderStats), String> {
+    if samples.is_empty() {
+        return Err(format!(
+            "empty sample range {}..{}",
+            samples.start, samples.end
+        ));
+    }
+    let o = RenderOptions {
+        spp: samples.end - samples.start,
+        ..options.clone()
+    };
+    let it = Integrator::new(&o)?;
     let (width, height) = (scene.camera.width, scene.camera.height);
-    let ts = options.tile_size;
+    let mut state = RenderState::new(StateHeader::new(width, height, &o), samples.clone())?;
+    let stride = it.record.stride();
+    let ts = o.tile_size;
     let mut tiles = Vec::new();
     for y0 in (0..height).step_by(ts as usize) {
         for x0 in (0..width).step_by(ts as usize) {
@@ -151,25 +170,25 @@ pub fn render(
                 y0,
                 w,
                 h,
-                pixels: (0..w * h).map(|_| it.pixel_state()).collect(),
+                records: vec![0.0; (w * h) as usize * stride],
                 rays: RayCounts::default(),
                 samples: 0,
             });
         }
     }
-    let spp = options.spp;
-    let pass = if options.pass_spp == 0 {
+    let spp = o.spp;
+    let pass = if o.pass_spp == 0 {
         spp.div_ceil(16)
     } else {
-        options.pass_spp.min(spp)
+        o.pass_spp.min(spp)
     };
     let total = u64::from(width) * u64::from(height) * u64::from(spp);
     let done = AtomicU64::new(0);
     let started = Instant::now();
     let run = |tiles: &mut Vec<Tile>| -> usize {
-        let mut start = 0;
-        while start < spp && !stop.load(Ordering::Relaxed) {
-            let end = (start + pass).min(spp);
+        let mut start = samples.start;
+        while start < samples.end && !stop.load(Ordering::Relaxed) {
+            let end = start.saturating_add(pass).min(samples.end);
             tiles.par_iter_mut().for_each(|tile| {
                 if stop.load(Ordering::Relaxed) {
                     return;
@@ -182,58 +201,40 @@ pub fn render(
         }
         rayon::current_num_threads()
     };
-    let threads = if options.threads > 0 {
+    let threads = if o.threads > 0 {
         rayon::ThreadPoolBuilder::new()
-            .num_threads(options.threads)
+            .num_threads(o.threads)
             .build()
             .map_err(|e| format!("thread pool: {e}"))?
             .install(|| run(&mut tiles))
     } else {
         run(&mut tiles)
     };
-    let names: Vec<&str> = options
-        .aovs
-        .iter()
-        .flat_map(|a| a.channels().iter().copied())
-        .collect();
-    let mut film = Film::new(width, height, &names);
     let mut rays = RayCounts::default();
-    let mut samples = 0;
+    let mut count = 0;
+    let data = state.data_mut();
     for t in &tiles {
         rays += t.rays;
-        samples += t.samples;
-        for j in 0..t.h {
-            for i in 0..t.w {
-                let px = &t.pixels[(j * t.w + i) as usize];
-                if px.iterations == 0 {
-                    continue;
-                }
-                let (x, y) = (t.x0 + i, t.y0 + j);
-                film.add_sample(x, y, px.value());
-                write_aovs(&mut film, &options.aovs, x, y, px);
-            }
+        count += t.samples;
+        let row = t.w as usize * stride;
+        for j in 0..t.h as usize {
+            let at = ((t.y0 as usize + j) * width as usize + t.x0 as usize) * stride;
+            data[at..at + row].copy_from_slice(&t.records[j * row..(j + 1) * row]);
         }
+    }
+    if count < total {
+        state.set_partial();
     }
     let stats = RenderStats {
-        integrator: options.integrator,
+        integrator: o.integrator,
         wall: started.elapsed(),
-        samples,
+        samples: count,
         samples_requested: total,
         rays,
-        stopped: samples < total,
+        stopped: count < total,
         threads,
     };
-    Ok((film, stats))
-}
-
-fn write_aovs(film: &mut Film, aovs: &[Aov], x: u32, y: u32, px: &PixelState) {
-    let mut channel = 0;
-    for a in aovs {
-        for k in 0..a.channels().len() {
-            film.add_aov(x, y, channel, px.aov_mean(a.offset() + k));
-            channel += 1;
-        }
-    }
+    Ok((state, stats))
 }
 
 /// Throughput of `direct` and `path` on `scene` with `options` otherwise unchanged, for

@@ -1,28 +1,52 @@
-//! Deterministic random numbers: one stream per (seed, pixel, sample index), one value
-//! per dimension, independent of threads and tile order (DESIGN.md §4).
+//! Deterministic random numbers: value `dim` of sample `index` of pixel (x, y) is a pure
+//! function of (seed, x, y, index, dim), independent of threads, tile order and control
+//! flow (DESIGN.md §4), and computed with 32-bit integer operations only, so that a GPU
+//! reproduces it bit for bit.
 //!
-//! A counter-based generator in the spirit of Random123 (Salmon et al. 2011) and PCG's
-//! output permutations (O'Neill 2014): the stream key is a hash of (seed, pixel, index),
-//! and value `d` of a stream is the SplitMix64 output (Steele et al. 2014) at position
-//! `d` from that key. Any value can be computed in O(1) without the ones before it.
+//! The generator is Philox4x32-10 (Salmon et al. 2011, "Parallel random numbers: as easy as
+//! 1, 2, 3"; Random123), a counter-based generator: the 64-bit seed is its key, the counter
+//! is `(x, y, index, dim / 4)`, and each evaluation gives four 32-bit outputs, dimensions
+//! `4⌊dim/4⌋ … +3`. It passes TestU01's BigCrush for any counter pattern. A 32-bit output u
+//! maps to `u · 2⁻³²` ∈ [0, 1), exact in f64; the GPU's f32 form is `(u >> 8) · 2⁻²⁴`.
+//!
+//! Which dimension each draw of a sample uses is fixed in advance by the integrator's
+//! dimension layout (`integrator/dims.rs`: per depth, technique and draw), so a sample's
+//! random numbers never depend on which branches it took (the pattern of pbrt-v4's
+//! `wavefront/samples.cpp`, where they are generated before the kernels that use them).
 
 use glam::DVec2;
 
-/// The SplitMix64 finaliser (Stafford's "Mix13"): a bijection on u64 with full avalanche.
+/// Philox4x32 multipliers and Weyl key increments (Salmon et al. 2011, Table 2).
+const M0: u32 = 0xD251_1F53;
+const M1: u32 = 0xCD9E_8D57;
+const W0: u32 = 0x9E37_79B9;
+const W1: u32 = 0xBB67_AE85;
+
+/// The high and low 32 bits of a·b.
 #[inline]
-pub fn mix64(mut z: u64) -> u64 {
-    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-    z ^ (z >> 31)
+fn mulhilo(a: u32, b: u32) -> (u32, u32) {
+    let p = u64::from(a) * u64::from(b);
+    ((p >> 32) as u32, p as u32)
 }
 
-/// The Weyl increment of SplitMix64 (2⁶⁴ / φ, odd).
-const GAMMA: u64 = 0x9e37_79b9_7f4a_7c15;
-
-/// A u64 as a uniform f64 in [0, 1) from its 53 high bits.
+/// Philox4x32-10: ten rounds of the Philox S-box on counter `c` under key `k`.
 #[inline]
-pub fn to_unit(bits: u64) -> f64 {
-    (bits >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
+pub fn philox4x32_10(mut c: [u32; 4], mut k: [u32; 2]) -> [u32; 4] {
+    for round in 0..10 {
+        if round > 0 {
+            k = [k[0].wrapping_add(W0), k[1].wrapping_add(W1)];
+        }
+        let (hi0, lo0) = mulhilo(M0, c[0]);
+        let (hi1, lo1) = mulhilo(M1, c[2]);
+        c = [hi1 ^ c[1] ^ k[0], lo1, hi0 ^ c[3] ^ k[1], lo0];
+    }
+    c
+}
+
+/// A 32-bit output as a uniform f64 in [0, 1): `u · 2⁻³²`.
+#[inline]
+pub fn to_unit(bits: u32) -> f64 {
+    f64::from(bits) * (1.0 / 4_294_967_296.0)
 }
 
 /// The source of every random number in a render: a seed.
@@ -39,51 +63,37 @@ impl Sampler {
     }
 
     /// The stream of sample `index` of pixel `(x, y)`.
-    pub fn stream(&self, x: u32, y: u32, index: u64) -> SampleStream {
-        let pixel = (u64::from(y) << 32) | u64::from(x);
-        let mut k = mix64(self.seed.wrapping_add(GAMMA));
-        k = mix64(k ^ pixel.wrapping_mul(0xd6e8_feb8_6659_fd93));
-        k = mix64(k ^ index.wrapping_mul(0xa076_1d64_78bd_642f));
-        SampleStream { key: k, dim: 0 }
+    pub fn stream(&self, x: u32, y: u32, index: u32) -> SampleStream {
+        SampleStream {
+            key: [self.seed as u32, (self.seed >> 32) as u32],
+            counter: [x, y, index],
+        }
     }
 }
 
-/// The random values of one sample, dimension by dimension.
+/// The random values of one sample, addressed by dimension.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct SampleStream {
-    key: u64,
-    dim: u64,
+    key: [u32; 2],
+    counter: [u32; 3],
 }
 
 impl SampleStream {
+    /// The four values of dimensions `4·block … 4·block + 3` as 32-bit integers.
+    #[inline]
+    pub fn block_bits(&self, block: u32) -> [u32; 4] {
+        let [x, y, i] = self.counter;
+        philox4x32_10([x, y, i, block], self.key)
+    }
     /// The value of dimension `dim` in [0, 1), whatever was drawn before.
     #[inline]
-    pub fn get(&self, dim: u64) -> f64 {
-        to_unit(mix64(
-            self.key
-                .wrapping_add(dim.wrapping_add(1).wrapping_mul(GAMMA)),
-        ))
+    pub fn get(&self, dim: u32) -> f64 {
+        to_unit(self.block_bits(dim / 4)[(dim % 4) as usize])
     }
-    /// The next dimension's value in [0, 1).
+    /// Dimensions `dim` and `dim + 1` as a point of [0, 1)².
     #[inline]
-    pub fn next_1d(&mut self) -> f64 {
-        let v = self.get(self.dim);
-        self.dim += 1;
-        v
-    }
-    /// The next two dimensions as a point of [0, 1)².
-    #[inline]
-    pub fn next_2d(&mut self) -> DVec2 {
-        let x = self.next_1d();
-        DVec2::new(x, self.next_1d())
-    }
-    /// The next dimension to be drawn.
-    pub fn dimension(&self) -> u64 {
-        self.dim
-    }
-    /// Moves to dimension `dim` (so that a fixed layout of dimensions can be kept).
-    pub fn set_dimension(&mut self, dim: u64) {
-        self.dim = dim;
+    pub fn get_2d(&self, dim: u32) -> DVec2 {
+        DVec2::new(self.get(dim), self.get(dim + 1))
     }
 }
 
@@ -100,17 +110,38 @@ mod tests {
         (s, counts.len() - 1)
     }
 
+    /// Random123's known-answer vectors for Philox4x32-10 (its `kat_vectors`).
+    #[test]
+    fn philox_known_answers() {
+        assert_eq!(
+            philox4x32_10([0; 4], [0; 2]),
+            [0x6627e8d5, 0xe169c58d, 0xbc57ac4c, 0x9b00dbd8]
+        );
+        assert_eq!(
+            philox4x32_10([u32::MAX; 4], [u32::MAX; 2]),
+            [0x408f276d, 0x41c83b0e, 0xa20bc7c6, 0x6d5451fd]
+        );
+        assert_eq!(
+            philox4x32_10(
+                [0x243f6a88, 0x85a308d3, 0x13198a2e, 0x03707344],
+                [0xa4093822, 0x299f31d0]
+            ),
+            [0xd16cfe09, 0x94fdcceb, 0x5001e420, 0x24126ea1]
+        );
+    }
+
     #[test]
     fn deterministic_and_order_independent() {
         let s = Sampler::new(7);
-        let mut a = s.stream(3, 4, 10);
-        let v: Vec<f64> = (0..8).map(|_| a.next_1d()).collect();
+        let a = s.stream(3, 4, 10);
+        let v: Vec<f64> = (0..8).map(|d| a.get(d)).collect();
         // Drawing other streams in between changes nothing.
-        let _ = s.stream(9, 9, 9).next_2d();
+        let _ = s.stream(9, 9, 9).get_2d(0);
         let b = s.stream(3, 4, 10);
         for (d, &x) in v.iter().enumerate() {
-            assert_eq!(b.get(d as u64), x);
+            assert_eq!(b.get(d as u32), x);
         }
+        assert_ne!(Sampler::new(7 + (1 << 32)).stream(3, 4, 10).get(0), v[0]);
         assert_ne!(s.stream(4, 3, 10).get(0), v[0]);
         assert_ne!(Sampler::new(8).stream(3, 4, 10).get(0), v[0]);
     }
@@ -143,7 +174,7 @@ mod tests {
     #[test]
     fn streams_independent() {
         let s = Sampler::new(99);
-        type Pair = fn(&Sampler, u32, u32, u64) -> (f64, f64);
+        type Pair = fn(&Sampler, u32, u32, u32) -> (f64, f64);
         let pairs: [(&str, Pair); 4] = [
             ("pixel x", |s, x, y, i| {
                 (s.stream(x, y, i).get(0), s.stream(x + 1, y, i).get(0))

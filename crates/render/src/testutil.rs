@@ -217,7 +217,7 @@ pub fn sphere_chi2(
     let mut counts = vec![0u64; bins.nz * bins.nphi];
     let mut valid = 0u64;
     for i in 0..n {
-        let st = s.stream(0, 0, i);
+        let st = s.stream(0, 0, i as u32);
         if let Some(w) = sample([st.get(0), st.get(1), st.get(2)]) {
             assert!((w.length() - 1.0).abs() < 1e-9, "not unit: {w}");
             counts[bins.cell(w)] += 1;

@@ -153,7 +153,7 @@ fn albedo(b: &Bxdf, wo: DVec3, n: u64, seed: u64) -> (Rgb, Rgb) {
     let s = Sampler::new(seed);
     let (mut sum, mut sum2) = (Rgb::ZERO, Rgb::ZERO);
     for i in 0..n {
-        let st = s.stream(0, 0, i);
+        let st = s.stream(0, 0, i as u32);
         if let Some(x) = b.sample_f(wo, st.get(0), DVec2::new(st.get(1), st.get(2))) {
             let w = x.weight * (x.eta * x.eta);
             sum += w;
@@ -231,7 +231,7 @@ fn reciprocity() {
         };
         let n2 = |w: DVec3| if w.z > 0.0 { 1.0 } else { eta * eta };
         for i in 0..20_000 {
-            let st = s.stream(0, 0, i);
+            let st = s.stream(0, 0, i as u32);
             let wo = uniform_sphere(DVec2::new(st.get(0), st.get(1)));
             let wi = uniform_sphere(DVec2::new(st.get(2), st.get(3)));
             let a = b.f(wo, wi) / n2(wo);

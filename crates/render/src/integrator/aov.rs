@@ -8,19 +8,16 @@
 //! `ρ(ωo) = ∫ f_s(ωo, ω)|cos θ| dω`, estimated by one BSDF draw per sample (its weight
 //! `f_s|cos|/pdf`; exact for Lambertian surfaces). All three are 0 where the ray escapes;
 //! a light has albedo 0. Each is averaged over the pixel's samples. The albedo draw takes
-//! its random numbers from fixed far dimensions of the sample's stream, so that asking
-//! for AOVs changes no other random number of the render.
+//! its random numbers from dimensions of its own ([`super::dims`]), so that asking for
+//! AOVs changes no other random number of the render.
 
+use super::dims::{ALBEDO, PIXEL};
 use super::vertex::{trace, Trace, Vertex};
-use super::{Integrator, IntegratorKind, PixelState, RayCounts};
+use super::{Integrator, IntegratorKind, Pixel, RayCounts};
 use crate::color::Rgb;
 use crate::sampler::SampleStream;
 use crate::scene::Scene;
 use frep::Ray;
-use glam::DVec2;
-
-/// Stream dimension of the albedo draw (far beyond any path's use).
-const ALBEDO_DIM: u64 = 1 << 40;
 
 /// An extra film channel group.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -80,10 +77,9 @@ fn first_hit(scene: &Scene, t: &Trace, ray: &Ray, rng: &SampleStream) -> [f64; 7
         Trace::Light(l) => [l.t, l.n.x, l.n.y, l.n.z, 0.0, 0.0, 0.0],
         Trace::Surface(h) => {
             let v = Vertex::new(scene, h, -ray.d);
-            let u = DVec2::new(rng.get(ALBEDO_DIM + 1), rng.get(ALBEDO_DIM + 2));
             let a = v
                 .bsdf
-                .sample_f(v.wo, rng.get(ALBEDO_DIM), u)
+                .sample_f(v.wo, rng.get(ALBEDO), rng.get_2d(ALBEDO + 1))
                 .map_or(Rgb::ZERO, |s| s.weight);
             [h.t, h.n.x, h.n.y, h.n.z, a.x, a.y, a.z]
         }
@@ -98,11 +94,9 @@ impl Integrator {
         t: &Trace,
         ray: &Ray,
         rng: &SampleStream,
-        px: &mut PixelState,
+        px: &mut Pixel,
     ) {
-        for (s, v) in px.aov.iter_mut().zip(first_hit(scene, t, ray, rng)) {
-            *s += v;
-        }
+        px.add_aovs(&first_hit(scene, t, ray, rng));
     }
 
     /// One sample of the `depth`, `normals` or `albedo` integrator.
@@ -111,21 +105,19 @@ impl Integrator {
         scene: &Scene,
         x: u32,
         y: u32,
-        rng: &mut SampleStream,
-        px: &mut PixelState,
+        rng: &SampleStream,
+        px: &mut Pixel,
         rays: &mut RayCounts,
     ) {
-        let ray = scene.camera.ray(x, y, rng.next_2d());
+        let ray = scene.camera.ray(x, y, rng.get_2d(PIXEL));
         rays.camera += 1;
         let t = trace(scene, &ray);
         let a = first_hit(scene, &t, &ray, rng);
-        px.sum += match self.kind {
+        px.add(match self.kind {
             IntegratorKind::Depth => Rgb::splat(a[0]),
             IntegratorKind::Normals => Rgb::new(a[1], a[2], a[3]),
             _ => Rgb::new(a[4], a[5], a[6]),
-        };
-        for (s, v) in px.aov.iter_mut().zip(a) {
-            *s += v;
-        }
+        });
+        px.add_aovs(&a);
     }
 }

@@ -37,19 +37,21 @@
 //! exist (adding failures instead would shrink α towards 0).
 
 mod aov;
+mod dims;
 mod path;
 mod state;
 mod vertex;
 
 pub use aov::Aov;
-pub(crate) use state::PixelState;
-pub use state::RayCounts;
+pub(crate) use dims::Dims;
+pub(crate) use state::Pixel;
+pub use state::{RayCounts, Record};
 
 use crate::sampler::Sampler;
 pub use crate::scene::IntegratorKind;
 use crate::scene::{RenderSettings, Scene};
 use crate::technique::Technique;
-use mis::{Heuristic, Layout, Method, Params};
+use mis::{Kernel, Layout, Method, Params};
 use std::sync::Arc;
 
 /// Whether the integrator draws techniques and combines them by MIS.
@@ -89,6 +91,9 @@ pub struct RenderOptions {
     pub pass_spp: u32,
     /// Worker threads (0: the current rayon pool).
     pub threads: usize,
+    /// A hash of the scene, recorded in the [`crate::RenderState`] so that states of
+    /// different scenes refuse to merge (0: unknown).
+    pub scene_hash: u64,
 }
 
 impl Default for RenderOptions {
@@ -109,6 +114,7 @@ impl Default for RenderOptions {
             tile_size: 16,
             pass_spp: 0,
             threads: 0,
+            scene_hash: 0,
         }
     }
 }
@@ -175,9 +181,9 @@ pub const MAX_TECHNIQUES: usize = Technique::ALL.len();
 #[derive(Clone, Debug)]
 pub(crate) enum Combine {
     /// Heuristic weights applied per draw, summed into the pixel (path, heuristics).
-    Heuristic(Heuristic),
-    /// One [`mis`] estimator per pixel and depth.
-    Estimator,
+    Heuristic(mis::Heuristic),
+    /// One [`mis`] estimator block per pixel and depth, run by this kernel.
+    Estimator(Kernel),
 }
 
 /// An integrator ready to run: the options digested once per render.
@@ -188,9 +194,11 @@ pub(crate) struct Integrator {
     pub techniques: Vec<Technique>,
     pub counts: Vec<u32>,
     pub layout: Arc<Layout>,
-    pub method: Method,
-    pub params: Params,
     pub combine: Combine,
+    /// Where each sum lives in a pixel's record.
+    pub record: Record,
+    /// Which random dimension each draw uses.
+    pub dims: Dims,
     /// Index of [`Technique::Bsdf`] in the list.
     pub bsdf_index: Option<usize>,
     pub max_depth: u32,
@@ -213,21 +221,26 @@ impl Integrator {
         } else {
             Layout::new(&counts, 3)
         };
-        let heuristic = match o.method {
-            Method::Balance => Some(Heuristic::Balance),
-            Method::Power => Some(Heuristic::Power {
-                beta: o.params.beta,
-            }),
-            Method::Maximum => Some(Heuristic::Maximum),
-            Method::Cutoff => Some(Heuristic::Cutoff { c: o.params.cutoff }),
-            _ => None,
-        };
         // `direct` always keeps the per-pixel estimator (the paper's setting); `path`
         // applies heuristic weights per draw and keeps estimators only for optimal MIS.
-        let combine = match (o.integrator, heuristic) {
+        let combine = match (o.integrator, o.method.heuristic(&o.params)) {
             (IntegratorKind::Path, Some(h)) => Combine::Heuristic(h),
-            _ => Combine::Estimator,
+            _ => Combine::Estimator(Kernel::new(o.method, &layout, &o.params)?),
         };
+        let depths = match (&combine, o.integrator) {
+            (Combine::Estimator(_), IntegratorKind::Direct) => 1,
+            (Combine::Estimator(_), IntegratorKind::Path) => o.max_depth.max(1) as usize,
+            _ => 0,
+        };
+        let record = Record {
+            aov: if o.aovs.is_empty() { 0 } else { 7 },
+            depths,
+            block: match &combine {
+                Combine::Estimator(k) => k.block_len(),
+                Combine::Heuristic(_) => 0,
+            },
+        };
+        let dims = Dims::new(&counts, o.max_depth)?;
         Ok(Self {
             kind: o.integrator,
             sampler: Sampler::new(o.seed),
@@ -235,9 +248,9 @@ impl Integrator {
             techniques,
             counts,
             layout,
-            method: o.method,
-            params: o.params,
             combine,
+            record,
+            dims,
             max_depth: o.max_depth,
             rr_depth: o.rr_depth,
             hide_emitters: o.hide_emitters,
@@ -245,31 +258,39 @@ impl Integrator {
         })
     }
 
-    /// A fresh pixel state.
-    pub fn pixel_state(&self) -> PixelState {
-        PixelState::default()
+    /// The MIS kernel of the per-pixel estimators (None when heuristic weights go straight
+    /// into the outside sum, or for AOV integrators).
+    pub fn kernel(&self) -> Option<&Kernel> {
+        match &self.combine {
+            Combine::Estimator(k) if self.record.depths > 0 => Some(k),
+            _ => None,
+        }
     }
 
-    /// Runs sample `index` of pixel (x, y) into `px`.
+    /// Runs sample `index` of pixel (x, y) into the pixel's record `rec`.
     pub fn sample(
         &self,
         scene: &Scene,
         x: u32,
         y: u32,
-        index: u64,
-        px: &mut PixelState,
+        index: u32,
+        rec: &mut [f64],
         rays: &mut RayCounts,
     ) {
-        let mut rng = self.sampler.stream(x, y, index);
+        let rng = self.sampler.stream(x, y, index);
+        let mut px = Pixel {
+            rec,
+            key: u64::from(index),
+        };
         match self.kind {
             IntegratorKind::Direct | IntegratorKind::Path => {
-                self.path_sample(scene, x, y, &mut rng, px, rays)
+                self.path_sample(scene, x, y, &rng, &mut px, rays)
             }
             IntegratorKind::Depth | IntegratorKind::Normals | IntegratorKind::Albedo => {
-                self.aov_sample(scene, x, y, &mut rng, px, rays)
+                self.aov_sample(scene, x, y, &rng, &mut px, rays)
             }
         }
-        px.iterations += 1;
+        px.end_sample();
     }
 }
 

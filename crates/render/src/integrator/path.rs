@@ -34,8 +34,9 @@
 //! the α minimising the variance is the optimum for the paths that do, which is what the
 //! per-depth state estimates. Memory: one estimator per pixel for each depth reached.
 
+use super::dims::PIXEL;
 use super::vertex::{trace, Trace, Vertex};
-use super::{Integrator, IntegratorKind, PixelState, RayCounts};
+use super::{Integrator, IntegratorKind, Pixel, RayCounts};
 use crate::color::Rgb;
 use crate::sampler::SampleStream;
 use crate::scene::Scene;
@@ -50,11 +51,11 @@ impl Integrator {
         scene: &Scene,
         x: u32,
         y: u32,
-        rng: &mut SampleStream,
-        px: &mut PixelState,
+        rng: &SampleStream,
+        px: &mut Pixel,
         rays: &mut RayCounts,
     ) {
-        let ray = scene.camera.ray(x, y, rng.next_2d());
+        let ray = scene.camera.ray(x, y, rng.get_2d(PIXEL));
         rays.camera += 1;
         let first = trace(scene, &ray);
         if self.aovs {
@@ -63,13 +64,13 @@ impl Integrator {
         let mut hit = match first {
             Trace::Light(l) => {
                 if !self.hide_emitters {
-                    px.sum += l.radiance;
+                    px.add(l.radiance);
                 }
                 return;
             }
             Trace::Escape => {
                 if !self.hide_emitters {
-                    px.sum += scene.lights.environment_radiance(ray.d);
+                    px.add(scene.lights.environment_radiance(ray.d));
                 }
                 return;
             }
@@ -95,7 +96,7 @@ impl Integrator {
             }
             if depth + 1 >= self.rr_depth as usize {
                 let q = (1.0 - beta.max_element()).max(RR_MIN_Q);
-                if rng.next_1d() < q {
+                if self.dims.roulette(rng, depth) < q {
                     break;
                 }
                 beta /= 1.0 - q;

@@ -1,8 +1,12 @@
-//! Per-pixel accumulation and ray counters.
+//! Per-pixel accumulation into a flat record, and ray counters.
+//!
+//! A pixel's record is `[N | outside-MIS Σ (R, G, B) | AOV Σ (7, if any) | one
+//! [`mis::Kernel`] block per vertex depth]` ([`Record`]): plain `f64` words, so that the
+//! records of a whole image are one array ([`crate::RenderState`]) that merges, serialises
+//! and uploads as data.
 
 use super::{Combine, Integrator};
 use crate::color::Rgb;
-use mis::{AnyEstimator, Estimator};
 use std::ops::AddAssign;
 
 /// Rays traced, by kind: camera rays, secondary rays (nearest-hit queries that extend a
@@ -33,20 +37,66 @@ impl AddAssign for RayCounts {
     }
 }
 
-/// Everything one pixel has accumulated.
-#[derive(Clone, Debug, Default)]
-pub(crate) struct PixelState {
-    /// Iterations (samples) N.
-    pub iterations: u64,
-    /// Σ of what is added outside MIS, and of heuristic-weighted draws in `path`.
-    pub sum: Rgb,
-    /// One estimator per depth (index 0: the first vertex), created when first reached.
-    pub depths: Vec<AnyEstimator>,
-    /// Σ of the first-hit AOVs: depth, normal (3), albedo (3).
-    pub aov: [f64; 7],
+/// Where each sum lives in a pixel's record (module docs).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Record {
+    /// AOV words (7: depth, normal, albedo; or 0).
+    pub aov: usize,
+    /// MIS blocks, one per vertex depth.
+    pub depths: usize,
+    /// Words of one MIS block.
+    pub block: usize,
 }
 
-impl PixelState {
+impl Record {
+    /// Offset of the outside-MIS sums.
+    pub const OUTSIDE: usize = 1;
+    /// Offset of the AOV sums.
+    pub const AOV: usize = 4;
+    /// Words of one record.
+    pub fn stride(&self) -> usize {
+        Self::AOV + self.aov + self.depths * self.block
+    }
+    /// The range of depth `d`'s block.
+    pub fn depth(&self, d: usize) -> std::ops::Range<usize> {
+        let at = Self::AOV + self.aov + d * self.block;
+        at..at + self.block
+    }
+}
+
+/// One pixel's record while a sample runs: the view the integrators add into. `key` is
+/// the sample's global index, which keys the uncorrelated estimator's sets.
+pub(crate) struct Pixel<'a> {
+    pub rec: &'a mut [f64],
+    pub key: u64,
+}
+
+impl Pixel<'_> {
+    /// Adds `c` outside MIS.
+    #[inline]
+    pub fn add(&mut self, c: Rgb) {
+        let s = &mut self.rec[Record::OUTSIDE..Record::OUTSIDE + 3];
+        s[0] += c.x;
+        s[1] += c.y;
+        s[2] += c.z;
+    }
+
+    /// Adds one sample's AOV values (depth, normal, albedo) if the record keeps them.
+    #[inline]
+    pub fn add_aovs(&mut self, v: &[f64; 7]) {
+        if let Some(s) = self.rec.get_mut(Record::AOV..Record::AOV + 7) {
+            for (s, v) in s.iter_mut().zip(v) {
+                *s += v;
+            }
+        }
+    }
+
+    /// Counts the finished sample.
+    #[inline]
+    pub fn end_sample(&mut self) {
+        self.rec[0] += 1.0;
+    }
+
     /// A draw of technique `k` at vertex `depth` with integrand `f` (throughput included)
     /// and every technique's pdf.
     #[inline]
@@ -65,116 +115,31 @@ impl PixelState {
                     }
                 };
                 if scale != 0.0 {
-                    self.sum += f * scale;
+                    self.add(f * scale);
                 }
             }
-            Combine::Estimator => self.estimator(it, depth).add_sample(k, &f.to_array(), pdfs),
+            Combine::Estimator(kernel) => {
+                let r = it.record.depth(depth);
+                kernel.add_sample(&mut self.rec[r], self.key, k, &f.to_array(), pdfs)
+            }
         }
     }
 
     /// Technique `k` produced no draw (or a delta-lobe draw) at vertex `depth`.
     #[inline]
     pub fn add_failed(&mut self, it: &Integrator, depth: usize, k: usize) {
-        if let Combine::Estimator = it.combine {
-            self.estimator(it, depth).add_failed(k);
+        if let Combine::Estimator(kernel) = &it.combine {
+            let r = it.record.depth(depth);
+            kernel.add_failed(&mut self.rec[r], self.key, k);
         }
     }
 
     /// Closes the iteration of vertex `depth`'s estimator.
     #[inline]
     pub fn end_vertex(&mut self, it: &Integrator, depth: usize) {
-        if let Combine::Estimator = it.combine {
-            self.estimator(it, depth).end_iteration();
+        if let Combine::Estimator(kernel) = &it.combine {
+            let r = it.record.depth(depth);
+            kernel.end_iteration(&mut self.rec[r], self.key);
         }
-    }
-
-    fn estimator(&mut self, it: &Integrator, depth: usize) -> &mut AnyEstimator {
-        while self.depths.len() <= depth {
-            let e = it
-                .method
-                .build(&it.layout, &it.params)
-                .expect("parameters validated with the options");
-            self.depths.push(e);
-        }
-        &mut self.depths[depth]
-    }
-
-    /// The pixel value: `sum/N + Σ_d (N_d/N)·estimate_d` (module docs of
-    /// [`crate::integrator`]); 0 before the first sample.
-    pub fn value(&self) -> Rgb {
-        if self.iterations == 0 {
-            return Rgb::ZERO;
-        }
-        let n = self.iterations as f64;
-        let mut v = self.sum / n;
-        let mut out = [0.0; 3];
-        for e in &self.depths {
-            let nd = e.iterations();
-            if nd > 0 {
-                e.estimate(&mut out);
-                v += Rgb::from_array(out) * (nd as f64 / n);
-            }
-        }
-        v
-    }
-
-    /// The mean of AOV value `i` (see [`Self::aov`]).
-    pub fn aov_mean(&self, i: usize) -> f64 {
-        if self.iterations == 0 {
-            0.0
-        } else {
-            self.aov[i] / self.iterations as f64
-        }
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::integrator::{IntegratorKind, RenderOptions};
-    use crate::technique::Technique;
-    use mis::Method;
-
-    /// `value = sum/N + Σ_d (N_d/N)·estimate_d`: a depth reached in half the iterations
-    /// counts half, heuristic draws go to the sum.
-    #[test]
-    fn pixel_value_weights_each_depth_by_its_share_of_iterations() {
-        let o = RenderOptions {
-            integrator: IntegratorKind::Path,
-            method: Method::OptimalDirect,
-            techniques: vec![(Technique::Bsdf, 1)],
-            ..RenderOptions::default()
-        };
-        let it = Integrator::new(&o).unwrap();
-        let mut px = PixelState::default();
-        assert_eq!(px.value(), Rgb::ZERO);
-        for i in 0..4 {
-            px.iterations += 1;
-            px.sum += Rgb::splat(1.0);
-            px.add_draw(&it, 0, 0, Rgb::new(2.0, 4.0, 6.0), &[2.0]);
-            px.end_vertex(&it, 0);
-            if i % 2 == 0 {
-                px.add_draw(&it, 1, 0, Rgb::splat(3.0), &[1.5]);
-                px.end_vertex(&it, 1);
-            }
-        }
-        // One technique: the estimate of depth d is the mean of f/p over its iterations.
-        let v = px.value();
-        let expect = Rgb::splat(1.0) + Rgb::new(1.0, 2.0, 3.0) + Rgb::splat(2.0) * 0.5;
-        assert!((v - expect).abs().max_element() < 1e-12, "{v} vs {expect}");
-        // The same draws under the balance heuristic in `path` go straight to the sum.
-        let it = Integrator::new(&RenderOptions {
-            method: Method::Balance,
-            ..o
-        })
-        .unwrap();
-        let mut px = PixelState {
-            iterations: 2,
-            ..PixelState::default()
-        };
-        px.add_draw(&it, 0, 0, Rgb::splat(2.0), &[2.0]);
-        px.add_draw(&it, 3, 0, Rgb::splat(4.0), &[0.0]);
-        assert!(px.depths.is_empty());
-        assert_eq!(px.value(), Rgb::splat(0.5));
     }
 }

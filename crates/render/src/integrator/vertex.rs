@@ -1,7 +1,7 @@
 //! One scattering vertex: delta lights, the MIS draws of every technique, delta lobes and
 //! the path's continuation (module docs of [`crate::integrator`]).
 
-use super::{Integrator, PixelState, RayCounts, MAX_TECHNIQUES};
+use super::{Integrator, Pixel, RayCounts, MAX_TECHNIQUES};
 use crate::bsdf::{Bsdf, BsdfSample};
 use crate::color::Rgb;
 use crate::light::LightHit;
@@ -168,22 +168,24 @@ impl Integrator {
         beta: Rgb,
         depth: usize,
         extend: bool,
-        rng: &mut SampleStream,
-        px: &mut PixelState,
+        rng: &SampleStream,
+        px: &mut Pixel,
         rays: &mut RayCounts,
     ) -> Option<Continuation> {
-        px.sum += beta * self.delta_lights(scene, v, rays);
+        px.add(beta * self.delta_lights(scene, v, rays));
         let mut next = None;
         if v.bsdf.bxdf.is_pure_specular() {
             // No continuous density anywhere: every BSDF draw is outside MIS.
             let nb = self.bsdf_index.map_or(1, |k| self.counts[k]);
             for j in 0..nb {
-                let uc = rng.next_1d();
-                let u = rng.next_2d();
-                if let Some(s) = v.bsdf.sample_f(v.wo, uc, u) {
+                let d = match self.bsdf_index {
+                    Some(k) => self.dims.technique(rng, depth, k, j),
+                    None => self.dims.extra(rng, depth),
+                };
+                if let Some(s) = v.bsdf.sample_f(v.wo, d.uc, d.u) {
                     let li =
                         self.li_of_bsdf_draw(scene, v, &s, extend && j == 0, true, &mut next, rays);
-                    px.sum += beta * s.weight * li / f64::from(nb);
+                    px.add(beta * s.weight * li / f64::from(nb));
                 }
             }
             return next;
@@ -199,9 +201,8 @@ impl Integrator {
         let mut pdfs = [0.0; MAX_TECHNIQUES];
         for (k, (&tech, &n_k)) in self.techniques.iter().zip(&self.counts).enumerate() {
             for j in 0..n_k {
-                let uc = rng.next_1d();
-                let u = rng.next_2d();
-                let Some(s) = tech.sample(&ctx, uc, u) else {
+                let d = self.dims.technique(rng, depth, k, j);
+                let Some(s) = tech.sample(&ctx, d.uc, d.u) else {
                     px.add_failed(self, depth, k);
                     continue;
                 };
@@ -211,7 +212,7 @@ impl Integrator {
                     px.add_failed(self, depth, k);
                     let bs = s.bsdf.expect("specular draws come from the BSDF");
                     let li = self.li_of_bsdf_draw(scene, v, &bs, carries, true, &mut next, rays);
-                    px.sum += beta * bs.weight * li / f64::from(n_k);
+                    px.add(beta * bs.weight * li / f64::from(n_k));
                     continue;
                 }
                 let fc = v.bsdf.f(v.wo, s.wi) * s.wi.dot(v.n).abs();
@@ -230,12 +231,11 @@ impl Integrator {
         if self.bsdf_index.is_none() && (extend || v.bsdf.bxdf.has_specular()) {
             // No BSDF technique: one extra draw for the delta lobes and the continuation;
             // its continuous outcomes are already covered by the techniques.
-            let uc = rng.next_1d();
-            let u = rng.next_2d();
-            if let Some(s) = v.bsdf.sample_f(v.wo, uc, u) {
+            let d = self.dims.extra(rng, depth);
+            if let Some(s) = v.bsdf.sample_f(v.wo, d.uc, d.u) {
                 let li = self.li_of_bsdf_draw(scene, v, &s, extend, s.specular, &mut next, rays);
                 if s.specular {
-                    px.sum += beta * s.weight * li;
+                    px.add(beta * s.weight * li);
                 }
             }
         }

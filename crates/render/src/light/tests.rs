@@ -114,7 +114,7 @@ fn sphere_area_sampling() {
     let (mut sum, mut sum2) = (0.0, 0.0);
     let s = crate::sampler::Sampler::new(10);
     for i in 0..n {
-        let st = s.stream(0, 0, i);
+        let st = s.stream(0, 0, i as u32);
         let x = l.sample_area(p, DVec2::new(st.get(0), st.get(1))).unwrap();
         let q = p + x.wi * x.dist;
         assert!(((q - center).length() - radius).abs() < 1e-9);
@@ -266,7 +266,7 @@ fn small_cone_sampling() {
     let mut counts = vec![0u64; 400];
     let s = crate::sampler::Sampler::new(12);
     for i in 0..n {
-        let st = s.stream(0, 0, i);
+        let st = s.stream(0, 0, i as u32);
         let x = l.sample_li(p, DVec2::new(st.get(0), st.get(1))).unwrap();
         assert!((x.pdf - pdf).abs() < 1e-9 * pdf && (l.pdf_li(p, x.wi) - pdf).abs() < 1e-9 * pdf);
         let w = frame.to_local(x.wi);

@@ -161,7 +161,7 @@ fn irradiance(lights: &Lights, t: Technique, n: u64, seed: u64) -> (f64, f64) {
     let s = Sampler::new(seed);
     let (mut sum, mut sum2) = (0.0, 0.0);
     for i in 0..n {
-        let st = s.stream(0, 0, i);
+        let st = s.stream(0, 0, i as u32);
         if let Some(x) = t.sample(&ctx, st.get(0), DVec2::new(st.get(1), st.get(2))) {
             let l = lights.radiance_along(&Ray::new(ctx.p, x.wi), 0.0, f64::INFINITY);
             let v = l.x * x.wi.z.max(0.0) / x.pdf;

@@ -9,7 +9,7 @@ use render::integrator::{IntegratorKind, RenderOptions};
 use render::light::{AreaLight, Environment, Lights, Shape as LightShape};
 use render::render_loop::{render, RenderStats};
 use render::scene::{Object, Scene};
-use render::{Film, Material, Technique, Texture};
+use render::{Image, Material, Technique, Texture};
 use std::f64::consts::PI;
 use std::sync::atomic::AtomicBool;
 
@@ -139,8 +139,10 @@ pub fn reference(cam: &Camera, x: u32, y: u32, sphere: bool, rect: bool) -> Rgb 
     sum / (k * k) as f64
 }
 
-pub fn run(scene: &Scene, o: &RenderOptions) -> (Film, RenderStats) {
-    render(scene, o, &AtomicBool::new(false), &|_, _| {}).unwrap()
+/// Renders `0..spp` and resolves the image.
+pub fn run(scene: &Scene, o: &RenderOptions) -> (Image, RenderStats) {
+    let (state, stats) = render(scene, o, &AtomicBool::new(false), &|_, _| {}).unwrap();
+    (state.image(), stats)
 }
 
 /// Mean and standard error of a list of independent values.
@@ -153,7 +155,7 @@ pub fn mean_se(d: &[f64]) -> (f64, f64) {
 
 /// Per channel: the mean over pixels of (film − reference) is within Z_BOUND standard
 /// errors of 0; returns the largest |z| and the largest relative standard error.
-pub fn check_against(film: &Film, refs: &dyn Fn(u32, u32) -> Rgb, what: &str) -> (f64, f64) {
+pub fn check_against(film: &Image, refs: &dyn Fn(u32, u32) -> Rgb, what: &str) -> (f64, f64) {
     let (mut zmax, mut rel) = (0.0f64, 0.0f64);
     for c in 0..3 {
         let mut d = Vec::new();

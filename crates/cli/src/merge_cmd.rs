@@ -1,0 +1,46 @@
+//! `frepray merge A.state B.state … -o OUT`: adds render states of disjoint sample ranges
+//! of one render (same scene, size, integrator, estimator, techniques and seed) and
+//! writes the result as an image or as a state.
+
+use crate::output::{self, Format};
+use render::RenderState;
+use std::path::PathBuf;
+
+/// Arguments of `frepray merge`.
+#[derive(clap::Args)]
+pub struct MergeArgs {
+    /// Render states written by `frepray render … -o NAME.state`.
+    #[arg(required = true)]
+    states: Vec<PathBuf>,
+    /// Output: .png, .exr (the resolved image) or .state (the merged sums); repeatable.
+    #[arg(short, long, required = true)]
+    output: Vec<PathBuf>,
+}
+
+/// Reads, merges and writes; errors name the file that does not fit.
+pub fn run(args: MergeArgs) -> Result<(), String> {
+    let formats = args
+        .output
+        .iter()
+        .map(|p| output::format_for_scene(p))
+        .collect::<Result<Vec<Format>, _>>()?;
+    let mut merged: Option<RenderState> = None;
+    for path in &args.states {
+        let s = RenderState::read(path)?;
+        match &mut merged {
+            None => merged = Some(s),
+            Some(m) => m
+                .merge(&s)
+                .map_err(|e| format!("{}: {e}", path.display()))?,
+        }
+    }
+    let merged = merged.expect("clap requires one state");
+    output::write_state(&args.output, &formats, &merged)?;
+    eprintln!(
+        "merged {} state(s): {}; written {}",
+        args.states.len(),
+        merged.summary(),
+        output::list(&args.output)
+    );
+    Ok(())
+}

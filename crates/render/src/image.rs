@@ -1,0 +1,337 @@
+//! A resolved image: per-pixel values of R, G, B and any number of named arbitrary output
+//! variable (AOV) channels, stored contiguously per pixel, written as linear EXR or sRGB
+//! PNG and read back from EXR.
+//!
+//! An image holds estimates, never sums: it is what [`crate::RenderState::image`] resolves
+//! from the per-pixel sums when an image is written (DESIGN.md §4: never merge estimates;
+//! merge the states). Pixel (0, 0) is the top-left corner.
+
+use crate::color::{srgb_u8, Rgb};
+use crate::output::write_atomically;
+use exr::prelude::{
+    AnyChannel, AnyChannels, Encoding, FlatSamples, Layer, LayerAttributes, SmallVec, WritableImage,
+};
+use image::ImageEncoder;
+use std::io;
+use std::path::Path;
+
+/// Pixel values of R, G, B and the AOV channels (module docs).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Image {
+    width: u32,
+    height: u32,
+    aov_names: Vec<String>,
+    /// `[R, G, B, AOVs…]` per pixel, row by row.
+    data: Vec<f64>,
+}
+
+impl Image {
+    /// A black image with the named AOV channels (unique, none of "R", "G", "B").
+    pub fn new(width: u32, height: u32, aov_names: &[&str]) -> Self {
+        for (i, n) in aov_names.iter().enumerate() {
+            assert!(!["R", "G", "B"].contains(n), "AOV name {n} is reserved");
+            assert!(!aov_names[..i].contains(n), "AOV name {n} given twice");
+        }
+        let n = width as usize * height as usize;
+        Self {
+            width,
+            height,
+            aov_names: aov_names.iter().map(|s| s.to_string()).collect(),
+            data: vec![0.0; n * (3 + aov_names.len())],
+        }
+    }
+    /// Width in pixels.
+    pub fn width(&self) -> u32 {
+        self.width
+    }
+    /// Height in pixels.
+    pub fn height(&self) -> u32 {
+        self.height
+    }
+    /// The AOV channel names, in channel order.
+    pub fn aov_names(&self) -> &[String] {
+        &self.aov_names
+    }
+    /// The index of the AOV channel `name`.
+    pub fn aov_index(&self, name: &str) -> Option<usize> {
+        self.aov_names.iter().position(|n| n == name)
+    }
+    /// Channels per pixel: 3 + AOVs.
+    pub fn channels(&self) -> usize {
+        3 + self.aov_names.len()
+    }
+    /// Every value, `[R, G, B, AOVs…]` per pixel, row by row.
+    pub fn data(&self) -> &[f64] {
+        &self.data
+    }
+    fn index(&self, x: u32, y: u32) -> usize {
+        assert!(
+            x < self.width && y < self.height,
+            "pixel ({x}, {y}) outside the image"
+        );
+        (y as usize * self.width as usize + x as usize) * self.channels()
+    }
+    /// The values of pixel (x, y): R, G, B, then the AOVs.
+    pub fn pixel(&self, x: u32, y: u32) -> &[f64] {
+        let i = self.index(x, y);
+        &self.data[i..i + self.channels()]
+    }
+    /// The values of pixel (x, y), to write.
+    pub fn pixel_mut(&mut self, x: u32, y: u32) -> &mut [f64] {
+        let (i, c) = (self.index(x, y), self.channels());
+        &mut self.data[i..i + c]
+    }
+    /// The pixel's colour.
+    pub fn rgb(&self, x: u32, y: u32) -> Rgb {
+        let p = self.pixel(x, y);
+        Rgb::new(p[0], p[1], p[2])
+    }
+    /// Sets the pixel's colour.
+    pub fn set_rgb(&mut self, x: u32, y: u32, c: Rgb) {
+        self.pixel_mut(x, y)[..3].copy_from_slice(&c.to_array());
+    }
+    /// The pixel's value of AOV channel `channel`.
+    pub fn aov(&self, x: u32, y: u32, channel: usize) -> f64 {
+        assert!(channel < self.aov_names.len(), "no AOV channel {channel}");
+        self.pixel(x, y)[3 + channel]
+    }
+    /// Sets the pixel's value of AOV channel `channel`.
+    pub fn set_aov(&mut self, x: u32, y: u32, channel: usize, v: f64) {
+        assert!(channel < self.aov_names.len(), "no AOV channel {channel}");
+        self.pixel_mut(x, y)[3 + channel] = v;
+    }
+    /// Copies the rows of `part` (same channels) into this image from row `y0` on.
+    pub fn set_rows(&mut self, y0: u32, part: &Image) {
+        assert_eq!(self.aov_names, part.aov_names, "AOV channels");
+        assert!(
+            part.width == self.width && y0 + part.height <= self.height,
+            "rows inside the image"
+        );
+        let i = self.index(0, y0);
+        self.data[i..i + part.data.len()].copy_from_slice(&part.data);
+    }
+    fn channel(&self, c: usize) -> Vec<f32> {
+        self.data
+            .chunks_exact(self.channels())
+            .map(|p| p[c] as f32)
+            .collect()
+    }
+    /// Writes the image as a linear f32 EXR with channels R, G, B and the AOVs (lossless
+    /// compression), whole or not at all.
+    pub fn write_exr(&self, path: impl AsRef<Path>) -> io::Result<()> {
+        let mut list: SmallVec<[AnyChannel<FlatSamples>; 4]> = SmallVec::new();
+        for (c, name) in ["R", "G", "B"].into_iter().enumerate() {
+            list.push(AnyChannel::new(name, FlatSamples::F32(self.channel(c))));
+        }
+        for (k, name) in self.aov_names.iter().enumerate() {
+            let data = self.channel(3 + k);
+            list.push(AnyChannel::new(name.as_str(), FlatSamples::F32(data)));
+        }
+        let layer = Layer::new(
+            (self.width as usize, self.height as usize),
+            LayerAttributes::default(),
+            Encoding::FAST_LOSSLESS,
+            AnyChannels::sort(list),
+        );
+        let image = exr::prelude::Image::from_layer(layer);
+        write_atomically(path.as_ref(), |w| {
+            image.write().to_buffered(w).map_err(io::Error::other)
+        })
+    }
+    /// Writes the colour as an 8-bit sRGB PNG (clamped to [0, 1], for display only),
+    /// whole or not at all.
+    pub fn write_png(&self, path: impl AsRef<Path>) -> io::Result<()> {
+        let bytes: Vec<u8> = self
+            .data
+            .chunks_exact(self.channels())
+            .flat_map(|p| [srgb_u8(p[0]), srgb_u8(p[1]), srgb_u8(p[2])])
+            .collect();
+        write_atomically(path.as_ref(), |w| {
+            image::codecs::png::PngEncoder::new(w)
+                .write_image(
+                    &bytes,
+                    self.width,
+                    self.height,
+                    image::ExtendedColorType::Rgb8,
+                )
+                .map_err(io::Error::other)
+        })
+    }
+    /// Reads the first layer of an EXR file: channels R, G, B (required) and every other
+    /// channel as an AOV, in the file's (alphabetical) order. Errors name the file and
+    /// what is wrong; a decoder panic on a malformed file is caught and reported.
+    pub fn read_exr(path: impl AsRef<Path>) -> Result<Image, String> {
+        let path = path.as_ref();
+        let at = |e: String| format!("{}: {e}", path.display());
+        let read = std::panic::catch_unwind(|| exr::prelude::read_first_flat_layer_from_file(path))
+            .map_err(|_| at("the EXR decoder failed on this file".into()))?;
+        let img = read.map_err(|e| at(format!("not a readable EXR file ({e})")))?;
+        let layer = &img.layer_data;
+        let (w, h) = (layer.size.width(), layer.size.height());
+        let (width, height) = (
+            u32::try_from(w).map_err(|_| at("too wide".into()))?,
+            u32::try_from(h).map_err(|_| at("too tall".into()))?,
+        );
+        let list = &layer.channel_data.list;
+        let names: Vec<String> = list.iter().map(|c| c.name.to_string()).collect();
+        let find = |name: &str| {
+            names
+                .iter()
+                .position(|n| n == name)
+                .ok_or_else(|| at(format!("no channel {name} (has {})", names.join(", "))))
+        };
+        let rgb = [find("R")?, find("G")?, find("B")?];
+        let aovs: Vec<usize> = (0..names.len()).filter(|i| !rgb.contains(i)).collect();
+        let aov_names: Vec<&str> = aovs.iter().map(|&i| names[i].as_str()).collect();
+        let mut out = Image::new(width, height, &aov_names);
+        let c = out.channels();
+        for (k, &i) in rgb.iter().chain(&aovs).enumerate() {
+            let values: Vec<f32> = list[i].sample_data.values_as_f32().collect();
+            if values.len() != w * h {
+                return Err(at(format!(
+                    "channel {} holds {} of {} values",
+                    names[i],
+                    values.len(),
+                    w * h
+                )));
+            }
+            for (p, v) in out.data.chunks_exact_mut(c).zip(values) {
+                p[k] = f64::from(v);
+            }
+        }
+        Ok(out)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::fs;
+    use std::path::PathBuf;
+
+    fn scratch(name: &str) -> PathBuf {
+        let d = std::env::temp_dir().join(format!("render-image-{}-{name}", std::process::id()));
+        let _ = fs::remove_dir_all(&d);
+        fs::create_dir_all(&d).unwrap();
+        d
+    }
+
+    fn test_film() -> Image {
+        let mut f = Image::new(5, 3, &["depth", "normal.X"]);
+        for y in 0..3 {
+            for x in 0..5 {
+                let v = Rgb::new(x as f64 * 0.5, y as f64 * 3.0 - 2.0, 2e-3 * (x * y) as f64);
+                f.set_rgb(x, y, v);
+                f.set_aov(x, y, 0, 11.0 + x as f64);
+                f.set_aov(x, y, 1, -0.5 * y as f64);
+            }
+        }
+        f
+    }
+
+    #[test]
+    fn pixels_and_rows() {
+        let f = test_film();
+        assert_eq!(f.rgb(2, 1), Rgb::new(1.0, 1.0, 0.004));
+        assert_eq!(f.aov(3, 0, 0), 14.0);
+        assert_eq!(f.aov(3, 1, 1), -0.5);
+        assert_eq!(f.pixel(3, 2), &[1.5, 4.0, 0.012, 14.0, -1.0]);
+        let mut g = Image::new(5, 4, &["depth", "normal.X"]);
+        g.set_rows(1, &f);
+        assert_eq!(g.pixel(3, 3), f.pixel(3, 2));
+        assert_eq!(g.rgb(4, 0), Rgb::ZERO);
+        assert_eq!(Image::new(2, 2, &[]).rgb(1, 1), Rgb::ZERO);
+    }
+
+    /// The EXR reader gives back what the writer wrote (as f32), AOVs included.
+    #[test]
+    fn exr_reader_round_trip() {
+        let d = scratch("exr-read");
+        let path = d.join("img.exr");
+        let f = test_film();
+        f.write_exr(&path).unwrap();
+        let g = Image::read_exr(&path).unwrap();
+        assert_eq!(g.aov_names(), f.aov_names());
+        for (a, b) in g.data().iter().zip(f.data()) {
+            assert_eq!(*a, *b as f32 as f64);
+        }
+        let bad = d.join("bad.exr");
+        fs::write(&bad, b"not an exr").unwrap();
+        let e = Image::read_exr(&bad).unwrap_err();
+        assert!(
+            e.contains("bad.exr") && e.contains("not a readable EXR"),
+            "{e}"
+        );
+        fs::remove_dir_all(&d).unwrap();
+    }
+
+    /// Writing then reading back with the exr crate gives exactly the f32 pixel values,
+    /// channel by channel, including the AOVs.
+    #[test]
+    fn exr_round_trip() {
+        let d = scratch("exr");
+        let path = d.join("img.exr");
+        let f = test_film();
+        f.write_exr(&path).unwrap();
+        let img = exr::prelude::read_first_flat_layer_from_file(&path).unwrap();
+        let layer = &img.layer_data;
+        assert_eq!((layer.size.width(), layer.size.height()), (5, 3));
+        let get = |name: &str| -> Vec<f32> {
+            let c = layer
+                .channel_data
+                .list
+                .iter()
+                .find(|c| c.name.eq(name))
+                .unwrap_or_else(|| panic!("channel {name}"));
+            assert!(matches!(c.sample_data, FlatSamples::F32(_)));
+            c.sample_data.values_as_f32().collect()
+        };
+        let (r, g, b) = (get("R"), get("G"), get("B"));
+        let (depth, nx) = (get("depth"), get("normal.X"));
+        for y in 0..3 {
+            for x in 0..5 {
+                let i = (y * 5 + x) as usize;
+                let c = f.rgb(x, y);
+                assert_eq!([r[i], g[i], b[i]], [c.x as f32, c.y as f32, c.z as f32]);
+                assert_eq!(depth[i], f.aov(x, y, 0) as f32);
+                assert_eq!(nx[i], f.aov(x, y, 1) as f32);
+            }
+        }
+        assert_eq!(fs::read_dir(&d).unwrap().count(), 1);
+        fs::remove_dir_all(&d).unwrap();
+    }
+
+    /// PNG holds the sRGB codes of the clamped values: 0 → 0, 0.5 → 188, ≥ 1 → 255,
+    /// negative → 0.
+    #[test]
+    fn png_encoding() {
+        let d = scratch("png");
+        let path = d.join("img.png");
+        let mut f = Image::new(2, 2, &[]);
+        f.set_rgb(0, 0, Rgb::new(0.0, 0.5, 1.0));
+        f.set_rgb(1, 0, Rgb::new(2.0, -1.0, 0.002));
+        f.set_rgb(0, 1, Rgb::splat(1.0));
+        f.write_png(&path).unwrap();
+        let img =
+            image::load_from_memory_with_format(&fs::read(&path).unwrap(), image::ImageFormat::Png)
+                .unwrap()
+                .to_rgb8();
+        assert_eq!(img.dimensions(), (2, 2));
+        assert_eq!(img.get_pixel(0, 0).0, [0, 188, 255]);
+        assert_eq!(img.get_pixel(1, 0).0, [255, 0, 7]);
+        assert_eq!(img.get_pixel(0, 1).0, [255, 255, 255]);
+        assert_eq!(img.get_pixel(1, 1).0, [0, 0, 0]);
+        fs::remove_dir_all(&d).unwrap();
+    }
+
+    /// Writing into a directory that does not exist fails and creates nothing.
+    #[test]
+    fn failed_write_leaves_no_file() {
+        let d = scratch("fail");
+        let f = test_film();
+        assert!(f.write_exr(d.join("missing/img.exr")).is_err());
+        assert!(f.write_png(d.join("missing/img.png")).is_err());
+        assert_eq!(fs::read_dir(&d).unwrap().count(), 0);
+        fs::remove_dir_all(&d).unwrap();
+    }
+}

@@ -1,0 +1,560 @@
+//! The render state: every pixel's sums over a range of samples, as one flat array that
+//! merges exactly, serialises to a documented file and resolves to an [`Image`].
+//!
+//! **What is stored.** One record per pixel, row by row, of [`Record::stride`] words:
+//! `[N | outside-MIS Σ (R, G, B) | AOV Σ (7 or 0) | one MIS block per vertex depth]`
+//! (`integrator/state.rs`, [`mis::Kernel`]). Sums, never estimates (DESIGN.md §4); an
+//! estimate is resolved from them only by [`RenderState::image`]: per pixel
+//! `Σ_outside/N + Σ_d (N_d/N)·estimate_d` (module docs of [`crate::integrator`]).
+//!
+//! **Merging.** Two states of the same scene and settings ([`StateHeader`] equal) over
+//! disjoint sample ranges merge by adding their records ([`mis::Kernel::merge`] for the MIS
+//! blocks). For the heuristics and the direct and uncorrelated optimal estimators the result
+//! is the state of one render over the union of the ranges, to the rounding of the order of
+//! the additions: every sample's random numbers depend on its global index only
+//! ([`crate::sampler`]), and the uncorrelated estimator's sets are keyed by that index. The
+//! progressive and full-weights estimators merge into an equally valid (unbiased) estimate,
+//! not the single run's: each range solved α from its own samples ([`mis::progressive`]).
+//! Overlapping ranges are refused: the same samples would count twice.
+//!
+//! **File format** (version 1, little-endian throughout):
+//!
+//! | bytes | content |
+//! |---|---|
+//! | 8 | magic `FREPSTAT` |
+//! | 4 | format version, u32 (1) |
+//! | 4 | header length H, u32 |
+//! | H | header, UTF-8 JSON: size, integrator, estimator and parameters, techniques, depths, AOVs, seed, scene hash, sample ranges, partial flag, record stride |
+//! | 8 | word count W = width · height · stride, u64 |
+//! | 8W | the records, f64 |
+//! | 8 | FNV-1a 64 hash of every byte before it, u64 |
+
+use crate::image::Image;
+use crate::integrator::{Aov, Integrator, IntegratorKind, Record, RenderOptions};
+use crate::output::write_atomically;
+use crate::scene::parse_technique;
+use crate::{Rgb, Technique};
+use mis::{Kernel, Method, Params};
+use serde_json::{json, Value};
+use std::fmt::Write as _;
+use std::io::{self, Write as _};
+use std::ops::Range;
+use std::path::Path;
+
+/// Everything that gives a state's sums their meaning; states merge only when equal.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StateHeader {
+    /// Image width in pixels.
+    pub width: u32,
+    /// Image height in pixels.
+    pub height: u32,
+    /// The integrator.
+    pub integrator: IntegratorKind,
+    /// How the draws are combined.
+    pub method: Method,
+    /// The method's parameters.
+    pub params: Params,
+    /// Techniques and their draws per vertex.
+    pub techniques: Vec<(Technique, u32)>,
+    /// Maximum path depth.
+    pub max_depth: u32,
+    /// Roulette starts after this many vertices.
+    pub rr_depth: u32,
+    /// Whether emitters seen by the camera are left out.
+    pub hide_emitters: bool,
+    /// Extra channels.
+    pub aovs: Vec<Aov>,
+    /// The seed of the random streams.
+    pub seed: u64,
+    /// A hash of the scene (0: unknown).
+    pub scene_hash: u64,
+}
+
+impl StateHeader {
+    /// The header of a render of a `width` × `height` image with `o`.
+    pub fn new(width: u32, height: u32, o: &RenderOptions) -> Self {
+        Self {
+            width,
+            height,
+            integrator: o.integrator,
+            method: o.method,
+            params: o.params,
+            techniques: o.techniques.clone(),
+            max_depth: o.max_depth,
+            rr_depth: o.rr_depth,
+            hide_emitters: o.hide_emitters,
+            aovs: o.aovs.clone(),
+            seed: o.seed,
+            scene_hash: o.scene_hash,
+        }
+    }
+
+    /// The render options this header describes (loop settings at their defaults).
+    pub fn options(&self) -> RenderOptions {
+        RenderOptions {
+            integrator: self.integrator,
+            method: self.method,
+            params: self.params,
+            techniques: self.techniques.clone(),
+            max_depth: self.max_depth,
+            rr_depth: self.rr_depth,
+            hide_emitters: self.hide_emitters,
+            aovs: self.aovs.clone(),
+            seed: self.seed,
+            scene_hash: self.scene_hash,
+            ..RenderOptions::default()
+        }
+    }
+
+    fn to_json(&self) -> Value {
+        json!({
+            "width": self.width,
+            "height": self.height,
+            "integrator": self.integrator.name(),
+            "estimator": self.method.name(),
+            "beta": self.params.beta,
+            "cutoff": self.params.cutoff,
+            "ridge": self.params.ridge,
+            "warmup": self.params.warmup,
+            "train": self.params.train,
+            "techniques": self.techniques.iter().map(|(t, n)| json!([t.name(), n])).collect::<Vec<_>>(),
+            "max_depth": self.max_depth,
+            "rr_depth": self.rr_depth,
+            "hide_emitters": self.hide_emitters,
+            "aovs": self.aovs.iter().map(|a| a.name()).collect::<Vec<_>>(),
+            "seed": self.seed,
+            "scene_hash": format!("{:016x}", self.scene_hash),
+        })
+    }
+
+    fn from_json(v: &Value) -> Result<Self, String> {
+        let field = |k: &str| v.get(k).ok_or_else(|| format!("header lacks {k:?}"));
+        let uint = |k: &str| {
+            field(k)?
+                .as_u64()
+                .ok_or_else(|| format!("header {k:?} is not an unsigned integer"))
+        };
+        let u32_ =
+            |k: &str| u32::try_from(uint(k)?).map_err(|_| format!("header {k:?} exceeds 32 bits"));
+        let float = |k: &str| {
+            field(k)?
+                .as_f64()
+                .ok_or_else(|| format!("header {k:?} is not a number"))
+        };
+        let text = |k: &str| {
+            field(k)?
+                .as_str()
+                .ok_or_else(|| format!("header {k:?} is not a string"))
+        };
+        let list = |k: &str| {
+            field(k)?
+                .as_array()
+                .ok_or_else(|| format!("header {k:?} is not a list"))
+        };
+        let techniques = list("techniques")?
+            .iter()
+            .map(|t| {
+                let name = t.get(0).and_then(Value::as_str);
+                let n = t.get(1).and_then(Value::as_u64);
+                match (name, n) {
+                    (Some(name), Some(n)) => Ok((
+                        parse_technique(name)?,
+                        u32::try_from(n).map_err(|_| "technique count exceeds 32 bits")?,
+                    )),
+                    _ => Err(format!("header technique {t} is not [name, count]")),
+                }
+            })
+            .collect::<Result<_, String>>()?;
+        let aovs = list("aovs")?
+            .iter()
+            .map(|a| a.as_str().ok_or("AOV names are strings")?.parse())
+            .collect::<Result<_, String>>()?;
+        Ok(Self {
+            width: u32_("width")?,
+            height: u32_("height")?,
+            integrator: text("integrator")?.parse()?,
+            method: text("estimator")?.parse().map_err(|e| format!("{e}"))?,
+            params: Params {
+                beta: float("beta")?,
+                cutoff: float("cutoff")?,
+                ridge: float("ridge")?,
+                warmup: uint("warmup")?,
+                train: uint("train")?,
+            },
+            techniques,
+            max_depth: u32_("max_depth")?,
+            rr_depth: u32_("rr_depth")?,
+            hide_emitters: field("hide_emitters")?
+                .as_bool()
+                .ok_or("header \"hide_emitters\" is not a boolean")?,
+            aovs,
+            seed: uint("seed")?,
+            scene_hash: u64::from_str_radix(text("scene_hash")?, 16)
+                .map_err(|e| format!("header \"scene_hash\": {e}"))?,
+        })
+    }
+
+    /// The first field in which two headers differ, for messages.
+    fn difference(&self, o: &StateHeader) -> String {
+        let (a, b) = (self.to_json(), o.to_json());
+        let (a, b) = (a.as_object().unwrap(), b.as_object().unwrap());
+        a.iter()
+            .find(|(k, v)| b.get(*k) != Some(v))
+            .map(|(k, v)| format!("{k} is {v} here and {} there", b[k]))
+            .unwrap_or_default()
+    }
+}
+
+/// Every pixel's sums over a set of sample ranges (module docs).
+#[derive(Clone, Debug)]
+pub struct RenderState {
+    header: StateHeader,
+    /// Disjoint, sorted, coalesced sample ranges.
+    samples: Vec<Range<u32>>,
+    partial: bool,
+    record: Record,
+    kernel: Option<Kernel>,
+    data: Vec<f64>,
+}
+
+impl PartialEq for RenderState {
+    /// Equal headers, sample ranges, partial flags and records, bit for bit.
+    fn eq(&self, o: &Self) -> bool {
+        self.header == o.header
+            && self.samples == o.samples
+            && self.partial == o.partial
+            && self.data.len() == o.data.len()
+            && self
+                .data
+                .iter()
+                .zip(&o.data)
+                .all(|(a, b)| a.to_bits() == b.to_bits())
+    }
+}
+
+/// Where a state file went wrong.
+fn corrupt(what: impl std::fmt::Display) -> String {
+    format!("not a valid frepray render state: {what}")
+}
+
+const MAGIC: &[u8; 8] = b"FREPSTAT";
+const VERSION: u32 = 1;
+
+/// FNV-1a, 64 bits.
+fn fnv1a(bytes: &[u8]) -> u64 {
+    bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| {
+        (h ^ u64::from(b)).wrapping_mul(0x0000_0100_0000_01b3)
+    })
+}
+
+impl RenderState {
+    /// An empty state (every sum 0) for samples `samples` of a render with `header`.
+    /// Errors when the header's options are invalid.
+    pub fn new(header: StateHeader, samples: Range<u32>) -> Result<Self, String> {
+        let it = Integrator::new(&header.options())?;
+        let record = it.record;
+        let kernel = it.kernel().cloned();
+        let n = header.width as usize * header.height as usize;
+        let words = n
+            .checked_mul(record.stride())
+            .ok_or("the render state would not fit in memory")?;
+        Ok(Self {
+            header,
+            samples: if samples.is_empty() {
+                vec![]
+            } else {
+                vec![samples]
+            },
+            partial: false,
+            record,
+            kernel,
+            data: vec![0.0; words],
+        })
+    }
+
+    /// What the sums mean.
+    pub fn header(&self) -> &StateHeader {
+        &self.header
+    }
+    /// The sample ranges summed (disjoint, sorted, adjacent ones joined).
+    pub fn samples(&self) -> &[Range<u32>] {
+        &self.samples
+    }
+    /// Whether some pixel got fewer samples than the ranges say (a stopped render).
+    pub fn is_partial(&self) -> bool {
+        self.partial
+    }
+    /// Marks the state as partial (a stopped render).
+    pub fn set_partial(&mut self) {
+        self.partial = true;
+    }
+    /// The layout of one pixel's record.
+    pub fn record(&self) -> &Record {
+        &self.record
+    }
+    /// Every record, row by row.
+    pub fn data(&self) -> &[f64] {
+        &self.data
+    }
+    /// Every record, to write (the render loop fills it).
+    pub fn data_mut(&mut self) -> &mut [f64] {
+        &mut self.data
+    }
+    /// The record of pixel (x, y).
+    pub fn pixel(&self, x: u32, y: u32) -> &[f64] {
+        assert!(
+            x < self.header.width && y < self.header.height,
+            "pixel outside the image"
+        );
+        let s = self.record.stride();
+        let i = (y as usize * self.header.width as usize + x as usize) * s;
+        &self.data[i..i + s]
+    }
+    /// Samples summed in pixel (x, y).
+    pub fn iterations(&self, x: u32, y: u32) -> u64 {
+        self.pixel(x, y)[0] as u64
+    }
+
+    /// The estimate of one record (module docs).
+    fn value(&self, rec: &[f64]) -> Rgb {
+        let n = rec[0];
+        if n == 0.0 {
+            return Rgb::ZERO;
+        }
+        let o = Record::OUTSIDE;
+        let mut v = Rgb::new(rec[o], rec[o + 1], rec[o + 2]) / n;
+        if let Some(k) = &self.kernel {
+            let mut out = [0.0; 3];
+            for d in 0..self.record.depths {
+                let block = &rec[self.record.depth(d)];
+                let nd = k.iterations(block);
+                if nd > 0 {
+                    k.estimate(block, &mut out);
+                    v += Rgb::from_array(out) * (nd as f64 / n);
+                }
+            }
+        }
+        v
+    }
+
+    /// The estimate of pixel (x, y).
+    pub fn rgb(&self, x: u32, y: u32) -> Rgb {
+        self.value(self.pixel(x, y))
+    }
+
+    /// Resolves the sums into an image: the estimate of every pixel and the means of the
+    /// AOV channels (pixels without samples are 0).
+    pub fn image(&self) -> Image {
+        let names: Vec<&str> = self
+            .header
+            .aovs
+            .iter()
+            .flat_map(|a| a.channels().iter().copied())
+            .collect();
+        let (w, h) = (self.header.width, self.header.height);
+        let mut img = Image::new(w, h, &names);
+        for y in 0..h {
+            for x in 0..w {
+                let rec = self.pixel(x, y);
+                img.set_rgb(x, y, self.value(rec));
+                let n = rec[0].max(1.0);
+                let mut c = 0;
+                for a in &self.header.aovs {
+                    for k in 0..a.channels().len() {
+                        img.set_aov(x, y, c, rec[Record::AOV + a.offset() + k] / n);
+                        c += 1;
+                    }
+                }
+            }
+        }
+        img
+    }
+
+    /// Adds the sums of `other`, a state of the same header over disjoint samples.
+    pub fn merge(&mut self, other: &RenderState) -> Result<(), String> {
+        if self.header != other.header {
+            return Err(format!(
+                "cannot merge render states of different renders: {}",
+                self.header.difference(&other.header)
+            ));
+        }
+        let mut all: Vec<Range<u32>> = self.samples.iter().chain(&other.samples).cloned().collect();
+        all.sort_by_key(|r| r.start);
+        let mut joined: Vec<Range<u32>> = Vec::new();
+        for r in all {
+            match joined.last_mut() {
+                Some(last) if r.start < last.end => {
+                    return Err(format!(
+                        "cannot merge render states whose samples overlap ({}..{} and {}..{}): \
+                         the same samples would count twice",
+                        last.start, last.end, r.start, r.end
+                    ))
+                }
+                Some(last) if r.start == last.end => last.end = r.end,
+                _ => joined.push(r),
+            }
+        }
+        let s = self.record.stride();
+        let mis_from = Record::AOV + self.record.aov;
+        for (a, b) in self
+            .data
+            .chunks_exact_mut(s)
+            .zip(other.data.chunks_exact(s))
+        {
+            for (x, y) in a[..mis_from].iter_mut().zip(&b[..mis_from]) {
+                *x += y;
+            }
+            if let Some(k) = &self.kernel {
+                for d in 0..self.record.depths {
+                    let r = self.record.depth(d);
+                    k.merge(&mut a[r.clone()], &b[r]);
+                }
+            }
+        }
+        self.samples = joined;
+        self.partial |= other.partial;
+        Ok(())
+    }
+
+    /// The state as bytes in the documented format (module docs).
+    pub fn to_bytes(&self) -> Vec<u8> {
+        let mut header = self.header.to_json();
+        let h = header.as_object_mut().expect("an object");
+        h.insert(
+            "samples".into(),
+            self.samples
+                .iter()
+                .map(|r| json!([r.start, r.end]))
+                .collect(),
+        );
+        h.insert("partial".into(), json!(self.partial));
+        h.insert("stride".into(), json!(self.record.stride()));
+        let text = header.to_string();
+        let mut out = Vec::with_capacity(32 + text.len() + 8 * self.data.len());
+        out.extend_from_slice(MAGIC);
+        out.extend_from_slice(&VERSION.to_le_bytes());
+        out.extend_from_slice(&(text.len() as u32).to_le_bytes());
+        out.extend_from_slice(text.as_bytes());
+        out.extend_from_slice(&(self.data.len() as u64).to_le_bytes());
+        for v in &self.data {
+            out.extend_from_slice(&v.to_le_bytes());
+        }
+        let hash = fnv1a(&out);
+        out.extend_from_slice(&hash.to_le_bytes());
+        out
+    }
+
+    /// Reads a state from bytes in the documented format; every inconsistency is an error
+    /// that says what is wrong.
+    pub fn from_bytes(bytes: &[u8]) -> Result<Self, String> {
+        let take = |at: usize, n: usize| -> Result<&[u8], String> {
+            bytes
+                .get(at..at.checked_add(n).ok_or_else(|| corrupt("truncated"))?)
+                .ok_or_else(|| corrupt(format!("truncated at byte {at}")))
+        };
+        if take(0, 8)? != MAGIC {
+            return Err(corrupt("no FREPSTAT magic at the start"));
+        }
+        let version = u32::from_le_bytes(take(8, 4)?.try_into().unwrap());
+        if version != VERSION {
+            return Err(corrupt(format!(
+                "format version {version}; this frepray reads version {VERSION}"
+            )));
+        }
+        let hlen = u32::from_le_bytes(take(12, 4)?.try_into().unwrap()) as usize;
+        let text = std::str::from_utf8(take(16, hlen)?).map_err(corrupt)?;
+        let at = 16 + hlen;
+        let words = u64::from_le_bytes(take(at, 8)?.try_into().unwrap());
+        let end = usize::try_from(words)
+            .ok()
+            .and_then(|w| w.checked_mul(8))
+            .and_then(|b| b.checked_add(at + 8))
+            .ok_or_else(|| corrupt("impossible word count"))?;
+        if bytes.len() != end + 8 {
+            return Err(corrupt(format!(
+                "{} bytes, the header says {}",
+                bytes.len(),
+                end + 8
+            )));
+        }
+        let stored = u64::from_le_bytes(take(end, 8)?.try_into().unwrap());
+        if stored != fnv1a(&bytes[..end]) {
+            return Err(corrupt("checksum mismatch (the file is damaged)"));
+        }
+        let v: Value = serde_json::from_str(text).map_err(|e| corrupt(format!("header: {e}")))?;
+        let header = StateHeader::from_json(&v).map_err(corrupt)?;
+        let mut state = RenderState::new(header, 0..0).map_err(corrupt)?;
+        let stride = v.get("stride").and_then(Value::as_u64);
+        if stride != Some(state.record.stride() as u64) || state.data.len() as u64 != words {
+            return Err(corrupt(format!(
+                "the records do not match the header (stride {stride:?}, expected {})",
+                state.record.stride()
+            )));
+        }
+        let ranges = v
+            .get("samples")
+            .and_then(Value::as_array)
+            .ok_or_else(|| corrupt("header lacks \"samples\""))?;
+        for r in ranges {
+            let a = r
+                .get(0)
+                .and_then(Value::as_u64)
+                .and_then(|a| u32::try_from(a).ok());
+            let b = r
+                .get(1)
+                .and_then(Value::as_u64)
+                .and_then(|b| u32::try_from(b).ok());
+            match (a, b) {
+                (Some(a), Some(b)) if a < b && state.samples.last().is_none_or(|l| l.end < a) => {
+                    state.samples.push(a..b)
+                }
+                _ => {
+                    return Err(corrupt(format!(
+                        "sample range {r} is not an increasing [start, end]"
+                    )))
+                }
+            }
+        }
+        state.partial = v.get("partial").and_then(Value::as_bool).unwrap_or(false);
+        for (d, c) in state
+            .data
+            .iter_mut()
+            .zip(bytes[at + 8..end].chunks_exact(8))
+        {
+            *d = f64::from_le_bytes(c.try_into().unwrap());
+        }
+        Ok(state)
+    }
+
+    /// Writes the state to `path` (whole or not at all).
+    pub fn write(&self, path: impl AsRef<Path>) -> io::Result<()> {
+        let bytes = self.to_bytes();
+        write_atomically(path.as_ref(), |w| w.write_all(&bytes))
+    }
+
+    /// Reads a state written by [`RenderState::write`]; errors name the file.
+    pub fn read(path: impl AsRef<Path>) -> Result<Self, String> {
+        let path = path.as_ref();
+        let bytes = std::fs::read(path).map_err(|e| format!("{}: {e}", path.display()))?;
+        Self::from_bytes(&bytes).map_err(|e| format!("{}: {e}", path.display()))
+    }
+
+    /// A one-line summary: size, estimator, samples.
+    pub fn summary(&self) -> String {
+        let mut s = format!(
+            "{}×{} {} {} seed {}, samples",
+            self.header.width,
+            self.header.height,
+            self.header.integrator,
+            self.header.method,
+            self.header.seed
+        );
+        for r in &self.samples {
+            let _ = write!(s, " {}..{}", r.start, r.end);
+        }
+        if self.partial {
+            s.push_str(" (partial)");
+        }
+        s
+    }
+}
