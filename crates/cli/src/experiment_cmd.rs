@@ -100,7 +100,8 @@ impl Renderer for SceneRenderer {
             seed,
             ..self.base.clone()
         };
-        let (state, stats) = render_loop::render(&self.scene, &o, &self.stop, &|_, _| {})?;
+        let (state, stats) = render_loop::render(&self.scene, &o, &self.stop, &|_, _| {})
+            .map_err(|e| e.to_string())?;
         if stats.stopped {
             return Ok(None);
         }

@@ -26,7 +26,7 @@ pub fn run(args: MergeArgs) -> Result<(), String> {
         .collect::<Result<Vec<Format>, _>>()?;
     let mut merged: Option<RenderState> = None;
     for path in &args.states {
-        let s = RenderState::read(path)?;
+        let s = RenderState::read(path).map_err(|e| e.to_string())?;
         match &mut merged {
             None => merged = Some(s),
             Some(m) => m

@@ -81,9 +81,7 @@ pub fn write_state(
     let mut image = None;
     for (p, &f) in outs.iter().zip(formats) {
         if f == Format::State {
-            state
-                .write(p)
-                .map_err(|e| format!("{}: {e}", p.display()))?;
+            state.write(p).map_err(|e| e.to_string())?;
         } else {
             write(p, image.get_or_insert_with(|| state.image()), f)?;
         }

@@ -179,7 +179,7 @@ pub fn run(
         bar.set_position(done);
     });
     bar.finish_and_clear();
-    let (state, stats) = result?;
+    let (state, stats) = result.map_err(|e| e.to_string())?;
     output::write_state(outs, &formats, &state)?;
     eprintln!("{stats}");
     eprintln!(
@@ -204,7 +204,7 @@ pub fn bench(input: &Path, o: &Overrides) -> Result<(), String> {
         scene.camera.height = h;
     }
     let opts = options(&settings, o)?;
-    let stats = render_loop::bench(&scene, &opts)?;
+    let stats = render_loop::bench(&scene, &opts).map_err(|e| e.to_string())?;
     println!(
         "| scene | integrator | MIS | resolution | spp | time (s) | MSamples/s | MRays/s | camera | secondary | shadow |"
     );

@@ -29,6 +29,7 @@ pub mod bsdf;
 pub mod camera;
 pub mod color;
 pub mod distribution;
+pub mod error;
 pub mod frame;
 pub mod image;
 pub mod integrator;
@@ -47,6 +48,7 @@ pub mod warp;
 
 pub use camera::Camera;
 pub use color::Rgb;
+pub use error::Error;
 pub use image::Image;
 pub use material::Material;
 pub use render_loop::{render, render_range, RenderStats};

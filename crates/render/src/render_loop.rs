@@ -20,6 +20,7 @@
 //! of every technique (DESIGN.md §4). Rays are counted exactly by kind (per tile, then
 //! summed).
 
+use crate::error::Error;
 use crate::integrator::{Integrator, IntegratorKind, RayCounts, RenderOptions};
 use crate::scene::Scene;
 use crate::state::{RenderState, StateHeader};
@@ -130,7 +131,7 @@ pub fn render(
     options: &RenderOptions,
     stop: &AtomicBool,
     progress: &(dyn Fn(u64, u64) + Sync),
-) -> Result<(RenderState, RenderStats), String> {
+) -> Result<(RenderState, RenderStats), Error> {
     render_range(scene, options, 0..options.spp, stop, progress)
 }
 
@@ -145,12 +146,9 @@ pub fn render_range(
     samples: Range<u32>,
     stop: &AtomicBool,
     progress: &(dyn Fn(u64, u64) + Sync),
-) -> Result<(RenderState, RenderStats), String> {
+) -> Result<(RenderState, RenderStats), Error> {
     if samples.is_empty() {
-        return Err(format!(
-            "empty sample range {}..{}",
-            samples.start, samples.end
-        ));
+        return Err(Error::EmptyRange(samples));
     }
     let o = RenderOptions {
         spp: samples.end - samples.start,
@@ -205,7 +203,7 @@ pub fn render_range(
         rayon::ThreadPoolBuilder::new()
             .num_threads(o.threads)
             .build()
-            .map_err(|e| format!("thread pool: {e}"))?
+            .map_err(|e| Error::Options(format!("thread pool: {e}")))?
             .install(|| run(&mut tiles))
     } else {
         run(&mut tiles)
@@ -239,7 +237,7 @@ pub fn render_range(
 
 /// Throughput of `direct` and `path` on `scene` with `options` otherwise unchanged, for
 /// the CLI's `bench` command: one render each, no progress, the statistics in that order.
-pub fn bench(scene: &Scene, options: &RenderOptions) -> Result<Vec<RenderStats>, String> {
+pub fn bench(scene: &Scene, options: &RenderOptions) -> Result<Vec<RenderStats>, Error> {
     let stop = AtomicBool::new(false);
     [IntegratorKind::Direct, IntegratorKind::Path]
         .into_iter()

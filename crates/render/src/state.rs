@@ -29,6 +29,7 @@
 //! | 8W | the records, f64 |
 //! | 8 | FNV-1a 64 hash of every byte before it, u64 |
 
+use crate::error::Error;
 use crate::image::Image;
 use crate::integrator::{Aov, Integrator, IntegratorKind, Record, RenderOptions};
 use crate::output::write_atomically;
@@ -37,7 +38,7 @@ use crate::{Rgb, Technique};
 use mis::{Kernel, Method, Params};
 use serde_json::{json, Value};
 use std::fmt::Write as _;
-use std::io::{self, Write as _};
+use std::io::Write as _;
 use std::ops::Range;
 use std::path::Path;
 
@@ -233,8 +234,8 @@ impl PartialEq for RenderState {
 }
 
 /// Where a state file went wrong.
-fn corrupt(what: impl std::fmt::Display) -> String {
-    format!("not a valid frepray render state: {what}")
+fn corrupt(what: impl std::fmt::Display) -> Error {
+    Error::Corrupt(what.to_string())
 }
 
 const MAGIC: &[u8; 8] = b"FREPSTAT";
@@ -250,14 +251,14 @@ fn fnv1a(bytes: &[u8]) -> u64 {
 impl RenderState {
     /// An empty state (every sum 0) for samples `samples` of a render with `header`.
     /// Errors when the header's options are invalid.
-    pub fn new(header: StateHeader, samples: Range<u32>) -> Result<Self, String> {
+    pub fn new(header: StateHeader, samples: Range<u32>) -> Result<Self, Error> {
         let it = Integrator::new(&header.options())?;
         let record = it.record;
         let kernel = it.kernel().cloned();
         let n = header.width as usize * header.height as usize;
         let words = n
             .checked_mul(record.stride())
-            .ok_or("the render state would not fit in memory")?;
+            .ok_or_else(|| Error::Options("the render state would not fit in memory".into()))?;
         Ok(Self {
             header,
             samples: if samples.is_empty() {
@@ -371,25 +372,16 @@ impl RenderState {
     }
 
     /// Adds the sums of `other`, a state of the same header over disjoint samples.
-    pub fn merge(&mut self, other: &RenderState) -> Result<(), String> {
+    pub fn merge(&mut self, other: &RenderState) -> Result<(), Error> {
         if self.header != other.header {
-            return Err(format!(
-                "cannot merge render states of different renders: {}",
-                self.header.difference(&other.header)
-            ));
+            return Err(Error::Mismatch(self.header.difference(&other.header)));
         }
         let mut all: Vec<Range<u32>> = self.samples.iter().chain(&other.samples).cloned().collect();
         all.sort_by_key(|r| r.start);
         let mut joined: Vec<Range<u32>> = Vec::new();
         for r in all {
             match joined.last_mut() {
-                Some(last) if r.start < last.end => {
-                    return Err(format!(
-                        "cannot merge render states whose samples overlap ({}..{} and {}..{}): \
-                         the same samples would count twice",
-                        last.start, last.end, r.start, r.end
-                    ))
-                }
+                Some(last) if r.start < last.end => return Err(Error::Overlap(last.clone(), r)),
                 Some(last) if r.start == last.end => last.end = r.end,
                 _ => joined.push(r),
             }
@@ -446,8 +438,8 @@ impl RenderState {
 
     /// Reads a state from bytes in the documented format; every inconsistency is an error
     /// that says what is wrong.
-    pub fn from_bytes(bytes: &[u8]) -> Result<Self, String> {
-        let take = |at: usize, n: usize| -> Result<&[u8], String> {
+    pub fn from_bytes(bytes: &[u8]) -> Result<Self, Error> {
+        let take = |at: usize, n: usize| -> Result<&[u8], Error> {
             bytes
                 .get(at..at.checked_add(n).ok_or_else(|| corrupt("truncated"))?)
                 .ok_or_else(|| corrupt(format!("truncated at byte {at}")))
@@ -527,16 +519,25 @@ impl RenderState {
     }
 
     /// Writes the state to `path` (whole or not at all).
-    pub fn write(&self, path: impl AsRef<Path>) -> io::Result<()> {
-        let bytes = self.to_bytes();
-        write_atomically(path.as_ref(), |w| w.write_all(&bytes))
+    pub fn write(&self, path: impl AsRef<Path>) -> Result<(), Error> {
+        let (path, bytes) = (path.as_ref(), self.to_bytes());
+        write_atomically(path, |w| w.write_all(&bytes)).map_err(|source| Error::Io {
+            path: path.into(),
+            source,
+        })
     }
 
     /// Reads a state written by [`RenderState::write`]; errors name the file.
-    pub fn read(path: impl AsRef<Path>) -> Result<Self, String> {
+    pub fn read(path: impl AsRef<Path>) -> Result<Self, Error> {
         let path = path.as_ref();
-        let bytes = std::fs::read(path).map_err(|e| format!("{}: {e}", path.display()))?;
-        Self::from_bytes(&bytes).map_err(|e| format!("{}: {e}", path.display()))
+        let bytes = std::fs::read(path).map_err(|source| Error::Io {
+            path: path.into(),
+            source,
+        })?;
+        Self::from_bytes(&bytes).map_err(|e| Error::InFile {
+            path: path.into(),
+            source: Box::new(e),
+        })
     }
 
     /// A one-line summary: size, estimator, samples.

@@ -140,7 +140,8 @@ fn mismatched_or_overlapping_states_are_refused() {
     let mut a = run(&scene, &o, 0..2);
     let overlap = run(&scene, &o, 1..3);
     let e = a.clone().merge(&overlap).unwrap_err();
-    assert!(e.contains("overlap"), "{e}");
+    assert!(matches!(e, render::Error::Overlap(..)), "{e}");
+    assert!(e.to_string().contains("overlap"), "{e}");
     let other_seed = run(
         &scene,
         &RenderOptions {
@@ -149,7 +150,7 @@ fn mismatched_or_overlapping_states_are_refused() {
         },
         2..4,
     );
-    let e = a.clone().merge(&other_seed).unwrap_err();
+    let e = a.clone().merge(&other_seed).unwrap_err().to_string();
     assert!(e.contains("seed"), "{e}");
     let other_scene = run(
         &scene,
@@ -163,6 +164,7 @@ fn mismatched_or_overlapping_states_are_refused() {
         .clone()
         .merge(&other_scene)
         .unwrap_err()
+        .to_string()
         .contains("scene_hash"));
     let other_method = run(
         &scene,
@@ -173,6 +175,7 @@ fn mismatched_or_overlapping_states_are_refused() {
         .clone()
         .merge(&other_method)
         .unwrap_err()
+        .to_string()
         .contains("estimator"));
     // A gap is allowed: ranges need not be adjacent.
     a.merge(&run(&scene, &o, 5..6)).unwrap();
@@ -188,20 +191,24 @@ fn damaged_state_files_are_errors() {
     let mut flipped = bytes.clone();
     let k = bytes.len() - 20;
     flipped[k] ^= 1;
-    let e = RenderState::from_bytes(&flipped).unwrap_err();
+    let e = RenderState::from_bytes(&flipped).unwrap_err().to_string();
     assert!(e.contains("checksum"), "{e}");
-    let e = RenderState::from_bytes(&bytes[..bytes.len() - 3]).unwrap_err();
+    let e = RenderState::from_bytes(&bytes[..bytes.len() - 3])
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("bytes"), "{e}");
-    let e = RenderState::from_bytes(b"PNG....").unwrap_err();
+    let e = RenderState::from_bytes(b"PNG....").unwrap_err().to_string();
     assert!(e.contains("truncated") || e.contains("magic"), "{e}");
     let mut wrong = bytes.clone();
     wrong[..8].copy_from_slice(b"NOTSTATE");
     assert!(RenderState::from_bytes(&wrong)
         .unwrap_err()
+        .to_string()
         .contains("magic"));
     let mut version = bytes;
     version[8] = 9;
     assert!(RenderState::from_bytes(&version)
         .unwrap_err()
+        .to_string()
         .contains("version 9"));
 }

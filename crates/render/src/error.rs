@@ -1,0 +1,49 @@
+//! The errors of rendering and of render states, typed at the crate's boundary.
+
+use std::ops::Range;
+use std::path::PathBuf;
+
+/// What can go wrong in a render or with a render state.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// The render options are invalid (the message says which and why).
+    #[error("{0}")]
+    Options(String),
+    /// A render of no samples was asked for.
+    #[error("empty sample range {}..{}", .0.start, .0.end)]
+    EmptyRange(Range<u32>),
+    /// Two states of different renders (the message names the first difference).
+    #[error("cannot merge render states of different renders: {0}")]
+    Mismatch(String),
+    /// Two states share samples.
+    #[error(
+        "cannot merge render states whose samples overlap ({}..{} and {}..{}): the same \
+         samples would count twice", .0.start, .0.end, .1.start, .1.end
+    )]
+    Overlap(Range<u32>, Range<u32>),
+    /// Bytes that are not a render state of this version.
+    #[error("not a valid frepray render state: {0}")]
+    Corrupt(String),
+    /// A file could not be read or written.
+    #[error("{}: {source}", path.display())]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        source: std::io::Error,
+    },
+    /// An error in a named file.
+    #[error("{}: {source}", path.display())]
+    InFile {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong with it.
+        source: Box<Error>,
+    },
+}
+
+impl From<String> for Error {
+    fn from(s: String) -> Self {
+        Error::Options(s)
+    }
+}
