@@ -43,8 +43,12 @@ struct RenderArgs {
     input: PathBuf,
     /// Output image: .png (sRGB, display) or .exr (linear, with AOV channels); repeat
     /// the flag to write several files from one render.
-    #[arg(short, long, required = true)]
+    #[arg(short, long, required_unless_present = "dump_scene")]
     output: Vec<PathBuf>,
+    /// Write the resolved scene (after overrides) as JSON to this file, for debugging
+    /// and GPU tests (scenes); without -o nothing is rendered.
+    #[arg(long, value_name = "FILE.json")]
+    dump_scene: Option<PathBuf>,
     /// Scenes: direct, path, depth, normals or albedo. Models: shaded, depth or normals.
     #[arg(long)]
     integrator: Option<String>,
@@ -188,7 +192,13 @@ fn render(args: RenderArgs) -> Result<(), String> {
             cutoff: args.cutoff,
             ridge: args.ridge,
         };
-        return scene_render::run(&args.input, &args.output, &o, args.quiet);
+        return scene_render::run(
+            &args.input,
+            &args.output,
+            args.dump_scene.as_deref(),
+            &o,
+            args.quiet,
+        );
     }
     let scene_only = [
         ("--spp", args.spp.is_some()),
@@ -200,6 +210,7 @@ fn render(args: RenderArgs) -> Result<(), String> {
         ("--beta", args.beta.is_some()),
         ("--cutoff", args.cutoff.is_some()),
         ("--ridge", args.ridge.is_some()),
+        ("--dump-scene", args.dump_scene.is_some()),
     ];
     if let Some((flag, _)) = scene_only.iter().find(|(_, set)| *set) {
         return Err(format!(
