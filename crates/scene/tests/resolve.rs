@@ -175,19 +175,19 @@ fn environment_cdf_matches_brute_force() {
     let close = |a: f64, b: f64| (a - b).abs() <= 1e-12 * b.abs().max(1.0);
     let m = &t.distribution.marginal;
     let mut acc = 0.0;
-    for y in 0..h {
+    for (y, &row) in rows.iter().enumerate() {
         assert!(
             close(m.cdf[y], acc / total),
             "row {y}: {} {}",
             m.cdf[y],
             acc / total
         );
-        assert!(close(m.pmf(y), rows[y] / total));
-        acc += rows[y];
+        assert!(close(m.pmf(y), row / total));
+        acc += row;
         let c = &t.distribution.conditional[y];
         let mut a = 0.0;
         for x in 0..w {
-            assert!(close(c.cdf[x], a / rows[y]), "({x}, {y})");
+            assert!(close(c.cdf[x], a / row), "({x}, {y})");
             a += weight(x, y);
         }
         assert_eq!(c.cdf[w], 1.0);

@@ -6,7 +6,7 @@
 //! lights are analytic shapes kept in [`Lights`], which integrators query beside the
 //! objects.
 //!
-//! Scenes are read and resolved by the [`scene`](::scene) crate into one flat
+//! Scenes are read and resolved by the [`scene`] crate into one flat
 //! [`SceneData`]; [`Scene::from_data`] builds the CPU scene from it, reusing its
 //! light-selection and environment distributions. [`load_scene`] / [`parse_scene`] do
 //! both; a malformed file is a [`SceneError`] naming the file, line, column and key.
@@ -149,7 +149,8 @@ impl Scene {
         }
     }
 
-    /// Builds the CPU scene from resolved data (see [`from_data`](self)).
+    /// Builds the CPU scene from resolved data: textures looked up, plastic coats
+    /// tabulated, one solid built per object, the resolved light distributions reused.
     pub fn from_data(data: &SceneData) -> Self {
         from_data::build(data)
     }
