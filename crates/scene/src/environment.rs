@@ -16,9 +16,18 @@ use glam::{DMat3, DVec3};
 use std::f64::consts::PI;
 use std::path::Path;
 
+/// Why an environment map could not be read.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("{0}")]
+pub struct MapError(pub String);
+
 /// Reads the R, G, B channels of the first layer of a lat-long EXR file, times `scale`,
-/// into row-major pixels (row 0 at the top); errors name what is wrong.
-pub fn read_exr_rgb(file: &Path, scale: f64) -> Result<(usize, usize, Vec<[f64; 3]>), String> {
+/// into row-major pixels (row 0 at the top): (width, height, pixels).
+pub fn read_exr_rgb(file: &Path, scale: f64) -> Result<(usize, usize, Vec<[f64; 3]>), MapError> {
+    read_exr(file, scale).map_err(MapError)
+}
+
+fn read_exr(file: &Path, scale: f64) -> Result<(usize, usize, Vec<[f64; 3]>), String> {
     let image = exr::prelude::read_first_flat_layer_from_file(file).map_err(|e| e.to_string())?;
     let layer = &image.layer_data;
     let (w, h) = (layer.size.width(), layer.size.height());

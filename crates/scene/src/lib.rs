@@ -66,7 +66,7 @@ pub use desc::{
     TransformStep,
 };
 pub use distribution::{Distribution1D, Distribution2D};
-pub use environment::read_exr_rgb;
+pub use environment::{read_exr_rgb, MapError};
 pub use error::SceneError;
 pub use load::{
     description_from_value, load, load_value, load_with, parse, parse_description, parse_with,
@@ -74,7 +74,9 @@ pub use load::{
 };
 pub use overrides::{parse_technique_list, Overrides};
 pub use resolve::METALS;
-pub use settings::{Emitters, IntegratorKind, RenderSettings, TechniqueKind, AOV_NAMES};
+pub use settings::{
+    Emitters, IntegratorKind, RenderSettings, TechniqueKind, UnknownName, AOV_NAMES,
+};
 pub use solids::{SolidEntry, SolidForm, SolidPool};
 
 /// The image size of a scene that gives no `camera.resolution`.

@@ -3,7 +3,7 @@
 //! is validated once, by the same code and with the same messages as one in the file.
 
 use crate::desc::{SceneDescription, TechniqueDesc};
-use crate::error::SceneError;
+use crate::error::{kp, SceneError};
 
 /// Values that replace a scene's own; `None` (or `false`) keeps the scene's.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -113,18 +113,22 @@ impl Overrides {
 }
 
 /// Parses `bsdf:2,light` (the command-line form) into techniques with sample counts
-/// (1 when omitted); names are checked when the scene is resolved.
-pub fn parse_technique_list(s: &str) -> Result<Vec<TechniqueDesc>, String> {
+/// (1 when omitted); names are checked when the scene is resolved. A count that is not
+/// a number is an error at `render.techniques`.
+pub fn parse_technique_list(s: &str) -> Result<Vec<TechniqueDesc>, SceneError> {
     s.split(',')
         .map(str::trim)
         .filter(|p| !p.is_empty())
         .map(|p| {
             let (name, n) = match p.split_once(':') {
                 Some((name, n)) => {
-                    let n: u32 = n
-                        .trim()
-                        .parse()
-                        .map_err(|_| format!("'{n}' is not a sample count"))?;
+                    let n: u32 = n.trim().parse().map_err(|_| {
+                        SceneError::at_key(
+                            "",
+                            &kp!["render", "techniques"],
+                            format!("'{n}' is not a sample count"),
+                        )
+                    })?;
                     (name.trim(), Some(n))
                 }
                 None => (p, None),

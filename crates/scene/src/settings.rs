@@ -55,18 +55,29 @@ fn names<T: Copy>(all: &[T], name: fn(T) -> &'static str) -> String {
     all.iter().map(|&t| name(t)).collect::<Vec<_>>().join(", ")
 }
 
+/// A name that is not one of its kind's (integrator, technique); lists the valid names.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("unknown {what} {name:?}; valid names: {valid}")]
+pub struct UnknownName {
+    /// What was named ("integrator", "technique").
+    pub what: &'static str,
+    /// The name given.
+    pub name: String,
+    /// The valid names, comma-separated.
+    pub valid: String,
+}
+
 impl FromStr for IntegratorKind {
-    type Err = String;
+    type Err = UnknownName;
     /// The kind named `s`; the error lists the valid names.
-    fn from_str(s: &str) -> Result<Self, String> {
+    fn from_str(s: &str) -> Result<Self, UnknownName> {
         IntegratorKind::ALL
             .into_iter()
             .find(|k| k.name() == s)
-            .ok_or_else(|| {
-                format!(
-                    "unknown integrator {s:?}; valid names: {}",
-                    names(&IntegratorKind::ALL, IntegratorKind::name)
-                )
+            .ok_or_else(|| UnknownName {
+                what: "integrator",
+                name: s.to_string(),
+                valid: names(&IntegratorKind::ALL, IntegratorKind::name),
             })
     }
 }
@@ -115,17 +126,16 @@ impl fmt::Display for TechniqueKind {
 }
 
 impl FromStr for TechniqueKind {
-    type Err = String;
+    type Err = UnknownName;
     /// The technique named `s`; the error lists the valid names.
-    fn from_str(s: &str) -> Result<Self, String> {
+    fn from_str(s: &str) -> Result<Self, UnknownName> {
         TechniqueKind::ALL
             .into_iter()
             .find(|t| t.name() == s)
-            .ok_or_else(|| {
-                format!(
-                    "unknown technique {s:?}; valid names: {}",
-                    names(&TechniqueKind::ALL, TechniqueKind::name)
-                )
+            .ok_or_else(|| UnknownName {
+                what: "technique",
+                name: s.to_string(),
+                valid: names(&TechniqueKind::ALL, TechniqueKind::name),
             })
     }
 }
@@ -227,7 +237,7 @@ pub(crate) fn settings(
     if let Some(name) = &r.integrator {
         s.integrator = name
             .parse()
-            .map_err(|e: String| src.at_value(&kp!["render", "integrator"], e))?;
+            .map_err(|e: UnknownName| src.at_value(&kp!["render", "integrator"], e.to_string()))?;
     }
     if let Some(spp) = r.spp {
         if spp == 0 {
@@ -276,7 +286,10 @@ pub(crate) fn settings(
             }
             for (i, t) in list.iter().enumerate() {
                 let at = kp!["render", "techniques", i, "technique"];
-                let tech: TechniqueKind = t.technique.parse().map_err(|e| src.at_value(&at, e))?;
+                let tech: TechniqueKind = t
+                    .technique
+                    .parse()
+                    .map_err(|e: UnknownName| src.at_value(&at, e.to_string()))?;
                 if s.techniques.iter().any(|&(u, _)| u == tech) {
                     return Err(
                         src.at_value(&at, format!("technique {:?} given twice", t.technique))
