@@ -53,6 +53,16 @@ fn files_and_values_resolve_to_equal_scene_data() {
         );
         assert_eq!(data.solids.len(), data.objects.len());
     }
+    // TOML files and their JSON twins resolve alike.
+    let mut pairs = 0;
+    for f in files.iter().filter(|f| f.extension().unwrap() == "toml") {
+        let twin = f.with_extension("json");
+        if twin.exists() {
+            assert_eq!(load(f).unwrap(), load(&twin).unwrap(), "{}", f.display());
+            pairs += 1;
+        }
+    }
+    assert!(pairs >= 2);
     // A change anywhere makes them differ.
     let f = scenes_dir().join("table.toml");
     let mut v = as_value(&f);
