@@ -8,7 +8,7 @@ use crate::experiment::{self, ExperimentConfig, Image, Renderer};
 use crate::scene_render::{self, Overrides};
 use render::integrator::RenderOptions;
 use render::render_loop;
-use render::scene::{load_scene, Scene};
+use render::scene::Scene;
 use std::path::PathBuf;
 use std::str::FromStr;
 use std::sync::atomic::AtomicBool;
@@ -125,7 +125,6 @@ impl Renderer for SceneRenderer {
 /// Runs the experiment.
 pub fn run(a: ExperimentArgs) -> Result<(), String> {
     crate::set_threads(a.threads)?;
-    let (mut scene, settings) = load_scene(&a.scene).map_err(|e| e.to_string())?;
     let o = Overrides {
         techniques: a.techniques.clone(),
         integrator: a.integrator.clone(),
@@ -136,13 +135,7 @@ pub fn run(a: ExperimentArgs) -> Result<(), String> {
         beta: a.beta,
         ..Default::default()
     };
-    if let Some(w) = o.width {
-        scene.camera.width = w;
-    }
-    if let Some(h) = o.height {
-        scene.camera.height = h;
-    }
-    let base = scene_render::options(&settings, &o)?;
+    let (scene, base) = scene_render::load(&a.scene, &o)?;
     // One spelling per estimator, so that "optimal_direct" and "optimal-direct" are
     // the same point of the sweep.
     let canon = |s: &str| {

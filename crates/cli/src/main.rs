@@ -48,12 +48,16 @@ struct RenderArgs {
     /// Output: .png (sRGB, display), .exr (linear, with AOV channels) or .state (scenes:
     /// every pixel's sums, for `frepray merge`); repeat the flag to write several files
     /// from one render.
-    #[arg(short, long, required = true)]
+    #[arg(short, long, required_unless_present = "dump_scene")]
     output: Vec<PathBuf>,
     /// Render samples START..END of every pixel (scenes) instead of 0..spp; states of
     /// disjoint ranges merge into the render of their union (`frepray merge`).
     #[arg(long, value_name = "START..END")]
     samples: Option<String>,
+    /// Write the resolved scene (after overrides) as JSON to this file, for debugging
+    /// and GPU tests (scenes); without -o nothing is rendered.
+    #[arg(long, value_name = "FILE.json")]
+    dump_scene: Option<PathBuf>,
     /// Scenes: direct, path, depth, normals or albedo. Models: shaded, depth or normals.
     #[arg(long)]
     integrator: Option<String>,
@@ -203,7 +207,14 @@ fn render(args: RenderArgs) -> Result<(), String> {
             .as_deref()
             .map(scene_render::parse_samples)
             .transpose()?;
-        return scene_render::run(&args.input, &args.output, &o, samples, args.quiet);
+        return scene_render::run(
+            &args.input,
+            &args.output,
+            args.dump_scene.as_deref(),
+            &o,
+            samples,
+            args.quiet,
+        );
     }
     let scene_only = [
         ("--spp", args.spp.is_some()),
@@ -216,6 +227,7 @@ fn render(args: RenderArgs) -> Result<(), String> {
         ("--cutoff", args.cutoff.is_some()),
         ("--ridge", args.ridge.is_some()),
         ("--samples", args.samples.is_some()),
+        ("--dump-scene", args.dump_scene.is_some()),
     ];
     if let Some((flag, _)) = scene_only.iter().find(|(_, set)| *set) {
         return Err(format!(

@@ -4,12 +4,12 @@
 use crate::output::{self, Format};
 use render::integrator::{Aov, RenderOptions};
 use render::render_loop;
-use render::scene::{load_scene, parse_technique, IntegratorKind, RenderSettings};
+use render::scene::{RenderSettings, Scene, SceneData};
 use std::ops::Range;
 use std::path::{Path, PathBuf};
-use std::str::FromStr;
 
-/// Command-line overrides of a scene's render settings.
+/// Command-line overrides of a scene's render settings, as given (see
+/// [`Overrides::to_scene`]).
 #[derive(Clone, Debug, Default)]
 pub struct Overrides {
     /// Samples per pixel.
@@ -42,77 +42,76 @@ pub struct Overrides {
     pub ridge: Option<f64>,
 }
 
-/// Parses `bsdf:2,light` into techniques with sample counts (1 when omitted).
-pub fn parse_techniques(s: &str) -> Result<Vec<(render::Technique, u32)>, String> {
-    s.split(',')
-        .map(str::trim)
-        .filter(|p| !p.is_empty())
-        .map(|p| {
-            let (name, n) = match p.split_once(':') {
-                Some((name, n)) => {
-                    let n: u32 = n
-                        .parse()
-                        .map_err(|_| format!("--techniques: '{n}' is not a sample count"))?;
-                    (name, n)
-                }
-                None => (p, 1),
-            };
-            Ok((
-                parse_technique(name).map_err(|e| format!("--techniques: {e}"))?,
-                n,
-            ))
+impl Overrides {
+    /// The overrides as the scene crate applies them to the description.
+    pub fn to_scene(&self) -> Result<scene::Overrides, String> {
+        let list = |s: &str| -> Vec<String> {
+            s.split(',')
+                .map(str::trim)
+                .filter(|x| !x.is_empty())
+                .map(String::from)
+                .collect()
+        };
+        Ok(scene::Overrides {
+            spp: self.spp,
+            estimator: self.mis.clone(),
+            techniques: self
+                .techniques
+                .as_deref()
+                .map(scene::parse_technique_list)
+                .transpose()
+                .map_err(|e| format!("--techniques: {e}"))?,
+            seed: self.seed,
+            integrator: self.integrator.clone(),
+            width: self.width,
+            height: self.height,
+            max_depth: self.max_depth,
+            aovs: self.aovs.as_deref().map(list),
+            hide_emitters: self.hide_emitters,
+            beta: self.beta,
+            cutoff: self.cutoff,
+            ridge: self.ridge,
         })
-        .collect()
+    }
 }
 
-/// The scene's settings with the overrides applied, as render options.
-pub fn options(settings: &RenderSettings, o: &Overrides) -> Result<RenderOptions, String> {
-    let mut s = settings.clone();
-    if let Some(n) = o.spp {
-        s.spp = n;
+/// The command-line flag that sets the value at an overridden scene key.
+fn flag(key: &str) -> &'static str {
+    match key {
+        "render.spp" => "--spp",
+        "render.estimator" => "--mis",
+        "render.techniques" => "--techniques",
+        "render.seed" => "--seed",
+        "render.integrator" => "--integrator",
+        "camera.resolution" => "--width/--height",
+        "render.max_depth" => "--max-depth",
+        "render.aovs" => "--aovs",
+        "render.hide_emitters" => "--hide-emitters",
+        "render.beta" => "--beta",
+        "render.cutoff" => "--cutoff",
+        "render.ridge" => "--ridge",
+        _ => "an override",
     }
-    if let Some(m) = &o.mis {
-        s.method = mis::Method::from_str(m).map_err(|e| format!("--mis: {e}"))?;
-    }
-    if let Some(t) = &o.techniques {
-        s.techniques = parse_techniques(t)?;
-    }
-    if let Some(seed) = o.seed {
-        s.seed = seed;
-    }
-    if let Some(i) = &o.integrator {
-        s.integrator = IntegratorKind::from_str(i).map_err(|e| format!("--integrator: {e}"))?;
-    }
-    if let Some(b) = o.beta {
-        s.params.beta = b;
-    }
-    if let Some(c) = o.cutoff {
-        s.params.cutoff = c;
-    }
-    if let Some(r) = o.ridge {
-        if !(r >= 0.0 && r.is_finite()) {
-            return Err(format!("--ridge {r}: expected a finite number ≥ 0"));
-        }
-        s.params.ridge = r;
-    }
-    if o.hide_emitters {
-        s.hide_emitters = true;
-    }
-    if let Some(d) = o.max_depth {
-        s.max_depth = d;
-    }
-    if let Some(a) = &o.aovs {
-        s.aovs = a
-            .split(',')
-            .map(str::trim)
-            .filter(|x| !x.is_empty())
-            .map(String::from)
-            .collect();
-    }
-    let mut opts = RenderOptions::from_settings(&s)?;
+}
+
+/// Loads a scene file with the overrides applied before it is resolved (so that they
+/// are validated once, with the file's own values): the resolved data and settings.
+/// An error about an overridden value names its flag.
+pub fn resolve(input: &Path, o: &Overrides) -> Result<(SceneData, RenderSettings), String> {
+    let so = o.to_scene()?;
+    scene::load_with(input, &so).map_err(|e| match so.key_of(&e.key) {
+        Some(k) => format!("{}: {e}", flag(k)),
+        None => e.to_string(),
+    })
+}
+
+/// Loads a scene file with overrides: the CPU scene and its render options.
+pub fn load(input: &Path, o: &Overrides) -> Result<(Scene, RenderOptions), String> {
+    let (data, settings) = resolve(input, o)?;
+    let mut opts = RenderOptions::from_settings(&settings)?;
     opts.threads = o.threads;
     opts.validate()?;
-    Ok(opts)
+    Ok((Scene::from_data(&data), opts))
 }
 
 /// Parses a sample range `A..B` (samples A to B−1 of every pixel).
@@ -129,18 +128,28 @@ pub fn parse_samples(s: &str) -> Result<Range<u32>, String> {
     Ok(a..b)
 }
 
-/// FNV-1a 64 of a file's bytes: the scene hash of the states it renders into.
-fn file_hash(path: &Path) -> Result<u64, String> {
-    let bytes = std::fs::read(path).map_err(|e| format!("{}: {e}", path.display()))?;
-    Ok(bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| {
+/// FNV-1a 64 of the resolved scene's JSON: the scene hash of the states it renders
+/// into, so that states of different scenes (or sizes) refuse to merge.
+pub fn scene_hash(data: &SceneData) -> Result<u64, String> {
+    let json = serde_json::to_vec(data).map_err(|e| e.to_string())?;
+    Ok(json.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| {
         (h ^ u64::from(b)).wrapping_mul(0x0000_0100_0000_01b3)
     }))
 }
 
-/// Loads, renders (samples `0..spp`, or `samples`) and writes a scene; prints statistics.
+/// Writes the resolved scene as pretty JSON (`--dump-scene`).
+pub fn dump(data: &SceneData, path: &Path) -> Result<(), String> {
+    let json = serde_json::to_string_pretty(data).map_err(|e| e.to_string())?;
+    std::fs::write(path, json + "\n").map_err(|e| format!("{}: {e}", path.display()))
+}
+
+/// Loads, renders (samples `0..spp`, or `samples`) and writes a scene; prints
+/// statistics. With `dump_to`, the resolved scene is also written there as JSON (and
+/// nothing is rendered without outputs).
 pub fn run(
     input: &Path,
     outs: &[PathBuf],
+    dump_to: Option<&Path>,
     o: &Overrides,
     samples: Option<Range<u32>>,
     quiet: bool,
@@ -149,22 +158,20 @@ pub fn run(
         .iter()
         .map(|p| output::format_for_scene(p))
         .collect::<Result<Vec<_>, _>>()?;
-    let (mut scene, settings) = load_scene(input).map_err(|e| e.to_string())?;
-    if let Some(w) = o.width {
-        scene.camera.width = w;
+    let (data, settings) = resolve(input, o)?;
+    let mut opts = RenderOptions::from_settings(&settings)?;
+    opts.threads = o.threads;
+    opts.validate()?;
+    if let Some(path) = dump_to {
+        dump(&data, path)?;
+        eprintln!("resolved scene written to {}", path.display());
+        if outs.is_empty() {
+            return Ok(());
+        }
     }
-    if let Some(h) = o.height {
-        scene.camera.height = h;
-    }
-    if scene.camera.width == 0 || scene.camera.height == 0 {
-        return Err("--width and --height must be at least 1".into());
-    }
-    let mut opts = options(&settings, o)?;
-    opts.scene_hash = file_hash(input)?;
+    opts.scene_hash = scene_hash(&data)?;
     let samples = samples.unwrap_or(0..opts.spp);
-    let mut check = settings.clone();
-    check.techniques = opts.techniques.clone();
-    check.check_techniques(&scene)?;
+    let scene = Scene::from_data(&data);
     if !formats.contains(&Format::Exr) && !opts.aovs.is_empty() {
         eprintln!(
             "note: AOV channels ({}) are only written to .exr",
@@ -196,14 +203,7 @@ pub fn run(
 
 /// Runs `direct` and `path` with the scene's settings and prints throughput.
 pub fn bench(input: &Path, o: &Overrides) -> Result<(), String> {
-    let (mut scene, settings) = load_scene(input).map_err(|e| e.to_string())?;
-    if let Some(w) = o.width {
-        scene.camera.width = w;
-    }
-    if let Some(h) = o.height {
-        scene.camera.height = h;
-    }
-    let opts = options(&settings, o)?;
+    let (scene, opts) = load(input, o)?;
     let stats = render_loop::bench(&scene, &opts).map_err(|e| e.to_string())?;
     println!(
         "| scene | integrator | MIS | resolution | spp | time (s) | MSamples/s | MRays/s | camera | secondary | shadow |"

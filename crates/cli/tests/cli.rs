@@ -306,3 +306,51 @@ fn split_render_merges_through_state_files() {
     assert!(String::from_utf8_lossy(&twice.stderr).contains("overlap"));
     assert!(!dir.join("never.exr").exists());
 }
+
+/// `--dump-scene` writes the resolved scene (overrides applied) as JSON and, without
+/// `-o`, renders nothing; an invalid override is reported against its flag.
+#[test]
+fn dumps_the_resolved_scene_as_json() {
+    let dir = out_dir("dump");
+    let json = dir.join("cornell.json");
+    let st = frepray()
+        .args(["render", "--quiet", "--width", "8", "--dump-scene"])
+        .arg(&json)
+        .arg(root().join("scenes/cornell.toml"))
+        .output()
+        .unwrap();
+    assert!(
+        st.status.success(),
+        "{}",
+        String::from_utf8_lossy(&st.stderr)
+    );
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert_eq!(v["camera"]["width"], 8);
+    let objects = v["objects"].as_array().unwrap();
+    assert!(!objects.is_empty());
+    assert_eq!(v["solids"].as_array().unwrap().len(), objects.len());
+    let materials = v["materials"].as_array().unwrap().len() as u64;
+    assert!(objects
+        .iter()
+        .all(|o| o["material"].as_u64().unwrap() < materials));
+    let cdf = v["lights"]["by_power"]["cdf"].as_array().unwrap();
+    assert_eq!(cdf.last().unwrap().as_f64(), Some(1.0));
+    assert!(
+        std::fs::read_dir(&dir).unwrap().count() == 1,
+        "only the dump"
+    );
+    let bad = frepray()
+        .args(["render", "--quiet", "--spp", "0", "--dump-scene"])
+        .arg(dir.join("never.json"))
+        .arg(root().join("scenes/cornell.toml"))
+        .output()
+        .unwrap();
+    assert!(!bad.status.success());
+    let err = String::from_utf8_lossy(&bad.stderr);
+    assert!(
+        err.contains("--spp: render.spp: spp must be at least 1"),
+        "{err}"
+    );
+    assert!(!dir.join("never.json").exists());
+}

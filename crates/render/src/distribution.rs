@@ -1,5 +1,7 @@
 //! Piecewise-constant distributions in one and two dimensions (pbrt-v4 §A.5.1 and
-//! §A.5.2, `PiecewiseConstant1D` / `PiecewiseConstant2D`).
+//! §A.5.2, `PiecewiseConstant1D` / `PiecewiseConstant2D`): sampling over the tables of
+//! [`scene::Distribution1D`] / [`scene::Distribution2D`], which compute them (one
+//! construction for every back end).
 
 use glam::DVec2;
 
@@ -16,31 +18,7 @@ impl Distribution1D {
     /// The distribution proportional to `f` (negative values count as 0). When every
     /// value is 0, the distribution is uniform. `f` must not be empty.
     pub fn new(f: &[f64]) -> Self {
-        assert!(!f.is_empty(), "empty distribution");
-        let n = f.len();
-        let mut func: Vec<f64> = f.iter().map(|&v| if v > 0.0 { v } else { 0.0 }).collect();
-        let mut cdf = vec![0.0; n + 1];
-        for i in 0..n {
-            cdf[i + 1] = cdf[i] + func[i] / n as f64;
-        }
-        let mut integral = cdf[n];
-        if integral <= 0.0 || !integral.is_finite() {
-            func.iter_mut().for_each(|v| *v = 1.0);
-            for (i, c) in cdf.iter_mut().enumerate() {
-                *c = i as f64 / n as f64;
-            }
-            integral = 1.0;
-        } else {
-            for c in cdf.iter_mut() {
-                *c /= integral;
-            }
-        }
-        cdf[n] = 1.0;
-        Self {
-            func,
-            cdf,
-            integral,
-        }
+        Self::from(&scene::Distribution1D::new(f))
     }
     /// Number of pieces.
     pub fn len(&self) -> usize {
@@ -107,17 +85,7 @@ pub struct Distribution2D {
 impl Distribution2D {
     /// The distribution proportional to `f`, row-major with `nu` values a row.
     pub fn new(f: &[f64], nu: usize, nv: usize) -> Self {
-        assert_eq!(f.len(), nu * nv, "grid size");
-        let conditional: Vec<Distribution1D> = f.chunks(nu).map(Distribution1D::new).collect();
-        let row: Vec<f64> = f
-            .chunks(nu)
-            .map(|r| r.iter().map(|&v| v.max(0.0)).sum::<f64>() / nu as f64)
-            .collect();
-        let marginal = Distribution1D::new(&row);
-        Self {
-            conditional,
-            marginal,
-        }
+        Self::from(&scene::Distribution2D::new(f, nu, nv))
     }
     /// A point (u, v) with density f/∫f; returns the point and its density.
     pub fn sample(&self, u: DVec2) -> (DVec2, f64) {
@@ -132,6 +100,27 @@ impl Distribution2D {
         }
         let row = ((p.y * self.marginal.len() as f64) as usize).min(self.marginal.len() - 1);
         self.marginal.pdf(p.y) * self.conditional[row].pdf(p.x)
+    }
+}
+
+impl From<&scene::Distribution1D> for Distribution1D {
+    /// The sampler over a table computed at scene resolution.
+    fn from(d: &scene::Distribution1D) -> Self {
+        Self {
+            func: d.func.clone(),
+            cdf: d.cdf.clone(),
+            integral: d.integral,
+        }
+    }
+}
+
+impl From<&scene::Distribution2D> for Distribution2D {
+    /// The sampler over a table computed at scene resolution.
+    fn from(d: &scene::Distribution2D) -> Self {
+        Self {
+            conditional: d.conditional.iter().map(Distribution1D::from).collect(),
+            marginal: Distribution1D::from(&d.marginal),
+        }
     }
 }
 

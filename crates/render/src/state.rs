@@ -33,7 +33,6 @@ use crate::error::Error;
 use crate::image::Image;
 use crate::integrator::{Aov, Integrator, IntegratorKind, Record, RenderOptions};
 use crate::output::write_atomically;
-use crate::scene::parse_technique;
 use crate::{Rgb, Technique};
 use mis::{Kernel, Method, Params};
 use serde_json::{json, Value};
@@ -159,7 +158,10 @@ impl StateHeader {
                 let n = t.get(1).and_then(Value::as_u64);
                 match (name, n) {
                     (Some(name), Some(n)) => Ok((
-                        parse_technique(name)?,
+                        Technique::from(
+                            name.parse::<scene::TechniqueKind>()
+                                .map_err(|e| e.to_string())?,
+                        ),
                         u32::try_from(n).map_err(|_| "technique count exceeds 32 bits")?,
                     )),
                     _ => Err(format!("header technique {t} is not [name, count]")),
@@ -173,7 +175,7 @@ impl StateHeader {
         Ok(Self {
             width: u32_("width")?,
             height: u32_("height")?,
-            integrator: text("integrator")?.parse()?,
+            integrator: text("integrator")?.parse().map_err(|e| format!("{e}"))?,
             method: text("estimator")?.parse().map_err(|e| format!("{e}"))?,
             params: Params {
                 beta: float("beta")?,

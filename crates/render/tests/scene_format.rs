@@ -7,8 +7,9 @@ use render::color::luminance;
 use render::light::Shape;
 use render::scene::{
     load_scene, parse_scene, IntegratorKind, RenderSettings, Scene, SceneError, SceneFormat,
+    TechniqueKind as Technique,
 };
-use render::{Material, Technique};
+use render::Material;
 use std::path::{Path, PathBuf};
 
 fn scenes_dir() -> PathBuf {
@@ -672,4 +673,40 @@ fn damaged_files_are_errors_not_panics() {
         }
     }
     assert!(errors > 200, "{errors} errors");
+}
+
+/// The CPU scene built from resolved data agrees with the renderer's own formulas: each
+/// light's power, and light selection recomputed by `Lights::new` from the scene radius.
+#[test]
+fn scenes_built_from_data_match_the_renderers_formulas() {
+    use render::light::Lights;
+    for f in scene_files() {
+        let (data, _) = scene::load(&f).unwrap_or_else(|e| panic!("{e}"));
+        let s = Scene::from_data(&data);
+        let close =
+            |a: DVec3, b: [f64; 3]| (a - DVec3::from_array(b)).length() <= 1e-12 * a.length();
+        for (l, a) in data.lights.area.iter().zip(s.lights.area()) {
+            assert!(close(a.power(), l.power), "{}", f.display());
+            assert!((a.area() - l.area).abs() <= 1e-12 * l.area);
+        }
+        for (l, d) in data.lights.delta.iter().zip(s.lights.delta()) {
+            assert!(close(d.power(), l.power), "{}", f.display());
+        }
+        let again = Lights::new(
+            s.lights.area().to_vec(),
+            s.lights.delta().to_vec(),
+            s.lights.environment().cloned(),
+            data.scene_radius,
+        );
+        let p = DVec3::new(0.1, 0.2, 0.3);
+        for k in 0..64 {
+            let z = -1.0 + (k as f64 + 0.5) / 32.0;
+            let phi = k as f64 * 2.4;
+            let r = (1.0 - z * z).sqrt();
+            let wi = DVec3::new(r * phi.cos(), r * phi.sin(), z);
+            assert_eq!(s.lights.pdf_by_power(p, wi), again.pdf_by_power(p, wi));
+            assert_eq!(s.lights.pdf_by_area(p, wi), again.pdf_by_area(p, wi));
+            assert_eq!(s.lights.pdf_environment(wi), again.pdf_environment(wi));
+        }
+    }
 }

@@ -130,7 +130,7 @@ impl RenderOptions {
             seed: s.seed,
             method: s.method,
             params: s.params,
-            techniques: s.techniques.clone(),
+            techniques: s.techniques.iter().map(|&(t, n)| (t.into(), n)).collect(),
             max_depth: s.max_depth,
             rr_depth: s.rr_depth,
             hide_emitters: s.hide_emitters,

@@ -6,7 +6,7 @@
 //! [0, 2π); column u = φ/2π, row v = θ/π (row 0 at +z, the top of the image).
 //! `to_world` rotates map directions into the scene.
 
-use crate::color::{average, Rgb};
+use crate::color::Rgb;
 use crate::distribution::Distribution2D;
 use crate::warp::{uniform_sphere, UNIFORM_SPHERE_PDF};
 use glam::{DMat3, DVec2, DVec3};
@@ -27,44 +27,26 @@ pub struct EnvMap {
 impl EnvMap {
     /// A map from row-major pixels (row 0 at the top), rotated by `to_world`.
     pub fn new(width: usize, height: usize, pixels: Vec<Rgb>, to_world: DMat3) -> Self {
-        assert!(
-            width > 0 && height > 0 && pixels.len() == width * height,
-            "map size"
-        );
-        let weights: Vec<f64> = (0..width * height)
-            .map(|i| {
-                let theta = PI * ((i / width) as f64 + 0.5) / height as f64;
-                average(pixels[i].max(Rgb::ZERO)) * theta.sin()
-            })
-            .collect();
-        let distribution = Distribution2D::new(&weights, width, height);
+        let table =
+            scene::EnvMapTable::new(width, height, pixels.iter().map(|p| p.to_array()).collect());
+        Self::from_table(&table, to_world)
+    }
+    /// A map over a resolved scene's table, whose sampling distribution is reused.
+    pub fn from_table(t: &scene::EnvMapTable, to_world: DMat3) -> Self {
         Self {
-            width,
-            height,
-            pixels,
+            width: t.width,
+            height: t.height,
+            pixels: t.pixels.iter().map(|&p| Rgb::from_array(p)).collect(),
             to_world,
-            distribution,
+            distribution: Distribution2D::from(&t.distribution),
         }
     }
-    /// Reads the R, G, B channels of the first layer of a lat-long EXR file.
+    /// Reads the R, G, B channels of the first layer of a lat-long EXR file
+    /// ([`scene::read_exr_rgb`]).
     pub fn load_exr(path: impl AsRef<Path>, to_world: DMat3) -> io::Result<Self> {
-        let image = exr::prelude::read_first_flat_layer_from_file(path.as_ref())
+        let (w, h, pixels) = scene::read_exr_rgb(path.as_ref(), 1.0)
             .map_err(|e| io::Error::other(format!("{}: {e}", path.as_ref().display())))?;
-        let layer = &image.layer_data;
-        let (w, h) = (layer.size.width(), layer.size.height());
-        let channel = |name: &str| -> io::Result<Vec<f32>> {
-            layer
-                .channel_data
-                .list
-                .iter()
-                .find(|c| c.name.eq_case_insensitive(name))
-                .map(|c| c.sample_data.values_as_f32().collect())
-                .ok_or_else(|| io::Error::other(format!("no channel {name}")))
-        };
-        let (r, g, b) = (channel("R")?, channel("G")?, channel("B")?);
-        let pixels = (0..w * h)
-            .map(|i| Rgb::new(r[i] as f64, g[i] as f64, b[i] as f64))
-            .collect();
+        let pixels = pixels.into_iter().map(Rgb::from_array).collect();
         Ok(Self::new(w, h, pixels, to_world))
     }
     fn to_uv(&self, dir: DVec3) -> (DVec2, f64) {

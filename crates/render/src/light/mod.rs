@@ -86,6 +86,31 @@ impl Lights {
             by_area,
         }
     }
+    /// The lights with selection distributions computed elsewhere (a resolved scene's):
+    /// `by_power` over the area lights then the environment, `by_area` over the area
+    /// lights.
+    pub fn from_parts(
+        area: Vec<AreaLight>,
+        delta: Vec<DeltaLight>,
+        environment: Option<Environment>,
+        by_power: Option<Distribution1D>,
+        by_area: Option<Distribution1D>,
+    ) -> Self {
+        let n = area.len() + usize::from(environment.is_some());
+        assert_eq!(by_power.as_ref().map_or(0, |d| d.len()), n, "by_power");
+        assert_eq!(
+            by_area.as_ref().map_or(0, |d| d.len()),
+            area.len(),
+            "by_area"
+        );
+        Self {
+            area,
+            delta,
+            environment,
+            by_power,
+            by_area,
+        }
+    }
     /// The area lights.
     pub fn area(&self) -> &[AreaLight] {
         &self.area

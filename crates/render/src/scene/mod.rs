@@ -6,9 +6,10 @@
 //! lights are analytic shapes kept in [`Lights`], which integrators query beside the
 //! objects.
 //!
-//! Scenes are read from TOML or JSON files of one schema (docs/scene-format.md) with
-//! [`load_scene`] / [`parse_scene`]; a malformed file is a [`SceneError`] naming the
-//! file, line, column and key.
+//! Scenes are read and resolved by the [`scene`] crate into one flat
+//! [`SceneData`]; [`Scene::from_data`] builds the CPU scene from it, reusing its
+//! light-selection and environment distributions. [`load_scene`] / [`parse_scene`] do
+//! both; a malformed file is a [`SceneError`] naming the file, line, column and key.
 //!
 //! ```
 //! use render::scene::{parse_scene, SceneFormat, IntegratorKind};
@@ -31,23 +32,15 @@
 //! assert_eq!((err.line, err.column, err.key.as_str()), (5, 57, "objects[0].material"));
 //! ```
 
-mod build;
-mod desc;
-mod error;
-mod lights;
-mod load;
-mod locate;
-mod settings;
+mod from_data;
 
-pub use build::METALS;
-pub use desc::{
-    CameraDesc, CheckerDesc, ColorDesc, EnvironmentDesc, LightDesc, MaterialDesc, ObjectDesc,
-    RenderDesc, RgbDesc, RotateDesc, ScaleDesc, SceneDescription, TechniqueDesc, TransformDesc,
-    TransformStep,
+pub use ::scene::parse_description;
+pub use ::scene::{
+    CameraDesc, CheckerDesc, ColorDesc, Emitters, EnvironmentDesc, IntegratorKind, LightDesc,
+    MaterialDesc, ObjectDesc, Overrides, RenderDesc, RenderSettings, RgbDesc, RotateDesc,
+    ScaleDesc, SceneData, SceneDescription, SceneError, SceneFormat, TechniqueDesc, TechniqueKind,
+    TransformDesc, TransformStep, AOV_NAMES, METALS,
 };
-pub use error::SceneError;
-pub use load::{load_scene, parse_description, parse_scene, SceneFormat};
-pub use settings::{parse_technique, IntegratorKind, RenderSettings, AOV_NAMES};
 
 use crate::camera::Camera;
 use crate::light::Lights;
@@ -55,6 +48,24 @@ use crate::material::Material;
 use crate::texture::TexCoord;
 use frep::{Aabb, Bvh, Ray, Solid, Surface};
 use glam::DVec3;
+use std::path::Path;
+
+/// Parses scene text and builds the scene; `path` names the file in errors and anchors
+/// relative model and map paths (it is not read).
+pub fn parse_scene(
+    text: &str,
+    format: SceneFormat,
+    path: &Path,
+) -> Result<(Scene, RenderSettings), SceneError> {
+    let (data, settings) = ::scene::parse(text, format, path)?;
+    Ok((Scene::from_data(&data), settings))
+}
+
+/// Reads a scene file (`.toml` or `.json`) and builds the scene.
+pub fn load_scene(path: &Path) -> Result<(Scene, RenderSettings), SceneError> {
+    let (data, settings) = ::scene::load(path)?;
+    Ok((Scene::from_data(&data), settings))
+}
 
 /// One solid with its material.
 pub struct Object {
@@ -64,6 +75,15 @@ pub struct Object {
     pub solid: Solid,
     /// Index into [`Scene::materials`].
     pub material: usize,
+}
+
+impl From<&Scene> for Emitters {
+    fn from(s: &Scene) -> Self {
+        Emitters {
+            area: !s.lights.area().is_empty(),
+            environment: s.lights.environment().is_some(),
+        }
+    }
 }
 
 /// The nearest surface a ray meets.
@@ -127,6 +147,12 @@ impl Scene {
             bvh,
             bounds,
         }
+    }
+
+    /// Builds the CPU scene from resolved data: textures looked up, plastic coats
+    /// tabulated, one solid built per object, the resolved light distributions reused.
+    pub fn from_data(data: &SceneData) -> Self {
+        from_data::build(data)
     }
 
     /// The union of the finite object bounds (empty if there is none).

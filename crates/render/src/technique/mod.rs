@@ -68,6 +68,18 @@ pub enum Technique {
     CosineHemisphere,
 }
 
+impl From<scene::TechniqueKind> for Technique {
+    fn from(k: scene::TechniqueKind) -> Self {
+        match k {
+            scene::TechniqueKind::Bsdf => Technique::Bsdf,
+            scene::TechniqueKind::LightPower => Technique::LightPower,
+            scene::TechniqueKind::LightArea => Technique::LightArea,
+            scene::TechniqueKind::Environment => Technique::Environment,
+            scene::TechniqueKind::CosineHemisphere => Technique::CosineHemisphere,
+        }
+    }
+}
+
 impl Technique {
     /// Every technique.
     pub const ALL: [Technique; 5] = [
@@ -86,6 +98,17 @@ impl Technique {
             Technique::LightArea => "light-area",
             Technique::Environment => "environment",
             Technique::CosineHemisphere => "cosine",
+        }
+    }
+
+    /// The scene files' name for this technique.
+    pub fn kind(self) -> scene::TechniqueKind {
+        match self {
+            Technique::Bsdf => scene::TechniqueKind::Bsdf,
+            Technique::LightPower => scene::TechniqueKind::LightPower,
+            Technique::LightArea => scene::TechniqueKind::LightArea,
+            Technique::Environment => scene::TechniqueKind::Environment,
+            Technique::CosineHemisphere => scene::TechniqueKind::CosineHemisphere,
         }
     }
 

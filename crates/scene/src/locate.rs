@@ -1,9 +1,10 @@
 //! Finding a key path in the scene text, so that errors found after parsing (a missing
 //! material, a bad value) still name a line and column. TOML is re-read into toml's
-//! spanned tree; JSON (already known to be valid) is scanned.
+//! spanned tree; JSON (already known to be valid) is scanned. A scene given as data has
+//! no text: its errors carry the key path alone.
 
-use super::error::{line_column, path_string, SceneError, Seg};
-use super::SceneFormat;
+use crate::error::{line_column, path_string, SceneError, Seg};
+use crate::load::SceneFormat;
 use std::ops::Range;
 use toml::de::{DeTable, DeValue};
 use toml::Spanned;
@@ -27,6 +28,8 @@ pub struct Source<'a> {
     pub format: SceneFormat,
     /// The file name for messages.
     pub file: String,
+    /// Whether there is text to point into (false for a scene given as data).
+    pub has_text: bool,
     toml: Option<Spanned<DeValue<'a>>>,
 }
 
@@ -43,7 +46,19 @@ impl<'a> Source<'a> {
             text,
             format,
             file,
+            has_text: true,
             toml,
+        }
+    }
+
+    /// A scene with no text (given as data): errors name the key path only.
+    pub fn without_text(file: String) -> Self {
+        Self {
+            text: "",
+            format: SceneFormat::Json,
+            file,
+            has_text: false,
+            toml: None,
         }
     }
 
@@ -62,6 +77,9 @@ impl<'a> Source<'a> {
 
     /// An error at byte `offset` of the text.
     pub fn error_at(&self, offset: usize, path: &[Seg], message: impl Into<String>) -> SceneError {
+        if !self.has_text {
+            return SceneError::at_key(&self.file, path, message);
+        }
         let (line, column) = line_column(self.text, offset);
         SceneError {
             file: self.file.clone(),
@@ -291,7 +309,7 @@ pub fn position_in_literal(raw: &str, line: usize, column: usize) -> usize {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::error::kp;
+    use crate::error::kp;
 
     #[test]
     fn json_paths_are_found() {

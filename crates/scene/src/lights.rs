@@ -1,37 +1,44 @@
-//! The `lights` list and the `environment` table of a scene file.
+//! The `lights` list of a scene file: area lights (sphere, rect, disk) and point / spot
+//! lights as [`Light`] records, their powers, and the light-selection distributions.
 
-use super::build::{check_keys, number, rotation, vec3};
-use super::desc::{ColorDesc, EnvironmentDesc, LightDesc};
-use super::error::{kp, SceneError, Seg};
-use super::locate::Source;
-use crate::color::{luminance, Rgb};
-use crate::light::{AreaLight, DeltaLight, EnvMap, Environment, Shape};
-use glam::{DMat3, DVec3};
-use std::path::Path;
+use crate::check::{check_keys, number, unit, vec3};
+use crate::data::{EnvMapTable, EnvironmentData, Light, LightData, LightKind};
+use crate::desc::{ColorDesc, LightDesc};
+use crate::distribution::Distribution1D;
+use crate::error::{kp, SceneError, Seg};
+use crate::locate::Source;
+use glam::DVec3;
+use std::f64::consts::PI;
 
-/// A sphere holding a light's shape: (centre, radius).
-pub(crate) fn bounding_sphere(s: &Shape) -> (DVec3, f64) {
-    match *s {
-        Shape::Sphere { center, radius } | Shape::Disk { center, radius, .. } => (center, radius),
-        Shape::Rect {
-            corner,
-            edge_u,
-            edge_v,
-        } => (
-            corner + (edge_u + edge_v) / 2.0,
-            (edge_u + edge_v).length().max((edge_u - edge_v).length()) / 2.0,
+/// Relative luminance Y of linear Rec. 709 RGB (ITU-R BT.709 weights).
+pub(crate) fn luminance(c: DVec3) -> f64 {
+    0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z
+}
+
+/// A sphere holding an area light: (centre, radius).
+pub(crate) fn bounding_sphere(l: &Light) -> (DVec3, f64) {
+    let (p0, e1, e2) = (
+        DVec3::from_array(l.p0),
+        DVec3::from_array(l.e1),
+        DVec3::from_array(l.e2),
+    );
+    match l.kind {
+        LightKind::Rect => (
+            p0 + (e1 + e2) / 2.0,
+            (e1 + e2).length().max((e1 - e2).length()) / 2.0,
         ),
+        _ => (p0, l.radius),
     }
 }
 
 /// A constant, non-negative colour.
-fn rgb(src: &Source, at: &[Seg], c: &ColorDesc) -> Result<Rgb, SceneError> {
+pub(crate) fn rgb(src: &Source, at: &[Seg], c: &ColorDesc) -> Result<DVec3, SceneError> {
     match c {
         ColorDesc::Rgb(a) => {
             for &x in a {
                 number(src, at, x, 0.0, f64::INFINITY)?;
             }
-            Ok(Rgb::from_array(*a))
+            Ok(DVec3::from_array(*a))
         }
         ColorDesc::Checker(_) => Err(src.at_value(at, "a light's colour must be constant")),
     }
@@ -46,7 +53,7 @@ fn emission(
     direct: &Option<ColorDesc>,
     l: &LightDesc,
     unit_power: f64,
-) -> Result<Rgb, SceneError> {
+) -> Result<DVec3, SceneError> {
     let key = |k: &str| [at.to_vec(), kp![k]].concat();
     let e = match (direct, l.power) {
         (Some(c), None) => {
@@ -62,7 +69,7 @@ fn emission(
             let p = number(src, &key("power"), p, 0.0, f64::INFINITY)?;
             let c = match &l.color {
                 Some(c) => rgb(src, &key("color"), c)?,
-                None => Rgb::ONE,
+                None => DVec3::ONE,
             };
             c * (p / unit_power)
         }
@@ -93,19 +100,7 @@ fn require<T: Copy>(
     v.ok_or_else(|| src.at_key(at, format!("a {kind} light needs {key}")))
 }
 
-fn unit(src: &Source, at: &[Seg], v: [f64; 3]) -> Result<DVec3, SceneError> {
-    let d = vec3(src, at, v)?;
-    if d.length() == 0.0 {
-        return Err(src.at_value(at, "expected a non-zero direction"));
-    }
-    Ok(d.normalize())
-}
-
-fn light(
-    src: &Source,
-    i: usize,
-    l: &LightDesc,
-) -> Result<Result<AreaLight, DeltaLight>, SceneError> {
+fn light(src: &Source, i: usize, l: &LightDesc) -> Result<Light, SceneError> {
     let at = kp!["lights", i];
     let key = |k: &str| [at.clone(), kp![k]].concat();
     let present = [
@@ -181,24 +176,27 @@ fn light(
         Ok(r)
     };
     let down = [0.0, 0.0, -1.0];
-    let shape = match kind {
-        "sphere" => Shape::Sphere {
-            center: vec3(
+    let shape: (LightKind, DVec3, DVec3, DVec3, f64) = match kind {
+        "sphere" => (
+            LightKind::Sphere,
+            vec3(
                 src,
                 &key("center"),
                 require(src, &at, kind, "center", l.center)?,
             )?,
-            radius: radius(l)?,
-        },
-        "disk" => Shape::Disk {
-            center: vec3(
+            DVec3::ZERO,
+            DVec3::ZERO,
+            radius(l)?,
+        ),
+        "disk" => {
+            let center = vec3(
                 src,
                 &key("center"),
                 require(src, &at, kind, "center", l.center)?,
-            )?,
-            normal: unit(src, &key("normal"), l.normal.unwrap_or(down))?,
-            radius: radius(l)?,
-        },
+            )?;
+            let normal = unit(src, &key("normal"), l.normal.unwrap_or(down))?;
+            (LightKind::Disk, center, normal, DVec3::ZERO, radius(l)?)
+        }
         "rect" | "rectangle" => match (l.corner, l.center) {
             (Some(c), None) => {
                 if l.size.is_some() || l.normal.is_some() {
@@ -225,11 +223,7 @@ fn light(
                         "the edges are parallel: the rect has no area",
                     ));
                 }
-                Shape::Rect {
-                    corner,
-                    edge_u,
-                    edge_v,
-                }
+                (LightKind::Rect, corner, edge_u, edge_v, 0.0)
             }
             (None, Some(c)) => {
                 if l.edge_u.is_some() || l.edge_v.is_some() {
@@ -251,11 +245,13 @@ fn light(
                 let helper = if n.z.abs() < 0.9 { DVec3::Z } else { DVec3::X };
                 let u = helper.cross(n).normalize();
                 let v = n.cross(u);
-                Shape::Rect {
-                    corner: center - (w * u + h * v) / 2.0,
-                    edge_u: w * u,
-                    edge_v: h * v,
-                }
+                (
+                    LightKind::Rect,
+                    center - (w * u + h * v) / 2.0,
+                    w * u,
+                    h * v,
+                    0.0,
+                )
             }
             (Some(_), Some(_)) => {
                 return Err(src.at_key(&key("corner"), "give either center or corner, not both"))
@@ -274,15 +270,11 @@ fn light(
                 require(src, &at, kind, "position", l.position)?,
             )?;
             if kind == "point" {
-                let probe = DeltaLight::Point {
-                    position,
-                    intensity: Rgb::ONE,
-                };
-                let intensity = emission(src, &at, "intensity", &l.intensity, l, probe.power().x)?;
-                return Ok(Err(DeltaLight::Point {
-                    position,
-                    intensity,
-                }));
+                let intensity = emission(src, &at, "intensity", &l.intensity, l, 4.0 * PI)?;
+                return Ok(Light {
+                    power: (4.0 * PI * intensity).to_array(),
+                    ..delta(LightKind::Point, position, DVec3::ZERO, intensity)
+                });
             }
             let target = match (l.direction, l.target) {
                 (Some(d), None) => position + unit(src, &key("direction"), d)?,
@@ -321,99 +313,125 @@ fn light(
                 0.0,
                 cone,
             )?;
-            let probe = DeltaLight::spot(position, target, Rgb::ONE, cone, start);
-            let intensity = emission(src, &at, "intensity", &l.intensity, l, probe.power().x)?;
-            return Ok(Err(DeltaLight::spot(
-                position, target, intensity, cone, start,
-            )));
+            // As pbrt-v4 §12.1.2: full intensity within the falloff start, smoothstep
+            // to zero at the cone; power 2π I ((1 − cos_start) + (cos_start − cos_end)/2).
+            let cos_falloff_start = start.min(cone).to_radians().cos();
+            let cos_falloff_end = cone.to_radians().cos();
+            let spread = (1.0 - cos_falloff_start) + (cos_falloff_start - cos_falloff_end) / 2.0;
+            let intensity = emission(src, &at, "intensity", &l.intensity, l, (2.0 * PI) * spread)?;
+            let axis = (target - position).normalize();
+            return Ok(Light {
+                cos_falloff_start,
+                cos_falloff_end,
+                power: (intensity * (2.0 * PI) * spread).to_array(),
+                ..delta(LightKind::Spot, position, axis, intensity)
+            });
         }
     };
-    let mut probe = AreaLight::new(shape, Rgb::ONE);
-    probe.two_sided = l.two_sided.unwrap_or(false);
-    let radiance = emission(src, &at, "radiance", &l.radiance, l, probe.power().x)?;
-    Ok(Ok(AreaLight { radiance, ..probe }))
+    let (kind, p0, e1, e2, radius) = shape;
+    let area = match kind {
+        LightKind::Sphere => 4.0 * PI * radius * radius,
+        LightKind::Rect => e1.cross(e2).length(),
+        _ => PI * radius * radius,
+    };
+    let two_sided = l.two_sided.unwrap_or(false);
+    let sides = if two_sided && kind != LightKind::Sphere {
+        2.0
+    } else {
+        1.0
+    };
+    // Power Φ = π A L, twice when two-sided (pbrt-v4 §12.2).
+    let unit_power = PI * area * sides;
+    let radiance = emission(src, &at, "radiance", &l.radiance, l, unit_power)?;
+    Ok(Light {
+        kind,
+        p0: p0.to_array(),
+        e1: e1.to_array(),
+        e2: e2.to_array(),
+        radius,
+        emission: radiance.to_array(),
+        two_sided,
+        cos_falloff_start: 0.0,
+        cos_falloff_end: 0.0,
+        area,
+        power: (radiance * unit_power).to_array(),
+        selection_pmf: 0.0,
+    })
+}
+
+/// A point or spot light with its other fields zero.
+fn delta(kind: LightKind, position: DVec3, axis: DVec3, intensity: DVec3) -> Light {
+    Light {
+        kind,
+        p0: position.to_array(),
+        e1: axis.to_array(),
+        e2: [0.0; 3],
+        radius: 0.0,
+        emission: intensity.to_array(),
+        two_sided: false,
+        cos_falloff_start: 0.0,
+        cos_falloff_end: 0.0,
+        area: 0.0,
+        power: [0.0; 3],
+        selection_pmf: 0.0,
+    }
 }
 
 /// The area lights and the point / spot lights, in file order.
 pub(crate) fn lights(
     src: &Source,
     list: &[LightDesc],
-) -> Result<(Vec<AreaLight>, Vec<DeltaLight>), SceneError> {
+) -> Result<(Vec<Light>, Vec<Light>), SceneError> {
     let (mut area, mut delta) = (Vec::new(), Vec::new());
     for (i, l) in list.iter().enumerate() {
-        match light(src, i, l)? {
-            Ok(a) => area.push(a),
-            Err(d) => delta.push(d),
+        let l = light(src, i, l)?;
+        if l.kind.has_area() {
+            area.push(l);
+        } else {
+            delta.push(l);
         }
     }
     Ok((area, delta))
 }
 
-/// Reads the R, G, B channels of a lat-long EXR map, times `scale`.
-fn read_map(file: &Path, scale: f64, to_world: DMat3) -> Result<EnvMap, String> {
-    let image = exr::prelude::read_first_flat_layer_from_file(file).map_err(|e| e.to_string())?;
-    let layer = &image.layer_data;
-    let (w, h) = (layer.size.width(), layer.size.height());
-    let channel = |name: &str| -> Result<Vec<f32>, String> {
-        layer
-            .channel_data
-            .list
-            .iter()
-            .find(|c| c.name.eq_case_insensitive(name))
-            .map(|c| c.sample_data.values_as_f32().collect())
-            .ok_or_else(|| format!("the image has no channel {name}"))
+/// The environment's power for light selection: π r² ∫ L dω for a scene of radius `r`
+/// (pbrt-v4 §12.5).
+pub(crate) fn environment_power(e: &EnvironmentData, maps: &[EnvMapTable], r: f64) -> DVec3 {
+    let integral = match e {
+        EnvironmentData::Constant { radiance } => DVec3::from_array(*radiance) * (4.0 * PI),
+        EnvironmentData::Map { map, .. } => DVec3::from_array(maps[map.index()].integral),
     };
-    let (r, g, b) = (channel("R")?, channel("G")?, channel("B")?);
-    if w == 0 || h == 0 {
-        return Err("the image is empty".into());
-    }
-    let mut pixels = Vec::with_capacity(w * h);
-    for i in 0..w * h {
-        let p = Rgb::new(r[i] as f64, g[i] as f64, b[i] as f64) * scale;
-        if !(p.is_finite() && p.min_element() >= 0.0) {
-            return Err(format!(
-                "pixel ({}, {}) is negative or not finite",
-                i % w,
-                i / w
-            ));
-        }
-        pixels.push(p);
-    }
-    Ok(EnvMap::new(w, h, pixels, to_world))
+    integral * (PI * r * r)
 }
 
-/// The environment: a constant dome or a map read beside the scene file (`base`).
-pub(crate) fn environment(
-    src: &Source,
-    base: &Path,
-    e: &EnvironmentDesc,
-) -> Result<Environment, SceneError> {
-    let at = kp!["environment"];
-    let key = |k: &str| kp!["environment", k];
-    match (&e.radiance, &e.map) {
-        (Some(c), None) => {
-            let present = [("scale", e.scale.is_some()), ("rotate", e.rotate.is_some())];
-            check_keys(src, &at, "a constant environment", &present, &["radiance"])?;
-            Ok(Environment::Constant(rgb(src, &key("radiance"), c)?))
+/// The lights with their selection distributions: ∝ luminance of power over the area
+/// lights then the environment, and ∝ area over the area lights.
+pub(crate) fn select(
+    mut area: Vec<Light>,
+    delta: Vec<Light>,
+    env: Option<&EnvironmentData>,
+    maps: &[EnvMapTable],
+    scene_radius: f64,
+) -> LightData {
+    let mut power: Vec<f64> = area
+        .iter()
+        .map(|l| luminance(DVec3::from_array(l.power)))
+        .collect();
+    if let Some(e) = env {
+        power.push(luminance(environment_power(e, maps, scene_radius)));
+    }
+    let by_power = (!power.is_empty()).then(|| Distribution1D::new(&power));
+    if let Some(d) = &by_power {
+        for (i, l) in area.iter_mut().enumerate() {
+            l.selection_pmf = d.pmf(i);
         }
-        (None, Some(file)) => {
-            let scale = number(
-                src,
-                &key("scale"),
-                e.scale.unwrap_or(1.0),
-                0.0,
-                f64::INFINITY,
-            )?;
-            let mut to_world = DMat3::IDENTITY;
-            if let Some(r) = &e.rotate {
-                to_world = rotation(src, &key("rotate"), r)?.m;
-            }
-            let full = base.join(file);
-            let map = read_map(&full, scale, to_world)
-                .map_err(|m| src.at_value(&key("map"), format!("{}: {m}", full.display())))?;
-            Ok(Environment::Map(map))
-        }
-        (Some(_), Some(_)) => Err(src.at_key(&key("map"), "give either radiance or map, not both")),
-        (None, None) => Err(src.at_key(&at, "an environment needs radiance or map")),
+    }
+    let areas: Vec<f64> = area.iter().map(|l| l.area).collect();
+    let by_area = (!areas.is_empty()).then(|| Distribution1D::new(&areas));
+    LightData {
+        area,
+        delta,
+        by_power,
+        by_area,
     }
 }

@@ -1,22 +1,21 @@
-//! From a [`SceneDescription`] to a [`Scene`]: camera, materials, objects (solids read
-//! inline or from model files, transformed) and, via [`super::lights`], the lights.
+//! From a [`SceneDescription`] to [`SceneData`]: camera, textures and materials,
+//! objects (solids read inline or from model files, transformed) and, via
+//! [`crate::lights`] and [`crate::environment`], the lights; then the render settings.
 
-use super::desc::{
-    CameraDesc, ColorDesc, MaterialDesc, ObjectDesc, RotateDesc, SceneDescription, TransformDesc,
+use crate::check::{check_keys, number, transform, vec3};
+use crate::data::{
+    CameraData, MaterialData, MaterialId, ObjectData, SceneData, TextureData, TextureId,
+    TextureSpace,
 };
-use super::error::{kp, KeyPath, SceneError, Seg};
-use super::lights::{environment, lights};
-use super::locate::{position_in_literal, Source};
-use super::{Object, Scene};
-use crate::bsdf::CoatTable;
-use crate::camera::Camera;
-use crate::color::Rgb;
-use crate::light::Lights;
-use crate::material::Material;
-use crate::texture::{Texture, TextureSpace};
+use crate::desc::{CameraDesc, ColorDesc, MaterialDesc, ObjectDesc, SceneDescription};
+use crate::environment::environment;
+use crate::error::{kp, path_string, KeyPath, SceneError, Seg};
+use crate::lights::{bounding_sphere, lights};
+use crate::locate::{position_in_literal, Source};
+use crate::settings::{settings, RenderSettings};
+use crate::solids::SolidPool;
 use frep::read::{read_file, read_str, Format};
-use frep::{Aabb, Affine, Shape, Solid, Surface};
-use glam::DVec3;
+use frep::{Aabb, Shape, Solid, Surface};
 use std::path::Path;
 
 /// Conductor presets: (name, η, k) per R, G, B channel, RGB fits of measured optical
@@ -28,60 +27,7 @@ pub const METALS: [(&str, [f64; 3], [f64; 3]); 4] = [
     ("silver", [0.155, 0.117, 0.138], [4.828, 3.122, 2.147]),
 ];
 
-/// A finite vector.
-pub(crate) fn vec3(src: &Source, at: &[Seg], v: [f64; 3]) -> Result<DVec3, SceneError> {
-    let d = DVec3::from_array(v);
-    if d.is_finite() {
-        Ok(d)
-    } else {
-        Err(src.at_value(at, "expected finite numbers"))
-    }
-}
-
-/// A finite number within `lo..=hi`.
-pub(crate) fn number(
-    src: &Source,
-    at: &[Seg],
-    v: f64,
-    lo: f64,
-    hi: f64,
-) -> Result<f64, SceneError> {
-    if v.is_finite() && v >= lo && v <= hi {
-        Ok(v)
-    } else {
-        let range = match (lo == f64::NEG_INFINITY, hi == f64::INFINITY) {
-            (true, true) => "finite".to_string(),
-            (false, true) => format!("≥ {lo}"),
-            (true, false) => format!("≤ {hi}"),
-            (false, false) => format!("in [{lo}, {hi}]"),
-        };
-        Err(src.at_value(at, format!("expected a number {range}, found {v}")))
-    }
-}
-
-/// Rejects keys given for a `kind` that does not take them.
-pub(crate) fn check_keys(
-    src: &Source,
-    at: &[Seg],
-    what: &str,
-    present: &[(&str, bool)],
-    allowed: &[&str],
-) -> Result<(), SceneError> {
-    for &(key, given) in present {
-        if given && !allowed.contains(&key) {
-            let mut p = at.to_vec();
-            p.push(key.into());
-            let valid = allowed.join(", ");
-            return Err(src.at_key(
-                &p,
-                format!("{what} takes no key {key:?} (its keys: {valid})"),
-            ));
-        }
-    }
-    Ok(())
-}
-
-fn camera(src: &Source, c: &CameraDesc) -> Result<Camera, SceneError> {
+fn camera(src: &Source, c: &CameraDesc) -> Result<CameraData, SceneError> {
     let eye = vec3(src, &kp!["camera", "eye"], c.eye)?;
     let target = vec3(src, &kp!["camera", "target"], c.target)?;
     let up = vec3(src, &kp!["camera", "up"], c.up.unwrap_or([0.0, 0.0, 1.0]))?;
@@ -98,7 +44,7 @@ fn camera(src: &Source, c: &CameraDesc) -> Result<Camera, SceneError> {
             "the field of view must lie strictly between 0 and 180 degrees",
         ));
     }
-    let [w, h] = c.resolution.unwrap_or([320, 240]);
+    let [w, h] = c.resolution.unwrap_or(crate::DEFAULT_RESOLUTION);
     if w == 0 || h == 0 {
         return Err(src.at_value(
             &kp!["camera", "resolution"],
@@ -118,19 +64,43 @@ fn camera(src: &Source, c: &CameraDesc) -> Result<Camera, SceneError> {
     if side.is_nan() || side < 1e-9 {
         return Err(src.at_value(&kp!["camera", "up"], "up is parallel to the view direction"));
     }
-    Ok(Camera::look_at(eye, target, up, fov, w, h))
+    Ok(CameraData {
+        eye: eye.to_array(),
+        target: target.to_array(),
+        up: up.to_array(),
+        fov,
+        width: w,
+        height: h,
+    })
 }
 
-/// A texture; `max` bounds every channel (1 for reflectances).
-fn texture(src: &Source, at: &[Seg], c: &ColorDesc, max: f64) -> Result<Texture, SceneError> {
-    let rgb = |at: &[Seg], a: &[f64; 3]| -> Result<Rgb, SceneError> {
+/// Adds a texture to the pool; `max` bounds every channel (1 for reflectances).
+fn texture(
+    src: &Source,
+    at: &[Seg],
+    c: &ColorDesc,
+    max: f64,
+    pool: &mut Vec<TextureData>,
+) -> Result<TextureId, SceneError> {
+    let t = texture_data(src, at, c, max)?;
+    pool.push(t);
+    Ok(TextureId(pool.len() as u32 - 1))
+}
+
+fn texture_data(
+    src: &Source,
+    at: &[Seg],
+    c: &ColorDesc,
+    max: f64,
+) -> Result<TextureData, SceneError> {
+    let rgb = |at: &[Seg], a: &[f64; 3]| -> Result<[f64; 3], SceneError> {
         for &x in a {
             number(src, at, x, 0.0, max)?;
         }
-        Ok(Rgb::from_array(*a))
+        Ok(*a)
     };
     match c {
-        ColorDesc::Rgb(a) => Ok(Texture::Constant(rgb(at, a)?)),
+        ColorDesc::Rgb(a) => Ok(TextureData::Constant { rgb: rgb(at, a)? }),
         ColorDesc::Checker(k) => {
             let mut p = at.to_vec();
             p.push("checker".into());
@@ -155,7 +125,7 @@ fn texture(src: &Source, at: &[Seg], c: &ColorDesc, max: f64) -> Result<Texture,
                     ))
                 }
             };
-            Ok(Texture::Checker {
+            Ok(TextureData::Checker {
                 a: rgb(&sub("a"), &k.a.0)?,
                 b: rgb(&sub("b"), &k.b.0)?,
                 scale,
@@ -173,7 +143,12 @@ fn scalar(src: &Source, at: &[Seg], c: &ColorDesc, lo: f64) -> Result<f64, Scene
     }
 }
 
-fn material(src: &Source, name: &String, m: &MaterialDesc) -> Result<Material, SceneError> {
+fn material(
+    src: &Source,
+    name: &String,
+    m: &MaterialDesc,
+    pool: &mut Vec<TextureData>,
+) -> Result<MaterialData, SceneError> {
     let at = kp!["materials", name];
     let key = |k: &str| [at.clone(), kp![k]].concat();
     let present = [
@@ -207,26 +182,29 @@ fn material(src: &Source, name: &String, m: &MaterialDesc) -> Result<Material, S
         None => Ok(default),
     };
     Ok(match m.kind.as_str() {
-        "diffuse" => Material::Diffuse {
+        "diffuse" => MaterialData::Diffuse {
             reflectance: texture(
                 src,
                 &key("reflectance"),
                 m.reflectance.as_ref().unwrap_or(&grey),
                 1.0,
+                pool,
             )?,
         },
-        "dielectric" => Material::Dielectric {
+        "dielectric" => MaterialData::Dielectric {
             eta: eta(1.5)?,
             roughness,
         },
-        "plastic" => Material::Plastic {
+        "plastic" => MaterialData::Plastic {
             diffuse: texture(
                 src,
                 &key("diffuse"),
                 m.diffuse.as_ref().unwrap_or(&grey),
                 1.0,
+                pool,
             )?,
-            coat: CoatTable::new(eta(1.5)?, roughness),
+            eta: eta(1.5)?,
+            roughness,
         },
         _ => {
             let (eta, k) = match (&m.metal, &m.eta, &m.k) {
@@ -243,13 +221,13 @@ fn material(src: &Source, name: &String, m: &MaterialDesc) -> Result<Material, S
                             )
                         })?;
                     (
-                        Texture::Constant(Rgb::from_array(*e)),
-                        Texture::Constant(Rgb::from_array(*k)),
+                        texture(src, &key("eta"), &ColorDesc::Rgb(*e), f64::INFINITY, pool)?,
+                        texture(src, &key("k"), &ColorDesc::Rgb(*k), f64::INFINITY, pool)?,
                     )
                 }
                 (None, Some(e), Some(k)) => (
-                    texture(src, &key("eta"), e, f64::INFINITY)?,
-                    texture(src, &key("k"), k, f64::INFINITY)?,
+                    texture(src, &key("eta"), e, f64::INFINITY, pool)?,
+                    texture(src, &key("k"), k, f64::INFINITY, pool)?,
                 ),
                 (Some(_), _, _) => {
                     let extra = if m.eta.is_some() { "eta" } else { "k" };
@@ -257,54 +235,9 @@ fn material(src: &Source, name: &String, m: &MaterialDesc) -> Result<Material, S
                 }
                 _ => return Err(src.at_key(&at, "a conductor needs metal, or eta and k")),
             };
-            Material::Conductor { eta, k, roughness }
+            MaterialData::Conductor { eta, k, roughness }
         }
     })
-}
-
-/// A rotation by `degrees` about `axis`.
-pub(crate) fn rotation(src: &Source, at: &[Seg], r: &RotateDesc) -> Result<Affine, SceneError> {
-    let key = |k: &str| [at.to_vec(), kp![k]].concat();
-    let axis = vec3(src, &key("axis"), r.axis)?;
-    if axis.length() == 0.0 {
-        return Err(src.at_value(&key("axis"), "the rotation axis is zero"));
-    }
-    let deg = number(
-        src,
-        &key("degrees"),
-        r.degrees,
-        f64::NEG_INFINITY,
-        f64::INFINITY,
-    )?;
-    Ok(Affine::rotate(axis, deg.to_radians()))
-}
-
-/// Steps applied first to last.
-pub(crate) fn transform(src: &Source, at: &[Seg], t: &TransformDesc) -> Result<Affine, SceneError> {
-    let mut acc = Affine::IDENTITY;
-    for (j, s) in t.steps.iter().enumerate() {
-        let mut p = at.to_vec();
-        if t.list {
-            p.push(j.into());
-        }
-        let key = |k: &str| [p.clone(), kp![k]].concat();
-        let step = match (s.translate, s.rotate, s.scale) {
-            (Some(v), None, None) => Affine::translate(vec3(src, &key("translate"), v)?),
-            (None, Some(r), None) => rotation(src, &key("rotate"), &r)?,
-            (None, None, Some(sc)) => {
-                let v = vec3(src, &key("scale"), sc.0)?;
-                if v.x * v.y * v.z == 0.0 {
-                    return Err(src.at_value(&key("scale"), "a scale factor is zero"));
-                }
-                Affine::scale(v)
-            }
-            _ => {
-                return Err(src.at_value(&p, "a transform step takes exactly one of translate, rotate, scale (use a list for several)"))
-            }
-        };
-        acc = acc.then(&step);
-    }
-    Ok(acc)
 }
 
 /// Whether a `.frep` text has an `output` statement (else it is one expression).
@@ -329,7 +262,7 @@ fn shape(src: &Source, base: &Path, i: usize, o: &ObjectDesc) -> Result<Shape, S
             } else {
                 format!("output\n{text}")
             };
-            let label = format!("{} ({})", src.file, super::error::path_string(&at));
+            let label = format!("{} ({})", src.file, path_string(&at));
             read_str(&full, Format::Frep, &label)
                 .map(|m| m.shape)
                 .map_err(|e| {
@@ -339,6 +272,16 @@ fn shape(src: &Source, base: &Path, i: usize, o: &ObjectDesc) -> Result<Shape, S
                     } else {
                         e.line.saturating_sub(1)
                     };
+                    if !src.has_text {
+                        let message = match line {
+                            0 => format!("in the solid: {}", e.message),
+                            _ => format!(
+                                "in the solid, line {line}, column {}: {}",
+                                e.column, e.message
+                            ),
+                        };
+                        return src.at_value(&at, message);
+                    }
                     let off = if line == 0 {
                         span.start
                     } else {
@@ -355,15 +298,16 @@ fn shape(src: &Source, base: &Path, i: usize, o: &ObjectDesc) -> Result<Shape, S
                     src.at_value(&at, format!("{}: {}", full.display(), e.message))
                 } else {
                     let here = src.at_value(&at, "");
+                    let of = match here.line {
+                        0 => here.key.clone(),
+                        _ => format!("{}:{}:{}", here.file, here.line, here.column),
+                    };
                     SceneError {
                         file: e.file,
                         line: e.line,
                         column: e.column,
                         key: here.key,
-                        message: format!(
-                            "{} (model of {}:{}:{})",
-                            e.message, here.file, here.line, here.column
-                        ),
+                        message: format!("{} (model of {of})", e.message),
                     }
                 }
             })
@@ -379,13 +323,15 @@ fn shape(src: &Source, base: &Path, i: usize, o: &ObjectDesc) -> Result<Shape, S
     }
 }
 
+/// The material index of object `i`, its shape (transform folded in) and its solid's
+/// bounds (the solid is built once here to check it).
 fn object(
     src: &Source,
     base: &Path,
     i: usize,
     o: &ObjectDesc,
     names: &[&String],
-) -> Result<Object, SceneError> {
+) -> Result<(MaterialId, Shape, Aabb), SceneError> {
     let material = names
         .iter()
         .position(|n| **n == o.material)
@@ -407,51 +353,70 @@ fn object(
         shape = Shape::Transformed(transform(src, &tp, t)?, Box::new(shape));
     }
     let solid = Solid::build(&shape).map_err(|e| src.at_value(&tp, e))?;
-    Ok(Object {
-        name: o.name.clone().unwrap_or_else(|| format!("objects[{i}]")),
-        solid,
-        material,
-    })
+    Ok((MaterialId(material as u32), shape, solid.bounds()))
 }
 
-/// Builds the scene; relative files are looked up beside `src.file`'s directory `base`.
-pub(crate) fn build(src: &Source, base: &Path, d: &SceneDescription) -> Result<Scene, SceneError> {
+/// Resolves a description; relative files are looked up in `base`.
+pub(crate) fn resolve_source(
+    src: &Source,
+    base: &Path,
+    d: &SceneDescription,
+) -> Result<(SceneData, RenderSettings), SceneError> {
     let camera = camera(src, &d.camera)?;
     let names: Vec<&String> = d.materials.keys().collect();
+    let mut textures = Vec::new();
     let materials = d
         .materials
         .iter()
-        .map(|(n, m)| material(src, n, m))
+        .map(|(n, m)| material(src, n, m, &mut textures))
         .collect::<Result<Vec<_>, _>>()?;
-    let objects = d
-        .objects
-        .iter()
-        .enumerate()
-        .map(|(i, o)| object(src, base, i, o, &names))
-        .collect::<Result<Vec<_>, _>>()?;
+    let mut solids = SolidPool::default();
+    let mut objects = Vec::with_capacity(d.objects.len());
+    for (i, o) in d.objects.iter().enumerate() {
+        let (material, shape, bounds) = object(src, base, i, o, &names)?;
+        objects.push(ObjectData {
+            name: o.name.clone().unwrap_or_else(|| format!("objects[{i}]")),
+            solid: solids.push(shape, bounds),
+            material,
+        });
+    }
     let (area, delta) = lights(src, &d.lights)?;
+    let mut maps = Vec::new();
     let env = match &d.environment {
-        Some(e) => Some(environment(src, base, e)?),
+        Some(e) => Some(environment(src, base, e, &mut maps)?),
         None => None,
     };
     // The scene's extent sets the environment's share of light selection.
     let mut b = objects
         .iter()
-        .map(|o| o.solid.bounds())
+        .map(|o| solids.bounds(o.solid))
         .filter(Aabb::is_finite)
         .fold(Aabb::EMPTY, |a, b| a.union(&b));
     for l in &area {
-        let (c, r) = super::lights::bounding_sphere(&l.shape);
+        let (c, r) = bounding_sphere(l);
         b = b.union(&Aabb::new(c - r, c + r));
     }
     for l in &delta {
-        b.include(l.position());
+        b.include(glam::DVec3::from_array(l.p0));
     }
-    let radius = if b.is_empty() {
+    let scene_radius = if b.is_empty() {
         1.0
     } else {
         (b.extent().length() / 2.0).max(1e-3)
     };
-    let lights = Lights::new(area, delta, env, radius);
-    Ok(Scene::new(camera, materials, objects, lights))
+    let lights = crate::lights::select(area, delta, env.as_ref(), &maps, scene_radius);
+    let data = SceneData {
+        camera,
+        textures,
+        materials,
+        material_names: names.into_iter().cloned().collect(),
+        solids,
+        objects,
+        lights,
+        environment: env,
+        maps,
+        scene_radius,
+    };
+    let settings = settings(src, &d.render, &data)?;
+    Ok((data, settings))
 }

@@ -1,7 +1,5 @@
 //! Scene-file errors: where (file, line, column, key path) and what.
 
-use std::fmt;
-
 /// One step of a key path: a table key or an array index.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub enum Seg {
@@ -35,7 +33,7 @@ pub type KeyPath = Vec<Seg>;
 /// Builds a [`KeyPath`] from keys (`&str`, `&String`) and indices (`usize`).
 macro_rules! kp {
     ($($s:expr),* $(,)?) => {
-        Vec::<$crate::scene::error::Seg>::from([$($crate::scene::error::Seg::from($s)),*])
+        Vec::<$crate::error::Seg>::from([$($crate::error::Seg::from($s)),*])
     };
 }
 pub(crate) use kp;
@@ -65,11 +63,14 @@ pub fn path_string(path: &[Seg]) -> String {
 }
 
 /// A malformed or inconsistent scene: the file, the 1-based line and column (in
-/// characters; 0 when the file could not be read at all), the key path of the offending
-/// entry (empty for syntax errors) and what is wrong.
-#[derive(Clone, Debug, PartialEq, Eq)]
+/// characters; 0 when there is no text to point into: an unreadable file, or a scene
+/// given as data), the key path of the offending entry (empty for syntax errors) and
+/// what is wrong.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("{}", self.located())]
 pub struct SceneError {
-    /// The file the position refers to (a model file for errors inside a model).
+    /// The file the position refers to (a model file for errors inside a model); empty
+    /// for a scene given as data.
     pub file: String,
     /// 1-based line; 0 when there is no position.
     pub line: usize,
@@ -81,21 +82,35 @@ pub struct SceneError {
     pub message: String,
 }
 
-impl fmt::Display for SceneError {
+impl SceneError {
+    /// An error with no position: a scene given as data, or no text to point into.
+    pub fn at_key(file: &str, key: &[Seg], message: impl Into<String>) -> Self {
+        SceneError {
+            file: file.to_string(),
+            line: 0,
+            column: 0,
+            key: path_string(key),
+            message: message.into(),
+        }
+    }
+
     /// `file:line:column: key: message` (parts without a value are left out).
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{}", self.file)?;
+    fn located(&self) -> String {
+        let mut s = self.file.clone();
         if self.line > 0 {
-            write!(f, ":{}:{}", self.line, self.column)?;
+            s.push_str(&format!(":{}:{}", self.line, self.column));
         }
-        if !self.key.is_empty() {
-            write!(f, ": {}", self.key)?;
+        for part in [&self.key, &self.message] {
+            if !part.is_empty() {
+                if !s.is_empty() {
+                    s.push_str(": ");
+                }
+                s.push_str(part);
+            }
         }
-        write!(f, ": {}", self.message)
+        s
     }
 }
-
-impl std::error::Error for SceneError {}
 
 /// The 1-based line and column (in characters) of byte `offset` of `text`.
 pub fn line_column(text: &str, offset: usize) -> (usize, usize) {
@@ -146,5 +161,7 @@ mod tests {
             message: "bad".into(),
         };
         assert_eq!(e.to_string(), "s.toml:3:7: camera.fov: bad");
+        let v = SceneError::at_key("", &kp!["objects", 1usize, "solid"], "bad");
+        assert_eq!(v.to_string(), "objects[1].solid: bad");
     }
 }

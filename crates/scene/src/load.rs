@@ -1,12 +1,14 @@
-//! Reading scene files: TOML or JSON text → [`SceneDescription`] → [`Scene`] and
-//! [`RenderSettings`], every failure a [`SceneError`] with a position.
+//! Reading scenes: TOML or JSON text, or a JSON value → [`SceneDescription`] →
+//! (overrides) → [`SceneData`] and [`RenderSettings`]; every failure a [`SceneError`]
+//! with a key path and, where there is text, a position.
 
-use super::build::build;
-use super::desc::SceneDescription;
-use super::error::{line_column, offset_of, path_string, KeyPath, SceneError, Seg};
-use super::locate::Source;
-use super::settings::{settings, RenderSettings};
-use super::Scene;
+use crate::data::SceneData;
+use crate::desc::SceneDescription;
+use crate::error::{line_column, offset_of, path_string, KeyPath, SceneError, Seg};
+use crate::locate::Source;
+use crate::overrides::Overrides;
+use crate::resolve::resolve_source;
+use crate::settings::RenderSettings;
 use std::path::Path;
 
 /// The two spellings of a scene file.
@@ -106,24 +108,67 @@ pub fn parse_description(
     }
 }
 
+/// Resolves a description with no source text (errors carry key paths, no positions);
+/// relative model and map paths are looked up in `base_dir`.
+pub fn resolve(
+    d: &SceneDescription,
+    base_dir: &Path,
+) -> Result<(SceneData, RenderSettings), SceneError> {
+    resolve_source(&Source::without_text(String::new()), base_dir, d)
+}
+
+/// Resolves a scene given as data (a JSON value, e.g. a Python dict); relative model
+/// and map paths are looked up in `base_dir`. Errors name the key path, e.g.
+/// `objects[1].solid`.
+pub fn load_value(
+    value: serde_json::Value,
+    base_dir: &Path,
+) -> Result<(SceneData, RenderSettings), SceneError> {
+    resolve(&description_from_value(value)?, base_dir)
+}
+
+/// The description held by a JSON value; errors name the key path.
+pub fn description_from_value(value: serde_json::Value) -> Result<SceneDescription, SceneError> {
+    serde_path_to_error::deserialize(value)
+        .map_err(|e| SceneError::at_key("", &key_path(e.path()), e.inner().to_string()))
+}
+
 /// Parses scene text; `path` names the file in errors and anchors relative model and
 /// map paths (it is not read).
-pub fn parse_scene(
+pub fn parse(
     text: &str,
     format: SceneFormat,
     path: &Path,
-) -> Result<(Scene, RenderSettings), SceneError> {
+) -> Result<(SceneData, RenderSettings), SceneError> {
+    parse_with(text, format, path, &Overrides::default())
+}
+
+/// [`parse`] with overrides applied to the description before it is resolved. Errors
+/// at an overridden key carry no position (the value is not in the text).
+pub fn parse_with(
+    text: &str,
+    format: SceneFormat,
+    path: &Path,
+    overrides: &Overrides,
+) -> Result<(SceneData, RenderSettings), SceneError> {
     let file = path.display().to_string();
-    let d = parse_description(text, format, &file)?;
+    let mut d = parse_description(text, format, &file)?;
+    d.apply_overrides(overrides);
     let src = Source::new(text, format, file);
     let base = path.parent().unwrap_or(Path::new(""));
-    let scene = build(&src, base, &d)?;
-    let settings = settings(&src, &d.render, &scene)?;
-    Ok((scene, settings))
+    resolve_source(&src, base, &d).map_err(|e| overrides.blame(e))
 }
 
 /// Reads a scene file, `.toml` or `.json`.
-pub fn load_scene(path: &Path) -> Result<(Scene, RenderSettings), SceneError> {
+pub fn load(path: &Path) -> Result<(SceneData, RenderSettings), SceneError> {
+    load_with(path, &Overrides::default())
+}
+
+/// [`load`] with overrides (see [`parse_with`]).
+pub fn load_with(
+    path: &Path,
+    overrides: &Overrides,
+) -> Result<(SceneData, RenderSettings), SceneError> {
     let file = path.display().to_string();
     let fail = |message: String| SceneError {
         file: file.clone(),
@@ -136,5 +181,5 @@ pub fn load_scene(path: &Path) -> Result<(Scene, RenderSettings), SceneError> {
         .ok_or_else(|| fail("expected a file ending in .toml or .json".into()))?;
     let text =
         std::fs::read_to_string(path).map_err(|e| fail(format!("cannot read the file: {e}")))?;
-    parse_scene(&text, format, path)
+    parse_with(&text, format, path, overrides)
 }

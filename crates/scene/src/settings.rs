@@ -1,11 +1,11 @@
 //! Render settings read from a scene file's `[render]` table: what an integrator needs
-//! besides the scene.
+//! besides the scene. Sampling techniques are named here by [`TechniqueKind`]; a
+//! renderer maps each to its own implementation.
 
-use super::desc::RenderDesc;
-use super::error::{kp, SceneError};
-use super::locate::Source;
-use super::Scene;
-use crate::technique::Technique;
+use crate::data::SceneData;
+use crate::desc::RenderDesc;
+use crate::error::{kp, SceneError};
+use crate::locate::Source;
 use std::fmt;
 use std::str::FromStr;
 
@@ -55,40 +55,114 @@ fn names<T: Copy>(all: &[T], name: fn(T) -> &'static str) -> String {
     all.iter().map(|&t| name(t)).collect::<Vec<_>>().join(", ")
 }
 
+/// A name that is not one of its kind's (integrator, technique); lists the valid names.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("unknown {what} {name:?}; valid names: {valid}")]
+pub struct UnknownName {
+    /// What was named ("integrator", "technique").
+    pub what: &'static str,
+    /// The name given.
+    pub name: String,
+    /// The valid names, comma-separated.
+    pub valid: String,
+}
+
 impl FromStr for IntegratorKind {
-    type Err = String;
+    type Err = UnknownName;
     /// The kind named `s`; the error lists the valid names.
-    fn from_str(s: &str) -> Result<Self, String> {
+    fn from_str(s: &str) -> Result<Self, UnknownName> {
         IntegratorKind::ALL
             .into_iter()
             .find(|k| k.name() == s)
-            .ok_or_else(|| {
-                format!(
-                    "unknown integrator {s:?}; valid names: {}",
-                    names(&IntegratorKind::ALL, IntegratorKind::name)
-                )
+            .ok_or_else(|| UnknownName {
+                what: "integrator",
+                name: s.to_string(),
+                valid: names(&IntegratorKind::ALL, IntegratorKind::name),
             })
     }
 }
 
-/// The technique named `s` ([`Technique::name`]); the error lists the valid names.
-pub fn parse_technique(s: &str) -> Result<Technique, String> {
-    Technique::ALL
-        .into_iter()
-        .find(|t| t.name() == s)
-        .ok_or_else(|| {
-            format!(
-                "unknown technique {s:?}; valid names: {}",
-                names(&Technique::ALL, Technique::name)
-            )
-        })
+/// A sampling technique (DESIGN.md §4): draws a direction at a shading point and
+/// reports its pdf for any direction.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum TechniqueKind {
+    /// Importance sampling of the BSDF.
+    Bsdf,
+    /// A light chosen ∝ power (area lights and the environment), then sampled.
+    LightPower,
+    /// A point uniform over the total area of the area lights.
+    LightArea,
+    /// The environment's own sampling.
+    Environment,
+    /// Cosine-weighted directions about the normal.
+    CosineHemisphere,
+}
+
+impl TechniqueKind {
+    /// Every technique, in the order of their names.
+    pub const ALL: [TechniqueKind; 5] = [
+        TechniqueKind::Bsdf,
+        TechniqueKind::LightPower,
+        TechniqueKind::LightArea,
+        TechniqueKind::Environment,
+        TechniqueKind::CosineHemisphere,
+    ];
+    /// The name used in scene files and on the command line.
+    pub const fn name(self) -> &'static str {
+        match self {
+            TechniqueKind::Bsdf => "bsdf",
+            TechniqueKind::LightPower => "light",
+            TechniqueKind::LightArea => "light-area",
+            TechniqueKind::Environment => "environment",
+            TechniqueKind::CosineHemisphere => "cosine",
+        }
+    }
+}
+
+impl fmt::Display for TechniqueKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl FromStr for TechniqueKind {
+    type Err = UnknownName;
+    /// The technique named `s`; the error lists the valid names.
+    fn from_str(s: &str) -> Result<Self, UnknownName> {
+        TechniqueKind::ALL
+            .into_iter()
+            .find(|t| t.name() == s)
+            .ok_or_else(|| UnknownName {
+                what: "technique",
+                name: s.to_string(),
+                valid: names(&TechniqueKind::ALL, TechniqueKind::name),
+            })
+    }
+}
+
+/// Which kinds of light a scene has, as far as sampling techniques care.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Emitters {
+    /// Whether there is an area light.
+    pub area: bool,
+    /// Whether there is an environment.
+    pub environment: bool,
+}
+
+impl From<&SceneData> for Emitters {
+    fn from(d: &SceneData) -> Self {
+        Emitters {
+            area: !d.lights.area.is_empty(),
+            environment: d.environment.is_some(),
+        }
+    }
 }
 
 /// The AOV names a scene file may ask for (first-hit depth, normal and albedo).
 pub const AOV_NAMES: [&str; 3] = ["depth", "normal", "albedo"];
 
-/// Everything an integrator needs besides the [`Scene`]. The defaults are those of a
-/// scene file that leaves a key out.
+/// Everything an integrator needs besides the scene. The defaults are those of a scene
+/// file that leaves a key out.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RenderSettings {
     /// Which image to compute (default path tracing).
@@ -101,7 +175,7 @@ pub struct RenderSettings {
     pub params: mis::Params,
     /// Each technique with n_i, its samples per camera sample, in file order (default
     /// BSDF and, when the scene has area lights or an environment, light sampling).
-    pub techniques: Vec<(Technique, u32)>,
+    pub techniques: Vec<(TechniqueKind, u32)>,
     /// Seed of the random streams (default 0).
     pub seed: u64,
     /// Longest path in bounces (default 5).
@@ -121,7 +195,7 @@ impl Default for RenderSettings {
             spp: 16,
             method: mis::Method::Balance,
             params: mis::Params::default(),
-            techniques: vec![(Technique::Bsdf, 1), (Technique::LightPower, 1)],
+            techniques: vec![(TechniqueKind::Bsdf, 1), (TechniqueKind::LightPower, 1)],
             seed: 0,
             max_depth: 5,
             rr_depth: 3,
@@ -135,14 +209,16 @@ impl RenderSettings {
     /// Why the techniques cannot work in `scene`, if they cannot: light sampling needs an
     /// area light or an environment, area sampling an area light, environment sampling
     /// an environment (point and spot lights are sampled outside MIS).
-    pub fn check_techniques(&self, scene: &Scene) -> Result<(), String> {
-        let area = !scene.lights.area().is_empty();
-        let env = scene.lights.environment().is_some();
+    pub fn check_techniques(&self, scene: impl Into<Emitters>) -> Result<(), String> {
+        let Emitters {
+            area,
+            environment: env,
+        } = scene.into();
         for &(t, _) in &self.techniques {
             let missing = match t {
-                Technique::LightPower if !area && !env => "an area light or an environment",
-                Technique::LightArea if !area => "an area light",
-                Technique::Environment if !env => "an environment",
+                TechniqueKind::LightPower if !area && !env => "an area light or an environment",
+                TechniqueKind::LightArea if !area => "an area light",
+                TechniqueKind::Environment if !env => "an environment",
                 _ => continue,
             };
             return Err(format!("technique {:?} needs {missing}", t.name()));
@@ -151,17 +227,17 @@ impl RenderSettings {
     }
 }
 
-/// Reads `[render]`; the techniques are checked against the built scene.
+/// Reads `[render]`; the techniques are checked against the resolved scene.
 pub(crate) fn settings(
     src: &Source,
     r: &RenderDesc,
-    scene: &Scene,
+    scene: &SceneData,
 ) -> Result<RenderSettings, SceneError> {
     let mut s = RenderSettings::default();
     if let Some(name) = &r.integrator {
         s.integrator = name
             .parse()
-            .map_err(|e: String| src.at_value(&kp!["render", "integrator"], e))?;
+            .map_err(|e: UnknownName| src.at_value(&kp!["render", "integrator"], e.to_string()))?;
     }
     if let Some(spp) = r.spp {
         if spp == 0 {
@@ -210,7 +286,10 @@ pub(crate) fn settings(
             }
             for (i, t) in list.iter().enumerate() {
                 let at = kp!["render", "techniques", i, "technique"];
-                let tech = parse_technique(&t.technique).map_err(|e| src.at_value(&at, e))?;
+                let tech: TechniqueKind = t
+                    .technique
+                    .parse()
+                    .map_err(|e: UnknownName| src.at_value(&at, e.to_string()))?;
                 if s.techniques.iter().any(|&(u, _)| u == tech) {
                     return Err(
                         src.at_value(&at, format!("technique {:?} given twice", t.technique))
@@ -227,9 +306,9 @@ pub(crate) fn settings(
                 .map_err(|e| src.at_value(&kp!["render", "techniques"], e))?;
         }
         None => {
-            s.techniques = vec![(Technique::Bsdf, 1)];
-            if s.check_techniques_with(scene, Technique::LightPower) {
-                s.techniques.push((Technique::LightPower, 1));
+            s.techniques = vec![(TechniqueKind::Bsdf, 1)];
+            if Emitters::from(scene) != Emitters::default() {
+                s.techniques.push((TechniqueKind::LightPower, 1));
             }
         }
     }
@@ -251,14 +330,4 @@ pub(crate) fn settings(
         s.aovs = aovs.clone();
     }
     Ok(s)
-}
-
-impl RenderSettings {
-    fn check_techniques_with(&self, scene: &Scene, t: Technique) -> bool {
-        let probe = RenderSettings {
-            techniques: vec![(t, 1)],
-            ..self.clone()
-        };
-        probe.check_techniques(scene).is_ok()
-    }
 }

@@ -1,0 +1,131 @@
+//! The CPU scene from a resolved [`SceneData`]: camera, materials (textures looked up
+//! in the pool, plastic coats tabulated), lights with the distributions computed at
+//! resolution, and one [`Solid`] built per object.
+
+use super::{Object, Scene};
+use crate::camera::Camera;
+use crate::color::Rgb;
+use crate::distribution::Distribution1D;
+use crate::light::{AreaLight, DeltaLight, EnvMap, Environment, Lights, Shape};
+use crate::material::Material;
+use crate::texture::{Texture, TextureSpace};
+use ::scene::{EnvironmentData, Light, LightKind, MaterialData, SceneData, TextureData, TextureId};
+use frep::Solid;
+use glam::{DMat3, DVec3};
+
+fn v3(a: [f64; 3]) -> DVec3 {
+    DVec3::from_array(a)
+}
+
+fn texture(data: &SceneData, id: TextureId) -> Texture {
+    match data.textures[id.index()] {
+        TextureData::Constant { rgb } => Texture::Constant(v3(rgb)),
+        TextureData::Checker { a, b, scale, space } => Texture::Checker {
+            a: v3(a),
+            b: v3(b),
+            scale,
+            space: match space {
+                ::scene::TextureSpace::Point => TextureSpace::Point,
+                ::scene::TextureSpace::Uv => TextureSpace::Uv,
+            },
+        },
+    }
+}
+
+fn material(data: &SceneData, m: &MaterialData) -> Material {
+    match *m {
+        MaterialData::Diffuse { reflectance } => Material::Diffuse {
+            reflectance: texture(data, reflectance),
+        },
+        MaterialData::Conductor { eta, k, roughness } => Material::Conductor {
+            eta: texture(data, eta),
+            k: texture(data, k),
+            roughness,
+        },
+        MaterialData::Dielectric { eta, roughness } => Material::Dielectric { eta, roughness },
+        MaterialData::Plastic {
+            diffuse,
+            eta,
+            roughness,
+        } => Material::plastic(texture(data, diffuse), eta, roughness),
+    }
+}
+
+fn area_light(l: &Light) -> AreaLight {
+    let shape = match l.kind {
+        LightKind::Sphere => Shape::Sphere {
+            center: v3(l.p0),
+            radius: l.radius,
+        },
+        LightKind::Rect => Shape::Rect {
+            corner: v3(l.p0),
+            edge_u: v3(l.e1),
+            edge_v: v3(l.e2),
+        },
+        LightKind::Disk => Shape::Disk {
+            center: v3(l.p0),
+            normal: v3(l.e1),
+            radius: l.radius,
+        },
+        k => unreachable!("{k:?} is not an area light"),
+    };
+    AreaLight {
+        shape,
+        radiance: Rgb::from_array(l.emission),
+        two_sided: l.two_sided,
+    }
+}
+
+fn delta_light(l: &Light) -> DeltaLight {
+    match l.kind {
+        LightKind::Point => DeltaLight::Point {
+            position: v3(l.p0),
+            intensity: v3(l.emission),
+        },
+        LightKind::Spot => DeltaLight::Spot {
+            position: v3(l.p0),
+            direction: v3(l.e1),
+            intensity: v3(l.emission),
+            cos_falloff_start: l.cos_falloff_start,
+            cos_falloff_end: l.cos_falloff_end,
+        },
+        k => unreachable!("{k:?} is not a point or spot light"),
+    }
+}
+
+fn environment(data: &SceneData, e: &EnvironmentData) -> Environment {
+    match e {
+        EnvironmentData::Constant { radiance } => Environment::Constant(v3(*radiance)),
+        EnvironmentData::Map { map, to_world } => Environment::Map(EnvMap::from_table(
+            &data.maps[map.index()],
+            DMat3::from_cols_array_2d(to_world),
+        )),
+    }
+}
+
+/// The CPU scene of `data` (see the module docs).
+pub(super) fn build(data: &SceneData) -> Scene {
+    let c = &data.camera;
+    let camera = Camera::look_at(v3(c.eye), v3(c.target), v3(c.up), c.fov, c.width, c.height);
+    let materials = data.materials.iter().map(|m| material(data, m)).collect();
+    let objects = data
+        .objects
+        .iter()
+        .map(|o| Object {
+            name: o.name.clone(),
+            // Resolution built this solid once already: it cannot fail.
+            solid: Solid::build(data.solids.shape(o.solid))
+                .unwrap_or_else(|e| panic!("{}: {e}", o.name)),
+            material: o.material.index(),
+        })
+        .collect();
+    let l = &data.lights;
+    let lights = Lights::from_parts(
+        l.area.iter().map(area_light).collect(),
+        l.delta.iter().map(delta_light).collect(),
+        data.environment.as_ref().map(|e| environment(data, e)),
+        l.by_power.as_ref().map(Distribution1D::from),
+        l.by_area.as_ref().map(Distribution1D::from),
+    );
+    Scene::new(camera, materials, objects, lights)
+}

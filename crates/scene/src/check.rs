@@ -1,0 +1,115 @@
+//! Checks shared by every part of resolution: finite vectors, numbers in a range, keys a
+//! `type` takes, rotations and transforms. Errors point at the offending key.
+
+use crate::desc::{RotateDesc, TransformDesc};
+use crate::error::{kp, SceneError, Seg};
+use crate::locate::Source;
+use frep::Affine;
+use glam::DVec3;
+
+/// A finite vector.
+pub(crate) fn vec3(src: &Source, at: &[Seg], v: [f64; 3]) -> Result<DVec3, SceneError> {
+    let d = DVec3::from_array(v);
+    if d.is_finite() {
+        Ok(d)
+    } else {
+        Err(src.at_value(at, "expected finite numbers"))
+    }
+}
+
+/// A finite, non-zero vector, normalised.
+pub(crate) fn unit(src: &Source, at: &[Seg], v: [f64; 3]) -> Result<DVec3, SceneError> {
+    let d = vec3(src, at, v)?;
+    if d.length() == 0.0 {
+        return Err(src.at_value(at, "expected a non-zero direction"));
+    }
+    Ok(d.normalize())
+}
+
+/// A finite number within `lo..=hi`.
+pub(crate) fn number(
+    src: &Source,
+    at: &[Seg],
+    v: f64,
+    lo: f64,
+    hi: f64,
+) -> Result<f64, SceneError> {
+    if v.is_finite() && v >= lo && v <= hi {
+        Ok(v)
+    } else {
+        let range = match (lo == f64::NEG_INFINITY, hi == f64::INFINITY) {
+            (true, true) => "finite".to_string(),
+            (false, true) => format!("≥ {lo}"),
+            (true, false) => format!("≤ {hi}"),
+            (false, false) => format!("in [{lo}, {hi}]"),
+        };
+        Err(src.at_value(at, format!("expected a number {range}, found {v}")))
+    }
+}
+
+/// Rejects keys given for a `kind` that does not take them.
+pub(crate) fn check_keys(
+    src: &Source,
+    at: &[Seg],
+    what: &str,
+    present: &[(&str, bool)],
+    allowed: &[&str],
+) -> Result<(), SceneError> {
+    for &(key, given) in present {
+        if given && !allowed.contains(&key) {
+            let mut p = at.to_vec();
+            p.push(key.into());
+            let valid = allowed.join(", ");
+            return Err(src.at_key(
+                &p,
+                format!("{what} takes no key {key:?} (its keys: {valid})"),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// A rotation by `degrees` about `axis`.
+pub(crate) fn rotation(src: &Source, at: &[Seg], r: &RotateDesc) -> Result<Affine, SceneError> {
+    let key = |k: &str| [at.to_vec(), kp![k]].concat();
+    let axis = vec3(src, &key("axis"), r.axis)?;
+    if axis.length() == 0.0 {
+        return Err(src.at_value(&key("axis"), "the rotation axis is zero"));
+    }
+    let deg = number(
+        src,
+        &key("degrees"),
+        r.degrees,
+        f64::NEG_INFINITY,
+        f64::INFINITY,
+    )?;
+    Ok(Affine::rotate(axis, deg.to_radians()))
+}
+
+/// Steps applied first to last.
+pub(crate) fn transform(src: &Source, at: &[Seg], t: &TransformDesc) -> Result<Affine, SceneError> {
+    let mut acc = Affine::IDENTITY;
+    for (j, s) in t.steps.iter().enumerate() {
+        let mut p = at.to_vec();
+        if t.list {
+            p.push(j.into());
+        }
+        let key = |k: &str| [p.clone(), kp![k]].concat();
+        let step = match (s.translate, s.rotate, s.scale) {
+            (Some(v), None, None) => Affine::translate(vec3(src, &key("translate"), v)?),
+            (None, Some(r), None) => rotation(src, &key("rotate"), &r)?,
+            (None, None, Some(sc)) => {
+                let v = vec3(src, &key("scale"), sc.0)?;
+                if v.x * v.y * v.z == 0.0 {
+                    return Err(src.at_value(&key("scale"), "a scale factor is zero"));
+                }
+                Affine::scale(v)
+            }
+            _ => {
+                return Err(src.at_value(&p, "a transform step takes exactly one of translate, rotate, scale (use a list for several)"))
+            }
+        };
+        acc = acc.then(&step);
+    }
+    Ok(acc)
+}

@@ -1,0 +1,268 @@
+//! The resolved scene: plain data, handles not owners (DESIGN.md §3, GPU.md §5).
+//!
+//! Everything a renderer reads is here once, validated, with every reference an index
+//! into a pool: objects name a solid and a material, materials name textures, the
+//! environment names a map. Distributions (light selection, the environment map's
+//! marginal and conditional CDFs) are computed here, once, so that every back end
+//! samples from the same numbers. Vectors are `[f64; 3]` (x, y, z or r, g, b).
+
+use crate::distribution::{Distribution1D, Distribution2D};
+use crate::solids::SolidPool;
+use serde::Serialize;
+
+macro_rules! id {
+    ($(#[$doc:meta])* $name:ident) => {
+        $(#[$doc])*
+        #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize)]
+        #[serde(transparent)]
+        pub struct $name(pub u32);
+
+        impl $name {
+            /// The index into its pool.
+            pub fn index(self) -> usize {
+                self.0 as usize
+            }
+        }
+    };
+}
+
+id!(
+    /// A texture: an index into [`SceneData::textures`].
+    TextureId
+);
+id!(
+    /// A material: an index into [`SceneData::materials`].
+    MaterialId
+);
+id!(
+    /// A solid: an index into [`SceneData::solids`].
+    SolidId
+);
+id!(
+    /// An environment map: an index into [`SceneData::maps`].
+    MapId
+);
+
+/// A whole resolved scene (see the module docs).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct SceneData {
+    /// The camera.
+    pub camera: CameraData,
+    /// Texture pool.
+    pub textures: Vec<TextureData>,
+    /// Material pool, in the order of their names.
+    pub materials: Vec<MaterialData>,
+    /// The name of each material, for messages.
+    pub material_names: Vec<String>,
+    /// Solid pool (one per object).
+    pub solids: SolidPool,
+    /// The objects: a solid with a material.
+    pub objects: Vec<ObjectData>,
+    /// Area, point and spot lights, with their selection distributions.
+    pub lights: LightData,
+    /// Light from infinitely far away.
+    pub environment: Option<EnvironmentData>,
+    /// Environment-map pool.
+    pub maps: Vec<EnvMapTable>,
+    /// Radius of a ball holding the objects and lights; it sets the environment's power
+    /// for light selection (π r² ∫ L dω, pbrt-v4 §12.5).
+    pub scene_radius: f64,
+}
+
+/// A perspective pinhole camera with a box filter.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct CameraData {
+    /// Position of the pinhole.
+    pub eye: [f64; 3],
+    /// A point the camera looks at (not the eye).
+    pub target: [f64; 3],
+    /// The image's up direction (not parallel to the view direction).
+    pub up: [f64; 3],
+    /// Full vertical field of view in degrees, in (0, 180).
+    pub fov: f64,
+    /// Image width in pixels (≥ 1).
+    pub width: u32,
+    /// Image height in pixels (≥ 1).
+    pub height: u32,
+}
+
+/// The domain of a checker texture.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum TextureSpace {
+    /// 3-D cells over the hit point.
+    Point,
+    /// 2-D cells over the surface parameters (u, v).
+    Uv,
+}
+
+/// A colour that may vary over a surface.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+#[serde(tag = "type", rename_all = "kebab-case")]
+pub enum TextureData {
+    /// The same colour everywhere.
+    Constant {
+        /// The colour.
+        rgb: [f64; 3],
+    },
+    /// Colour `a` where the sum of the cell indices is even, `b` where it is odd.
+    Checker {
+        /// Even cells.
+        a: [f64; 3],
+        /// Odd cells.
+        b: [f64; 3],
+        /// Checks per unit length (> 0).
+        scale: f64,
+        /// Point or uv cells.
+        space: TextureSpace,
+    },
+}
+
+/// A material: plain parameters and texture ids. Roughness is the GGX α.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+#[serde(tag = "type", rename_all = "kebab-case")]
+pub enum MaterialData {
+    /// Lambertian reflection.
+    Diffuse {
+        /// Reflectance in [0, 1]³.
+        reflectance: TextureId,
+    },
+    /// Metal with complex index η + i k per channel.
+    Conductor {
+        /// Real part of the index.
+        eta: TextureId,
+        /// Absorption.
+        k: TextureId,
+        /// GGX α in [0, 1].
+        roughness: f64,
+    },
+    /// Glass.
+    Dielectric {
+        /// Index of refraction (inside over outside).
+        eta: f64,
+        /// GGX α in [0, 1].
+        roughness: f64,
+    },
+    /// A diffuse base under a dielectric coat.
+    Plastic {
+        /// Base reflectance in [0, 1]³.
+        diffuse: TextureId,
+        /// Coat index of refraction.
+        eta: f64,
+        /// Coat GGX α in [0, 1].
+        roughness: f64,
+    },
+}
+
+/// One object: a solid of the pool with a material.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ObjectData {
+    /// Name, for messages (default `objects[i]`).
+    pub name: String,
+    /// Its solid (transforms folded in).
+    pub solid: SolidId,
+    /// Its material.
+    pub material: MaterialId,
+}
+
+/// What a light is; says which fields of [`Light`] apply.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum LightKind {
+    /// A sphere emitting outward.
+    Sphere,
+    /// The parallelogram `p0 + a·e1 + b·e2`, a, b ∈ [0, 1], emitting along e1 × e2.
+    Rect,
+    /// A disk of centre `p0`, unit normal `e1` (the emitting side) and `radius`.
+    Disk,
+    /// An isotropic point light at `p0`.
+    Point,
+    /// A spot light at `p0` with unit axis `e1`.
+    Spot,
+}
+
+impl LightKind {
+    /// Whether the light has an area (and so takes part in MIS).
+    pub fn has_area(self) -> bool {
+        matches!(self, LightKind::Sphere | LightKind::Rect | LightKind::Disk)
+    }
+}
+
+/// One light: a tag and its parameters; fields that a kind does not use are zero.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Light {
+    /// What the light is.
+    pub kind: LightKind,
+    /// Centre (sphere, disk), corner (rect) or position (point, spot).
+    pub p0: [f64; 3],
+    /// First edge (rect), unit normal (disk) or unit axis (spot).
+    pub e1: [f64; 3],
+    /// Second edge (rect).
+    pub e2: [f64; 3],
+    /// Radius (sphere, disk).
+    pub radius: f64,
+    /// Radiance (area lights) or radiant intensity in W/sr (point, spot).
+    pub emission: [f64; 3],
+    /// Whether a rect or disk emits on both sides.
+    pub two_sided: bool,
+    /// Spot: cos of the angle where the falloff starts.
+    pub cos_falloff_start: f64,
+    /// Spot: cos of the cone's half-angle.
+    pub cos_falloff_end: f64,
+    /// Surface area (area lights).
+    pub area: f64,
+    /// Emitted power Φ per channel (π A L, twice for two-sided; 4π I for a point light;
+    /// pbrt-v4 §12.1.2 for a spot light).
+    pub power: [f64; 3],
+    /// Probability of this light in light selection ∝ power (0 for point and spot
+    /// lights, which are sampled outside MIS).
+    pub selection_pmf: f64,
+}
+
+/// The lights and the distributions used to choose among them.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct LightData {
+    /// Area lights (sphere, rect, disk), in file order.
+    pub area: Vec<Light>,
+    /// Point and spot lights, in file order.
+    pub delta: Vec<Light>,
+    /// Light selection ∝ luminance of power over the area lights then, last, the
+    /// environment (None when there is neither).
+    pub by_power: Option<Distribution1D>,
+    /// Area lights ∝ area (None without area lights).
+    pub by_area: Option<Distribution1D>,
+}
+
+/// Light from infinitely far away.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+#[serde(tag = "type", rename_all = "kebab-case")]
+pub enum EnvironmentData {
+    /// Uniform radiance from every direction.
+    Constant {
+        /// The radiance.
+        radiance: [f64; 3],
+    },
+    /// A lat-long map of the pool.
+    Map {
+        /// The map.
+        map: MapId,
+        /// Rotation from the map's frame to the scene, as columns.
+        to_world: [[f64; 3]; 3],
+    },
+}
+
+/// A lat-long radiance map (row 0 at the map's +z; column u = φ/2π) with its sampling
+/// distribution ∝ average(L) · sin θ, computed once.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct EnvMapTable {
+    /// Columns.
+    pub width: usize,
+    /// Rows.
+    pub height: usize,
+    /// Row-major radiance, already multiplied by the scene's `scale`.
+    pub pixels: Vec<[f64; 3]>,
+    /// Marginal over rows and conditional over columns of each row.
+    pub distribution: Distribution2D,
+    /// ∫ L dω over the sphere (exact for the piecewise-constant map).
+    pub integral: [f64; 3],
+}

@@ -1,0 +1,259 @@
+//! Resolution: a scene file and the same scene given as data resolve to equal
+//! SceneData; errors in data name their key path; the distributions computed once are
+//! right; overrides are validated like the file's own values.
+
+use scene::{
+    load, load_value, parse, parse_with, EnvironmentData, LightKind, Overrides, SceneData,
+    SceneFormat, TechniqueDesc, TechniqueKind,
+};
+use serde_json::{json, Value};
+use std::path::{Path, PathBuf};
+
+fn scenes_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes")
+}
+
+fn scene_files() -> Vec<PathBuf> {
+    let mut v: Vec<PathBuf> = std::fs::read_dir(scenes_dir())
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| SceneFormat::from_path(p).is_some())
+        .collect();
+    v.sort();
+    v
+}
+
+/// The file's text as a JSON value (TOML converted), as a caller with a dict has it.
+fn as_value(p: &Path) -> Value {
+    let text = std::fs::read_to_string(p).unwrap();
+    match SceneFormat::from_path(p).unwrap() {
+        SceneFormat::Toml => toml::from_str(&text).unwrap(),
+        SceneFormat::Json => serde_json::from_str(&text).unwrap(),
+    }
+}
+
+fn load_file(p: &Path) -> SceneData {
+    load(p).unwrap_or_else(|e| panic!("{e}")).0
+}
+
+#[test]
+fn files_and_values_resolve_to_equal_scene_data() {
+    let files = scene_files();
+    assert!(files.len() >= 7, "{files:?}");
+    for f in &files {
+        let (data, settings) = load(f).unwrap_or_else(|e| panic!("{e}"));
+        let (from_value, settings_v) =
+            load_value(as_value(f), &scenes_dir()).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(data, from_value, "{}", f.display());
+        assert_eq!(settings, settings_v, "{}", f.display());
+        // The same data serialises to the same JSON (what --dump-scene writes).
+        assert_eq!(
+            serde_json::to_value(&data).unwrap(),
+            serde_json::to_value(&from_value).unwrap()
+        );
+        assert_eq!(data.solids.len(), data.objects.len());
+    }
+    // TOML files and their JSON twins resolve alike.
+    let mut pairs = 0;
+    for f in files.iter().filter(|f| f.extension().unwrap() == "toml") {
+        let twin = f.with_extension("json");
+        if twin.exists() {
+            assert_eq!(load(f).unwrap(), load(&twin).unwrap(), "{}", f.display());
+            pairs += 1;
+        }
+    }
+    assert!(pairs >= 2);
+    // A change anywhere makes them differ.
+    let f = scenes_dir().join("table.toml");
+    let mut v = as_value(&f);
+    v["objects"][0]["transform"] = json!({ "translate": [0, 0, 1e-9] });
+    let moved = load_value(v, &scenes_dir()).unwrap().0;
+    assert_ne!(load_file(&f).solids, moved.solids);
+}
+
+#[track_caller]
+fn value_error(v: Value, key: &str, message: &str) {
+    let e = load_value(v, &scenes_dir()).expect_err("an error");
+    assert_eq!(e.key, key, "{e}");
+    assert!(e.message.contains(message), "{e}");
+    assert_eq!((e.line, e.column, e.file.as_str()), (0, 0, ""), "{e}");
+    assert!(e.to_string().starts_with(&format!("{key}: ")), "{e}");
+}
+
+fn base() -> Value {
+    json!({
+        "camera": {"eye": [0, -4, 1], "target": [0, 0, 1], "resolution": [64, 48]},
+        "materials": {"white": {"type": "diffuse", "reflectance": 0.8}},
+        "objects": [
+            {"solid": "sphere([0, 0, 1], 1)", "material": "white"},
+            {"solid": "let a = sphere([0, 0, 3], 1)\noutput a", "material": "white"}
+        ],
+        "lights": [{"type": "sphere", "center": [0, 0, 5], "radius": 0.5, "power": 10}]
+    })
+}
+
+#[test]
+fn errors_in_values_name_the_key_path() {
+    assert!(load_value(base(), &scenes_dir()).is_ok());
+    let mut v = base();
+    v["objects"][1]["solid"] = json!(3);
+    value_error(v, "objects[1].solid", "invalid type");
+    let mut v = base();
+    v["objects"][0]["material"] = json!("black");
+    value_error(
+        v,
+        "objects[0].material",
+        "unknown material \"black\"; defined: white",
+    );
+    let mut v = base();
+    v["camera"]["zoom"] = json!(2);
+    value_error(v, "camera.zoom", "unknown field `zoom`");
+    let mut v = base();
+    v["lights"][0]["radius"] = json!(-1);
+    value_error(v, "lights[0].radius", "≥ 0");
+    let mut v = base();
+    v["materials"]["white"]["type"] = json!("velvet");
+    value_error(v, "materials.white.type", "valid types: diffuse");
+    let mut v = base();
+    v["render"] = json!({"techniques": [{"technique": "environment"}]});
+    value_error(v, "render.techniques", "needs an environment");
+    // An error inside an inline solid keeps its place within the solid.
+    let mut v = base();
+    v["objects"][1]["solid"] = json!("let a = sphere([0, 0, 3], 1)\noutput b");
+    value_error(v, "objects[1].solid", "in the solid, line 2");
+    // A model file that is not there.
+    let mut v = base();
+    v["objects"][0] = json!({"model": "models/nope.frep", "material": "white"});
+    value_error(v, "objects[0].model", "nope.frep");
+}
+
+#[test]
+fn light_selection_cdf_sums_to_one() {
+    for name in ["many-lights.toml", "environment.toml", "cornell.toml"] {
+        let d = load_file(&scenes_dir().join(name));
+        let by_power = d.lights.by_power.as_ref().unwrap();
+        let n = d.lights.area.len() + usize::from(d.environment.is_some());
+        assert_eq!(by_power.len(), n);
+        assert_eq!((by_power.cdf[0], by_power.cdf[n]), (0.0, 1.0));
+        assert!(by_power.cdf.windows(2).all(|w| w[0] <= w[1]));
+        let total: f64 = (0..n).map(|i| by_power.pmf(i)).sum();
+        assert!((total - 1.0).abs() < 1e-12, "{name}: {total}");
+        // Each area light's pmf ∝ the luminance of its power.
+        let lum = |p: [f64; 3]| 0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2];
+        let sum: f64 = by_power.func.iter().sum();
+        for (i, l) in d.lights.area.iter().enumerate() {
+            assert_eq!(l.selection_pmf, by_power.pmf(i));
+            assert!((l.selection_pmf - lum(l.power) / sum).abs() < 1e-12);
+            assert!(l.kind.has_area() && l.area > 0.0);
+        }
+        assert!(d.lights.delta.iter().all(|l| l.selection_pmf == 0.0));
+        let Some(by_area) = d.lights.by_area.as_ref() else {
+            assert!(d.lights.area.is_empty(), "{name}");
+            continue;
+        };
+        let areas: f64 = d.lights.area.iter().map(|l| l.area).sum();
+        for (i, l) in d.lights.area.iter().enumerate() {
+            assert!((by_area.pmf(i) - l.area / areas).abs() < 1e-12);
+        }
+    }
+    let p = load_file(&scenes_dir().join("point-lights.toml"));
+    assert!(p.lights.by_power.is_none() && p.lights.area.is_empty());
+    let kinds: Vec<LightKind> = p.lights.delta.iter().map(|l| l.kind).collect();
+    assert_eq!(kinds, [LightKind::Point, LightKind::Point, LightKind::Spot]);
+}
+
+/// The environment map's table against a brute-force computation from its pixels:
+/// weight average(L)·sin θ per pixel, the marginal ∝ row sums, the conditional of each
+/// row ∝ its weights, and ∫ L dω by summing pixel solid angles.
+#[test]
+fn environment_cdf_matches_brute_force() {
+    let d = load_file(&scenes_dir().join("environment.toml"));
+    let Some(EnvironmentData::Map { map, .. }) = d.environment else {
+        panic!("environment.toml has a map")
+    };
+    let t = &d.maps[map.index()];
+    let (w, h) = (t.width, t.height);
+    assert_eq!(t.pixels.len(), w * h);
+    let pi = std::f64::consts::PI;
+    let weight = |x: usize, y: usize| {
+        let p = t.pixels[y * w + x];
+        let theta = pi * (y as f64 + 0.5) / h as f64;
+        (p[0] + p[1] + p[2]) / 3.0 * theta.sin()
+    };
+    let rows: Vec<f64> = (0..h).map(|y| (0..w).map(|x| weight(x, y)).sum()).collect();
+    let total: f64 = rows.iter().sum();
+    let close = |a: f64, b: f64| (a - b).abs() <= 1e-12 * b.abs().max(1.0);
+    let m = &t.distribution.marginal;
+    let mut acc = 0.0;
+    for (y, &row) in rows.iter().enumerate() {
+        assert!(
+            close(m.cdf[y], acc / total),
+            "row {y}: {} {}",
+            m.cdf[y],
+            acc / total
+        );
+        assert!(close(m.pmf(y), row / total));
+        acc += row;
+        let c = &t.distribution.conditional[y];
+        let mut a = 0.0;
+        for x in 0..w {
+            assert!(close(c.cdf[x], a / row), "({x}, {y})");
+            a += weight(x, y);
+        }
+        assert_eq!(c.cdf[w], 1.0);
+    }
+    assert_eq!(m.cdf[h], 1.0);
+    let mut integral = [0.0; 3];
+    for y in 0..h {
+        let band = (pi * y as f64 / h as f64).cos() - (pi * (y + 1) as f64 / h as f64).cos();
+        for x in 0..w {
+            for (c, i) in integral.iter_mut().enumerate() {
+                *i += t.pixels[y * w + x][c] * 2.0 * pi / w as f64 * band;
+            }
+        }
+    }
+    for c in 0..3 {
+        assert!(
+            close(t.integral[c], integral[c]),
+            "{:?} {integral:?}",
+            t.integral
+        );
+    }
+}
+
+#[test]
+fn overrides_are_validated_once_like_the_files_values() {
+    let f = scenes_dir().join("cornell.toml");
+    let text = std::fs::read_to_string(&f).unwrap();
+    let o = Overrides {
+        spp: Some(3),
+        width: Some(10),
+        techniques: Some(vec![TechniqueDesc {
+            technique: "light-area".into(),
+            samples: Some(2),
+        }]),
+        ..Default::default()
+    };
+    let (d, s) = parse_with(&text, SceneFormat::Toml, &f, &o).unwrap();
+    assert_eq!((s.spp, d.camera.width), (3, 10));
+    assert_eq!(s.techniques, vec![(TechniqueKind::LightArea, 2)]);
+    let (plain, _) = parse(&text, SceneFormat::Toml, &f).unwrap();
+    assert_eq!(d.camera.height, plain.camera.height);
+    // A bad overridden value: the key path, no position in the file.
+    let bad = Overrides {
+        estimator: Some("optimal-guess".into()),
+        ..Default::default()
+    };
+    let e = parse_with(&text, SceneFormat::Toml, &f, &bad).unwrap_err();
+    assert_eq!((e.key.as_str(), e.line), ("render.estimator", 0), "{e}");
+    assert!(e.message.contains("optimal-direct"), "{e}");
+    let none = Overrides {
+        techniques: Some(vec![TechniqueDesc {
+            technique: "environment".into(),
+            samples: None,
+        }]),
+        ..Default::default()
+    };
+    let e = parse_with(&text, SceneFormat::Toml, &f, &none).unwrap_err();
+    assert_eq!(e.key, "render.techniques", "{e}");
+}
