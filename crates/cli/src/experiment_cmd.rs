@@ -1,11 +1,11 @@
 //! `frepray experiment SCENE`: the estimator comparison of the paper, on a scene file.
 //!
-//! Connects the experiment driver ([`crate::experiment`]) to the CPU renderer: every
+//! Connects the experiment driver ([`frepray::experiment`]) to the CPU renderer: every
 //! point of the sweep is one `render_loop::render` of the scene with the estimator,
 //! sample count and seed the driver asks for.
 
-use crate::experiment::{self, ExperimentConfig, Image, Renderer};
 use crate::scene_render::{self, Overrides};
+use frepray::experiment::{self, ExperimentConfig, Image, Renderer};
 use render::integrator::RenderOptions;
 use render::render_loop;
 use render::scene::Scene;

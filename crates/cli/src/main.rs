@@ -1,14 +1,13 @@
 //! `frepray`: render functionally defined scenes, check model files.
 
 mod check;
-mod experiment;
 mod experiment_cmd;
 mod merge_cmd;
 mod output;
-mod preview;
 mod scene_render;
 
-use clap::{Parser, Subcommand};
+use clap::{Parser, Subcommand, ValueEnum};
+use frepray::preview;
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -61,7 +60,7 @@ struct RenderArgs {
     /// Scenes: direct, path, depth, normals or albedo. Models: shaded, depth or normals.
     #[arg(long)]
     integrator: Option<String>,
-    /// Samples per pixel (scenes).
+    /// Samples per pixel [scene's, or 4 for models].
     #[arg(long)]
     spp: Option<u32>,
     /// MIS heuristic or estimator (scenes): balance, power, maximum, cutoff,
@@ -101,14 +100,35 @@ struct RenderArgs {
     #[arg(long)]
     height: Option<u32>,
     /// A model's vertical axis (models).
-    #[arg(long, value_enum, default_value_t = preview::Up::Z)]
-    up: preview::Up,
+    #[arg(long, value_enum, default_value_t = UpArg::Z)]
+    up: UpArg,
     /// Worker threads (0: one per core). The image does not depend on it.
     #[arg(long, default_value_t = 0)]
     threads: usize,
     /// Hide the progress bar.
     #[arg(long)]
     quiet: bool,
+}
+
+/// A model's vertical axis.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum UpArg {
+    /// x up.
+    X,
+    /// y up.
+    Y,
+    /// z up (Fidget's colonnade.vm is modelled z-up too).
+    Z,
+}
+
+impl From<UpArg> for preview::Up {
+    fn from(u: UpArg) -> Self {
+        match u {
+            UpArg::X => preview::Up::X,
+            UpArg::Y => preview::Up::Y,
+            UpArg::Z => preview::Up::Z,
+        }
+    }
 }
 
 #[derive(clap::Args)]
@@ -217,7 +237,6 @@ fn render(args: RenderArgs) -> Result<(), String> {
         );
     }
     let scene_only = [
-        ("--spp", args.spp.is_some()),
         ("--mis", args.mis.is_some()),
         ("--techniques", args.techniques.is_some()),
         ("--seed", args.seed.is_some()),
@@ -254,38 +273,46 @@ fn render(args: RenderArgs) -> Result<(), String> {
     if width == 0 || height == 0 {
         return Err("--width and --height must be at least 1".into());
     }
-    let start = std::time::Instant::now();
-    let model = frep::read::read_file(&args.input).map_err(|e| e.to_string())?;
-    let solid =
-        frep::Solid::build(&model.shape).map_err(|e| format!("{}: {e}", args.input.display()))?;
-    let setup = start.elapsed();
-    let cam = preview::framing(
-        &preview::view_bounds(&solid),
-        args.up.vector(),
-        width,
-        height,
-    );
-    let stop = stop_on_ctrl_c();
-    let bar = progress_bar(args.quiet, "rows");
-    bar.set_length(height as u64);
-    let t0 = std::time::Instant::now();
-    let film = preview::render(&solid, &cam, look, &stop, &|n| bar.inc(n));
-    let trace = t0.elapsed();
-    bar.finish_and_clear();
-    let stopped = stop.load(Ordering::SeqCst);
-    for (p, f) in args.output.iter().zip(formats) {
-        output::write(p, &film, f)?;
+    let spp = args.spp.unwrap_or(4);
+    if spp == 0 {
+        return Err("--spp must be at least 1".into());
     }
-    let rays = width as f64 * height as f64;
-    eprintln!(
-        "{}{} {}x{}: setup {:.2} s, trace {:.2} s, {:.3} MRays/s (camera), written {}",
-        if stopped { "interrupted: " } else { "" },
-        args.input.display(),
+    let start = std::time::Instant::now();
+    let solid = preview::load_model(&args.input).map_err(|e| e.to_string())?;
+    let setup = start.elapsed();
+    let stop = stop_on_ctrl_c();
+    let bar = progress_bar(args.quiet, "samples");
+    let result = preview::render(
+        solid,
+        args.up.into(),
         width,
         height,
-        setup.as_secs_f64(),
-        trace.as_secs_f64(),
-        rays / trace.as_secs_f64().max(1e-9) / 1e6,
+        look,
+        spp,
+        &stop,
+        &|done, total| {
+            bar.set_length(total);
+            bar.set_position(done);
+        },
+    );
+    bar.finish_and_clear();
+    let (state, stats) = result.map_err(|e| e.to_string())?;
+    let image = state.image();
+    for (p, f) in args.output.iter().zip(formats) {
+        output::write(p, &image, f)?;
+    }
+    eprintln!(
+        "{}: setup {:.2} s; {stats}",
+        args.input.display(),
+        setup.as_secs_f64()
+    );
+    eprintln!(
+        "{}{} written",
+        if stats.stopped {
+            "interrupted: what was rendered is "
+        } else {
+            ""
+        },
         output::list(&args.output)
     );
     Ok(())

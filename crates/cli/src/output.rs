@@ -1,6 +1,6 @@
 //! Choosing the output format from the file name.
 
-use crate::preview::Look;
+use frepray::preview::Look;
 use render::{Image, RenderState};
 use std::path::Path;
 

@@ -163,39 +163,22 @@ impl Image {
     pub fn read_exr(path: impl AsRef<Path>) -> Result<Image, String> {
         let path = path.as_ref();
         let at = |e: String| format!("{}: {e}", path.display());
-        let read = std::panic::catch_unwind(|| exr::prelude::read_first_flat_layer_from_file(path))
-            .map_err(|_| at("the EXR decoder failed on this file".into()))?;
-        let img = read.map_err(|e| at(format!("not a readable EXR file ({e})")))?;
-        let layer = &img.layer_data;
-        let (w, h) = (layer.size.width(), layer.size.height());
+        let exr = scene::read_exr(path).map_err(at)?;
         let (width, height) = (
-            u32::try_from(w).map_err(|_| at("too wide".into()))?,
-            u32::try_from(h).map_err(|_| at("too tall".into()))?,
+            u32::try_from(exr.width).map_err(|_| at("too wide".into()))?,
+            u32::try_from(exr.height).map_err(|_| at("too tall".into()))?,
         );
-        let list = &layer.channel_data.list;
-        let names: Vec<String> = list.iter().map(|c| c.name.to_string()).collect();
-        let find = |name: &str| {
-            names
-                .iter()
-                .position(|n| n == name)
-                .ok_or_else(|| at(format!("no channel {name} (has {})", names.join(", "))))
-        };
-        let rgb = [find("R")?, find("G")?, find("B")?];
-        let aovs: Vec<usize> = (0..names.len()).filter(|i| !rgb.contains(i)).collect();
-        let aov_names: Vec<&str> = aovs.iter().map(|&i| names[i].as_str()).collect();
+        let rgb = [
+            exr.find("R").map_err(at)?,
+            exr.find("G").map_err(at)?,
+            exr.find("B").map_err(at)?,
+        ];
+        let aovs: Vec<usize> = (0..exr.names.len()).filter(|i| !rgb.contains(i)).collect();
+        let aov_names: Vec<&str> = aovs.iter().map(|&i| exr.names[i].as_str()).collect();
         let mut out = Image::new(width, height, &aov_names);
         let c = out.channels();
         for (k, &i) in rgb.iter().chain(&aovs).enumerate() {
-            let values: Vec<f32> = list[i].sample_data.values_as_f32().collect();
-            if values.len() != w * h {
-                return Err(at(format!(
-                    "channel {} holds {} of {} values",
-                    names[i],
-                    values.len(),
-                    w * h
-                )));
-            }
-            for (p, v) in out.data.chunks_exact_mut(c).zip(values) {
+            for (p, &v) in out.data.chunks_exact_mut(c).zip(&exr.values[i]) {
                 p[k] = f64::from(v);
             }
         }

@@ -28,18 +28,9 @@ pub fn read_exr_rgb(file: &Path, scale: f64) -> Result<(usize, usize, Vec<[f64; 
 }
 
 fn read_exr(file: &Path, scale: f64) -> Result<(usize, usize, Vec<[f64; 3]>), String> {
-    let image = exr::prelude::read_first_flat_layer_from_file(file).map_err(|e| e.to_string())?;
-    let layer = &image.layer_data;
-    let (w, h) = (layer.size.width(), layer.size.height());
-    let channel = |name: &str| -> Result<Vec<f32>, String> {
-        layer
-            .channel_data
-            .list
-            .iter()
-            .find(|c| c.name.eq_case_insensitive(name))
-            .map(|c| c.sample_data.values_as_f32().collect())
-            .ok_or_else(|| format!("the image has no channel {name}"))
-    };
+    let img = crate::exr_file::read_exr(file)?;
+    let (w, h) = (img.width, img.height);
+    let channel = |name: &str| -> Result<&Vec<f32>, String> { Ok(&img.values[img.find(name)?]) };
     let (r, g, b) = (channel("R")?, channel("G")?, channel("B")?);
     if w == 0 || h == 0 {
         return Err("the image is empty".into());

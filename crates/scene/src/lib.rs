@@ -48,6 +48,7 @@ mod desc;
 mod distribution;
 mod environment;
 mod error;
+mod exr_file;
 mod lights;
 mod load;
 mod locate;
@@ -68,6 +69,7 @@ pub use desc::{
 pub use distribution::{Distribution1D, Distribution2D};
 pub use environment::{read_exr_rgb, MapError};
 pub use error::SceneError;
+pub use exr_file::{read_exr, ExrChannels};
 pub use load::{
     description_from_value, load, load_value, load_with, parse, parse_description, parse_with,
     resolve, SceneFormat,
