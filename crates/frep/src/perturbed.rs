@@ -8,6 +8,7 @@
 mod scan;
 mod surface;
 
+pub use scan::MAX_ACTIVE;
 pub use surface::PerturbedSurface;
 
 use crate::quadric::Quadric;

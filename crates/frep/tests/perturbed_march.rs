@@ -391,6 +391,59 @@ fn walking_from_each_crossing_lists_every_sign_change() {
     assert!(crossings > walks);
 }
 
+/// More perturbations active along one ray than the scan's fixed active set holds
+/// ([`frep::perturbed::MAX_ACTIVE`]): a rod of length 5 with a row of 3 × K
+/// overlapping perturbations along its axis, alternately hollowing and filling, and rays
+/// along the row. The overflow rule must
+/// still give every sign change of the march, each to TOL.
+#[test]
+fn more_perturbations_than_the_active_set_holds_miss_nothing() {
+    let count = 3 * frep::perturbed::MAX_ACTIVE;
+    let mut pq = PerturbedQuadric::new(Quadric::ellipsoid(DVec3::ZERO, DVec3::new(2.5, 0.5, 0.5)));
+    for k in 0..count {
+        let x = -2.2 + 4.4 * (k as f64 + 0.5) / count as f64;
+        // Support radius 0.06 (pitch 0.046: neighbours overlap); F' changes sign between
+        // each cavity and the next filling.
+        let f = if k % 2 == 0 { -2e3 } else { 2e3 };
+        pq.push(
+            f,
+            Quadric::sphere(DVec3::new(x, 0.01 * (k % 3) as f64, 0.0), 0.06),
+        );
+    }
+    let s = pq.surface();
+    let mut rng = Pcg64::seed_from_u64(17);
+    let mut crossings = 0;
+    for k in 0..40 {
+        let tilt = 0.02 * (k as f64 / 40.0 - 0.5);
+        let o = DVec3::new(-2.8, 0.003 * (k % 5) as f64, tilt);
+        let ray = Ray::new(o, DVec3::new(1.0, tilt * 0.1, -tilt / 5.6).normalize());
+        // The row of supports lies along the ray: far more than MAX_ACTIVE candidates.
+        let mut met = 0;
+        s.bvh().for_each_hit(&ray, 0.0, 6.0, |_| met += 1);
+        assert!(met > frep::perturbed::MAX_ACTIVE, "{met}");
+        let t_min = rng.gen_range(0.0..0.5);
+        let want = march(&pq, &ray, t_min, 6.0, 8 * STEPS, 1000);
+        let mut got = Vec::new();
+        let mut t = t_min;
+        while let Some(h) = s.first_crossing(&ray, t, 6.0) {
+            got.push(h);
+            t = h;
+            assert!(got.len() <= 1000, "runaway walk");
+        }
+        assert!(
+            want.len() > 2 * frep::perturbed::MAX_ACTIVE,
+            "{}",
+            want.len()
+        );
+        assert_eq!(got.len(), want.len(), "{ray:?}: {got:?} vs {want:?}");
+        for (g, w) in got.iter().zip(&want) {
+            assert!((g - w).abs() <= TOL, "{ray:?}: {g} vs {w}");
+        }
+        crossings += got.len();
+    }
+    println!("{crossings} crossings");
+}
+
 /// A perturbed ellipsoid of size 2 with `count` bumps and dents (support radius 0.15 …
 /// 0.35) scattered over its surface.
 fn bumpy_ellipsoid(rng: &mut Pcg64, count: usize) -> PerturbedQuadric {

@@ -87,16 +87,17 @@ impl PerturbedSurface {
     pub fn first_crossing_f32(&self, o: Vec3, d: Vec3, t_min: f32, t_max: f32) -> Option<f32> {
         let ray = Ray::new(o.as_dvec3(), d.as_dvec3());
         let (lo, hi, sign) = self.clip(&ray, t_min as f64, t_max as f64)?;
-        let mut cand = Vec::new();
-        self.bvh.collect(&ray, lo, hi, &mut cand);
         let to32 = |c: &[f64; 10]| c.map(|v| v as f32);
-        let perts = cand.iter().map(|&i| {
-            let p = &self.perturbations[i as usize];
-            (p.f as f32, to32(&p.q.c))
-        });
-        scan::first_crossing::<f32>(
+        let src = Supports {
+            perturbations: &self.perturbations,
+            bvh: &self.bvh,
+            ray: &ray,
+            lo,
+            hi,
+        };
+        scan::first_crossing::<f32, _>(
             &to32(&self.base.c),
-            perts,
+            &F32(src),
             o.to_array(),
             d.to_array(),
             (lo as f32, hi as f32),
@@ -104,6 +105,44 @@ impl PerturbedSurface {
             t_max,
             sign as f32,
         )
+    }
+}
+
+/// The perturbations whose support box the ray meets on a part of [lo, hi], nearer BVH
+/// subtrees first, read straight from the BVH walk (nothing is collected).
+struct Supports<'a> {
+    perturbations: &'a [Perturbation],
+    bvh: &'a Bvh,
+    ray: &'a Ray,
+    lo: f64,
+    hi: f64,
+}
+
+impl scan::Source<f64> for Supports<'_> {
+    #[inline]
+    fn for_each(&self, lo: f64, hi: f64, mut visit: impl FnMut(f64, &Coeffs<f64>)) {
+        self.bvh.for_each_hit(self.ray, lo, hi, |i| {
+            let p = &self.perturbations[i];
+            visit(p.f, &p.q.c)
+        });
+    }
+}
+
+/// The same perturbations rounded to f32 (the GPU's arithmetic).
+struct F32<'a>(Supports<'a>);
+
+impl scan::Source<f32> for F32<'_> {
+    #[inline]
+    fn for_each(&self, lo: f32, hi: f32, mut visit: impl FnMut(f32, &Coeffs<f32>)) {
+        // The whole range is queried with its f64 ends, as the clip gave them; a chunk
+        // with its f32 ends, widened by an ulp each way so that no box is lost.
+        let s = &self.0;
+        let (lo, hi) = if (lo, hi) == (s.lo as f32, s.hi as f32) {
+            (s.lo, s.hi)
+        } else {
+            (lo.next_down() as f64, hi.next_up() as f64)
+        };
+        s.for_each(lo, hi, |f, q| visit(f as f32, &q.map(|v| v as f32)));
     }
 }
 
@@ -136,16 +175,17 @@ impl Surface for PerturbedSurface {
 
     fn first_crossing(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<f64> {
         let (lo, hi, sign) = self.clip(ray, t_min, t_max)?;
-        let mut cand = Vec::new();
-        self.bvh.collect(ray, lo, hi, &mut cand);
-        let perts = cand.iter().map(|&i| {
-            let p = &self.perturbations[i as usize];
-            (p.f, p.q.c)
-        });
+        let src = Supports {
+            perturbations: &self.perturbations,
+            bvh: &self.bvh,
+            ray,
+            lo,
+            hi,
+        };
         let base: &Coeffs<f64> = &self.base.c;
         scan::first_crossing(
             base,
-            perts,
+            &src,
             ray.o.to_array(),
             ray.d.to_array(),
             (lo, hi),
