@@ -19,9 +19,11 @@
 
 pub mod bounds;
 pub mod bvh;
+pub mod bytecode;
 pub mod csg;
 pub mod dual;
 pub mod expr;
+pub mod flat;
 pub mod interval;
 pub mod interval_trace;
 pub mod perturbed;
@@ -36,12 +38,14 @@ pub mod surface;
 pub mod transform;
 pub mod tree;
 
-pub use bvh::Bvh;
+pub use bvh::{Bvh, BvhRef};
+pub use bytecode::Bytecode;
 pub use dual::Dual;
 pub use expr::{Choice, Expr, Node};
+pub use flat::{Flat, Leaf, LeafView};
 pub use interval::Interval;
-pub use interval_trace::ExprSurface;
-pub use perturbed::{PerturbedQuadric, PerturbedSurface};
+pub use interval_trace::{ExprSurface, ExprView};
+pub use perturbed::{PerturbedQuadric, PerturbedSurface, PerturbedView};
 pub use quadric::Quadric;
 pub use ray::{Aabb, Ray};
 pub use scalar::Scalar;

@@ -9,7 +9,7 @@ mod scan;
 mod surface;
 
 pub use scan::MAX_ACTIVE;
-pub use surface::PerturbedSurface;
+pub use surface::{PerturbedSurface, PerturbedView};
 
 use crate::quadric::Quadric;
 use crate::transform::Affine;

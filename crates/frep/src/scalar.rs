@@ -1,6 +1,6 @@
 //! The number types an expression can be evaluated over.
 //!
-//! One generic evaluator ([`crate::Tape::eval`]) serves plain `f64` and `f32` point
+//! One generic evaluator ([`crate::Expr::eval_with`]) serves plain `f64` and `f32` point
 //! evaluation, [`crate::Interval`] bounds and [`crate::Dual`] derivatives: each type says
 //! here how it performs every operation of the expression language.
 

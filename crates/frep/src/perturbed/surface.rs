@@ -7,7 +7,7 @@
 
 use super::scan::{self, Coeffs};
 use super::{Perturbation, PerturbedQuadric};
-use crate::bvh::Bvh;
+use crate::bvh::{Bvh, BvhRef};
 use crate::quadric::Quadric;
 use crate::ray::{Aabb, Ray};
 use crate::surface::Surface;
@@ -71,6 +71,38 @@ impl PerturbedSurface {
         &self.bvh
     }
 
+    /// The solid as a borrowed view.
+    pub fn view(&self) -> PerturbedView<'_> {
+        PerturbedView {
+            base: &self.base,
+            perturbations: &self.perturbations,
+            bvh: self.bvh.as_ref(),
+            bounds: self.bounds,
+        }
+    }
+
+    /// The first t in (t_min, t_max) where F' changes sign, in f32 (see
+    /// [`PerturbedView::first_crossing_f32`]).
+    pub fn first_crossing_f32(&self, o: Vec3, d: Vec3, t_min: f32, t_max: f32) -> Option<f32> {
+        self.view().first_crossing_f32(o, d, t_min, t_max)
+    }
+}
+
+/// A perturbed quadric over borrowed arrays: what [`PerturbedSurface`] and the flat
+/// solids of [`crate::solid`] intersect. Perturbation k of the BVH is `perturbations[k]`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PerturbedView<'a> {
+    /// The base quadric F.
+    pub base: &'a Quadric,
+    /// The perturbations.
+    pub perturbations: &'a [Perturbation],
+    /// The BVH over their supports.
+    pub bvh: BvhRef<'a>,
+    /// A box holding every point with F' ≥ 0 ([`PerturbedSurface::bounds`]).
+    pub bounds: Aabb,
+}
+
+impl PerturbedView<'_> {
     /// The range [lo, hi] of [t_min, t_max] inside the bounds, and the sign of F' just
     /// after lo when known (−1 where the ray enters the bounds from outside, where F' < 0).
     fn clip(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<(f64, f64, f64)> {
@@ -89,8 +121,8 @@ impl PerturbedSurface {
         let (lo, hi, sign) = self.clip(&ray, t_min as f64, t_max as f64)?;
         let to32 = |c: &[f64; 10]| c.map(|v| v as f32);
         let src = Supports {
-            perturbations: &self.perturbations,
-            bvh: &self.bvh,
+            perturbations: self.perturbations,
+            bvh: self.bvh,
             ray: &ray,
             lo,
             hi,
@@ -106,13 +138,62 @@ impl PerturbedSurface {
             sign as f32,
         )
     }
+
+    /// F' at p, summing only the perturbations whose support box holds p.
+    pub fn value(&self, p: DVec3) -> f64 {
+        let mut v = self.base.eval(p);
+        self.bvh.for_each_containing(p, |i| {
+            let pt = &self.perturbations[i];
+            let q = pt.q.eval(p);
+            if q > 0.0 {
+                v += pt.f * q * q * q;
+            }
+        });
+        v
+    }
+
+    /// ∇F' = ∇F + Σ_{q_i>0} 3·f_i·q_i²·∇q_i (RESEARCH.md §4).
+    pub fn gradient(&self, p: DVec3) -> DVec3 {
+        let mut g = self.base.gradient(p);
+        self.bvh.for_each_containing(p, |i| {
+            let pt = &self.perturbations[i];
+            let q = pt.q.eval(p);
+            if q > 0.0 {
+                g += (3.0 * pt.f * q * q) * pt.q.gradient(p);
+            }
+        });
+        g
+    }
+
+    /// The first t in (t_min, t_max) where F' changes sign (exact scan, no allocation).
+    pub fn first_crossing(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<f64> {
+        let (lo, hi, sign) = self.clip(ray, t_min, t_max)?;
+        let src = Supports {
+            perturbations: self.perturbations,
+            bvh: self.bvh,
+            ray,
+            lo,
+            hi,
+        };
+        let base: &Coeffs<f64> = &self.base.c;
+        scan::first_crossing(
+            base,
+            &src,
+            ray.o.to_array(),
+            ray.d.to_array(),
+            (lo, hi),
+            t_min,
+            t_max,
+            sign,
+        )
+    }
 }
 
 /// The perturbations whose support box the ray meets on a part of [lo, hi], nearer BVH
 /// subtrees first, read straight from the BVH walk (nothing is collected).
 struct Supports<'a> {
     perturbations: &'a [Perturbation],
-    bvh: &'a Bvh,
+    bvh: BvhRef<'a>,
     ray: &'a Ray,
     lo: f64,
     hi: f64,
@@ -149,50 +230,16 @@ impl scan::Source<f32> for F32<'_> {
 impl Surface for PerturbedSurface {
     /// F' at p, summing only the perturbations whose support box holds p.
     fn value(&self, p: DVec3) -> f64 {
-        let mut v = self.base.eval(p);
-        self.bvh.for_each_containing(p, |i| {
-            let pt = &self.perturbations[i];
-            let q = pt.q.eval(p);
-            if q > 0.0 {
-                v += pt.f * q * q * q;
-            }
-        });
-        v
+        self.view().value(p)
     }
 
     /// ∇F' = ∇F + Σ_{q_i>0} 3·f_i·q_i²·∇q_i (RESEARCH.md §4).
     fn gradient(&self, p: DVec3) -> DVec3 {
-        let mut g = self.base.gradient(p);
-        self.bvh.for_each_containing(p, |i| {
-            let pt = &self.perturbations[i];
-            let q = pt.q.eval(p);
-            if q > 0.0 {
-                g += (3.0 * pt.f * q * q) * pt.q.gradient(p);
-            }
-        });
-        g
+        self.view().gradient(p)
     }
 
     fn first_crossing(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<f64> {
-        let (lo, hi, sign) = self.clip(ray, t_min, t_max)?;
-        let src = Supports {
-            perturbations: &self.perturbations,
-            bvh: &self.bvh,
-            ray,
-            lo,
-            hi,
-        };
-        let base: &Coeffs<f64> = &self.base.c;
-        scan::first_crossing(
-            base,
-            &src,
-            ray.o.to_array(),
-            ray.d.to_array(),
-            (lo, hi),
-            t_min,
-            t_max,
-            sign,
-        )
+        self.view().first_crossing(ray, t_min, t_max)
     }
 
     /// The base's support box united with the support boxes of every perturbation that
