@@ -105,9 +105,15 @@ impl Solid {
                     true => Aabb::EMPTY,
                     false => Aabb::EVERYTHING,
                 };
-                let mut parts = Vec::with_capacity(v.len());
+                // Nested unions (intersections) are one: their parts join this node's, so
+                // that chains such as union(a, union(b, …)) do not nest deep.
+                let mut nested = Vec::with_capacity(v.len());
                 for s in v {
-                    parts.push(Self::build_moved(s, m, flat)?);
+                    same_op_parts(s, m, union, &mut nested);
+                }
+                let mut parts = Vec::with_capacity(nested.len());
+                for (s, m) in nested {
+                    parts.push(Self::build_moved(s, &m, flat)?);
                 }
                 if parts.len() == 1 {
                     return Ok(parts[0]);
@@ -286,6 +292,24 @@ impl Solid {
     }
 }
 
+/// The parts of `s` moved by `m` as parts of a union (`union`) or intersection: `s`
+/// itself, or, when it is (a moved) node of the same kind, its parts, recursively.
+fn same_op_parts<'a>(s: &'a Shape, m: &Affine, union: bool, out: &mut Vec<(&'a Shape, Affine)>) {
+    let (mut inner, mut moved) = (s, *m);
+    while let Shape::Transformed(a, c) = inner {
+        moved = a.then(&moved);
+        inner = c;
+    }
+    match (inner, union) {
+        (Shape::Union(v), true) | (Shape::Intersection(v), false) => {
+            for c in v {
+                same_op_parts(c, &moved, union, out);
+            }
+        }
+        _ => out.push((s, *m)),
+    }
+}
+
 /// Appends a node; returns its index.
 fn push_node(flat: &mut Flat, op: CsgOp, operands: Span, bounds: Aabb) -> u32 {
     flat.nodes.push(CsgNode {
@@ -438,5 +462,79 @@ mod tests {
         let h = s.intersect(&ray, 0.0, f64::INFINITY).unwrap();
         assert!((h.t - 5.0).abs() < 1e-8, "{h:?}");
         assert!((h.normal - DVec3::Z).length() < 1e-6);
+    }
+
+    /// The flat form: children before parents, each leaf once in the table and its
+    /// data in the pools, and equal builds equal.
+    #[test]
+    fn flat_form_is_post_order_and_comparable() {
+        use crate::perturbed::PerturbedQuadric;
+        use crate::quadric::Quadric;
+        let pq = PerturbedQuadric::new(Quadric::sphere(DVec3::ZERO, 1.0))
+            .with(0.5, Quadric::sphere(DVec3::X, 0.3))
+            .with(-0.5, Quadric::sphere(DVec3::Y, 0.3));
+        let shape = Shape::Difference(
+            Box::new(Shape::Union(vec![
+                Shape::Perturbed(pq),
+                ball(DVec3::new(0.0, 0.0, 1.0), 0.5),
+            ])),
+            Box::new(ball(DVec3::new(1.0, 0.0, 0.0), 0.4)),
+        );
+        let (a, b) = (Solid::build(&shape).unwrap(), Solid::build(&shape).unwrap());
+        assert_eq!(a, b);
+        let f = a.flat();
+        assert_eq!(f.leaves.len(), 3);
+        assert_eq!(f.quadrics.len(), 1);
+        assert_eq!(f.perturbations.len(), 2);
+        assert!(!f.tapes.is_empty() && !f.bytecode.is_empty());
+        for (i, n) in f.nodes.iter().enumerate() {
+            assert!(f.parts(i).iter().all(|&c| (c as usize) < i));
+            assert_eq!(n.op == CsgOp::Leaf, f.parts(i).is_empty());
+        }
+        assert_eq!(f.nodes.last().unwrap().op, CsgOp::Difference);
+        assert!(matches!(f.leaves[0], crate::flat::Leaf::Perturbed { .. }));
+    }
+
+    /// A union of 40 balls in a row (inside the default domain) splits into nodes of at most MAX_PARTS parts, a
+    /// chain of 100 nested unions stays shallow, and the crossings are those of the
+    /// balls; CSG nested deeper than MAX_DEPTH is an error, not a panic.
+    #[test]
+    fn wide_and_deep_csg() {
+        let balls: Vec<Shape> = (0..40)
+            .map(|k| ball(DVec3::new(k as f64 * 2.4, 0.0, 0.0), 1.0))
+            .collect();
+        let chain = balls
+            .iter()
+            .rev()
+            .cloned()
+            .reduce(|acc, b| Shape::Union(vec![b, acc]))
+            .unwrap();
+        for shape in [Shape::Union(balls.clone()), chain] {
+            let s = Solid::build(&shape).unwrap();
+            let f = s.flat();
+            assert!((0..f.nodes.len()).all(|i| f.parts(i).len() <= MAX_PARTS));
+            let ray = Ray::new(DVec3::new(-5.0, 0.0, 0.0), DVec3::X);
+            let mut t = 0.0;
+            let mut got = vec![];
+            while let Some(h) = s.intersect(&ray, t, 200.0) {
+                got.push(h.t);
+                t = h.t + 1e-9;
+            }
+            assert_eq!(got.len(), 80);
+            for (k, t) in got.iter().enumerate() {
+                let want = 5.0 + (k / 2) as f64 * 2.4 + if k % 2 == 0 { -1.0 } else { 1.0 };
+                assert!((t - want).abs() < 1e-8, "{k}: {t} vs {want}");
+            }
+        }
+        let mut deep = ball(DVec3::ZERO, 1.0);
+        for k in 0..2 * MAX_DEPTH {
+            let other = ball(DVec3::new(0.1 * k as f64, 0.0, 0.0), 1.0);
+            deep = match k % 2 {
+                0 => Shape::Union(vec![deep, other]),
+                _ => Shape::Intersection(vec![deep, other]),
+            };
+        }
+        let err = Solid::build(&deep).unwrap_err();
+        assert!(err.contains("nested"), "{err}");
     }
 }
