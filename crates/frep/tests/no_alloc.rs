@@ -85,9 +85,11 @@ fn bumpy(n: usize) -> PerturbedQuadric {
 /// along it overflow the scan's fixed active set (chunks, then streaming).
 fn rod() -> PerturbedQuadric {
     let n = 3 * frep::perturbed::MAX_ACTIVE;
-    let mut pq = PerturbedQuadric::new(Quadric::ellipsoid(DVec3::ZERO, DVec3::new(2.5, 0.5, 0.5)));
+    let half = 0.023 * n as f64;
+    let radii = DVec3::new(half + 0.3, 0.5, 0.5);
+    let mut pq = PerturbedQuadric::new(Quadric::ellipsoid(DVec3::ZERO, radii));
     for k in 0..n {
-        let x = -2.2 + 4.4 * (k as f64 + 0.5) / n as f64;
+        let x = -half + 2.0 * half * (k as f64 + 0.5) / n as f64;
         let f = if k % 2 == 0 { -2e3 } else { 2e3 };
         pq.push(f, Quadric::sphere(DVec3::new(x, 0.0, 0.0), 0.06));
     }
