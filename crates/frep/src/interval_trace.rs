@@ -7,6 +7,14 @@
 //! split, left half first, so the first crossing is found first. Segments shorter than
 //! a resolution `eps` (relative to the solid's size) are decided by the signs at their
 //! ends: only a feature that enters and leaves within `eps` along the ray can be missed.
+//!
+//! **Allocation.** A trace keeps its segment stack, the tapes it simplifies per segment
+//! (stacked in one arena: a segment's tape never ends before those of the segments under
+//! it) and its node values in thread-local vectors. They grow on a thread's first rays
+//! and are reused after, so a warm thread traces without allocating
+//! (crates/frep/tests/no_alloc.rs). What still allocates: [`Expr::simplify`] and the
+//! one-off evaluations [`Expr::eval`], [`Expr::eval_f32`], [`Expr::gradient`] (a
+//! fresh vector each), none of which tracing uses.
 
 use crate::dual::Dual;
 use crate::expr::{eval_choices_nodes, eval_nodes, simplify_into, Choice, Expr, Node};

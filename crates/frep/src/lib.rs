@@ -4,6 +4,9 @@
 //! ≥ 0 (the HyperFun / FRep convention), the surface is F = 0. Every solid lowers to one
 //! representation, a deduplicated expression DAG ([`Expr`]), evaluated over f64, f32,
 //! intervals or dual numbers; rays meet solids through one contract ([`Surface`]).
+//! A built [`Solid`] is flat, inspectable data ([`flat`]): CSG nodes, a leaf table and
+//! pools that a GPU can upload, intersected in place without allocating per ray; its
+//! expressions also compile to register [`bytecode`], the GPU interpreter's reference.
 //!
 //! ```
 //! use frep::{Expr, Tree};
