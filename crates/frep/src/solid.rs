@@ -537,4 +537,49 @@ mod tests {
         let err = Solid::build(&deep).unwrap_err();
         assert!(err.contains("nested"), "{err}");
     }
+
+    /// A solid's leaves, intersected in place over the pools, give what the owning
+    /// surfaces give, bit for bit.
+    #[test]
+    fn flat_leaves_match_their_surfaces() {
+        use crate::perturbed::PerturbedQuadric;
+        use crate::quadric::Quadric;
+        let mut pq =
+            PerturbedQuadric::new(Quadric::ellipsoid(DVec3::ZERO, DVec3::new(1.0, 0.7, 0.5)));
+        for k in 0..60 {
+            let a = k as f64 * 2.4;
+            let c = DVec3::new(a.cos(), 0.7 * a.sin(), 0.5 * (0.4 * a).sin());
+            pq.push(
+                if k % 3 == 0 { -30.0 } else { 50.0 },
+                Quadric::sphere(c, 0.25),
+            );
+        }
+        let gyroid = (3.0 * Tree::x()).sin() * (3.0 * Tree::y()).cos()
+            + (3.0 * Tree::y()).sin() * (3.0 * Tree::z()).cos()
+            + (3.0 * Tree::z()).sin() * (3.0 * Tree::x()).cos();
+        let ball = 1.2 - (Tree::x().square() + Tree::y().square() + Tree::z().square());
+        let expr = gyroid.min(&ball);
+        let shapes = [Shape::Perturbed(pq.clone()), Shape::function(expr.clone())];
+        let solids = shapes.map(|s| Solid::build(&s).unwrap());
+        let e = Expr::new(&expr);
+        let surfaces: [Box<dyn Surface>; 2] = [
+            Box::new(pq.surface()),
+            Box::new(ExprSurface::new(e.clone(), solids[1].bounds())),
+        ];
+        for (solid, surface) in solids.iter().zip(&surfaces) {
+            let mut hits = 0;
+            for k in 0..300 {
+                let u = k as f64 * 0.37;
+                let o = DVec3::new(2.0 * u.cos(), 1.5 * (0.7 * u).sin(), 2.0 * u.sin());
+                let ray = Ray::new(o, -o + 0.3 * DVec3::new(u.sin(), 0.2, u.cos()));
+                let got = solid.intersect(&ray, 0.0, f64::INFINITY);
+                let want = surface.first_hit(&ray, 0.0, f64::INFINITY);
+                assert_eq!(got.map(|h| (h.t, h.normal)), want, "ray {k}");
+                hits += got.is_some() as usize;
+                let p = ray.at(0.5);
+                assert_eq!(solid.value(p).to_bits(), surface.value(p).to_bits());
+            }
+            assert!(hits > 100, "{hits} hits");
+        }
+    }
 }
