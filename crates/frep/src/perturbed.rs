@@ -5,6 +5,7 @@
 //! so F' is C² and each perturbation only acts inside its support q_i ≥ 0.
 //! [`PerturbedSurface`] intersects rays with such a solid exactly.
 
+mod along;
 mod scan;
 mod surface;
 
