@@ -7,7 +7,8 @@
 //! With the BVH over the supports the cost should grow far slower than N; the unculled
 //! rows test every perturbation on every ray, for comparison.
 //!
-//! Run: `cargo bench -p frep --bench perturbed`.
+//! Run: `cargo bench -p frep --bench perturbed`. With `PERTURBED_ONE_PASS=N` in the
+//! environment it traces one untimed pass at N perturbations instead.
 
 use frep::perturbed::{PerturbedQuadric, PerturbedSurface};
 use frep::quadric::Quadric;
@@ -75,6 +76,17 @@ fn measure(s: &PerturbedSurface, rays: &[Ray]) -> (f64, usize) {
 
 fn main() {
     let rays = camera();
+    // `PERTURBED_ONE_PASS=N`: one untimed pass at N perturbations, for instruction counts
+    // that other builds on the machine cannot disturb (valgrind, docs/benchmarks.md).
+    if let Ok(n) = std::env::var("PERTURBED_ONE_PASS") {
+        let s = PerturbedSurface::new(&scene(n.parse().expect("a count")));
+        let hits = rays
+            .iter()
+            .filter(|r| black_box(s.first_crossing(r, 0.0, f64::INFINITY)).is_some())
+            .count();
+        println!("{hits} hits");
+        return;
+    }
     println!("perturbed ellipsoid, {SIZE}x{SIZE} primary rays, one thread, support radius 0.08");
     println!(
         "{:>6} {:>8} {:>14} {:>8} {:>16}",

@@ -253,6 +253,64 @@ impl Bvh {
 
     /// The box of every finite item together.
     pub fn bounds(&self) -> Aabb {
+        self.as_ref().bounds()
+    }
+
+    /// The arrays, borrowed.
+    pub fn as_ref(&self) -> BvhRef<'_> {
+        BvhRef {
+            nodes: &self.nodes,
+            order: &self.order,
+            item_bounds: &self.item_bounds,
+            unbounded: &self.unbounded,
+        }
+    }
+
+    /// Calls `visit(item)` for every item whose box the segment o + t·d, t ∈ [t_min,
+    /// t_max], meets (and every unbounded item), nearer subtrees first.
+    pub fn for_each_hit(&self, ray: &Ray, t_min: f64, t_max: f64, visit: impl FnMut(usize)) {
+        self.as_ref().for_each_hit(ray, t_min, t_max, visit)
+    }
+
+    /// Appends to `out` the items [`for_each_hit`](Self::for_each_hit) visits.
+    pub fn collect(&self, ray: &Ray, t_min: f64, t_max: f64, out: &mut Vec<u32>) {
+        self.for_each_hit(ray, t_min, t_max, |i| out.push(i as u32));
+    }
+
+    /// Closest-hit traversal: see [`BvhRef::nearest`].
+    pub fn nearest(
+        &self,
+        ray: &Ray,
+        t_min: f64,
+        t_max: f64,
+        hit: impl FnMut(usize, f64) -> Option<f64>,
+    ) -> Option<(usize, f64)> {
+        self.as_ref().nearest(ray, t_min, t_max, hit)
+    }
+
+    /// Calls `visit(item)` for every item whose box holds `p` (and every unbounded item).
+    pub fn for_each_containing(&self, p: DVec3, visit: impl FnMut(usize)) {
+        self.as_ref().for_each_containing(p, visit)
+    }
+}
+
+/// A BVH's flattened arrays, borrowed ([`Bvh`]'s, or a range of a flat solid's pools):
+/// every query walks these and allocates nothing.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BvhRef<'a> {
+    /// The nodes, root first ([`Bvh::nodes`]).
+    pub nodes: &'a [BvhNode],
+    /// Item indices in leaf order ([`Bvh::order`]).
+    pub order: &'a [u32],
+    /// The items' boxes in leaf order ([`Bvh::item_bounds`]).
+    pub item_bounds: &'a [Aabb],
+    /// Items with non-finite boxes ([`Bvh::unbounded`]).
+    pub unbounded: &'a [u32],
+}
+
+impl BvhRef<'_> {
+    /// The box of every finite item together.
+    pub fn bounds(&self) -> Aabb {
         self.nodes.first().map_or(Aabb::EMPTY, |n| n.bounds)
     }
 
@@ -263,11 +321,6 @@ impl Bvh {
             visit(i);
             None
         });
-    }
-
-    /// Appends to `out` the items [`for_each_hit`](Self::for_each_hit) visits.
-    pub fn collect(&self, ray: &Ray, t_min: f64, t_max: f64, out: &mut Vec<u32>) {
-        self.for_each_hit(ray, t_min, t_max, |i| out.push(i as u32));
     }
 
     /// Closest-hit traversal: `hit(item, t_max)` returns the item's hit parameter if it
@@ -289,7 +342,7 @@ impl Bvh {
                 }
             }
         };
-        for &i in &self.unbounded {
+        for &i in self.unbounded {
             offer(i, &mut t_max, &mut best);
         }
         if self.nodes.is_empty() {
@@ -333,7 +386,7 @@ impl Bvh {
 
     /// Calls `visit(item)` for every item whose box holds `p` (and every unbounded item).
     pub fn for_each_containing(&self, p: DVec3, mut visit: impl FnMut(usize)) {
-        for &i in &self.unbounded {
+        for &i in self.unbounded {
             visit(i as usize);
         }
         if self.nodes.is_empty() {

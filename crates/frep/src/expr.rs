@@ -315,12 +315,7 @@ impl Expr {
     /// Evaluates at (x, y, z) over any [`Scalar`], using `scratch` for the node values.
     #[inline]
     pub fn eval_with<S: Scalar>(&self, x: S, y: S, z: S, scratch: &mut Vec<S>) -> S {
-        scratch.clear();
-        for n in &self.nodes {
-            let v = eval_node(*n, scratch, x, y, z);
-            scratch.push(v);
-        }
-        *scratch.last().expect("an expression has a root")
+        eval_nodes(&self.nodes, x, y, z, scratch)
     }
 
     /// Evaluation over a box (intervals, or duals of intervals) that also records, for
@@ -335,93 +330,15 @@ impl Expr {
         scratch: &mut Vec<S>,
         choices: &mut Vec<Choice>,
     ) -> S {
-        scratch.clear();
-        choices.clear();
-        for n in &self.nodes {
-            let mut choice = Choice::Both;
-            let v = match *n {
-                Node::Binary(op @ (BinaryOp::Min | BinaryOp::Max), a, b) => {
-                    let (u, w) = (scratch[a as usize], scratch[b as usize]);
-                    let a_low = u.less(w) == Some(true);
-                    let b_low = w.less(u) == Some(true);
-                    choice = match (op, a_low, b_low) {
-                        (BinaryOp::Min, true, _) | (BinaryOp::Max, _, true) => Choice::Left,
-                        (BinaryOp::Min, _, true) | (BinaryOp::Max, true, _) => Choice::Right,
-                        _ => Choice::Both,
-                    };
-                    match choice {
-                        Choice::Left => u,
-                        Choice::Right => w,
-                        Choice::Both => apply_binary(op, u, w),
-                    }
-                }
-                node => eval_node(node, scratch, x, y, z),
-            };
-            scratch.push(v);
-            choices.push(choice);
-        }
-        *scratch.last().expect("an expression has a root")
+        eval_choices_nodes(&self.nodes, x, y, z, scratch, choices)
     }
 
     /// The expression with every decided min/max replaced by its deciding operand and
     /// what no longer feeds the root dropped. Over the box the choices were recorded on,
     /// the result has exactly the same values as `self`. None when nothing was decided.
     pub fn simplify(&self, choices: &[Choice]) -> Option<Expr> {
-        if !choices.iter().any(|c| *c != Choice::Both) {
-            return None;
-        }
-        SIMPLIFY.with_borrow_mut(|(live, remap)| {
-            let n = self.nodes.len();
-            // Backward: what the root still needs, following only the chosen operands.
-            live.clear();
-            live.resize(n, false);
-            live[n - 1] = true;
-            let mut count = 0;
-            for i in (0..n).rev() {
-                if !live[i] {
-                    continue;
-                }
-                count += 1;
-                match (self.nodes[i], choices[i]) {
-                    (Node::Binary(_, a, _), Choice::Left) => live[a as usize] = true,
-                    (Node::Binary(_, _, b), Choice::Right) => live[b as usize] = true,
-                    (Node::Binary(_, a, b), _) => {
-                        live[a as usize] = true;
-                        live[b as usize] = true;
-                    }
-                    (Node::Unary(_, a) | Node::PowI(a, _), _) => live[a as usize] = true,
-                    _ => {}
-                }
-            }
-            // Forward: copy what is live; a decided min/max is its chosen operand.
-            remap.clear();
-            remap.resize(n, u32::MAX);
-            let mut out = Vec::with_capacity(count);
-            for i in 0..n {
-                if !live[i] {
-                    continue;
-                }
-                remap[i] = match (self.nodes[i], choices[i]) {
-                    (Node::Binary(_, a, _), Choice::Left) => remap[a as usize],
-                    (Node::Binary(_, _, b), Choice::Right) => remap[b as usize],
-                    (node, _) => {
-                        out.push(match node {
-                            Node::Unary(op, a) => Node::Unary(op, remap[a as usize]),
-                            Node::PowI(a, k) => Node::PowI(remap[a as usize], k),
-                            Node::Binary(op, a, b) => {
-                                Node::Binary(op, remap[a as usize], remap[b as usize])
-                            }
-                            other => other,
-                        });
-                        out.len() as u32 - 1
-                    }
-                };
-            }
-            // Every live node is reachable from the root through chosen operands, so the
-            // root's image is the last node written.
-            debug_assert_eq!(remap[n - 1] as usize, out.len() - 1);
-            Some(Expr { nodes: out })
-        })
+        let mut out = Vec::new();
+        simplify_into(&self.nodes, None, choices, &mut out).then_some(Expr { nodes: out })
     }
 
     /// F at a point, in f64.
@@ -446,6 +363,131 @@ impl Expr {
         let r = self.eval_with(v(0), v(1), v(2), &mut Vec::with_capacity(self.len()));
         (r.v, r.d)
     }
+}
+
+/// Evaluates the node list `nodes` (root last) at (x, y, z), using `scratch` for the
+/// node values: [`Expr::eval_with`] over a borrowed tape.
+#[inline]
+pub fn eval_nodes<S: Scalar>(nodes: &[Node], x: S, y: S, z: S, scratch: &mut Vec<S>) -> S {
+    scratch.clear();
+    for n in nodes {
+        let v = eval_node(*n, scratch, x, y, z);
+        scratch.push(v);
+    }
+    *scratch.last().expect("an expression has a root")
+}
+
+/// [`Expr::eval_choices`] over a borrowed tape.
+pub fn eval_choices_nodes<S: Scalar>(
+    nodes: &[Node],
+    x: S,
+    y: S,
+    z: S,
+    scratch: &mut Vec<S>,
+    choices: &mut Vec<Choice>,
+) -> S {
+    scratch.clear();
+    choices.clear();
+    for n in nodes {
+        let mut choice = Choice::Both;
+        let v = match *n {
+            Node::Binary(op @ (BinaryOp::Min | BinaryOp::Max), a, b) => {
+                let (u, w) = (scratch[a as usize], scratch[b as usize]);
+                let a_low = u.less(w) == Some(true);
+                let b_low = w.less(u) == Some(true);
+                choice = match (op, a_low, b_low) {
+                    (BinaryOp::Min, true, _) | (BinaryOp::Max, _, true) => Choice::Left,
+                    (BinaryOp::Min, _, true) | (BinaryOp::Max, true, _) => Choice::Right,
+                    _ => Choice::Both,
+                };
+                match choice {
+                    Choice::Left => u,
+                    Choice::Right => w,
+                    Choice::Both => apply_binary(op, u, w),
+                }
+            }
+            node => eval_node(node, scratch, x, y, z),
+        };
+        scratch.push(v);
+        choices.push(choice);
+    }
+    *scratch.last().expect("an expression has a root")
+}
+
+/// [`Expr::simplify`] appending to `out`: the tape is `tape`, or when `tape` is None the
+/// nodes `out[range]` already in `out` (so that simplified tapes can stack up in one
+/// reused arena). Returns false, appending nothing, when no choice is decided. Reuses
+/// thread-local liveness buffers: no allocation once `out` and they have grown.
+pub fn simplify_into(
+    tape: &[Node],
+    range: Option<std::ops::Range<usize>>,
+    choices: &[Choice],
+    out: &mut Vec<Node>,
+) -> bool {
+    if !choices.iter().any(|c| *c != Choice::Both) {
+        return false;
+    }
+    let (base, n) = match &range {
+        Some(r) => (r.start, r.len()),
+        None => (0, tape.len()),
+    };
+    let from_out = range.is_some();
+    let node = |out: &Vec<Node>, i: usize| {
+        if from_out {
+            out[base + i]
+        } else {
+            tape[i]
+        }
+    };
+    SIMPLIFY.with_borrow_mut(|(live, remap)| {
+        // Backward: what the root still needs, following only the chosen operands.
+        live.clear();
+        live.resize(n, false);
+        live[n - 1] = true;
+        for i in (0..n).rev() {
+            if !live[i] {
+                continue;
+            }
+            match (node(out, i), choices[i]) {
+                (Node::Binary(_, a, _), Choice::Left) => live[a as usize] = true,
+                (Node::Binary(_, _, b), Choice::Right) => live[b as usize] = true,
+                (Node::Binary(_, a, b), _) => {
+                    live[a as usize] = true;
+                    live[b as usize] = true;
+                }
+                (Node::Unary(_, a) | Node::PowI(a, _), _) => live[a as usize] = true,
+                _ => {}
+            }
+        }
+        // Forward: copy what is live; a decided min/max is its chosen operand.
+        remap.clear();
+        remap.resize(n, u32::MAX);
+        let start = out.len();
+        for i in 0..n {
+            if !live[i] {
+                continue;
+            }
+            remap[i] = match (node(out, i), choices[i]) {
+                (Node::Binary(_, a, _), Choice::Left) => remap[a as usize],
+                (Node::Binary(_, _, b), Choice::Right) => remap[b as usize],
+                (nd, _) => {
+                    out.push(match nd {
+                        Node::Unary(op, a) => Node::Unary(op, remap[a as usize]),
+                        Node::PowI(a, k) => Node::PowI(remap[a as usize], k),
+                        Node::Binary(op, a, b) => {
+                            Node::Binary(op, remap[a as usize], remap[b as usize])
+                        }
+                        other => other,
+                    });
+                    (out.len() - start) as u32 - 1
+                }
+            };
+        }
+        // Every live node is reachable from the root through chosen operands, so the
+        // root's image is the last node written.
+        debug_assert_eq!(remap[n - 1] as usize, out.len() - start - 1);
+        true
+    })
 }
 
 #[cfg(test)]

@@ -7,9 +7,17 @@
 //! split, left half first, so the first crossing is found first. Segments shorter than
 //! a resolution `eps` (relative to the solid's size) are decided by the signs at their
 //! ends: only a feature that enters and leaves within `eps` along the ray can be missed.
+//!
+//! **Allocation.** A trace keeps its segment stack, the tapes it simplifies per segment
+//! (stacked in one arena: a segment's tape never ends before those of the segments under
+//! it) and its node values in thread-local vectors. They grow on a thread's first rays
+//! and are reused after, so a warm thread traces without allocating
+//! (crates/frep/tests/no_alloc.rs). What still allocates: [`Expr::simplify`] and the
+//! one-off evaluations [`Expr::eval`], [`Expr::eval_f32`], [`Expr::gradient`] (a
+//! fresh vector each), none of which tracing uses.
 
 use crate::dual::Dual;
-use crate::expr::{Choice, Expr};
+use crate::expr::{eval_choices_nodes, eval_nodes, simplify_into, Choice, Expr, Node};
 use crate::interval::Interval;
 use crate::ray::{Aabb, Ray};
 use crate::surface::{outward, Surface};
@@ -29,26 +37,57 @@ pub struct ExprSurface {
     eps: f64,
 }
 
+/// An expression solid over a borrowed tape (root last): what [`ExprSurface`] and the
+/// flat solids of [`crate::solid`] intersect.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ExprView<'a> {
+    /// The nodes, in evaluation order.
+    pub tape: &'a [Node],
+    /// A box holding every point with F ≥ 0.
+    pub bounds: Aabb,
+    /// The resolution along rays ([`RESOLUTION`] × the bounds' diagonal).
+    pub eps: f64,
+}
+
 thread_local! {
-    static SCRATCH_I: RefCell<Vec<Interval>> = const { RefCell::new(Vec::new()) };
     static SCRATCH_D: RefCell<Vec<Dual<Interval, 1>>> = const { RefCell::new(Vec::new()) };
     static SCRATCH_F: RefCell<Vec<f64>> = const { RefCell::new(Vec::new()) };
     static SCRATCH_G: RefCell<Vec<Dual<f64, 3>>> = const { RefCell::new(Vec::new()) };
     static SCRATCH_T: RefCell<Vec<Dual<f64, 1>>> = const { RefCell::new(Vec::new()) };
+    /// The segment stack, the arena of simplified tapes and the choices of one trace,
+    /// kept per thread: once grown, tracing allocates nothing.
+    static TRACE: RefCell<Trace> = const {
+        RefCell::new(Trace { stack: Vec::new(), arena: Vec::new(), choices: Vec::new() })
+    };
+}
+
+/// The reusable state of [`ExprView::trace`].
+struct Trace {
+    stack: Vec<Segment>,
+    /// Simplified tapes, stacked: a segment's tape ends at or after the tapes of every
+    /// segment below it on the stack, so popping a segment frees what lies past its tape.
+    arena: Vec<Node>,
+    choices: Vec<Choice>,
+}
+
+/// A ray segment [a, b] still to search, the inside predicate at its ends, and its tape
+/// (None: the root tape; else a range of the arena).
+#[derive(Clone, Copy)]
+struct Segment {
+    a: f64,
+    b: f64,
+    ia: bool,
+    ib: bool,
+    tape: Option<(u32, u32)>,
 }
 
 impl ExprSurface {
     /// A solid whose every point with F ≥ 0 lies in `bounds` (see [`crate::bounds`]).
     pub fn new(expr: Expr, bounds: Aabb) -> Self {
-        let diag = if bounds.is_finite() && !bounds.is_empty() {
-            bounds.extent().length()
-        } else {
-            1.0
-        };
         Self {
             expr: Arc::new(expr),
             bounds,
-            eps: RESOLUTION * diag.max(1e-12),
+            eps: resolution(&bounds),
         }
     }
 
@@ -57,106 +96,112 @@ impl ExprSurface {
         &self.expr
     }
 
-    /// Whether the point at t is inside (F ≥ 0; NaN counts as outside), by `tape`.
-    #[inline]
-    fn inside_at(tape: &Expr, ray: &Ray, t: f64) -> bool {
-        Self::value_at(tape, ray, t) >= 0.0
-    }
-
-    /// F and dF/dt over the segment [t0, t1] by `tape`, recording min/max choices.
-    fn segment(
-        tape: &Expr,
-        ray: &Ray,
-        t0: f64,
-        t1: f64,
-        choices: &mut Vec<Choice>,
-    ) -> (Interval, Interval) {
-        let t = Interval::new(t0, t1);
-        let c = |k: usize| {
-            let v = Interval::point(ray.o[k]) + t * Interval::point(ray.d[k]);
-            Dual::new(v, [Interval::point(ray.d[k])])
-        };
-        let r = SCRATCH_D.with_borrow_mut(|s| tape.eval_choices(c(0), c(1), c(2), s, choices));
-        (r.v, r.d[0])
-    }
-
-    /// F at the point at t, by `tape`.
-    #[inline]
-    fn value_at(tape: &Expr, ray: &Ray, t: f64) -> f64 {
-        let p = ray.at(t);
-        SCRATCH_F.with_borrow_mut(|s| tape.eval_with(p.x, p.y, p.z, s))
-    }
-
-    /// ∇F at p by `tape`.
-    fn gradient_by(tape: &Expr, p: DVec3) -> DVec3 {
-        let v = |k: usize| Dual::<f64, 3>::var(p[k], k);
-        let r = SCRATCH_G.with_borrow_mut(|s| tape.eval_with(v(0), v(1), v(2), s));
-        DVec3::from_array(r.d)
-    }
-
-    /// Finds the crossing in [a, b], where the inside predicate differs at the ends:
-    /// safeguarded Newton on F(t) (a Newton step that leaves the bracket becomes a
-    /// bisection), stopping when the bracket or the step is below `tol`.
-    fn refine(tape: &Expr, ray: &Ray, mut a: f64, mut b: f64, inside_a: bool, tol: f64) -> f64 {
-        let mut x = 0.5 * (a + b);
-        for _ in 0..100 {
-            let p = ray.at(x);
-            let c = |k: usize| Dual::<f64, 1>::new(p[k], [ray.d[k]]);
-            let r = SCRATCH_T.with_borrow_mut(|s| tape.eval_with(c(0), c(1), c(2), s));
-            if (r.v >= 0.0) == inside_a {
-                a = x;
-            } else {
-                b = x;
-            }
-            if b - a <= tol {
-                return b;
-            }
-            let step = r.v / r.d[0];
-            let newton = x - step;
-            if step.is_finite() && newton > a && newton < b {
-                if step.abs() <= tol {
-                    return newton;
-                }
-                x = newton;
-            } else {
-                x = 0.5 * (a + b);
-            }
+    /// The solid as a borrowed view.
+    pub fn view(&self) -> ExprView<'_> {
+        ExprView {
+            tape: self.expr.nodes(),
+            bounds: self.bounds,
+            eps: self.eps,
         }
-        b
     }
+}
+
+/// The resolution along rays for a solid with these bounds.
+pub fn resolution(bounds: &Aabb) -> f64 {
+    let diag = if bounds.is_finite() && !bounds.is_empty() {
+        bounds.extent().length()
+    } else {
+        1.0
+    };
+    RESOLUTION * diag.max(1e-12)
+}
+
+/// Whether the point at t is inside (F ≥ 0; NaN counts as outside), by `tape`.
+#[inline]
+fn inside_at(tape: &[Node], ray: &Ray, t: f64) -> bool {
+    value_at(tape, ray, t) >= 0.0
+}
+
+/// F and dF/dt over the segment [t0, t1] by `tape`, recording min/max choices.
+fn segment(
+    tape: &[Node],
+    ray: &Ray,
+    t0: f64,
+    t1: f64,
+    choices: &mut Vec<Choice>,
+) -> (Interval, Interval) {
+    let t = Interval::new(t0, t1);
+    let c = |k: usize| {
+        let v = Interval::point(ray.o[k]) + t * Interval::point(ray.d[k]);
+        Dual::new(v, [Interval::point(ray.d[k])])
+    };
+    let r = SCRATCH_D.with_borrow_mut(|s| eval_choices_nodes(tape, c(0), c(1), c(2), s, choices));
+    (r.v, r.d[0])
+}
+
+/// F at the point at t, by `tape`.
+#[inline]
+fn value_at(tape: &[Node], ray: &Ray, t: f64) -> f64 {
+    let p = ray.at(t);
+    SCRATCH_F.with_borrow_mut(|s| eval_nodes(tape, p.x, p.y, p.z, s))
+}
+
+/// ∇F at p by `tape`.
+fn gradient_by(tape: &[Node], p: DVec3) -> DVec3 {
+    let v = |k: usize| Dual::<f64, 3>::var(p[k], k);
+    let r = SCRATCH_G.with_borrow_mut(|s| eval_nodes(tape, v(0), v(1), v(2), s));
+    DVec3::from_array(r.d)
+}
+
+/// Finds the crossing in [a, b], where the inside predicate differs at the ends:
+/// safeguarded Newton on F(t) (a Newton step that leaves the bracket becomes a
+/// bisection), stopping when the bracket or the step is below `tol`.
+fn refine(tape: &[Node], ray: &Ray, mut a: f64, mut b: f64, inside_a: bool, tol: f64) -> f64 {
+    let mut x = 0.5 * (a + b);
+    for _ in 0..100 {
+        let p = ray.at(x);
+        let c = |k: usize| Dual::<f64, 1>::new(p[k], [ray.d[k]]);
+        let r = SCRATCH_T.with_borrow_mut(|s| eval_nodes(tape, c(0), c(1), c(2), s));
+        if (r.v >= 0.0) == inside_a {
+            a = x;
+        } else {
+            b = x;
+        }
+        if b - a <= tol {
+            return b;
+        }
+        let step = r.v / r.d[0];
+        let newton = x - step;
+        if step.is_finite() && newton > a && newton < b {
+            if step.abs() <= tol {
+                return newton;
+            }
+            x = newton;
+        } else {
+            x = 0.5 * (a + b);
+        }
+    }
+    b
 }
 
 /// Expressions shorter than this are not worth simplifying per segment.
 const SIMPLIFY_MIN_LEN: usize = 24;
 
-impl Surface for ExprSurface {
-    fn value(&self, p: DVec3) -> f64 {
-        SCRATCH_F.with_borrow_mut(|s| self.expr.eval_with(p.x, p.y, p.z, s))
+impl ExprView<'_> {
+    /// F at p.
+    pub fn value(&self, p: DVec3) -> f64 {
+        SCRATCH_F.with_borrow_mut(|s| eval_nodes(self.tape, p.x, p.y, p.z, s))
     }
 
-    fn gradient(&self, p: DVec3) -> DVec3 {
-        Self::gradient_by(&self.expr, p)
+    /// ∇F at p.
+    pub fn gradient(&self, p: DVec3) -> DVec3 {
+        gradient_by(self.tape, p)
     }
 
-    fn first_crossing(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<f64> {
-        self.trace(ray, t_min, t_max).map(|(t, _)| t)
-    }
-
-    fn first_hit(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<(f64, DVec3)> {
-        // The normal from the tape simplified for the hit's segment: same values there,
-        // a fraction of the nodes.
-        let (t, tape) = self.trace(ray, t_min, t_max)?;
-        Some((t, outward(Self::gradient_by(&tape, ray.at(t)))))
-    }
-
-    fn bounds(&self) -> Aabb {
-        self.bounds
-    }
-}
-
-impl ExprSurface {
-    /// The first crossing and the tape that holds at it.
-    fn trace(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<(f64, Arc<Expr>)> {
+    /// The first crossing in (t_min, t_max) and, when `normal`, the outward normal there
+    /// (from the tape simplified for the hit's segment: same values there, a fraction of
+    /// the nodes; else +z). Allocates nothing once this thread's scratch has grown.
+    pub fn trace(&self, ray: &Ray, t_min: f64, t_max: f64, normal: bool) -> Option<(f64, DVec3)> {
         // Outside the bounds F < 0, so crossings lie inside them; widen a little so that
         // a surface on the box face is not clipped away.
         let grown = Aabb::new(self.bounds.lo - self.eps, self.bounds.hi + self.eps);
@@ -167,44 +212,106 @@ impl ExprSurface {
         let eps_t = self.eps / ray.d.length().max(f64::MIN_POSITIVE);
         // Crossings are located to 1e-5 of the resolution (1e-12 of the solid's size).
         let tol = eps_t * 1e-5;
-        let root = self.expr.clone();
-        let mut choices = Vec::new();
+        let root = self.tape;
         // Where the range was clipped by the grown bounds, F < 0 is known (a solid cut by
         // its search domain is thereby capped at the domain's faces).
-        let ia = t0 <= t_min && Self::inside_at(&root, ray, t0);
-        let ib = t1 >= t_max && Self::inside_at(&root, ray, t1);
-        let mut stack = vec![(t0, t1, ia, ib, root)];
-        while let Some((a, b, ia, ib, tape)) = stack.pop() {
-            let (v, slope) = Self::segment(&tape, ray, a, b, &mut choices);
-            if v.lo > 0.0 || v.hi < 0.0 {
-                continue;
-            }
-            if slope.lo > 0.0 || slope.hi < 0.0 || b - a <= eps_t {
-                // Monotonic (at most one crossing) or below resolution: decided by the
-                // signs at the ends.
-                if ia != ib {
-                    return Some((Self::refine(&tape, ray, a, b, ia, tol), tape));
+        let ia = t0 <= t_min && inside_at(root, ray, t0);
+        let ib = t1 >= t_max && inside_at(root, ray, t1);
+        TRACE.with_borrow_mut(|tr| {
+            let Trace {
+                stack,
+                arena,
+                choices,
+            } = tr;
+            stack.clear();
+            arena.clear();
+            stack.push(Segment {
+                a: t0,
+                b: t1,
+                ia,
+                ib,
+                tape: None,
+            });
+            while let Some(Segment { a, b, ia, ib, tape }) = stack.pop() {
+                arena.truncate(tape.map_or(0, |(_, e)| e as usize));
+                let nodes = match tape {
+                    None => root,
+                    Some((s, e)) => &arena[s as usize..e as usize],
+                };
+                let (v, slope) = segment(nodes, ray, a, b, choices);
+                if v.lo > 0.0 || v.hi < 0.0 {
+                    continue;
                 }
-                continue;
+                if slope.lo > 0.0 || slope.hi < 0.0 || b - a <= eps_t {
+                    // Monotonic (at most one crossing) or below resolution: decided by
+                    // the signs at the ends.
+                    if ia != ib {
+                        let t = refine(nodes, ray, a, b, ia, tol);
+                        let n = match normal {
+                            true => outward(gradient_by(nodes, ray.at(t))),
+                            false => DVec3::Z,
+                        };
+                        return Some((t, n));
+                    }
+                    continue;
+                }
+                // The mean-value form F(m) + F'([a,b])·([a,b] − m) is far tighter than
+                // the plain interval on short segments (Moore 1966, §6).
+                let m = 0.5 * (a + b);
+                let fm = value_at(nodes, ray, m);
+                let mv = Interval::point(fm) + slope * Interval::new(a - m, b - m);
+                if ia == ib && (mv.lo > 0.0 || mv.hi < 0.0) {
+                    continue;
+                }
+                // Both halves lie in this segment, so its min/max choices hold there too.
+                let mut half = tape;
+                if nodes.len() >= SIMPLIFY_MIN_LEN {
+                    let start = arena.len();
+                    let range = tape.map(|(s, e)| s as usize..e as usize);
+                    if simplify_into(root, range, choices, arena) {
+                        half = Some((start as u32, arena.len() as u32));
+                    }
+                }
+                let im = fm >= 0.0;
+                stack.push(Segment {
+                    a: m,
+                    b,
+                    ia: im,
+                    ib,
+                    tape: half,
+                });
+                stack.push(Segment {
+                    a,
+                    b: m,
+                    ia,
+                    ib: im,
+                    tape: half,
+                });
             }
-            // The mean-value form F(m) + F'([a,b])·([a,b] − m) is far tighter than the
-            // plain interval on short segments (Moore 1966, §6).
-            let m = 0.5 * (a + b);
-            let fm = Self::value_at(&tape, ray, m);
-            let mv = Interval::point(fm) + slope * Interval::new(a - m, b - m);
-            if ia == ib && (mv.lo > 0.0 || mv.hi < 0.0) {
-                continue;
-            }
-            // Both halves lie in this segment, so its min/max choices hold there too.
-            let tape = match tape.len() >= SIMPLIFY_MIN_LEN {
-                true => tape.simplify(&choices).map(Arc::new).unwrap_or(tape),
-                false => tape,
-            };
-            let im = fm >= 0.0;
-            stack.push((m, b, im, ib, tape.clone()));
-            stack.push((a, m, ia, im, tape));
-        }
-        None
+            None
+        })
+    }
+}
+
+impl Surface for ExprSurface {
+    fn value(&self, p: DVec3) -> f64 {
+        self.view().value(p)
+    }
+
+    fn gradient(&self, p: DVec3) -> DVec3 {
+        self.view().gradient(p)
+    }
+
+    fn first_crossing(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<f64> {
+        self.view().trace(ray, t_min, t_max, false).map(|(t, _)| t)
+    }
+
+    fn first_hit(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<(f64, DVec3)> {
+        self.view().trace(ray, t_min, t_max, true)
+    }
+
+    fn bounds(&self) -> Aabb {
+        self.bounds
     }
 }
 

@@ -4,6 +4,9 @@
 //! ≥ 0 (the HyperFun / FRep convention), the surface is F = 0. Every solid lowers to one
 //! representation, a deduplicated expression DAG ([`Expr`]), evaluated over f64, f32,
 //! intervals or dual numbers; rays meet solids through one contract ([`Surface`]).
+//! A built [`Solid`] is flat, inspectable data ([`flat`]): CSG nodes, a leaf table and
+//! pools that a GPU can upload, intersected in place without allocating per ray; its
+//! expressions also compile to register [`bytecode`], the GPU interpreter's reference.
 //!
 //! ```
 //! use frep::{Expr, Tree};
@@ -19,9 +22,11 @@
 
 pub mod bounds;
 pub mod bvh;
+pub mod bytecode;
 pub mod csg;
 pub mod dual;
 pub mod expr;
+pub mod flat;
 pub mod interval;
 pub mod interval_trace;
 pub mod perturbed;
@@ -36,12 +41,14 @@ pub mod surface;
 pub mod transform;
 pub mod tree;
 
-pub use bvh::Bvh;
+pub use bvh::{Bvh, BvhRef};
+pub use bytecode::Bytecode;
 pub use dual::Dual;
 pub use expr::{Choice, Expr, Node};
+pub use flat::{Flat, Leaf, LeafView};
 pub use interval::Interval;
-pub use interval_trace::ExprSurface;
-pub use perturbed::{PerturbedQuadric, PerturbedSurface};
+pub use interval_trace::{ExprSurface, ExprView};
+pub use perturbed::{PerturbedQuadric, PerturbedSurface, PerturbedView};
 pub use quadric::Quadric;
 pub use ray::{Aabb, Ray};
 pub use scalar::Scalar;

@@ -5,10 +5,12 @@
 //! so F' is C² and each perturbation only acts inside its support q_i ≥ 0.
 //! [`PerturbedSurface`] intersects rays with such a solid exactly.
 
+mod along;
 mod scan;
 mod surface;
 
-pub use surface::PerturbedSurface;
+pub use scan::MAX_ACTIVE;
+pub use surface::{PerturbedSurface, PerturbedView};
 
 use crate::quadric::Quadric;
 use crate::transform::Affine;

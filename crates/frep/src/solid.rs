@@ -4,13 +4,18 @@
 //! expression is an expression), bounds each leaf, and keeps min/max CSG as a tree whose
 //! crossings combine exactly along the ray: each part reports its own crossings, and the
 //! combined inside/outside state (any / all / a-and-not-b) flips only where it says so.
+//! The solid is its flat form ([`Flat`]): post-order CSG nodes, a leaf table and pools,
+//! intersected in place. Combining crossings keeps each node's part states in fixed
+//! arrays of [`MAX_PARTS`] on the stack, nesting at most [`MAX_DEPTH`] deep (wider nodes
+//! are split at build, deeper ones are a build error), so no ray allocates.
 
 use crate::bounds::{expr_bounds, DEFAULT_DOMAIN};
 use crate::expr::Expr;
+use crate::flat::{CsgNode, CsgOp, Flat, LeafView, Span, MAX_DEPTH, MAX_PARTS};
 use crate::interval_trace::ExprSurface;
 use crate::ray::{Aabb, Ray};
 use crate::shape::Shape;
-use crate::surface::Surface;
+use crate::surface::{outward, Surface};
 use crate::transform::Affine;
 use glam::DVec3;
 
@@ -24,15 +29,9 @@ pub struct Hit {
 }
 
 /// A solid ready for ray queries (see the module docs).
-pub enum Solid {
-    /// A solid with its own intersector.
-    Leaf(Box<dyn Surface>),
-    /// Inside any part.
-    Union(Vec<Solid>, Aabb),
-    /// Inside every part.
-    Intersection(Vec<Solid>, Aabb),
-    /// Inside the first part and outside the second.
-    Difference(Box<Solid>, Box<Solid>, Aabb),
+#[derive(Clone, Debug, PartialEq)]
+pub struct Solid {
+    flat: Flat,
 }
 
 /// How a CSG node combines its parts' inside states.
@@ -55,12 +54,24 @@ impl Rule {
 
 impl Solid {
     /// Builds a solid from a shape. Expression leaves are bounded inside their declared
-    /// domain, else inside ±[`DEFAULT_DOMAIN`].
+    /// domain, else inside ±[`DEFAULT_DOMAIN`]. Errors for a singular transform, an
+    /// expression the bytecode cannot hold, or CSG nested deeper than [`MAX_DEPTH`].
     pub fn build(shape: &Shape) -> Result<Solid, String> {
-        Self::build_moved(shape, &Affine::IDENTITY)
+        let mut flat = Flat::default();
+        let (_, depth) = Self::build_moved(shape, &Affine::IDENTITY, &mut flat)?;
+        if depth > MAX_DEPTH {
+            return Err(format!(
+                "CSG nested {depth} deep; at most {MAX_DEPTH} levels are supported"
+            ));
+        }
+        Ok(Solid { flat })
     }
 
-    fn build_moved(shape: &Shape, m: &Affine) -> Result<Solid, String> {
+    /// Appends the nodes of `shape` moved by `m`; returns the root's index and depth.
+    fn build_moved(shape: &Shape, m: &Affine, flat: &mut Flat) -> Result<(u32, usize), String> {
+        let leaf = |flat: &mut Flat, k: u32, bounds: Aabb| {
+            push_node(flat, CsgOp::Leaf, Span { first: k, count: 1 }, bounds)
+        };
         Ok(match shape {
             Shape::Function { tree, domain } => {
                 let moved = m
@@ -72,64 +83,266 @@ impl Solid {
                 ));
                 let expr = Expr::new(&moved);
                 let bounds = expr_bounds(&expr, domain);
-                Solid::Leaf(Box::new(ExprSurface::new(expr, bounds)))
+                let k = flat.push_expr(&ExprSurface::new(expr, bounds))?;
+                (leaf(flat, k, bounds), 1)
             }
             Shape::Perturbed(p) => {
                 // A moved quadric is a quadric: the exact path survives any transform.
                 let moved = p
                     .transformed(m)
-                    .ok_or_else(|| format!("singular transform {m:?}"))?;
-                Solid::Leaf(Box::new(moved.surface()))
+                    .ok_or_else(|| format!("singular transform {m:?}"))?
+                    .surface();
+                let k = flat.push_perturbed(&moved);
+                (leaf(flat, k, moved.bounds()), 1)
             }
-            Shape::Union(v) => {
-                let parts = v
-                    .iter()
-                    .map(|s| Self::build_moved(s, m))
-                    .collect::<Result<Vec<_>, _>>()?;
-                let b = parts.iter().fold(Aabb::EMPTY, |b, p| b.union(&p.bounds()));
-                let b = tighten(shape, m, b)?;
-                Solid::Union(parts, b)
-            }
-            Shape::Intersection(v) => {
-                let parts = v
-                    .iter()
-                    .map(|s| Self::build_moved(s, m))
-                    .collect::<Result<Vec<_>, _>>()?;
+            Shape::Union(v) | Shape::Intersection(v) => {
+                let union = matches!(shape, Shape::Union(_));
+                let (op, fold): (_, fn(&Aabb, &Aabb) -> Aabb) = match union {
+                    true => (CsgOp::Union, Aabb::union),
+                    false => (CsgOp::Intersection, Aabb::intersection),
+                };
+                let start = match union {
+                    true => Aabb::EMPTY,
+                    false => Aabb::EVERYTHING,
+                };
+                // Nested unions (intersections) are one: their parts join this node's, so
+                // that chains such as union(a, union(b, …)) do not nest deep.
+                let mut nested = Vec::with_capacity(v.len());
+                for s in v {
+                    same_op_parts(s, m, union, &mut nested);
+                }
+                let mut parts = Vec::with_capacity(nested.len());
+                for (s, m) in nested {
+                    parts.push(Self::build_moved(s, &m, flat)?);
+                }
+                if parts.len() == 1 {
+                    return Ok(parts[0]);
+                }
+                // Groups of at most MAX_PARTS under nodes of their own, until one is left.
+                while parts.len() > MAX_PARTS {
+                    let mut grouped = Vec::with_capacity(parts.len().div_ceil(MAX_PARTS));
+                    for group in parts.chunks(MAX_PARTS) {
+                        if let [one] = group {
+                            grouped.push(*one);
+                            continue;
+                        }
+                        grouped.push(interior(flat, op, group, start, fold, None));
+                    }
+                    parts = grouped;
+                }
                 let b = parts
                     .iter()
-                    .fold(Aabb::EVERYTHING, |b, p| b.intersection(&p.bounds()));
+                    .fold(start, |b, &(i, _)| fold(&b, &flat.nodes[i as usize].bounds));
                 let b = tighten(shape, m, b)?;
-                Solid::Intersection(parts, b)
+                interior(flat, op, &parts, start, fold, Some(b))
             }
             Shape::Difference(a, b) => {
-                let (a, b) = (Self::build_moved(a, m)?, Self::build_moved(b, m)?);
-                let bounds = tighten(shape, m, a.bounds())?;
-                Solid::Difference(Box::new(a), Box::new(b), bounds)
+                let parts = [
+                    Self::build_moved(a, m, flat)?,
+                    Self::build_moved(b, m, flat)?,
+                ];
+                let bounds = tighten(shape, m, flat.nodes[parts[0].0 as usize].bounds)?;
+                let keep = |b: &Aabb, _: &Aabb| *b;
+                interior(flat, CsgOp::Difference, &parts, bounds, keep, Some(bounds))
             }
-            Shape::Transformed(inner, s) => Self::build_moved(s, &inner.then(m))?,
+            Shape::Transformed(inner, s) => Self::build_moved(s, &inner.then(m), flat)?,
         })
+    }
+
+    /// The flat arrays (see [`crate::flat`]).
+    pub fn flat(&self) -> &Flat {
+        &self.flat
+    }
+
+    fn root(&self) -> usize {
+        self.flat.nodes.len() - 1
     }
 
     /// The first crossing in (t_min, t_max) with its outward normal.
     pub fn intersect(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<Hit> {
-        match self {
-            Solid::Leaf(s) => {
-                let (t, normal) = s.first_hit(ray, t_min, t_max)?;
-                Some(Hit { t, normal })
-            }
-            Solid::Union(parts, b) => combine(parts, b, Rule::Any, ray, t_min, t_max),
-            Solid::Intersection(parts, b) => combine(parts, b, Rule::All, ray, t_min, t_max),
-            Solid::Difference(a, b, bounds) => {
-                let parts = [a.as_ref(), b.as_ref()];
-                combine_refs(&parts, bounds, Rule::FirstNotSecond, ray, t_min, t_max)
-            }
-        }
+        self.intersect_node(self.root(), ray, t_min, t_max)
     }
 
     /// Whether p is inside (F ≥ 0).
     pub fn inside(&self, p: DVec3) -> bool {
         Surface::value(self, p) >= 0.0
     }
+
+    fn intersect_node(&self, i: usize, ray: &Ray, t_min: f64, t_max: f64) -> Option<Hit> {
+        let node = &self.flat.nodes[i];
+        let rule = match node.op {
+            CsgOp::Leaf => {
+                let (t, normal) = match self.flat.leaf(node.operands.first as usize) {
+                    LeafView::Perturbed(s) => {
+                        let t = s.first_crossing(ray, t_min, t_max)?;
+                        (t, outward(s.gradient(ray.at(t))))
+                    }
+                    LeafView::Expr(s) => s.trace(ray, t_min, t_max, true)?,
+                };
+                return Some(Hit { t, normal });
+            }
+            CsgOp::Union => Rule::Any,
+            CsgOp::Intersection => Rule::All,
+            CsgOp::Difference => Rule::FirstNotSecond,
+        };
+        self.combine(self.flat.parts(i), &node.bounds, rule, ray, t_min, t_max)
+    }
+
+    /// Walks the parts' crossings in order, flipping each part's state, until the
+    /// combined state flips. A part's next crossing is searched a hair past its last one
+    /// so that a root found to rounding is never found twice. States and pending
+    /// crossings live in fixed arrays (at most [`MAX_PARTS`] parts per node).
+    fn combine(
+        &self,
+        parts: &[u32],
+        bounds: &Aabb,
+        rule: Rule,
+        ray: &Ray,
+        t_min: f64,
+        t_max: f64,
+    ) -> Option<Hit> {
+        let (lo, hi) = if bounds.is_finite() {
+            let grown = Aabb::new(bounds.lo - 1e-9, bounds.hi + 1e-9);
+            grown.clip(ray, t_min, t_max)?
+        } else {
+            (t_min, t_max)
+        };
+        let nudge = 1e-10 * bounds.extent().length().clamp(1.0, 1e12) / ray.d.length();
+        // Each part's state at the start of the clipped range: a part may well be inside
+        // there even though the combination is not.
+        let start = ray.at(lo);
+        let n = parts.len();
+        let mut state = [false; MAX_PARTS];
+        let mut next: [Option<Hit>; MAX_PARTS] = [None; MAX_PARTS];
+        for (k, &p) in parts.iter().enumerate() {
+            state[k] = self.value_node(p as usize, start) >= 0.0;
+            next[k] = self.intersect_node(p as usize, ray, lo, hi);
+        }
+        let mut combined = rule.apply(&state[..n]);
+        loop {
+            let (k, h) = next[..n]
+                .iter()
+                .enumerate()
+                .filter_map(|(k, h)| h.map(|h| (k, h)))
+                .min_by(|a, b| a.1.t.total_cmp(&b.1.t))?;
+            state[k] = !state[k];
+            let now = rule.apply(&state[..n]);
+            if now != combined {
+                let normal = match (rule, k) {
+                    (Rule::FirstNotSecond, 1) => -h.normal,
+                    _ => h.normal,
+                };
+                return Some(Hit { t: h.t, normal });
+            }
+            combined = now;
+            let from = h.t + nudge.max(h.t.abs() * 1e-15);
+            next[k] = self.intersect_node(parts[k] as usize, ray, from, hi);
+        }
+    }
+
+    fn value_node(&self, i: usize, p: DVec3) -> f64 {
+        let node = &self.flat.nodes[i];
+        let parts = self.flat.parts(i);
+        let v = |k: &u32| self.value_node(*k as usize, p);
+        match node.op {
+            CsgOp::Leaf => match self.flat.leaf(node.operands.first as usize) {
+                LeafView::Perturbed(s) => s.value(p),
+                LeafView::Expr(s) => s.value(p),
+            },
+            CsgOp::Union => parts.iter().map(v).fold(f64::NEG_INFINITY, f64::max),
+            CsgOp::Intersection => parts.iter().map(v).fold(f64::INFINITY, f64::min),
+            CsgOp::Difference => v(&parts[0]).min(-v(&parts[1])),
+        }
+    }
+
+    fn gradient_node(&self, i: usize, p: DVec3) -> DVec3 {
+        let node = &self.flat.nodes[i];
+        let parts = self.flat.parts(i);
+        // The gradient of min/max is the active part's.
+        let pick = |max: bool| {
+            let best = parts.iter().max_by(|a, b| {
+                let (x, y) = (
+                    self.value_node(**a as usize, p),
+                    self.value_node(**b as usize, p),
+                );
+                if max {
+                    x.total_cmp(&y)
+                } else {
+                    y.total_cmp(&x)
+                }
+            });
+            best.map_or(DVec3::ZERO, |&k| self.gradient_node(k as usize, p))
+        };
+        match node.op {
+            CsgOp::Leaf => match self.flat.leaf(node.operands.first as usize) {
+                LeafView::Perturbed(s) => s.gradient(p),
+                LeafView::Expr(s) => s.gradient(p),
+            },
+            CsgOp::Union => pick(true),
+            CsgOp::Intersection => pick(false),
+            CsgOp::Difference => {
+                let (a, b) = (parts[0] as usize, parts[1] as usize);
+                if self.value_node(a, p) <= -self.value_node(b, p) {
+                    self.gradient_node(a, p)
+                } else {
+                    -self.gradient_node(b, p)
+                }
+            }
+        }
+    }
+}
+
+/// The parts of `s` moved by `m` as parts of a union (`union`) or intersection: `s`
+/// itself, or, when it is (a moved) node of the same kind, its parts, recursively.
+fn same_op_parts<'a>(s: &'a Shape, m: &Affine, union: bool, out: &mut Vec<(&'a Shape, Affine)>) {
+    let (mut inner, mut moved) = (s, *m);
+    while let Shape::Transformed(a, c) = inner {
+        moved = a.then(&moved);
+        inner = c;
+    }
+    match (inner, union) {
+        (Shape::Union(v), true) | (Shape::Intersection(v), false) => {
+            for c in v {
+                same_op_parts(c, &moved, union, out);
+            }
+        }
+        _ => out.push((s, *m)),
+    }
+}
+
+/// Appends a node; returns its index.
+fn push_node(flat: &mut Flat, op: CsgOp, operands: Span, bounds: Aabb) -> u32 {
+    flat.nodes.push(CsgNode {
+        op,
+        operands,
+        bounds,
+    });
+    flat.nodes.len() as u32 - 1
+}
+
+/// Appends an interior node over `parts` (node index, depth); its bounds are `bounds`, or
+/// the parts' bounds folded from `start`. Returns (index, depth).
+fn interior(
+    flat: &mut Flat,
+    op: CsgOp,
+    parts: &[(u32, usize)],
+    start: Aabb,
+    fold: impl Fn(&Aabb, &Aabb) -> Aabb,
+    bounds: Option<Aabb>,
+) -> (u32, usize) {
+    let b = bounds.unwrap_or_else(|| {
+        parts
+            .iter()
+            .fold(start, |b, &(i, _)| fold(&b, &flat.nodes[i as usize].bounds))
+    });
+    let first = flat.children.len();
+    flat.children.extend(parts.iter().map(|&(i, _)| i));
+    let span = Span {
+        first: first as u32,
+        count: parts.len() as u32,
+    };
+    let depth = 1 + parts.iter().map(|&(_, d)| d).max().unwrap_or(0);
+    (push_node(flat, op, span, b), depth)
 }
 
 /// A CSG node's bounds from its parts can be infinite (half-spaces cut into a box);
@@ -163,104 +376,25 @@ fn transform_box(b: &Aabb, m: &Affine) -> Aabb {
     out
 }
 
-fn combine(parts: &[Solid], b: &Aabb, rule: Rule, ray: &Ray, t0: f64, t1: f64) -> Option<Hit> {
-    let refs: Vec<&Solid> = parts.iter().collect();
-    combine_refs(&refs, b, rule, ray, t0, t1)
-}
-
-/// Walks the parts' crossings in order, flipping each part's state, until the combined
-/// state flips. A part's next crossing is searched a hair past its last one so that a
-/// root found to rounding is never found twice.
-fn combine_refs(
-    parts: &[&Solid],
-    bounds: &Aabb,
-    rule: Rule,
-    ray: &Ray,
-    t_min: f64,
-    t_max: f64,
-) -> Option<Hit> {
-    let (lo, hi) = if bounds.is_finite() {
-        let grown = Aabb::new(bounds.lo - 1e-9, bounds.hi + 1e-9);
-        grown.clip(ray, t_min, t_max)?
-    } else {
-        (t_min, t_max)
-    };
-    let nudge = 1e-10 * bounds.extent().length().clamp(1.0, 1e12) / ray.d.length();
-    // Each part's state at the start of the clipped range: a part may well be inside
-    // there even though the combination is not.
-    let start = ray.at(lo);
-    let mut state: Vec<bool> = parts.iter().map(|p| p.inside(start)).collect();
-    let mut combined = rule.apply(&state);
-    let mut next: Vec<Option<Hit>> = parts.iter().map(|p| p.intersect(ray, lo, hi)).collect();
-    loop {
-        let (k, h) = next
-            .iter()
-            .enumerate()
-            .filter_map(|(k, h)| h.map(|h| (k, h)))
-            .min_by(|a, b| a.1.t.total_cmp(&b.1.t))?;
-        state[k] = !state[k];
-        let now = rule.apply(&state);
-        if now != combined {
-            let normal = match (rule, k) {
-                (Rule::FirstNotSecond, 1) => -h.normal,
-                _ => h.normal,
-            };
-            return Some(Hit { t: h.t, normal });
-        }
-        combined = now;
-        next[k] = parts[k].intersect(ray, h.t + nudge.max(h.t.abs() * 1e-15), hi);
-    }
-}
-
 impl Surface for Solid {
     fn value(&self, p: DVec3) -> f64 {
-        match self {
-            Solid::Leaf(s) => s.value(p),
-            Solid::Union(v, _) => v
-                .iter()
-                .map(|s| s.value(p))
-                .fold(f64::NEG_INFINITY, f64::max),
-            Solid::Intersection(v, _) => v.iter().map(|s| s.value(p)).fold(f64::INFINITY, f64::min),
-            Solid::Difference(a, b, _) => a.value(p).min(-b.value(p)),
-        }
+        self.value_node(self.root(), p)
     }
 
     fn gradient(&self, p: DVec3) -> DVec3 {
-        // The gradient of min/max is the active part's.
-        let pick = |v: &[Solid], max: bool| {
-            let best = v.iter().max_by(|a, b| {
-                let (x, y) = (a.value(p), b.value(p));
-                if max {
-                    x.total_cmp(&y)
-                } else {
-                    y.total_cmp(&x)
-                }
-            });
-            best.map_or(DVec3::ZERO, |s| s.gradient(p))
-        };
-        match self {
-            Solid::Leaf(s) => s.gradient(p),
-            Solid::Union(v, _) => pick(v, true),
-            Solid::Intersection(v, _) => pick(v, false),
-            Solid::Difference(a, b, _) => {
-                if a.value(p) <= -b.value(p) {
-                    a.gradient(p)
-                } else {
-                    -b.gradient(p)
-                }
-            }
-        }
+        self.gradient_node(self.root(), p)
     }
 
     fn first_crossing(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<f64> {
         self.intersect(ray, t_min, t_max).map(|h| h.t)
     }
 
+    fn first_hit(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<(f64, DVec3)> {
+        self.intersect(ray, t_min, t_max).map(|h| (h.t, h.normal))
+    }
+
     fn bounds(&self) -> Aabb {
-        match self {
-            Solid::Leaf(s) => s.bounds(),
-            Solid::Union(_, b) | Solid::Intersection(_, b) | Solid::Difference(_, _, b) => *b,
-        }
+        self.flat.nodes[self.root()].bounds
     }
 }
 
@@ -328,5 +462,124 @@ mod tests {
         let h = s.intersect(&ray, 0.0, f64::INFINITY).unwrap();
         assert!((h.t - 5.0).abs() < 1e-8, "{h:?}");
         assert!((h.normal - DVec3::Z).length() < 1e-6);
+    }
+
+    /// The flat form: children before parents, each leaf once in the table and its
+    /// data in the pools, and equal builds equal.
+    #[test]
+    fn flat_form_is_post_order_and_comparable() {
+        use crate::perturbed::PerturbedQuadric;
+        use crate::quadric::Quadric;
+        let pq = PerturbedQuadric::new(Quadric::sphere(DVec3::ZERO, 1.0))
+            .with(0.5, Quadric::sphere(DVec3::X, 0.3))
+            .with(-0.5, Quadric::sphere(DVec3::Y, 0.3));
+        let shape = Shape::Difference(
+            Box::new(Shape::Union(vec![
+                Shape::Perturbed(pq),
+                ball(DVec3::new(0.0, 0.0, 1.0), 0.5),
+            ])),
+            Box::new(ball(DVec3::new(1.0, 0.0, 0.0), 0.4)),
+        );
+        let (a, b) = (Solid::build(&shape).unwrap(), Solid::build(&shape).unwrap());
+        assert_eq!(a, b);
+        let f = a.flat();
+        assert_eq!(f.leaves.len(), 3);
+        assert_eq!(f.quadrics.len(), 1);
+        assert_eq!(f.perturbations.len(), 2);
+        assert!(!f.tapes.is_empty() && !f.bytecode.is_empty());
+        for (i, n) in f.nodes.iter().enumerate() {
+            assert!(f.parts(i).iter().all(|&c| (c as usize) < i));
+            assert_eq!(n.op == CsgOp::Leaf, f.parts(i).is_empty());
+        }
+        assert_eq!(f.nodes.last().unwrap().op, CsgOp::Difference);
+        assert!(matches!(f.leaves[0], crate::flat::Leaf::Perturbed { .. }));
+    }
+
+    /// A union of 40 balls in a row (inside the default domain) splits into nodes of at most MAX_PARTS parts, a
+    /// chain of 100 nested unions stays shallow, and the crossings are those of the
+    /// balls; CSG nested deeper than MAX_DEPTH is an error, not a panic.
+    #[test]
+    fn wide_and_deep_csg() {
+        let balls: Vec<Shape> = (0..40)
+            .map(|k| ball(DVec3::new(k as f64 * 2.4, 0.0, 0.0), 1.0))
+            .collect();
+        let chain = balls
+            .iter()
+            .rev()
+            .cloned()
+            .reduce(|acc, b| Shape::Union(vec![b, acc]))
+            .unwrap();
+        for shape in [Shape::Union(balls.clone()), chain] {
+            let s = Solid::build(&shape).unwrap();
+            let f = s.flat();
+            assert!((0..f.nodes.len()).all(|i| f.parts(i).len() <= MAX_PARTS));
+            let ray = Ray::new(DVec3::new(-5.0, 0.0, 0.0), DVec3::X);
+            let mut t = 0.0;
+            let mut got = vec![];
+            while let Some(h) = s.intersect(&ray, t, 200.0) {
+                got.push(h.t);
+                t = h.t + 1e-9;
+            }
+            assert_eq!(got.len(), 80);
+            for (k, t) in got.iter().enumerate() {
+                let want = 5.0 + (k / 2) as f64 * 2.4 + if k % 2 == 0 { -1.0 } else { 1.0 };
+                assert!((t - want).abs() < 1e-8, "{k}: {t} vs {want}");
+            }
+        }
+        let mut deep = ball(DVec3::ZERO, 1.0);
+        for k in 0..2 * MAX_DEPTH {
+            let other = ball(DVec3::new(0.1 * k as f64, 0.0, 0.0), 1.0);
+            deep = match k % 2 {
+                0 => Shape::Union(vec![deep, other]),
+                _ => Shape::Intersection(vec![deep, other]),
+            };
+        }
+        let err = Solid::build(&deep).unwrap_err();
+        assert!(err.contains("nested"), "{err}");
+    }
+
+    /// A solid's leaves, intersected in place over the pools, give what the owning
+    /// surfaces give, bit for bit.
+    #[test]
+    fn flat_leaves_match_their_surfaces() {
+        use crate::perturbed::PerturbedQuadric;
+        use crate::quadric::Quadric;
+        let mut pq =
+            PerturbedQuadric::new(Quadric::ellipsoid(DVec3::ZERO, DVec3::new(1.0, 0.7, 0.5)));
+        for k in 0..60 {
+            let a = k as f64 * 2.4;
+            let c = DVec3::new(a.cos(), 0.7 * a.sin(), 0.5 * (0.4 * a).sin());
+            pq.push(
+                if k % 3 == 0 { -30.0 } else { 50.0 },
+                Quadric::sphere(c, 0.25),
+            );
+        }
+        let gyroid = (3.0 * Tree::x()).sin() * (3.0 * Tree::y()).cos()
+            + (3.0 * Tree::y()).sin() * (3.0 * Tree::z()).cos()
+            + (3.0 * Tree::z()).sin() * (3.0 * Tree::x()).cos();
+        let ball = 1.2 - (Tree::x().square() + Tree::y().square() + Tree::z().square());
+        let expr = gyroid.min(&ball);
+        let shapes = [Shape::Perturbed(pq.clone()), Shape::function(expr.clone())];
+        let solids = shapes.map(|s| Solid::build(&s).unwrap());
+        let e = Expr::new(&expr);
+        let surfaces: [Box<dyn Surface>; 2] = [
+            Box::new(pq.surface()),
+            Box::new(ExprSurface::new(e.clone(), solids[1].bounds())),
+        ];
+        for (solid, surface) in solids.iter().zip(&surfaces) {
+            let mut hits = 0;
+            for k in 0..300 {
+                let u = k as f64 * 0.37;
+                let o = DVec3::new(2.0 * u.cos(), 1.5 * (0.7 * u).sin(), 2.0 * u.sin());
+                let ray = Ray::new(o, -o + 0.3 * DVec3::new(u.sin(), 0.2, u.cos()));
+                let got = solid.intersect(&ray, 0.0, f64::INFINITY);
+                let want = surface.first_hit(&ray, 0.0, f64::INFINITY);
+                assert_eq!(got.map(|h| (h.t, h.normal)), want, "ray {k}");
+                hits += got.is_some() as usize;
+                let p = ray.at(0.5);
+                assert_eq!(solid.value(p).to_bits(), surface.value(p).to_bits());
+            }
+            assert!(hits > 100, "{hits} hits");
+        }
     }
 }

@@ -391,6 +391,66 @@ fn walking_from_each_crossing_lists_every_sign_change() {
     assert!(crossings > walks);
 }
 
+/// More perturbations active along one ray than the scan's fixed active set holds
+/// ([`frep::perturbed::MAX_ACTIVE`]): a rod with a row of 3 × K
+/// overlapping perturbations along its axis, alternately hollowing and filling, and rays
+/// along the row. The overflow rule must
+/// still give every sign change of the march, each to TOL.
+#[test]
+fn more_perturbations_than_the_active_set_holds_miss_nothing() {
+    let count = 3 * frep::perturbed::MAX_ACTIVE;
+    // Pitch 0.046 whatever the count: the rod is as long as the row needs.
+    let half = 0.023 * count as f64;
+    let length = 2.0 * half + 1.2;
+    let radii = DVec3::new(half + 0.3, 0.5, 0.5);
+    let mut pq = PerturbedQuadric::new(Quadric::ellipsoid(DVec3::ZERO, radii));
+    for k in 0..count {
+        let x = -half + 2.0 * half * (k as f64 + 0.5) / count as f64;
+        // Support radius 0.06 (pitch 0.046: neighbours overlap); F' changes sign between
+        // each cavity and the next filling.
+        let f = if k % 2 == 0 { -2e3 } else { 2e3 };
+        pq.push(
+            f,
+            Quadric::sphere(DVec3::new(x, 0.01 * (k % 3) as f64, 0.0), 0.06),
+        );
+    }
+    let s = pq.surface();
+    let mut rng = Pcg64::seed_from_u64(17);
+    let mut crossings = 0;
+    for k in 0..10 {
+        let tilt = 0.02 * (k as f64 / 10.0 - 0.5);
+        let o = DVec3::new(-half - 0.6, 0.003 * (k % 5) as f64, tilt);
+        let ray = Ray::new(o, DVec3::new(1.0, tilt * 0.1, -tilt / length).normalize());
+        // The row of supports lies along the ray: far more than MAX_ACTIVE candidates.
+        let mut met = 0;
+        s.bvh().for_each_hit(&ray, 0.0, length, |_| met += 1);
+        assert!(met > frep::perturbed::MAX_ACTIVE, "{met}");
+        let t_min = rng.gen_range(0.0..0.5);
+        let steps = (4.0 * STEPS as f64 * length / 6.0) as usize;
+        let want = march(&pq, &ray, t_min, length, steps, 1000);
+        let mut got = Vec::new();
+        let mut t = t_min;
+        while let Some(h) = s.first_crossing(&ray, t, length) {
+            got.push(h);
+            // Step past the root as CSG does (`Solid::combine`): a root returned a
+            // rounding before the sign change is otherwise found again an ulp later.
+            t = h + 1e-12 * (1.0 + h.abs());
+            assert!(got.len() <= 1000, "runaway walk");
+        }
+        assert!(
+            want.len() > 2 * frep::perturbed::MAX_ACTIVE,
+            "{}",
+            want.len()
+        );
+        assert_eq!(got.len(), want.len(), "{ray:?}: {got:?} vs {want:?}");
+        for (g, w) in got.iter().zip(&want) {
+            assert!((g - w).abs() <= TOL, "{ray:?}: {g} vs {w}");
+        }
+        crossings += got.len();
+    }
+    println!("{crossings} crossings");
+}
+
 /// A perturbed ellipsoid of size 2 with `count` bumps and dents (support radius 0.15 …
 /// 0.35) scattered over its surface.
 fn bumpy_ellipsoid(rng: &mut Pcg64, count: usize) -> PerturbedQuadric {

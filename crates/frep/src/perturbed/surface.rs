@@ -7,7 +7,7 @@
 
 use super::scan::{self, Coeffs};
 use super::{Perturbation, PerturbedQuadric};
-use crate::bvh::Bvh;
+use crate::bvh::{Bvh, BvhRef};
 use crate::quadric::Quadric;
 use crate::ray::{Aabb, Ray};
 use crate::surface::Surface;
@@ -71,6 +71,38 @@ impl PerturbedSurface {
         &self.bvh
     }
 
+    /// The solid as a borrowed view.
+    pub fn view(&self) -> PerturbedView<'_> {
+        PerturbedView {
+            base: &self.base,
+            perturbations: &self.perturbations,
+            bvh: self.bvh.as_ref(),
+            bounds: self.bounds,
+        }
+    }
+
+    /// The first t in (t_min, t_max) where F' changes sign, in f32 (see
+    /// [`PerturbedView::first_crossing_f32`]).
+    pub fn first_crossing_f32(&self, o: Vec3, d: Vec3, t_min: f32, t_max: f32) -> Option<f32> {
+        self.view().first_crossing_f32(o, d, t_min, t_max)
+    }
+}
+
+/// A perturbed quadric over borrowed arrays: what [`PerturbedSurface`] and the flat
+/// solids of [`crate::solid`] intersect. Perturbation k of the BVH is `perturbations[k]`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PerturbedView<'a> {
+    /// The base quadric F.
+    pub base: &'a Quadric,
+    /// The perturbations.
+    pub perturbations: &'a [Perturbation],
+    /// The BVH over their supports.
+    pub bvh: BvhRef<'a>,
+    /// A box holding every point with F' ≥ 0 ([`PerturbedSurface::bounds`]).
+    pub bounds: Aabb,
+}
+
+impl PerturbedView<'_> {
     /// The range [lo, hi] of [t_min, t_max] inside the bounds, and the sign of F' just
     /// after lo when known (−1 where the ray enters the bounds from outside, where F' < 0).
     fn clip(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<(f64, f64, f64)> {
@@ -87,16 +119,17 @@ impl PerturbedSurface {
     pub fn first_crossing_f32(&self, o: Vec3, d: Vec3, t_min: f32, t_max: f32) -> Option<f32> {
         let ray = Ray::new(o.as_dvec3(), d.as_dvec3());
         let (lo, hi, sign) = self.clip(&ray, t_min as f64, t_max as f64)?;
-        let mut cand = Vec::new();
-        self.bvh.collect(&ray, lo, hi, &mut cand);
         let to32 = |c: &[f64; 10]| c.map(|v| v as f32);
-        let perts = cand.iter().map(|&i| {
-            let p = &self.perturbations[i as usize];
-            (p.f as f32, to32(&p.q.c))
-        });
-        scan::first_crossing::<f32>(
+        let src = Supports {
+            perturbations: self.perturbations,
+            bvh: self.bvh,
+            ray: &ray,
+            lo,
+            hi,
+        };
+        scan::first_crossing::<f32, _>(
             &to32(&self.base.c),
-            perts,
+            &F32(src),
             o.to_array(),
             d.to_array(),
             (lo as f32, hi as f32),
@@ -105,11 +138,9 @@ impl PerturbedSurface {
             sign as f32,
         )
     }
-}
 
-impl Surface for PerturbedSurface {
     /// F' at p, summing only the perturbations whose support box holds p.
-    fn value(&self, p: DVec3) -> f64 {
+    pub fn value(&self, p: DVec3) -> f64 {
         let mut v = self.base.eval(p);
         self.bvh.for_each_containing(p, |i| {
             let pt = &self.perturbations[i];
@@ -122,7 +153,7 @@ impl Surface for PerturbedSurface {
     }
 
     /// ∇F' = ∇F + Σ_{q_i>0} 3·f_i·q_i²·∇q_i (RESEARCH.md §4).
-    fn gradient(&self, p: DVec3) -> DVec3 {
+    pub fn gradient(&self, p: DVec3) -> DVec3 {
         let mut g = self.base.gradient(p);
         self.bvh.for_each_containing(p, |i| {
             let pt = &self.perturbations[i];
@@ -134,18 +165,20 @@ impl Surface for PerturbedSurface {
         g
     }
 
-    fn first_crossing(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<f64> {
+    /// The first t in (t_min, t_max) where F' changes sign (exact scan, no allocation).
+    pub fn first_crossing(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<f64> {
         let (lo, hi, sign) = self.clip(ray, t_min, t_max)?;
-        let mut cand = Vec::new();
-        self.bvh.collect(ray, lo, hi, &mut cand);
-        let perts = cand.iter().map(|&i| {
-            let p = &self.perturbations[i as usize];
-            (p.f, p.q.c)
-        });
+        let src = Supports {
+            perturbations: self.perturbations,
+            bvh: self.bvh,
+            ray,
+            lo,
+            hi,
+        };
         let base: &Coeffs<f64> = &self.base.c;
         scan::first_crossing(
             base,
-            perts,
+            &src,
             ray.o.to_array(),
             ray.d.to_array(),
             (lo, hi),
@@ -153,6 +186,60 @@ impl Surface for PerturbedSurface {
             t_max,
             sign,
         )
+    }
+}
+
+/// The perturbations whose support box the ray meets on a part of [lo, hi], nearer BVH
+/// subtrees first, read straight from the BVH walk (nothing is collected).
+struct Supports<'a> {
+    perturbations: &'a [Perturbation],
+    bvh: BvhRef<'a>,
+    ray: &'a Ray,
+    lo: f64,
+    hi: f64,
+}
+
+impl scan::Source<f64> for Supports<'_> {
+    #[inline]
+    fn for_each(&self, lo: f64, hi: f64, mut visit: impl FnMut(f64, &Coeffs<f64>)) {
+        self.bvh.for_each_hit(self.ray, lo, hi, |i| {
+            let p = &self.perturbations[i];
+            visit(p.f, &p.q.c)
+        });
+    }
+}
+
+/// The same perturbations rounded to f32 (the GPU's arithmetic).
+struct F32<'a>(Supports<'a>);
+
+impl scan::Source<f32> for F32<'_> {
+    #[inline]
+    fn for_each(&self, lo: f32, hi: f32, mut visit: impl FnMut(f32, &Coeffs<f32>)) {
+        // The whole range is queried with its f64 ends, as the clip gave them; a chunk
+        // with its f32 ends, widened by an ulp each way so that no box is lost.
+        let s = &self.0;
+        let (lo, hi) = if (lo, hi) == (s.lo as f32, s.hi as f32) {
+            (s.lo, s.hi)
+        } else {
+            (lo.next_down() as f64, hi.next_up() as f64)
+        };
+        s.for_each(lo, hi, |f, q| visit(f as f32, &q.map(|v| v as f32)));
+    }
+}
+
+impl Surface for PerturbedSurface {
+    /// F' at p, summing only the perturbations whose support box holds p.
+    fn value(&self, p: DVec3) -> f64 {
+        self.view().value(p)
+    }
+
+    /// ∇F' = ∇F + Σ_{q_i>0} 3·f_i·q_i²·∇q_i (RESEARCH.md §4).
+    fn gradient(&self, p: DVec3) -> DVec3 {
+        self.view().gradient(p)
+    }
+
+    fn first_crossing(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<f64> {
+        self.view().first_crossing(ray, t_min, t_max)
     }
 
     /// The base's support box united with the support boxes of every perturbation that

@@ -1,0 +1,230 @@
+//! The flat form of a solid: plain, inspectable arrays that another back end can upload.
+//!
+//! A [`crate::Solid`] is this data and nothing else: CSG nodes with children before
+//! parents (post-order, root last), a table of [`Leaf`]s, and pools that leaves and nodes
+//! name by index ([`Span`]s, handles not owners): base quadrics, perturbations, BVH nodes
+//! with their item order and boxes, expression tapes and their register bytecode
+//! ([`crate::bytecode`]). Every element is `Copy`, so two builds compare with `==` and a
+//! GPU mirrors them as structs of the same fields (GPU.md §5.2). The CPU intersects over
+//! these arrays directly, through [`crate::PerturbedView`] and [`crate::ExprView`].
+
+use crate::bvh::{BvhNode, BvhRef};
+use crate::expr::Node;
+use crate::interval_trace::ExprView;
+use crate::perturbed::{Perturbation, PerturbedView};
+use crate::quadric::Quadric;
+use crate::ray::Aabb;
+use std::ops::Range;
+
+/// The most parts one CSG node combines; wider unions and intersections are split into a
+/// tree of nodes of at most this many parts (their crossings combine on the stack).
+pub const MAX_PARTS: usize = 8;
+
+/// The deepest CSG nesting a solid may have (leaves at depth 1): the CPU combines
+/// crossings by recursion on the call stack and a GPU by an explicit stack of this size.
+/// Deeper scenes are a build error.
+pub const MAX_DEPTH: usize = 32;
+
+/// The elements `first..first + count` of a pool.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Span {
+    /// Index of the first element.
+    pub first: u32,
+    /// Number of elements.
+    pub count: u32,
+}
+
+impl Span {
+    /// The span of the elements from `first` to the pool's current length.
+    fn since(first: usize, len: usize) -> Self {
+        Self {
+            first: first as u32,
+            count: (len - first) as u32,
+        }
+    }
+    /// As a range of indices.
+    pub fn range(self) -> Range<usize> {
+        self.first as usize..(self.first + self.count) as usize
+    }
+}
+
+/// How a CSG node combines its parts' inside states.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CsgOp {
+    /// A leaf: `operands.first` is its index in [`Flat::leaves`].
+    Leaf,
+    /// Inside any part.
+    Union,
+    /// Inside every part.
+    Intersection,
+    /// Inside the first part and outside the second.
+    Difference,
+}
+
+/// One CSG node.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CsgNode {
+    /// The operation.
+    pub op: CsgOp,
+    /// Leaf: the leaf index (count 1). Otherwise the parts, as a span of
+    /// [`Flat::children`] (node indices, each below this node's; 2 ..= [`MAX_PARTS`]).
+    pub operands: Span,
+    /// A box holding every inside point (may be infinite).
+    pub bounds: Aabb,
+}
+
+/// A leaf of the CSG tree: one of a closed set of kinds, its data in the pools.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Leaf {
+    /// A perturbed quadric, intersected exactly. BVH node offsets and item indices are
+    /// relative to the leaf's own spans (item k is `perturbations.first + k`).
+    Perturbed {
+        /// Index of the base quadric in [`Flat::quadrics`].
+        base: u32,
+        /// Its perturbations in [`Flat::perturbations`].
+        perturbations: Span,
+        /// Its BVH nodes in [`Flat::bvh_nodes`].
+        bvh_nodes: Span,
+        /// Its BVH item order and item boxes in [`Flat::bvh_order`] and
+        /// [`Flat::bvh_item_bounds`].
+        bvh_items: Span,
+        /// Its items with unbounded supports in [`Flat::bvh_unbounded`].
+        bvh_unbounded: Span,
+        /// A box holding every inside point.
+        bounds: Aabb,
+    },
+    /// Any other expression, intersected by interval arithmetic.
+    Expr {
+        /// Its node list in [`Flat::tapes`].
+        tape: Span,
+        /// Its register bytecode in [`Flat::bytecode`].
+        code: Span,
+        /// Registers the bytecode uses.
+        registers: u32,
+        /// A box holding every inside point.
+        bounds: Aabb,
+        /// Resolution along rays ([`crate::interval_trace::resolution`]).
+        eps: f64,
+    },
+}
+
+/// A leaf's data, borrowed from the pools.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum LeafView<'a> {
+    /// A perturbed quadric.
+    Perturbed(PerturbedView<'a>),
+    /// An expression.
+    Expr(ExprView<'a>),
+}
+
+/// The flat arrays of a solid (see the module docs).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Flat {
+    /// CSG nodes, children before parents; the root is last.
+    pub nodes: Vec<CsgNode>,
+    /// The parts of every interior node, as node indices.
+    pub children: Vec<u32>,
+    /// The leaves.
+    pub leaves: Vec<Leaf>,
+    /// Base quadrics of perturbed leaves.
+    pub quadrics: Vec<Quadric>,
+    /// Perturbations of perturbed leaves.
+    pub perturbations: Vec<Perturbation>,
+    /// BVH nodes over perturbation supports ([`crate::Bvh::nodes`]).
+    pub bvh_nodes: Vec<BvhNode>,
+    /// BVH item order ([`crate::Bvh::order`]).
+    pub bvh_order: Vec<u32>,
+    /// BVH item boxes in leaf order ([`crate::Bvh::item_bounds`]).
+    pub bvh_item_bounds: Vec<Aabb>,
+    /// BVH items with non-finite boxes ([`crate::Bvh::unbounded`]).
+    pub bvh_unbounded: Vec<u32>,
+    /// Expression tapes ([`crate::Expr::nodes`]).
+    pub tapes: Vec<Node>,
+    /// Register bytecode of the tapes ([`crate::bytecode::Bytecode::words`]).
+    pub bytecode: Vec<u32>,
+}
+
+impl Flat {
+    /// Appends a perturbed leaf; returns its index.
+    pub(crate) fn push_perturbed(&mut self, s: &crate::PerturbedSurface) -> u32 {
+        use crate::Surface;
+        let bvh = s.bvh();
+        let base = self.quadrics.len() as u32;
+        self.quadrics.push(*s.base());
+        let p0 = self.perturbations.len();
+        self.perturbations.extend_from_slice(s.perturbations());
+        let n0 = self.bvh_nodes.len();
+        self.bvh_nodes.extend_from_slice(bvh.nodes());
+        let i0 = self.bvh_order.len();
+        self.bvh_order.extend_from_slice(bvh.order());
+        self.bvh_item_bounds.extend_from_slice(bvh.item_bounds());
+        let u0 = self.bvh_unbounded.len();
+        self.bvh_unbounded.extend_from_slice(bvh.unbounded());
+        self.leaves.push(Leaf::Perturbed {
+            base,
+            perturbations: Span::since(p0, self.perturbations.len()),
+            bvh_nodes: Span::since(n0, self.bvh_nodes.len()),
+            bvh_items: Span::since(i0, self.bvh_order.len()),
+            bvh_unbounded: Span::since(u0, self.bvh_unbounded.len()),
+            bounds: s.bounds(),
+        });
+        self.leaves.len() as u32 - 1
+    }
+
+    /// Appends an expression leaf with its bytecode; returns its index.
+    pub(crate) fn push_expr(&mut self, s: &crate::ExprSurface) -> Result<u32, String> {
+        let v = s.view();
+        let code = crate::bytecode::Bytecode::compile(s.expr()).map_err(|e| e.to_string())?;
+        let t0 = self.tapes.len();
+        self.tapes.extend_from_slice(v.tape);
+        let c0 = self.bytecode.len();
+        self.bytecode.extend_from_slice(code.words());
+        self.leaves.push(Leaf::Expr {
+            tape: Span::since(t0, self.tapes.len()),
+            code: Span::since(c0, self.bytecode.len()),
+            registers: code.registers() as u32,
+            bounds: v.bounds,
+            eps: v.eps,
+        });
+        Ok(self.leaves.len() as u32 - 1)
+    }
+
+    /// Leaf `k`'s data, borrowed from the pools.
+    pub fn leaf(&self, k: usize) -> LeafView<'_> {
+        match self.leaves[k] {
+            Leaf::Perturbed {
+                base,
+                perturbations,
+                bvh_nodes,
+                bvh_items,
+                bvh_unbounded,
+                bounds,
+            } => LeafView::Perturbed(PerturbedView {
+                base: &self.quadrics[base as usize],
+                perturbations: &self.perturbations[perturbations.range()],
+                bvh: BvhRef {
+                    nodes: &self.bvh_nodes[bvh_nodes.range()],
+                    order: &self.bvh_order[bvh_items.range()],
+                    item_bounds: &self.bvh_item_bounds[bvh_items.range()],
+                    unbounded: &self.bvh_unbounded[bvh_unbounded.range()],
+                },
+                bounds,
+            }),
+            Leaf::Expr {
+                tape, bounds, eps, ..
+            } => LeafView::Expr(ExprView {
+                tape: &self.tapes[tape.range()],
+                bounds,
+                eps,
+            }),
+        }
+    }
+
+    /// The parts of node `i` (empty for a leaf).
+    pub fn parts(&self, i: usize) -> &[u32] {
+        match self.nodes[i].op {
+            CsgOp::Leaf => &[],
+            _ => &self.children[self.nodes[i].operands.range()],
+        }
+    }
+}
