@@ -24,6 +24,7 @@ const STACK: usize = 80;
 
 /// One node of the flattened tree.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub struct BvhNode {
     /// The box holding every item below.
     pub bounds: Aabb,

@@ -19,6 +19,7 @@ thread_local! {
 
 /// One node of an [`Expr`]; operands are indices of earlier nodes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub enum Node {
     /// A constant, stored as its bit pattern so that nodes hash.
     Const(u64),

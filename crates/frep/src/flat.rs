@@ -27,6 +27,7 @@ pub const MAX_DEPTH: usize = 32;
 
 /// The elements `first..first + count` of a pool.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub struct Span {
     /// Index of the first element.
     pub first: u32,
@@ -50,6 +51,7 @@ impl Span {
 
 /// How a CSG node combines its parts' inside states.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub enum CsgOp {
     /// A leaf: `operands.first` is its index in [`Flat::leaves`].
     Leaf,
@@ -63,6 +65,7 @@ pub enum CsgOp {
 
 /// One CSG node.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub struct CsgNode {
     /// The operation.
     pub op: CsgOp,
@@ -75,6 +78,7 @@ pub struct CsgNode {
 
 /// A leaf of the CSG tree: one of a closed set of kinds, its data in the pools.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub enum Leaf {
     /// A perturbed quadric, intersected exactly. BVH node offsets and item indices are
     /// relative to the leaf's own spans (item k is `perturbations.first + k`).
@@ -119,6 +123,7 @@ pub enum LeafView<'a> {
 
 /// The flat arrays of a solid (see the module docs).
 #[derive(Clone, Debug, Default, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub struct Flat {
     /// CSG nodes, children before parents; the root is last.
     pub nodes: Vec<CsgNode>,

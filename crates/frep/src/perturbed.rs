@@ -19,6 +19,7 @@ use glam::DVec3;
 
 /// One perturbation f·max(q, 0)³.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub struct Perturbation {
     /// Form factor f (positive adds material, negative removes it).
     pub f: f64,

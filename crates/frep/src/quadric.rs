@@ -12,6 +12,7 @@ use glam::{DMat3, DVec3};
 
 /// A quadric function of x, y, z (see the module docs for the coefficient order).
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub struct Quadric {
     /// Coefficients `[xx, yy, zz, xy, yz, xz, x, y, z, 1]`.
     pub c: [f64; 10],

@@ -25,6 +25,7 @@ impl Ray {
 
 /// An axis-aligned box; `Aabb::EMPTY` has lo > hi.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub struct Aabb {
     /// Lower corner.
     pub lo: DVec3,

@@ -30,6 +30,7 @@ pub struct Hit {
 
 /// A solid ready for ray queries (see the module docs).
 #[derive(Clone, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub struct Solid {
     flat: Flat,
 }

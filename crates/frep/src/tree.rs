@@ -10,6 +10,7 @@ use std::sync::Arc;
 
 /// A coordinate variable.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub enum Var {
     /// x.
     X,
@@ -21,6 +22,7 @@ pub enum Var {
 
 /// A one-argument operation.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
 #[allow(missing_docs)]
 pub enum UnaryOp {
     Neg,
@@ -44,6 +46,7 @@ pub enum UnaryOp {
 
 /// A two-argument operation.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
 #[allow(missing_docs)]
 pub enum BinaryOp {
     Add,

@@ -79,7 +79,7 @@ pub use resolve::METALS;
 pub use settings::{
     Emitters, IntegratorKind, RenderSettings, TechniqueKind, UnknownName, AOV_NAMES,
 };
-pub use solids::{SolidEntry, SolidForm, SolidPool};
+pub use solids::SolidPool;
 
 /// The image size of a scene that gives no `camera.resolution`.
 pub const DEFAULT_RESOLUTION: [u32; 2] = [320, 240];

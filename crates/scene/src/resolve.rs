@@ -15,7 +15,7 @@ use crate::locate::{position_in_literal, Source};
 use crate::settings::{settings, RenderSettings};
 use crate::solids::SolidPool;
 use frep::read::{read_file, read_str, Format};
-use frep::{Aabb, Shape, Solid, Surface};
+use frep::{Aabb, Shape, Solid};
 use std::path::Path;
 
 /// Conductor presets: (name, η, k) per R, G, B channel, RGB fits of measured optical
@@ -331,7 +331,7 @@ fn object(
     i: usize,
     o: &ObjectDesc,
     names: &[&String],
-) -> Result<(MaterialId, Shape, Aabb), SceneError> {
+) -> Result<(MaterialId, Solid), SceneError> {
     let material = names
         .iter()
         .position(|n| **n == o.material)
@@ -353,7 +353,7 @@ fn object(
         shape = Shape::Transformed(transform(src, &tp, t)?, Box::new(shape));
     }
     let solid = Solid::build(&shape).map_err(|e| src.at_value(&tp, e))?;
-    Ok((MaterialId(material as u32), shape, solid.bounds()))
+    Ok((MaterialId(material as u32), solid))
 }
 
 /// Resolves a description; relative files are looked up in `base`.
@@ -373,10 +373,10 @@ pub(crate) fn resolve_source(
     let mut solids = SolidPool::default();
     let mut objects = Vec::with_capacity(d.objects.len());
     for (i, o) in d.objects.iter().enumerate() {
-        let (material, shape, bounds) = object(src, base, i, o, &names)?;
+        let (material, solid) = object(src, base, i, o, &names)?;
         objects.push(ObjectData {
             name: o.name.clone().unwrap_or_else(|| format!("objects[{i}]")),
-            solid: solids.push(shape, bounds),
+            solid: solids.push(solid),
             material,
         });
     }

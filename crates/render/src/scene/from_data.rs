@@ -10,7 +10,6 @@ use crate::light::{AreaLight, DeltaLight, EnvMap, Environment, Lights, Shape};
 use crate::material::Material;
 use crate::texture::{Texture, TextureSpace};
 use ::scene::{EnvironmentData, Light, LightKind, MaterialData, SceneData, TextureData, TextureId};
-use frep::Solid;
 use glam::{DMat3, DVec3};
 
 fn v3(a: [f64; 3]) -> DVec3 {
@@ -113,9 +112,7 @@ pub(super) fn build(data: &SceneData) -> Scene {
         .iter()
         .map(|o| Object {
             name: o.name.clone(),
-            // Resolution built this solid once already: it cannot fail.
-            solid: Solid::build(data.solids.shape(o.solid))
-                .unwrap_or_else(|e| panic!("{}: {e}", o.name)),
+            solid: data.solids.solid(o.solid).clone(),
             material: o.material.index(),
         })
         .collect();
