@@ -4,7 +4,7 @@ scenes: `frepray bench` runs alternate A, B, A, B, … so that load on a shared 
 both alike; prints the median MSamples/s and MRays/s of each and the ratio B/A, with the
 load average before and after.
 
-    python3 bench/ab/ab.py OLD/frepray NEW/frepray --reps 3 -- \
+    python3 bench/ab/ab.py --reps 3 OLD/frepray NEW/frepray -- \
         --mis balance --spp 8 --width 160 --height 120 --techniques light:1,bsdf:1,light-area:1
 
 Scenes default to the paper's two (scenes/many-lights.toml, scenes/table.toml)."""

@@ -195,6 +195,7 @@ impl Flat {
     }
 
     /// Leaf `k`'s data, borrowed from the pools.
+    #[inline(always)]
     pub fn leaf(&self, k: usize) -> LeafView<'_> {
         match self.leaves[k] {
             Leaf::Perturbed {
@@ -226,6 +227,7 @@ impl Flat {
     }
 
     /// The parts of node `i` (empty for a leaf).
+    #[inline]
     pub fn parts(&self, i: usize) -> &[u32] {
         match self.nodes[i].op {
             CsgOp::Leaf => &[],

@@ -174,11 +174,11 @@ impl Solid {
         let rule = match node.op {
             CsgOp::Leaf => {
                 let (t, normal) = match self.flat.leaf(node.operands.first as usize) {
-                    LeafView::Perturbed(s) => {
+                    LeafView::Perturbed(ref s) => {
                         let t = s.first_crossing(ray, t_min, t_max)?;
                         (t, outward(s.gradient(ray.at(t))))
                     }
-                    LeafView::Expr(s) => s.trace(ray, t_min, t_max, true)?,
+                    LeafView::Expr(ref s) => s.trace(ray, t_min, t_max, true)?,
                 };
                 return Some(Hit { t, normal });
             }
@@ -247,8 +247,8 @@ impl Solid {
         let v = |k: &u32| self.value_node(*k as usize, p);
         match node.op {
             CsgOp::Leaf => match self.flat.leaf(node.operands.first as usize) {
-                LeafView::Perturbed(s) => s.value(p),
-                LeafView::Expr(s) => s.value(p),
+                LeafView::Perturbed(ref s) => s.value(p),
+                LeafView::Expr(ref s) => s.value(p),
             },
             CsgOp::Union => parts.iter().map(v).fold(f64::NEG_INFINITY, f64::max),
             CsgOp::Intersection => parts.iter().map(v).fold(f64::INFINITY, f64::min),
@@ -276,8 +276,8 @@ impl Solid {
         };
         match node.op {
             CsgOp::Leaf => match self.flat.leaf(node.operands.first as usize) {
-                LeafView::Perturbed(s) => s.gradient(p),
-                LeafView::Expr(s) => s.gradient(p),
+                LeafView::Perturbed(ref s) => s.gradient(p),
+                LeafView::Expr(ref s) => s.gradient(p),
             },
             CsgOp::Union => pick(true),
             CsgOp::Intersection => pick(false),

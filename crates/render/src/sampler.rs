@@ -15,6 +15,7 @@
 //! `wavefront/samples.cpp`, where they are generated before the kernels that use them).
 
 use glam::DVec2;
+use std::cell::Cell;
 
 /// Philox4x32 multipliers and Weyl key increments (Salmon et al. 2011, Table 2).
 const M0: u32 = 0xD251_1F53;
@@ -67,15 +68,19 @@ impl Sampler {
         SampleStream {
             key: [self.seed as u32, (self.seed >> 32) as u32],
             counter: [x, y, index],
+            cached: Cell::new(None),
         }
     }
 }
 
-/// The random values of one sample, addressed by dimension.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+/// The random values of one sample, addressed by dimension. The last Philox block
+/// computed is kept, so that reading a vertex's dimensions in order costs one evaluation
+/// per four dimensions.
+#[derive(Clone, Debug, PartialEq, Eq)]
 pub struct SampleStream {
     key: [u32; 2],
     counter: [u32; 3],
+    cached: Cell<Option<(u32, [u32; 4])>>,
 }
 
 impl SampleStream {
@@ -88,7 +93,16 @@ impl SampleStream {
     /// The value of dimension `dim` in [0, 1), whatever was drawn before.
     #[inline]
     pub fn get(&self, dim: u32) -> f64 {
-        to_unit(self.block_bits(dim / 4)[(dim % 4) as usize])
+        let block = dim / 4;
+        let bits = match self.cached.get() {
+            Some((b, bits)) if b == block => bits,
+            _ => {
+                let bits = self.block_bits(block);
+                self.cached.set(Some((block, bits)));
+                bits
+            }
+        };
+        to_unit(bits[(dim % 4) as usize])
     }
     /// Dimensions `dim` and `dim + 1` as a point of [0, 1)².
     #[inline]
