@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Installs what frepray needs on a fresh Debian machine of this project's kind.
-# Rust (stable, with rustfmt and clippy) is expected on the machine; everything else
-# comes from crates.io through cargo.
+# Rust (stable, with rustfmt and clippy) is expected on the machine; crates come from
+# crates.io through cargo; Mesa's software Vulkan driver (lavapipe) from Debian, so that
+# the GPU back end runs and is tested on machines without a GPU (../shared/GPU.md §11.1).
 set -euo pipefail
 if ! command -v cargo >/dev/null 2>&1; then
   if [ -x "$HOME/.cargo/bin/cargo" ]; then
@@ -12,3 +13,18 @@ if ! command -v cargo >/dev/null 2>&1; then
   fi
 fi
 rustup component add rustfmt clippy >/dev/null 2>&1 || true
+
+# lavapipe, at the versions GPU.md measured (Debian 12's main archive).
+LAVAPIPE="mesa-vulkan-drivers=22.3.6-1+deb12u2 libvulkan1=1.3.239.0-1"
+if ! dpkg -s mesa-vulkan-drivers libvulkan1 >/dev/null 2>&1; then
+  if [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then
+    echo "setup: installing Mesa's lavapipe for the GPU tests" >&2
+    apt-get update -qq >/dev/null
+    # shellcheck disable=SC2086
+    DEBIAN_FRONTEND=noninteractive apt-get install -y -qq $LAVAPIPE >/dev/null \
+      || DEBIAN_FRONTEND=noninteractive apt-get install -y -qq mesa-vulkan-drivers libvulkan1 >/dev/null
+  else
+    echo "setup: mesa-vulkan-drivers and libvulkan1 are missing; install them as root" \
+      "(apt-get install mesa-vulkan-drivers libvulkan1) for the GPU tests" >&2
+  fi
+fi

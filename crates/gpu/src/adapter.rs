@@ -1,0 +1,193 @@
+//! Choosing an adapter and opening a device with the features frepray can use.
+
+use std::fmt;
+
+/// Which optional features frepray may use; each can be forced off so that CI on lavapipe
+/// (which has them all) also tests the paths other adapters take (GPU.md §2.2, §3.3).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct GpuOptions {
+    /// Use `SHADER_F64` (MIS sums in f64) where the adapter has it.
+    pub f64: bool,
+    /// Use `SHADER_INT64` where the adapter has it.
+    pub int64: bool,
+    /// Use subgroup operations where the adapter has them.
+    pub subgroups: bool,
+}
+
+impl Default for GpuOptions {
+    /// Every feature the adapter offers.
+    fn default() -> Self {
+        Self {
+            f64: true,
+            int64: true,
+            subgroups: true,
+        }
+    }
+}
+
+impl GpuOptions {
+    /// The defaults, with `FREPRAY_GPU_F64=off`, `FREPRAY_GPU_INT64=off` and
+    /// `FREPRAY_GPU_SUBGROUPS=off` turning features off.
+    pub fn from_env() -> Self {
+        let on = |name: &str| std::env::var(name).map_or(true, |v| v != "off" && v != "0");
+        Self {
+            f64: on("FREPRAY_GPU_F64"),
+            int64: on("FREPRAY_GPU_INT64"),
+            subgroups: on("FREPRAY_GPU_SUBGROUPS"),
+        }
+    }
+}
+
+/// Why no GPU could be used.
+#[derive(Debug, thiserror::Error)]
+pub enum GpuError {
+    /// No adapter: no GPU and no software driver (install `mesa-vulkan-drivers` for
+    /// lavapipe).
+    #[error(
+        "no GPU adapter found ({0}); on Linux without a GPU install Mesa's lavapipe \
+         (apt-get install mesa-vulkan-drivers libvulkan1)"
+    )]
+    NoAdapter(String),
+    /// The adapter refused the device.
+    #[error("the GPU adapter {adapter} refused a device: {message}")]
+    Device {
+        /// The adapter's name.
+        adapter: String,
+        /// Why.
+        message: String,
+    },
+    /// The work needs more of a limit than the device has.
+    #[error("the GPU's {limit} is {have}; this needs {need}")]
+    Limit {
+        /// The limit's name (wgpu's).
+        limit: &'static str,
+        /// What the device offers.
+        have: u64,
+        /// What the work needs.
+        need: u64,
+    },
+    /// A shader or pipeline failed validation, or a readback failed.
+    #[error("GPU: {0}")]
+    Run(String),
+}
+
+/// What the opened device is and offers.
+#[derive(Clone, Debug)]
+pub struct GpuInfo {
+    /// Adapter name, e.g. `llvmpipe (LLVM 15.0.6, 256 bits)`.
+    pub name: String,
+    /// Backend, e.g. Vulkan.
+    pub backend: String,
+    /// Discrete, integrated, CPU (software), …
+    pub device_type: String,
+    /// Whether f64 is in use.
+    pub f64: bool,
+    /// Whether int64 is in use.
+    pub int64: bool,
+    /// Whether subgroups are in use.
+    pub subgroups: bool,
+    /// Whether timestamp queries are available (stage times).
+    pub timestamps: bool,
+    /// The device's largest storage-buffer binding in bytes.
+    pub max_storage_binding: u64,
+}
+
+impl fmt::Display for GpuInfo {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let yes = |b: bool| if b { "yes" } else { "no" };
+        write!(
+            f,
+            "{} ({}, {}); f64 {}, int64 {}, subgroups {}, timestamps {}; storage binding ≤ {} MiB",
+            self.name,
+            self.backend,
+            self.device_type,
+            yes(self.f64),
+            yes(self.int64),
+            yes(self.subgroups),
+            yes(self.timestamps),
+            self.max_storage_binding >> 20
+        )
+    }
+}
+
+/// An opened device with its queue.
+pub struct Gpu {
+    pub(crate) device: wgpu::Device,
+    pub(crate) queue: wgpu::Queue,
+    info: GpuInfo,
+}
+
+impl Gpu {
+    /// Opens the first adapter the environment allows (`WGPU_BACKEND`, `WGPU_ADAPTER_NAME`
+    /// pin one) with the features `options` allow and the adapter has, and the adapter's
+    /// own limits.
+    pub fn new(options: &GpuOptions) -> Result<Gpu, GpuError> {
+        let instance =
+            wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+        let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
+            power_preference: wgpu::PowerPreference::HighPerformance,
+            ..Default::default()
+        }))
+        .map_err(|e| GpuError::NoAdapter(e.to_string()))?;
+        let a = adapter.get_info();
+        let offered = adapter.features();
+        let mut want = wgpu::Features::empty();
+        let mut take = |f: wgpu::Features, allowed: bool| {
+            let on = allowed && offered.contains(f);
+            if on {
+                want |= f;
+            }
+            on
+        };
+        let f64 = take(wgpu::Features::SHADER_F64, options.f64);
+        let int64 = take(wgpu::Features::SHADER_INT64, options.int64);
+        let subgroups = take(wgpu::Features::SUBGROUP, options.subgroups);
+        let timestamps = take(wgpu::Features::TIMESTAMP_QUERY, true);
+        let limits = adapter.limits();
+        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+            label: Some("frepray"),
+            required_features: want,
+            required_limits: limits.clone(),
+            experimental_features: wgpu::ExperimentalFeatures::disabled(),
+            memory_hints: wgpu::MemoryHints::Performance,
+            trace: wgpu::Trace::Off,
+        }))
+        .map_err(|e| GpuError::Device {
+            adapter: a.name.clone(),
+            message: e.to_string(),
+        })?;
+        let info = GpuInfo {
+            name: a.name,
+            backend: format!("{:?}", a.backend),
+            device_type: format!("{:?}", a.device_type),
+            f64,
+            int64,
+            subgroups,
+            timestamps,
+            max_storage_binding: limits.max_storage_buffer_binding_size,
+        };
+        Ok(Gpu {
+            device,
+            queue,
+            info,
+        })
+    }
+
+    /// What the device is and offers.
+    pub fn info(&self) -> &GpuInfo {
+        &self.info
+    }
+
+    /// An error unless a storage binding of `bytes` fits the device.
+    pub fn check_binding(&self, bytes: u64) -> Result<(), GpuError> {
+        let have = self.info.max_storage_binding;
+        if bytes > have {
+            return Err(GpuError::Limit {
+                limit: "max_storage_buffer_binding_size",
+                have,
+                need: bytes,
+            });
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,130 @@
+//! One WGSL compute entry point over storage buffers: dispatched, waited for and read
+//! back. The plumbing of kernel twins and tests (GPU.md §3.5, §9); the wavefront
+//! integrator will chain such passes without reading back between them.
+
+use crate::{Gpu, GpuError};
+use wgpu::util::DeviceExt;
+
+/// A compiled compute pipeline whose bind group 0 holds the input storage buffers at
+/// bindings 0 … n−1 (read-only, `array<u32>`) and the output at binding n (read-write).
+pub struct Kernel {
+    pipeline: wgpu::ComputePipeline,
+    inputs: usize,
+}
+
+impl Kernel {
+    /// Compiles `entry` of the WGSL `source` with `inputs` input buffers. Shader errors
+    /// are returned with naga's message.
+    pub fn new(gpu: &Gpu, source: &str, entry: &str, inputs: usize) -> Result<Kernel, GpuError> {
+        let scope = gpu.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let module = gpu
+            .device
+            .create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some(entry),
+                source: wgpu::ShaderSource::Wgsl(source.into()),
+            });
+        let pipeline = gpu
+            .device
+            .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(entry),
+                layout: None,
+                module: &module,
+                entry_point: Some(entry),
+                compilation_options: Default::default(),
+                cache: None,
+            });
+        if let Some(e) = pollster::block_on(scope.pop()) {
+            return Err(GpuError::Run(format!("kernel {entry}: {e}")));
+        }
+        Ok(Kernel { pipeline, inputs })
+    }
+
+    /// Runs the kernel on `workgroups` with the given inputs and an output of
+    /// `output_words` u32 (zeroed), and reads the output back.
+    pub fn run(
+        &self,
+        gpu: &Gpu,
+        inputs: &[&[u32]],
+        output_words: usize,
+        workgroups: [u32; 3],
+    ) -> Result<Vec<u32>, GpuError> {
+        assert_eq!(inputs.len(), self.inputs, "one slice per input binding");
+        let bytes = (output_words * 4) as u64;
+        gpu.check_binding(bytes)?;
+        let d = &gpu.device;
+        let scope = d.push_error_scope(wgpu::ErrorFilter::Validation);
+        let input_buffers: Vec<wgpu::Buffer> = inputs
+            .iter()
+            .map(|words| {
+                // Empty bindings are invalid: give an empty input one word.
+                let data: &[u32] = if words.is_empty() { &[0] } else { words };
+                d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some("input"),
+                    contents: bytemuck::cast_slice(data),
+                    usage: wgpu::BufferUsages::STORAGE,
+                })
+            })
+            .collect();
+        let size = bytes.max(4);
+        let output = d.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("output"),
+            size,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        });
+        let readback = d.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("readback"),
+            size,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let mut entries: Vec<wgpu::BindGroupEntry> = input_buffers
+            .iter()
+            .enumerate()
+            .map(|(k, b)| wgpu::BindGroupEntry {
+                binding: k as u32,
+                resource: b.as_entire_binding(),
+            })
+            .collect();
+        entries.push(wgpu::BindGroupEntry {
+            binding: self.inputs as u32,
+            resource: output.as_entire_binding(),
+        });
+        let group = d.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("kernel"),
+            layout: &self.pipeline.get_bind_group_layout(0),
+            entries: &entries,
+        });
+        let mut encoder = d.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
+        {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: None,
+                timestamp_writes: None,
+            });
+            pass.set_pipeline(&self.pipeline);
+            pass.set_bind_group(0, &group, &[]);
+            pass.dispatch_workgroups(workgroups[0], workgroups[1], workgroups[2]);
+        }
+        encoder.copy_buffer_to_buffer(&output, 0, &readback, 0, size);
+        gpu.queue.submit([encoder.finish()]);
+        if let Some(e) = pollster::block_on(scope.pop()) {
+            return Err(GpuError::Run(e.to_string()));
+        }
+        let (tx, rx) = std::sync::mpsc::channel();
+        readback.map_async(wgpu::MapMode::Read, .., move |r| {
+            let _ = tx.send(r);
+        });
+        d.poll(wgpu::PollType::wait_indefinitely())
+            .map_err(|e| GpuError::Run(e.to_string()))?;
+        rx.recv()
+            .map_err(|e| GpuError::Run(e.to_string()))?
+            .map_err(|e| GpuError::Run(e.to_string()))?;
+        let view = readback
+            .get_mapped_range(..)
+            .map_err(|e| GpuError::Run(e.to_string()))?;
+        let out = bytemuck::cast_slice::<u8, u32>(&view)[..output_words].to_vec();
+        drop(view);
+        readback.unmap();
+        Ok(out)
+    }
+}

@@ -1,0 +1,37 @@
+//! # gpu — the GPU back end on wgpu
+//!
+//! The same renderer as the CPU's, on `wgpu` 30 with WGSL compute shaders, reading the same
+//! resolved scene (`scene::SceneData`) and returning the same per-pixel sums
+//! (`render::RenderState`), so that a GPU sample range merges with a CPU one
+//! (../shared/GPU.md; DESIGN.md §2–§3). This crate is being built in the order of
+//! GPU.md §12; today it holds the first step:
+//!
+//! - [`Gpu`]: adapter choice with the features frepray uses (f64, int64, subgroups,
+//!   timestamps), each of which can be forced off ([`GpuOptions`], or the environment
+//!   variables `FREPRAY_GPU_F64=off`, `FREPRAY_GPU_INT64=off`,
+//!   `FREPRAY_GPU_SUBGROUPS=off`), and a clear error, never a panic, where there is no
+//!   adapter or a device limit is too small;
+//! - [`Kernel`]: one WGSL compute entry point over storage buffers, dispatched and read
+//!   back, bounds checks off (GPU.md §3.4), for kernel twins and tests;
+//! - [`layout`]: the flat scene's quadrics, perturbations and BVH nodes as `#[repr(C)]`
+//!   structs with their WGSL mirrors;
+//! - [`sampler`]: the CPU's random numbers (Philox4x32-10, `render::sampler`) in WGSL with
+//!   32-bit operations only, equal bit for bit on every adapter.
+//!
+//! On machines without a GPU, tests run on Mesa's lavapipe (`mesa-vulkan-drivers`). They
+//! skip, saying so, where no adapter exists, unless `FREPRAY_REQUIRE_GPU=1` (set by
+//! `scripts/test.sh`), where a missing adapter fails them (GPU.md §11.1).
+//!
+//! ```no_run
+//! let gpu = gpu::Gpu::new(&gpu::GpuOptions::from_env()).unwrap();
+//! println!("{}", gpu.info());
+//! ```
+#![warn(missing_docs)]
+
+mod adapter;
+mod kernel;
+pub mod layout;
+pub mod sampler;
+
+pub use adapter::{Gpu, GpuError, GpuInfo, GpuOptions};
+pub use kernel::Kernel;
