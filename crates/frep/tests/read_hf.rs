@@ -405,7 +405,7 @@ fn hf_s_is_reserved_only_when_the_header_declares_it() {
         1.0,
         "s scalar",
     );
-    let array = hf("m(x[3], a[1])\n{\n  array s[2];\n  s = [x[1], x[2]];\n  m = 1 - s[1] * s[1] - s[2] * s[2];\n}\n");
+    let array = hf("m(x[3], a[1])\n{\n  array s[2];\n  s[1] = x[1];\n  s[2] = x[2];\n  m = 1 - s[1] * s[1] - s[2] * s[2];\n}\n");
     agree(&array, |[x, y, _]| 1.0 - x * x - y * y, 1.0, "s array");
     // Declared in the header, `s` is that array: a scalar assignment is refused.
     let e = read_str(
