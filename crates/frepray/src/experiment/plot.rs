@@ -139,26 +139,6 @@ fn ticks(r: &std::ops::Range<f64>) -> Vec<f64> {
         .unwrap_or_else(|| even(15))
 }
 
-#[cfg(test)]
-mod tick_tests {
-    use super::ticks;
-
-    /// Ticks cover the whole range: at least three, the first in its lower third and
-    /// the last in its upper third (in log), over wide and narrow ranges alike.
-    #[test]
-    fn ticks_span_the_data_range() {
-        for r in [1e-5..3e2, 0.031..0.038, 0.9..1.1, 12.0..95.0, 2e-3..2.2e-3] {
-            let k = ticks(&r);
-            assert!(k.len() >= 3, "{r:?}: {k:?}");
-            let at = |v: f64| (v.ln() - r.start.ln()) / (r.end.ln() - r.start.ln());
-            assert!(
-                at(k[0]) < 0.34 && at(*k.last().unwrap()) > 0.66,
-                "{r:?}: {k:?}"
-            );
-            assert!(k.iter().all(|v| r.contains(v)), "{r:?}: {k:?}");
-        }
-    }
-}
 
 /// A tick label: plain for moderate values, else scientific.
 fn tick(v: f64) -> String {
@@ -233,4 +213,25 @@ fn draw<DB: DrawingBackend>(
         .position(SeriesLabelPosition::UpperRight)
         .draw()?;
     root.present()
+}
+
+#[cfg(test)]
+mod tick_tests {
+    use super::ticks;
+
+    /// Ticks cover the whole range: at least three, the first in its lower third and
+    /// the last in its upper third (in log), over wide and narrow ranges alike.
+    #[test]
+    fn ticks_span_the_data_range() {
+        for r in [1e-5..3e2, 0.031..0.038, 0.9..1.1, 12.0..95.0, 2e-3..2.2e-3] {
+            let k = ticks(&r);
+            assert!(k.len() >= 3, "{r:?}: {k:?}");
+            let at = |v: f64| (v.ln() - r.start.ln()) / (r.end.ln() - r.start.ln());
+            assert!(
+                at(k[0]) < 0.34 && at(*k.last().unwrap()) > 0.66,
+                "{r:?}: {k:?}"
+            );
+            assert!(k.iter().all(|v| r.contains(v)), "{r:?}: {k:?}");
+        }
+    }
 }
