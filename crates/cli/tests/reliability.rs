@@ -553,3 +553,40 @@ fn range_errors_read_as_words() {
     assert!(err.contains("expected a positive number"), "{err}");
     assert!(!err.contains("e-308") && err.len() < 400, "{err}");
 }
+
+/// Pathological but legal functions finish within a bounded time per ray; a model
+/// file too large to lower is refused with its size.
+#[test]
+fn pathological_functions_finish_and_huge_models_are_refused() {
+    let dir = out_dir("pathological");
+    for (name, f) in [
+        ("div0", "x / 0"),
+        ("inverse", "1 / sqrt(x*x + y*y + z*z) - 1"),
+        ("pow", "pow(sphere([0, 0, 0], 1), 1e300)"),
+    ] {
+        let model = dir.join(format!("{name}.frep"));
+        std::fs::write(
+            &model,
+            format!("bounds([-2, -2, -2], [2, 2, 2])\noutput {f}\n"),
+        )
+        .unwrap();
+        let o = run_within(
+            frepray()
+                .arg("render")
+                .arg(&model)
+                .args(["--width", "16", "--height", "16", "--spp", "1", "-o"])
+                .arg(dir.join(format!("{name}.exr"))),
+            Duration::from_secs(60),
+        );
+        assert!(o.status.success(), "{name}: {}", stderr(&o));
+    }
+    let huge = dir.join("huge.vm");
+    std::fs::File::create(&huge)
+        .unwrap()
+        .set_len(50 << 20)
+        .unwrap();
+    let o = run_within(frepray().arg("check").arg(&huge), Duration::from_secs(10));
+    let err = stderr(&o);
+    assert!(!o.status.success());
+    assert!(err.contains("more than the 16777216"), "{err}");
+}

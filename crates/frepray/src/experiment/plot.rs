@@ -139,7 +139,6 @@ fn ticks(r: &std::ops::Range<f64>) -> Vec<f64> {
         .unwrap_or_else(|| even(15))
 }
 
-
 /// A tick label: plain for moderate values, else scientific.
 fn tick(v: f64) -> String {
     if (1e-3..1e5).contains(&v.abs()) {
