@@ -64,10 +64,10 @@ pub struct ExperimentArgs {
     #[arg(long)]
     height: Option<u32>,
     /// Optimal-MIS ridge λ [default: 0.1].
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     ridge: Option<f64>,
     /// Power heuristic exponent β [default: 2].
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     beta: Option<f64>,
     /// Leave emitters seen directly by the camera out of the images, so that the error
     /// measures the estimators, not the camera's sampling of visible lights.

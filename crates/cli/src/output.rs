@@ -182,3 +182,39 @@ fn written_or(total: usize, failed: Vec<String>) -> Result<(), String> {
         ))
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use render::integrator::RenderOptions;
+    use render::StateHeader;
+
+    /// One output that cannot be written does not stop the others; the error names it.
+    #[test]
+    fn a_failed_write_does_not_stop_the_others() {
+        let dir = std::env::temp_dir().join(format!("frepray-out-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        let state =
+            RenderState::new(StateHeader::new(4, 3, &RenderOptions::default()), 0..1).unwrap();
+        let outs = [
+            dir.join("a.exr"),
+            dir.join("gone/b.state"),
+            dir.join("c.png"),
+        ];
+        let formats: Vec<Format> = outs.iter().map(|p| format_for_scene(p).unwrap()).collect();
+        let e = write_state(&outs, &formats, &state).unwrap_err();
+        assert!(e.contains("1 of 3") && e.contains("b.state"), "{e}");
+        assert!(outs[0].is_file() && outs[2].is_file());
+        assert!(check_writable(&outs[1])
+            .unwrap_err()
+            .contains("does not exist"));
+        assert!(check_writable(&dir).unwrap_err().contains("is a folder"));
+        assert_eq!(
+            partial_path(Path::new("out/x.exr"), false),
+            Path::new("out/x.partial.exr")
+        );
+        assert_eq!(partial_path(Path::new("x.exr"), true), Path::new("x.exr"));
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}

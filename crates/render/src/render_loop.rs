@@ -156,7 +156,7 @@ pub fn render(
 /// Renders samples `samples` of every pixel of `scene` with `options` (whose `spp` is
 /// ignored) into a new [`RenderState`]. `progress(done, total)` is called (from worker
 /// threads) after each tile of each pass with the samples done so far; setting `stop`
-/// ends the render after the tiles in flight (module docs). Errors on invalid options or
+/// ends the render within one sample of each thread (module docs). Errors on invalid options or
 /// an empty range.
 pub fn render_range(
     scene: &Scene,
