@@ -71,9 +71,9 @@ pub fn check_memory(width: u32, height: u32, o: &RenderOptions) -> Result<u64, E
     let (limit, what) = memory_limit(o.max_memory);
     if need > limit {
         return Err(Error::Limit(format!(
-            "a {width}×{height} render with these settings needs about {} ({} bytes of \
-             per-pixel state, {} words per pixel), more than the {} ({}); lower the \
-             resolution, the AOVs or the depth, or raise --max-memory",
+            "a {width}×{height} render with these settings needs about {} ({} bytes: \
+             {} words of state per pixel, held twice, and the image), more than the {} \
+             ({}); lower the resolution, the AOVs or the depth, or raise --max-memory",
             bytes(need),
             need,
             Integrator::new(o)?.record.stride(),
