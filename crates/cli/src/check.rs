@@ -1,4 +1,4 @@
-//! `frepray check`: read a model, build it, and summarise it.
+//! `frepray check`: read a model or a scene, build it, and summarise it.
 
 use frep::{Expr, Shape, Solid, Surface};
 use std::path::Path;
@@ -20,8 +20,60 @@ fn perturbations(s: &Shape) -> (usize, usize) {
     }
 }
 
-/// Reads, lowers and bounds `file`, printing what it found.
+/// The kinds of file `check` and `render` read, for messages.
+pub const KINDS: &str = "a scene (.toml, .json) or a model (.frep, .hf, .vm)";
+
+/// Checks `file` by its kind: a scene is resolved (models, maps and settings
+/// validated), a model read, lowered and bounded; prints what it found.
 pub fn run(file: &Path) -> Result<(), String> {
+    let ext = file
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    match ext.as_deref() {
+        Some("toml" | "json") => scene(file),
+        Some("frep" | "hf" | "vm") => model(file),
+        _ => Err(format!(
+            "{}: unknown kind of file; expected {KINDS}",
+            file.display()
+        )),
+    }
+}
+
+/// Resolves a scene file and summarises it.
+fn scene(file: &Path) -> Result<(), String> {
+    let (data, settings) = crate::scene_render::resolve(file, &Default::default())?;
+    println!("file:          {}", file.display());
+    println!(
+        "resolution:    {}×{}",
+        data.camera.width, data.camera.height
+    );
+    println!(
+        "objects:       {} ({} materials)",
+        data.objects.len(),
+        data.materials.len()
+    );
+    println!(
+        "lights:        {} area, {} point/spot, environment: {}",
+        data.lights.area.len(),
+        data.lights.delta.len(),
+        if data.environment.is_some() {
+            "yes"
+        } else {
+            "no"
+        }
+    );
+    println!(
+        "render:        {} {} spp, {}",
+        settings.integrator,
+        settings.spp,
+        settings.method.name()
+    );
+    Ok(())
+}
+
+/// Reads, lowers and bounds a model file.
+fn model(file: &Path) -> Result<(), String> {
     let model = frep::read::read_file(file).map_err(|e| e.to_string())?;
     let tree = model.shape.to_tree()?;
     let expr = Expr::new(&tree);

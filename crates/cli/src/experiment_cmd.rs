@@ -9,7 +9,8 @@ use frepray::experiment::{self, ExperimentConfig, Image, Renderer};
 use render::integrator::RenderOptions;
 use render::render_loop;
 use render::scene::Scene;
-use std::path::PathBuf;
+use render::{RenderState, StateHeader};
+use std::path::{Path, PathBuf};
 use std::str::FromStr;
 use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
@@ -63,10 +64,10 @@ pub struct ExperimentArgs {
     #[arg(long)]
     height: Option<u32>,
     /// Optimal-MIS ridge λ [default: 0.1].
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     ridge: Option<f64>,
     /// Power heuristic exponent β [default: 2].
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     beta: Option<f64>,
     /// Leave emitters seen directly by the camera out of the images, so that the error
     /// measures the estimators, not the camera's sampling of visible lights.
@@ -85,6 +86,37 @@ struct SceneRenderer {
     scene: Scene,
     base: RenderOptions,
     stop: Arc<AtomicBool>,
+    quiet: bool,
+}
+
+/// Chunks of a reference render: an interrupted reference keeps the chunks it
+/// finished (at most 1/`REFERENCE_CHUNKS` of its work is lost).
+const REFERENCE_CHUNKS: u32 = 32;
+
+impl SceneRenderer {
+    fn options(&self, estimator: &str, spp: u32, seed: u64) -> Result<RenderOptions, String> {
+        Ok(RenderOptions {
+            method: mis::Method::from_str(estimator).map_err(|e| e.to_string())?,
+            spp,
+            seed,
+            ..self.base.clone()
+        })
+    }
+}
+
+/// The driver's image of a render state.
+fn to_image(state: &RenderState) -> Image {
+    let img = state.image();
+    let (w, h) = (img.width(), img.height());
+    let rgb = (0..h)
+        .flat_map(|y| (0..w).map(move |x| (x, y)))
+        .map(|(x, y)| img.rgb(x, y).to_array())
+        .collect();
+    Image {
+        width: w,
+        height: h,
+        rgb,
+    }
 }
 
 impl Renderer for SceneRenderer {
@@ -94,31 +126,68 @@ impl Renderer for SceneRenderer {
         spp: u32,
         seed: u64,
     ) -> Result<Option<(Image, f64)>, String> {
-        let o = RenderOptions {
-            method: mis::Method::from_str(estimator).map_err(|e| e.to_string())?,
-            spp,
-            seed,
-            ..self.base.clone()
-        };
+        let o = self.options(estimator, spp, seed)?;
         let (state, stats) = render_loop::render(&self.scene, &o, &self.stop, &|_, _| {})
             .map_err(|e| e.to_string())?;
         if stats.stopped {
             return Ok(None);
         }
-        let img = state.image();
-        let (w, h) = (img.width(), img.height());
-        let rgb = (0..h)
-            .flat_map(|y| (0..w).map(move |x| (x, y)))
-            .map(|(x, y)| img.rgb(x, y).to_array())
-            .collect();
-        Ok(Some((
-            Image {
-                width: w,
-                height: h,
-                rgb,
-            },
-            stats.wall.as_secs_f64(),
-        )))
+        Ok(Some((to_image(&state), stats.wall.as_secs_f64())))
+    }
+
+    /// Renders the reference in [`REFERENCE_CHUNKS`] sample ranges merged as they
+    /// finish; when stopped, the finished ones go to `checkpoint` (a render state),
+    /// which a rerun continues from if it is a state of the same render.
+    fn render_reference(
+        &mut self,
+        estimator: &str,
+        spp: u32,
+        seed: u64,
+        checkpoint: &Path,
+    ) -> Result<Option<(Image, f64)>, String> {
+        let o = self.options(estimator, spp, seed)?;
+        let header = StateHeader::new(self.scene.camera.width, self.scene.camera.height, &o);
+        let mut acc = RenderState::read(checkpoint).ok().filter(|s| {
+            s.header() == &header
+                && !s.is_partial()
+                && matches!(s.samples(), [r] if r.start == 0 && r.end < spp)
+        });
+        let mut next = acc.as_ref().map_or(0, |s| s.samples()[0].end);
+        if next > 0 && !self.quiet {
+            eprintln!(
+                "reference: continuing from {next} of {spp} samples ({})",
+                checkpoint.display()
+            );
+        }
+        let chunk = spp.div_ceil(REFERENCE_CHUNKS).max(1);
+        let mut wall = 0.0;
+        while next < spp {
+            let end = next.saturating_add(chunk).min(spp);
+            let (state, stats) =
+                render_loop::render_range(&self.scene, &o, next..end, &self.stop, &|_, _| {})
+                    .map_err(|e| e.to_string())?;
+            wall += stats.wall.as_secs_f64();
+            if stats.stopped {
+                if let Some(s) = &acc {
+                    s.write(checkpoint).map_err(|e| e.to_string())?;
+                    if !self.quiet {
+                        eprintln!(
+                            "reference: {} of {spp} samples kept in {}",
+                            s.samples()[0].end,
+                            checkpoint.display()
+                        );
+                    }
+                }
+                return Ok(None);
+            }
+            match &mut acc {
+                None => acc = Some(state),
+                Some(a) => a.merge(&state).map_err(|e| e.to_string())?,
+            }
+            next = end;
+        }
+        let state = acc.expect("spp ≥ 1: at least one chunk");
+        Ok(Some((to_image(&state), wall)))
     }
 }
 
@@ -135,7 +204,13 @@ pub fn run(a: ExperimentArgs) -> Result<(), String> {
         beta: a.beta,
         ..Default::default()
     };
-    let (scene, base) = scene_render::load(&a.scene, &o)?;
+    let (data, settings) = scene_render::resolve(&a.scene, &o)?;
+    let mut base = RenderOptions::from_settings(&settings)?;
+    base.validate()?;
+    // The hash of the resolved scene covers every file it reads (models, environment
+    // maps), not only the scene text: editing a model invalidates earlier renders.
+    base.scene_hash = scene_render::scene_hash(&data)?;
+    let scene = Scene::from_data(&data);
     // One spelling per estimator, so that "optimal_direct" and "optimal-direct" are
     // the same point of the sweep.
     let canon = |s: &str| {
@@ -148,7 +223,6 @@ pub fn run(a: ExperimentArgs) -> Result<(), String> {
         .iter()
         .map(|s| canon(s))
         .collect::<Result<Vec<_>, _>>()?;
-    let text = std::fs::read(&a.scene).map_err(|e| format!("{}: {e}", a.scene.display()))?;
     let mut cfg = ExperimentConfig::new(&a.scene, &a.out);
     cfg.command_line = std::env::args().collect::<Vec<_>>().join(" ");
     cfg.renderer_settings = format!(
@@ -161,8 +235,9 @@ pub fn run(a: ExperimentArgs) -> Result<(), String> {
         scene.camera.width,
         scene.camera.height,
         base.params,
-        fnv1a(&text)
+        base.scene_hash
     );
+    cfg.size = Some((scene.camera.width, scene.camera.height));
     cfg.estimators = estimators;
     cfg.spp = a.spp;
     cfg.reference_spp = a.reference_spp;
@@ -175,6 +250,7 @@ pub fn run(a: ExperimentArgs) -> Result<(), String> {
         scene,
         base,
         stop: crate::stop_on_ctrl_c(),
+        quiet: a.quiet,
     };
     let quiet = a.quiet;
     let summary = experiment::run(&cfg, &mut r, &|line: &str| {
@@ -188,11 +264,4 @@ pub fn run(a: ExperimentArgs) -> Result<(), String> {
         eprintln!("results in {}", a.out.display());
     }
     Ok(())
-}
-
-/// FNV-1a of the scene text: a change of the scene invalidates earlier renders.
-fn fnv1a(bytes: &[u8]) -> u64 {
-    bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, b| {
-        (h ^ *b as u64).wrapping_mul(0x0000_0100_0000_01b3)
-    })
 }

@@ -2,6 +2,7 @@
 
 mod check;
 mod experiment_cmd;
+mod interrupt;
 mod merge_cmd;
 mod output;
 mod scene_render;
@@ -10,12 +11,17 @@ use clap::{Parser, Subcommand, ValueEnum};
 use frepray::preview;
 use std::path::PathBuf;
 use std::process::ExitCode;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 
-/// A physically based renderer for functionally defined (FRep) scenes.
+/// frepray: a physically based renderer for functionally defined (FRep) scenes —
+/// solids where F(x, y, z) ≥ 0 (perturbed quadrics, CSG, blends, HyperFun and Fidget
+/// models) — with Monte Carlo light transport and optimal multiple importance sampling.
+///
+/// Exit status: 0 on success, 1 on an error, 130 when interrupted by Ctrl-C (the
+/// partial result is written first; see `frepray render --help`).
 #[derive(Parser)]
-#[command(name = "frepray", version, about)]
+#[command(name = "frepray", version)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -33,9 +39,10 @@ enum Command {
     /// Merge render states (.state) of disjoint sample ranges of one render into one
     /// image (.png, .exr) or state.
     Merge(merge_cmd::MergeArgs),
-    /// Validate a model file and print a summary (bounds, node count, perturbations).
+    /// Validate a scene or model file and print a summary (scenes: resolution,
+    /// objects, lights, settings; models: bounds, node count, perturbations).
     Check {
-        /// The model file.
+        /// The scene (.toml, .json) or model (.frep, .hf, .vm) file.
         file: PathBuf,
     },
 }
@@ -78,14 +85,14 @@ struct RenderArgs {
     #[arg(long)]
     max_depth: Option<u32>,
     /// Power heuristic exponent β (scenes, `--mis power`) [default: 2].
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     beta: Option<f64>,
     /// Cutoff heuristic threshold c (scenes, `--mis cutoff`) [default: 0.5].
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     cutoff: Option<f64>,
     /// Optimal-MIS ridge λ (scenes, `--mis optimal-*`): the solve adds λ/N·tr(Â)/T to
     /// the diagonal [default: 0.1].
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     ridge: Option<f64>,
     /// Leave emitters seen directly by the camera out of the image (scenes).
     #[arg(long)]
@@ -102,9 +109,18 @@ struct RenderArgs {
     /// A model's vertical axis (models).
     #[arg(long, value_enum, default_value_t = UpArg::Z)]
     up: UpArg,
-    /// Worker threads (0: one per core). The image does not depend on it.
+    /// Worker threads (0: one per core; at most 8 per core). The image does not depend
+    /// on it.
     #[arg(long, default_value_t = 0)]
     threads: usize,
+    /// The memory the render may take, e.g. `512M`, `8G` [default: what the system has
+    /// available]; a larger render is refused before it starts, with its estimate.
+    #[arg(long, value_name = "SIZE", value_parser = render::limits::parse_bytes)]
+    max_memory: Option<u64>,
+    /// On Ctrl-C, write the partial result to the -o names themselves instead of
+    /// `NAME.partial.EXT` (which never replaces a finished file).
+    #[arg(long)]
+    overwrite_partial: bool,
     /// Hide the progress bar.
     #[arg(long)]
     quiet: bool,
@@ -164,17 +180,24 @@ fn main() -> ExitCode {
         Command::Merge(args) => merge_cmd::run(args),
         Command::Check { file } => check::run(&file),
     };
-    match result {
+    let code = match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {e}");
             ExitCode::FAILURE
         }
+    };
+    if interrupt::interrupted() {
+        ExitCode::from(interrupt::EXIT_INTERRUPTED)
+    } else {
+        code
     }
 }
 
-/// Sets the global thread pool's size (0 keeps one thread per core).
+/// Sets the global thread pool's size (0 keeps one thread per core); refuses more
+/// than [`render::limits::max_threads`].
 pub fn set_threads(n: usize) -> Result<(), String> {
+    render::limits::check_threads(n).map_err(|e| e.to_string())?;
     if n > 0 {
         rayon::ThreadPoolBuilder::new()
             .num_threads(n)
@@ -184,13 +207,10 @@ pub fn set_threads(n: usize) -> Result<(), String> {
     Ok(())
 }
 
-/// A flag that Ctrl-C sets, so that a render stops and keeps what it has.
+/// A flag that Ctrl-C sets, so that a render stops and keeps what it has
+/// ([`interrupt`]).
 pub fn stop_on_ctrl_c() -> Arc<AtomicBool> {
-    let stop = Arc::new(AtomicBool::new(false));
-    let s = stop.clone();
-    // Only one handler can be set per process; a second call keeps the first.
-    let _ = ctrlc::set_handler(move || s.store(true, Ordering::SeqCst));
-    stop
+    interrupt::stop_flag()
 }
 
 /// A progress bar (hidden when `quiet`).
@@ -234,7 +254,21 @@ fn render(args: RenderArgs) -> Result<(), String> {
             &o,
             samples,
             args.quiet,
+            args.max_memory.unwrap_or(0),
+            args.overwrite_partial,
         );
+    }
+    let is_model = args
+        .input
+        .extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| ["frep", "hf", "vm"].contains(&e.to_ascii_lowercase().as_str()));
+    if !is_model {
+        return Err(format!(
+            "{}: unknown kind of file; expected {}",
+            args.input.display(),
+            check::KINDS
+        ));
     }
     let scene_only = [
         ("--mis", args.mis.is_some()),
@@ -268,8 +302,12 @@ fn render(args: RenderArgs) -> Result<(), String> {
     let formats = args
         .output
         .iter()
-        .map(|p| output::format_for(p, look))
-        .collect::<Result<Vec<_>, _>>()?;
+        .map(|p| {
+            let f = output::format_for(p, look)?;
+            output::check_writable(p)?;
+            Ok(f)
+        })
+        .collect::<Result<Vec<_>, String>>()?;
     if width == 0 || height == 0 {
         return Err("--width and --height must be at least 1".into());
     }
@@ -277,6 +315,11 @@ fn render(args: RenderArgs) -> Result<(), String> {
     if spp == 0 {
         return Err("--spp must be at least 1".into());
     }
+    let limit = render::integrator::RenderOptions {
+        max_memory: args.max_memory.unwrap_or(0),
+        ..preview::options(look, spp, 0)
+    };
+    render::limits::check_memory(width, height, &limit).map_err(|e| e.to_string())?;
     let start = std::time::Instant::now();
     let solid = preview::load_model(&args.input).map_err(|e| e.to_string())?;
     let setup = start.elapsed();
@@ -297,15 +340,20 @@ fn render(args: RenderArgs) -> Result<(), String> {
     );
     bar.finish_and_clear();
     let (state, stats) = result.map_err(|e| e.to_string())?;
-    let image = state.image();
-    for (p, f) in args.output.iter().zip(formats) {
-        output::write(p, &image, f)?;
-    }
     eprintln!(
         "{}: setup {:.2} s; {stats}",
         args.input.display(),
         setup.as_secs_f64()
     );
+    let outs: Vec<PathBuf> = if stats.stopped {
+        args.output
+            .iter()
+            .map(|p| output::partial_path(p, args.overwrite_partial))
+            .collect()
+    } else {
+        args.output.clone()
+    };
+    output::write_all(&outs, &formats, &state.image())?;
     eprintln!(
         "{}{} written",
         if stats.stopped {
@@ -313,7 +361,7 @@ fn render(args: RenderArgs) -> Result<(), String> {
         } else {
             ""
         },
-        output::list(&args.output)
+        output::list(&outs)
     );
     Ok(())
 }

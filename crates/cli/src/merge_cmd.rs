@@ -19,11 +19,7 @@ pub struct MergeArgs {
 
 /// Reads, merges and writes; errors name the file that does not fit.
 pub fn run(args: MergeArgs) -> Result<(), String> {
-    let formats = args
-        .output
-        .iter()
-        .map(|p| output::format_for_scene(p))
-        .collect::<Result<Vec<Format>, _>>()?;
+    let formats: Vec<Format> = output::check_scene_outputs(&args.output)?;
     let mut merged: Option<RenderState> = None;
     for path in &args.states {
         let s = RenderState::read(path).map_err(|e| e.to_string())?;

@@ -1,8 +1,10 @@
-//! Choosing the output format from the file name.
+//! Output files: the format from the file name, checks that every output can be
+//! written before any work starts, the names of a partial (interrupted) result, and
+//! writing every output even when one fails.
 
 use frepray::preview::Look;
 use render::{Image, RenderState};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// An image format frepray writes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -44,13 +46,77 @@ pub fn format_for(path: &Path, look: Look) -> Result<Format, String> {
         Ok(f) => Ok(f),
     }
     .and_then(|f| match f {
-        Format::Png if look != Look::Shaded => Err(format!(
-            "{}: --integrator {} writes EXR channels; use a .exr output",
-            path.display(),
-            format!("{look:?}").to_lowercase()
-        )),
+        Format::Png if look != Look::Shaded => {
+            Err(aov_png_refusal(path, &format!("{look:?}").to_lowercase()))
+        }
         f => Ok(f),
     })
+}
+
+/// The refusal of a PNG for `--integrator depth|normals` (scenes and models alike):
+/// distances and normal components are not display colours.
+pub fn aov_png_refusal(path: &Path, integrator: &str) -> String {
+    format!(
+        "{}: --integrator {integrator} writes values, not colours, to EXR channels; use a \
+         .exr output",
+        path.display()
+    )
+}
+
+/// Checks, before any work, that `path` can be written: its folder exists and is
+/// writable (a probe file is created there and removed) and `path` is not a folder.
+pub fn check_writable(path: &Path) -> Result<(), String> {
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    let fail = |why: String| format!("cannot write {}: {why}", path.display());
+    if !dir.is_dir() {
+        return Err(fail(format!("the folder {} does not exist", dir.display())));
+    }
+    if path.is_dir() {
+        return Err(fail("it is a folder".into()));
+    }
+    let probe = dir.join(format!(".frepray-probe-{}.tmp", std::process::id()));
+    std::fs::OpenOptions::new()
+        .write(true)
+        .create_new(true)
+        .open(&probe)
+        .map_err(|e| {
+            fail(format!(
+                "the folder {} is not writable ({e})",
+                dir.display()
+            ))
+        })?;
+    let _ = std::fs::remove_file(&probe);
+    Ok(())
+}
+
+/// Checks every output before any work: its format ([`format_for_scene`]) and that it
+/// can be written ([`check_writable`]).
+pub fn check_scene_outputs(outs: &[PathBuf]) -> Result<Vec<Format>, String> {
+    outs.iter()
+        .map(|p| {
+            let f = format_for_scene(p)?;
+            check_writable(p)?;
+            Ok(f)
+        })
+        .collect()
+}
+
+/// Where the partial result of an interrupted render goes: `NAME.partial.EXT` next to
+/// `NAME.EXT`, so that it never silently replaces a finished file of that name (unless
+/// `overwrite`, `--overwrite-partial`).
+pub fn partial_path(path: &Path, overwrite: bool) -> PathBuf {
+    if overwrite {
+        return path.to_path_buf();
+    }
+    let stem = path.file_stem().unwrap_or_default().to_string_lossy();
+    let name = match path.extension() {
+        Some(e) => format!("{stem}.partial.{}", e.to_string_lossy()),
+        None => format!("{stem}.partial"),
+    };
+    path.with_file_name(name)
 }
 
 /// The paths, comma-separated, for messages.
@@ -72,19 +138,83 @@ pub fn write(path: &Path, img: &Image, format: Format) -> Result<(), String> {
 }
 
 /// Writes a render state's outputs: the state itself to `.state` files, its resolved
-/// image to the others (resolved once).
+/// image to the others (resolved once). Every output is attempted; the error names
+/// each that failed.
 pub fn write_state(
-    outs: &[std::path::PathBuf],
+    outs: &[PathBuf],
     formats: &[Format],
     state: &RenderState,
 ) -> Result<(), String> {
     let mut image = None;
+    let mut failed = Vec::new();
     for (p, &f) in outs.iter().zip(formats) {
-        if f == Format::State {
-            state.write(p).map_err(|e| e.to_string())?;
+        let r = if f == Format::State {
+            state.write(p).map_err(|e| e.to_string())
         } else {
-            write(p, image.get_or_insert_with(|| state.image()), f)?;
+            write(p, image.get_or_insert_with(|| state.image()), f)
+        };
+        if let Err(e) = r {
+            failed.push(e);
         }
     }
-    Ok(())
+    written_or(outs.len(), failed)
+}
+
+/// Writes an image to every output; every one is attempted, the error names each that
+/// failed.
+pub fn write_all(outs: &[PathBuf], formats: &[Format], img: &Image) -> Result<(), String> {
+    let failed: Vec<String> = outs
+        .iter()
+        .zip(formats)
+        .filter_map(|(p, &f)| write(p, img, f).err())
+        .collect();
+    written_or(outs.len(), failed)
+}
+
+fn written_or(total: usize, failed: Vec<String>) -> Result<(), String> {
+    if failed.is_empty() {
+        Ok(())
+    } else {
+        Err(format!(
+            "{} of {total} output(s) not written (the others were): {}",
+            failed.len(),
+            failed.join("; ")
+        ))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use render::integrator::RenderOptions;
+    use render::StateHeader;
+
+    /// One output that cannot be written does not stop the others; the error names it.
+    #[test]
+    fn a_failed_write_does_not_stop_the_others() {
+        let dir = std::env::temp_dir().join(format!("frepray-out-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        let state =
+            RenderState::new(StateHeader::new(4, 3, &RenderOptions::default()), 0..1).unwrap();
+        let outs = [
+            dir.join("a.exr"),
+            dir.join("gone/b.state"),
+            dir.join("c.png"),
+        ];
+        let formats: Vec<Format> = outs.iter().map(|p| format_for_scene(p).unwrap()).collect();
+        let e = write_state(&outs, &formats, &state).unwrap_err();
+        assert!(e.contains("1 of 3") && e.contains("b.state"), "{e}");
+        assert!(outs[0].is_file() && outs[2].is_file());
+        assert!(check_writable(&outs[1])
+            .unwrap_err()
+            .contains("does not exist"));
+        assert!(check_writable(&dir).unwrap_err().contains("is a folder"));
+        assert_eq!(
+            partial_path(Path::new("out/x.exr"), false),
+            Path::new("out/x.partial.exr")
+        );
+        assert_eq!(partial_path(Path::new("x.exr"), true), Path::new("x.exr"));
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 }

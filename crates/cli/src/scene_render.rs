@@ -2,7 +2,7 @@
 //! them overridden on the command line.
 
 use crate::output::{self, Format};
-use render::integrator::{Aov, RenderOptions};
+use render::integrator::{Aov, IntegratorKind, RenderOptions};
 use render::render_loop;
 use render::scene::{RenderSettings, Scene, SceneData};
 use std::ops::Range;
@@ -146,6 +146,7 @@ pub fn dump(data: &SceneData, path: &Path) -> Result<(), String> {
 /// Loads, renders (samples `0..spp`, or `samples`) and writes a scene; prints
 /// statistics. With `dump_to`, the resolved scene is also written there as JSON (and
 /// nothing is rendered without outputs).
+#[allow(clippy::too_many_arguments)]
 pub fn run(
     input: &Path,
     outs: &[PathBuf],
@@ -153,15 +154,19 @@ pub fn run(
     o: &Overrides,
     samples: Option<Range<u32>>,
     quiet: bool,
+    max_memory: u64,
+    overwrite_partial: bool,
 ) -> Result<(), String> {
-    let formats = outs
-        .iter()
-        .map(|p| output::format_for_scene(p))
-        .collect::<Result<Vec<_>, _>>()?;
+    let formats = output::check_scene_outputs(outs)?;
+    if let Some(d) = dump_to {
+        output::check_writable(d)?;
+    }
     let (data, settings) = resolve(input, o)?;
     let mut opts = RenderOptions::from_settings(&settings)?;
     opts.threads = o.threads;
+    opts.max_memory = max_memory;
     opts.validate()?;
+    warn_unused(o, &opts);
     if let Some(path) = dump_to {
         dump(&data, path)?;
         eprintln!("resolved scene written to {}", path.display());
@@ -171,6 +176,16 @@ pub fn run(
     }
     opts.scene_hash = scene_hash(&data)?;
     let samples = samples.unwrap_or(0..opts.spp);
+    let (width, height) = (data.camera.width, data.camera.height);
+    render::limits::check_memory(width, height, &opts).map_err(|e| e.to_string())?;
+    if let Some(i) = formats.iter().position(|f| *f == Format::Png) {
+        if matches!(
+            opts.integrator,
+            IntegratorKind::Depth | IntegratorKind::Normals
+        ) {
+            return Err(output::aov_png_refusal(&outs[i], opts.integrator.name()));
+        }
+    }
     let scene = Scene::from_data(&data);
     if !formats.contains(&Format::Exr) && !opts.aovs.is_empty() {
         eprintln!(
@@ -187,8 +202,15 @@ pub fn run(
     });
     bar.finish_and_clear();
     let (state, stats) = result.map_err(|e| e.to_string())?;
-    output::write_state(outs, &formats, &state)?;
     eprintln!("{stats}");
+    let outs: Vec<PathBuf> = if stats.stopped {
+        outs.iter()
+            .map(|p| output::partial_path(p, overwrite_partial))
+            .collect()
+    } else {
+        outs.to_vec()
+    };
+    output::write_state(&outs, &formats, &state)?;
     eprintln!(
         "{}{} written",
         if stats.stopped {
@@ -196,15 +218,68 @@ pub fn run(
         } else {
             ""
         },
-        output::list(outs)
+        output::list(&outs)
     );
     Ok(())
+}
+
+/// Warns about overrides that do not apply to the chosen estimator or integrator.
+fn warn_unused(o: &Overrides, opts: &RenderOptions) {
+    use mis::Method;
+    let optimal = !matches!(
+        opts.method,
+        Method::Balance | Method::Power | Method::Maximum | Method::Cutoff
+    );
+    let mis = matches!(
+        opts.integrator,
+        IntegratorKind::Direct | IntegratorKind::Path
+    );
+    let unused = [
+        (
+            "--beta",
+            o.beta.is_some() && (!mis || opts.method != Method::Power),
+            "--mis power",
+        ),
+        (
+            "--cutoff",
+            o.cutoff.is_some() && (!mis || opts.method != Method::Cutoff),
+            "--mis cutoff",
+        ),
+        (
+            "--ridge",
+            o.ridge.is_some() && (!mis || !optimal),
+            "an optimal estimator (--mis optimal-*)",
+        ),
+        (
+            "--max-depth",
+            o.max_depth.is_some() && opts.integrator != IntegratorKind::Path,
+            "--integrator path",
+        ),
+        (
+            "--mis",
+            o.mis.is_some() && !mis,
+            "--integrator direct or path",
+        ),
+        (
+            "--techniques",
+            o.techniques.is_some() && !mis,
+            "--integrator direct or path",
+        ),
+    ];
+    for (flag, _, applies) in unused.iter().filter(|u| u.1) {
+        eprintln!(
+            "warning: {flag} has no effect here (integrator {}, estimator {}); it applies with {applies}",
+            opts.integrator,
+            opts.method.name()
+        );
+    }
 }
 
 /// Runs `direct` and `path` with the scene's settings and prints throughput.
 pub fn bench(input: &Path, o: &Overrides) -> Result<(), String> {
     let (scene, opts) = load(input, o)?;
-    let stats = render_loop::bench(&scene, &opts).map_err(|e| e.to_string())?;
+    let stop = crate::stop_on_ctrl_c();
+    let stats = render_loop::bench(&scene, &opts, &stop).map_err(|e| e.to_string())?;
     println!(
         "| scene | integrator | MIS | resolution | spp | time (s) | MSamples/s | MRays/s | camera | secondary | shadow |"
     );

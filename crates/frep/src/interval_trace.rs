@@ -29,6 +29,14 @@ use std::sync::Arc;
 /// diagonal are decided by their end signs.
 pub const RESOLUTION: f64 = 1e-7;
 
+/// The most segments one trace bounds by intervals. Well-behaved functions need far
+/// fewer; where intervals say nothing (`x/0`, `pow(f, 1e300)`: every bound infinite or
+/// NaN) bisection would go on to the resolution, ~2^26 segments a ray. Past this budget
+/// the segments left are decided by their end signs, as those below the resolution:
+/// the time per ray is bounded, and only a crossing that enters and leaves within one
+/// of those segments can be missed (docs/reliability.md).
+pub const MAX_SEGMENTS: u32 = 1 << 12;
+
 /// An expression solid ready for ray queries.
 #[derive(Clone, Debug)]
 pub struct ExprSurface {
@@ -232,7 +240,9 @@ impl ExprView<'_> {
                 ib,
                 tape: None,
             });
+            let mut visits = 0u32;
             while let Some(Segment { a, b, ia, ib, tape }) = stack.pop() {
+                visits += 1;
                 arena.truncate(tape.map_or(0, |(_, e)| e as usize));
                 let nodes = match tape {
                     None => root,
@@ -242,9 +252,9 @@ impl ExprView<'_> {
                 if v.lo > 0.0 || v.hi < 0.0 {
                     continue;
                 }
-                if slope.lo > 0.0 || slope.hi < 0.0 || b - a <= eps_t {
-                    // Monotonic (at most one crossing) or below resolution: decided by
-                    // the signs at the ends.
+                if slope.lo > 0.0 || slope.hi < 0.0 || b - a <= eps_t || visits > MAX_SEGMENTS {
+                    // Monotonic (at most one crossing), below resolution or past the
+                    // budget: decided by the signs at the ends.
                     if ia != ib {
                         let t = refine(nodes, ray, a, b, ia, tol);
                         let n = match normal {

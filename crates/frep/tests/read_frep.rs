@@ -32,16 +32,15 @@ fn frep_doc_and_example_files_load() {
             .unwrap_or_else(|e| panic!("{e}\n{text}"));
         assert!(expr(&m).eval([0.05, 0.1, 0.2]).is_finite(), "{text}");
     }
-    let mut n = 0;
-    for entry in std::fs::read_dir(root().join("models/examples")).unwrap() {
-        let path = entry.unwrap().path();
-        if path.extension().is_some_and(|e| e == "frep") {
-            let m = read_file(&path).unwrap_or_else(|e| panic!("{e}"));
-            assert!(m.domain.is_some(), "{path:?} declares bounds");
-            n += 1;
-        }
+    // The shipped examples, named (a user's own model saved there is not tested).
+    for name in ["bumpy_ball", "machined_part", "smooth_blob"] {
+        let path = root()
+            .join("models/examples")
+            .join(name)
+            .with_extension("frep");
+        let m = read_file(&path).unwrap_or_else(|e| panic!("{e}"));
+        assert!(m.domain.is_some(), "{path:?} declares bounds");
     }
-    assert!(n >= 3);
 }
 
 fn frep(text: &str) -> Model {

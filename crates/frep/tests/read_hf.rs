@@ -393,3 +393,39 @@ fn hf_errors_have_positions() {
         ],
     );
 }
+
+/// The third header array `s[k]` exists only when the header declares it: without it,
+/// `s` is an ordinary local (scalar or array); with it, `s` is the header's array.
+#[test]
+fn hf_s_is_reserved_only_when_the_header_declares_it() {
+    let scalar = hf("m(x[3], a[1])\n{\n  s = x[1] * 2;\n  m = 1 - s * s - x[2] * x[2];\n}\n");
+    agree(
+        &scalar,
+        |[x, y, _]| 1.0 - 4.0 * x * x - y * y,
+        1.0,
+        "s scalar",
+    );
+    let array = hf("m(x[3], a[1])\n{\n  array s[2];\n  s[1] = x[1];\n  s[2] = x[2];\n  m = 1 - s[1] * s[1] - s[2] * s[2];\n}\n");
+    agree(&array, |[x, y, _]| 1.0 - x * x - y * y, 1.0, "s array");
+    // Declared in the header, `s` is that array: a scalar assignment is refused.
+    let e = read_str(
+        "m(x[3], a[1], s[2])\n{\n  s = 1;\n  m = 1;\n}\n",
+        Format::HyperFun,
+        "t.hf",
+    )
+    .expect_err("s is the header's array");
+    assert!(e.to_string().contains("'s'"), "{e}");
+    let e = read_str(
+        "m(x[3], a[1], s[2])\n{\n  array s[2];\n  m = 1;\n}\n",
+        Format::HyperFun,
+        "t.hf",
+    )
+    .expect_err("s is already in use");
+    assert!(e.to_string().contains("already in use"), "{e}");
+    // `x` and `a` are always the header's.
+    for name in ["x", "a"] {
+        let text = format!("m(x[3], a[1])\n{{\n  array {name}[2];\n  m = 1;\n}}\n");
+        let e = read_str(&text, Format::HyperFun, "t.hf").expect_err("header name");
+        assert!(e.to_string().contains("already in use"), "{e}");
+    }
+}

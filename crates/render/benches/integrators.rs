@@ -97,7 +97,7 @@ fn main() {
                 method,
                 ..options.clone()
             };
-            for stats in bench(&scene, &o).expect("valid options") {
+            for stats in bench(&scene, &o, &Default::default()).expect("valid options") {
                 println!("{path}, {method}, {stats}");
             }
         }
@@ -117,7 +117,7 @@ fn main() {
             ],
             ..RenderOptions::default()
         };
-        for stats in bench(&scene, &options).expect("valid options") {
+        for stats in bench(&scene, &options, &Default::default()).expect("valid options") {
             println!("{method}, {stats}");
         }
     }

@@ -9,6 +9,10 @@ pub enum Error {
     /// The render options are invalid (the message says which and why).
     #[error("{0}")]
     Options(String),
+    /// A render that would exceed a resource limit (memory, threads): the message gives
+    /// the estimate and the limit.
+    #[error("{0}")]
+    Limit(String),
     /// A render of no samples was asked for.
     #[error("empty sample range {}..{}", .0.start, .0.end)]
     EmptyRange(Range<u32>),

@@ -34,6 +34,7 @@ pub mod frame;
 pub mod image;
 pub mod integrator;
 pub mod light;
+pub mod limits;
 pub mod material;
 pub mod output;
 pub mod render_loop;

@@ -12,9 +12,11 @@
 //! **Passes.** The samples are rendered in passes of `pass_spp` per pixel; within a pass
 //! every tile is one rayon task. Each tile's records stay with it across passes, so the
 //! progressive optimal estimators see each pixel's iterations in order. The stop flag is
-//! read before each tile: once set, the tiles not yet started are skipped and the render
-//! ends; the state is then marked partial, and each pixel's estimate is still correct for
-//! the samples it got (the pixels of a stopped render hold 0, 1 or more passes).
+//! read before every sample (a relaxed atomic load, far below a sample's cost): once
+//! set, each thread finishes the sample it is on and the render ends within one sample
+//! at any `spp`; the state is then marked partial, and each pixel's estimate is still
+//! correct for the whole samples it got (the pixels of a stopped render hold different
+//! numbers of samples, 0 included).
 //!
 //! **Statistics.** A *sample* is one iteration of a pixel: one camera ray with the draws
 //! of every technique (DESIGN.md §4). Rays are counted exactly by kind (per tile, then
@@ -112,16 +114,32 @@ struct Tile {
 }
 
 impl Tile {
-    /// Samples `start..end` of every pixel, each pixel's in index order.
-    fn render(&mut self, it: &Integrator, scene: &Scene, start: u32, end: u32) {
+    /// Samples `start..end` of every pixel, each pixel's in index order, until `stop`
+    /// is set: it is read before every sample, so that a pixel's record always holds
+    /// whole samples and a stop takes effect within one sample. Returns the samples
+    /// rendered.
+    fn render(
+        &mut self,
+        it: &Integrator,
+        scene: &Scene,
+        start: u32,
+        end: u32,
+        stop: &AtomicBool,
+    ) -> u64 {
         let stride = it.record.stride();
-        for (k, rec) in self.records.chunks_exact_mut(stride).enumerate() {
+        let mut n = 0;
+        'pixels: for (k, rec) in self.records.chunks_exact_mut(stride).enumerate() {
             let (i, j) = (k as u32 % self.w, k as u32 / self.w);
             for s in start..end {
+                if stop.load(Ordering::Relaxed) {
+                    break 'pixels;
+                }
                 it.sample(scene, self.x0 + i, self.y0 + j, s, rec, &mut self.rays);
+                n += 1;
             }
         }
-        self.samples += u64::from(self.w * self.h) * u64::from(end - start);
+        self.samples += n;
+        n
     }
 }
 
@@ -138,7 +156,7 @@ pub fn render(
 /// Renders samples `samples` of every pixel of `scene` with `options` (whose `spp` is
 /// ignored) into a new [`RenderState`]. `progress(done, total)` is called (from worker
 /// threads) after each tile of each pass with the samples done so far; setting `stop`
-/// ends the render after the tiles in flight (module docs). Errors on invalid options or
+/// ends the render within one sample of each thread (module docs). Errors on invalid options or
 /// an empty range.
 pub fn render_range(
     scene: &Scene,
@@ -156,6 +174,8 @@ pub fn render_range(
     };
     let it = Integrator::new(&o)?;
     let (width, height) = (scene.camera.width, scene.camera.height);
+    crate::limits::check_threads(o.threads)?;
+    crate::limits::check_memory(width, height, &o)?;
     let mut state = RenderState::new(StateHeader::new(width, height, &o), samples.clone())?;
     let stride = it.record.stride();
     let ts = o.tile_size;
@@ -191,8 +211,7 @@ pub fn render_range(
                 if stop.load(Ordering::Relaxed) {
                     return;
                 }
-                tile.render(&it, scene, start, end);
-                let n = u64::from(tile.w * tile.h) * u64::from(end - start);
+                let n = tile.render(&it, scene, start, end, stop);
                 progress(done.fetch_add(n, Ordering::Relaxed) + n, total);
             });
             start = end;
@@ -236,17 +255,23 @@ pub fn render_range(
 }
 
 /// Throughput of `direct` and `path` on `scene` with `options` otherwise unchanged, for
-/// the CLI's `bench` command: one render each, no progress, the statistics in that order.
-pub fn bench(scene: &Scene, options: &RenderOptions) -> Result<Vec<RenderStats>, Error> {
-    let stop = AtomicBool::new(false);
-    [IntegratorKind::Direct, IntegratorKind::Path]
-        .into_iter()
-        .map(|integrator| {
-            let o = RenderOptions {
-                integrator,
-                ..options.clone()
-            };
-            render(scene, &o, &stop, &|_, _| {}).map(|r| r.1)
-        })
-        .collect()
+/// the CLI's `bench` command: one render each, no progress, the statistics in that order
+/// (a set `stop` ends the render in flight and skips the rest).
+pub fn bench(
+    scene: &Scene,
+    options: &RenderOptions,
+    stop: &AtomicBool,
+) -> Result<Vec<RenderStats>, Error> {
+    let mut out = Vec::new();
+    for integrator in [IntegratorKind::Direct, IntegratorKind::Path] {
+        if stop.load(Ordering::Relaxed) {
+            break;
+        }
+        let o = RenderOptions {
+            integrator,
+            ..options.clone()
+        };
+        out.push(render(scene, &o, stop, &|_, _| {})?.1);
+    }
+    Ok(out)
 }

@@ -37,13 +37,16 @@ pub(crate) fn number(
     if v.is_finite() && v >= lo && v <= hi {
         Ok(v)
     } else {
-        let range = match (lo == f64::NEG_INFINITY, hi == f64::INFINITY) {
-            (true, true) => "finite".to_string(),
-            (false, true) => format!("≥ {lo}"),
-            (true, false) => format!("≤ {hi}"),
-            (false, false) => format!("in [{lo}, {hi}]"),
+        let what = match (lo == f64::NEG_INFINITY, hi == f64::INFINITY) {
+            (true, true) => "a finite number".to_string(),
+            // The smallest positive double stands for "> 0": say so, not its 300 digits.
+            (false, true) if lo == f64::MIN_POSITIVE => "a positive number".to_string(),
+            (false, false) if lo == f64::MIN_POSITIVE => format!("a number in (0, {hi}]"),
+            (false, true) => format!("a number ≥ {lo}"),
+            (true, false) => format!("a number ≤ {hi}"),
+            (false, false) => format!("a number in [{lo}, {hi}]"),
         };
-        Err(src.at_value(at, format!("expected a number {range}, found {v}")))
+        Err(src.at_value(at, format!("expected {what}, found {v}")))
     }
 }
 

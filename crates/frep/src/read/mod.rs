@@ -63,6 +63,10 @@ impl ReadError {
 
 impl fmt::Display for ReadError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if self.line == 0 {
+            // About the whole file (unreadable, unknown kind, too large): no position.
+            return write!(f, "{}: {}", self.file, self.message);
+        }
         write!(
             f,
             "{}:{}:{}: {}",
@@ -107,8 +111,13 @@ pub struct Model {
     pub domain: Option<Aabb>,
 }
 
-/// Reads a model file, choosing the format from its extension. An unreadable file or an
-/// unknown extension is a [`ReadError`] at line 0, column 0.
+/// The largest model file read: 16 MiB (the largest shared model, Fidget's
+/// `prospero.vm`, is 149 kB); larger texts take unbounded time and memory to lower.
+pub const MAX_MODEL_BYTES: u64 = 16 << 20;
+
+/// Reads a model file, choosing the format from its extension. An unreadable file, an
+/// unknown extension or a file over [`MAX_MODEL_BYTES`] is a [`ReadError`] at line 0
+/// (shown without a position).
 pub fn read_file(path: &Path) -> Result<Model, ReadError> {
     let file = path.display().to_string();
     let format = path
@@ -123,6 +132,17 @@ pub fn read_file(path: &Path) -> Result<Model, ReadError> {
                 "expected a file ending in .frep, .hf or .vm, found another extension",
             )
         })?;
+    let len = std::fs::metadata(path)
+        .map_err(|e| ReadError::at(&file, 0, 0, format!("cannot read the file: {e}")))?
+        .len();
+    if len > MAX_MODEL_BYTES {
+        return Err(ReadError::at(
+            &file,
+            0,
+            0,
+            format!("the file is {len} bytes, more than the {MAX_MODEL_BYTES} a model may have"),
+        ));
+    }
     let text = std::fs::read_to_string(path)
         .map_err(|e| ReadError::at(&file, 0, 0, format!("cannot read the file: {e}")))?;
     read_str(&text, format, &file)

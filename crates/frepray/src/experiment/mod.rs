@@ -49,7 +49,25 @@ pub trait Renderer {
         spp: u32,
         seed: u64,
     ) -> Result<Option<(Image, f64)>, String>;
+
+    /// Renders the reference like [`Renderer::render`], keeping what a stopped render
+    /// got in `checkpoint` and continuing from it when it holds samples of the same
+    /// render (so an interrupted reference is not restarted). The default has no
+    /// checkpoints.
+    fn render_reference(
+        &mut self,
+        estimator: &str,
+        spp: u32,
+        seed: u64,
+        checkpoint: &Path,
+    ) -> Result<Option<(Image, f64)>, String> {
+        let _ = checkpoint;
+        self.render(estimator, spp, seed)
+    }
 }
+
+/// The checkpoint of an interrupted reference render, in the output folder.
+pub const REFERENCE_CHECKPOINT: &str = "reference.partial.state";
 
 /// What to run.
 #[derive(Clone, Debug)]
@@ -80,6 +98,9 @@ pub struct ExperimentConfig {
     pub repeats: u32,
     /// The estimator the others are compared against.
     pub baseline: String,
+    /// The size of the renders (width, height), when known: a given reference of
+    /// another size is refused before anything is rendered.
+    pub size: Option<(u32, u32)>,
 }
 
 /// XORed into the seed for a rendered reference, so that its noise is independent of
@@ -103,6 +124,7 @@ impl ExperimentConfig {
             seed: 0,
             repeats: 1,
             baseline: "balance".into(),
+            size: None,
         }
     }
 }
@@ -269,6 +291,14 @@ pub fn run(
     let (reference, ref_info) = match &cfg.reference {
         Some(path) => {
             let img = exr_io::read(path)?;
+            if let Some((w, h)) = cfg.size.filter(|&s| s != (img.width, img.height)) {
+                return Err(format!(
+                    "{}: the reference is {}×{}, the renders would be {w}×{h}",
+                    path.display(),
+                    img.width,
+                    img.height
+                ));
+            }
             let info = ReferenceInfo {
                 source: ReferenceSource::File {
                     path: absolute(path),
@@ -303,11 +333,15 @@ pub fn run(
                 r
             } else {
                 progress(&format!("reference: {estimator} {spp} spp seed {seed}"));
-                let Some((img, t)) = renderer.render(estimator, spp, seed)? else {
+                let checkpoint = out.join(REFERENCE_CHECKPOINT);
+                let Some((img, t)) =
+                    renderer.render_reference(estimator, spp, seed, &checkpoint)?
+                else {
                     summary.interrupted = true;
-                    progress("interrupted while rendering the reference");
+                    progress("interrupted while rendering the reference: rerun to continue it");
                     return Ok(summary);
                 };
+                let _ = std::fs::remove_file(&checkpoint);
                 img.validate().map_err(|e| format!("reference: {e}"))?;
                 let img = img.rounded_to_f32();
                 exr_io::write(&path, &img, None)?;

@@ -100,8 +100,10 @@ fn log_range(values: impl Iterator<Item = f64>) -> std::ops::Range<f64> {
     lo / pad..hi * pad
 }
 
-/// Tick positions 1, 2, 5 × 10^k inside `r` (every integer multiple of 10^k where
-/// that leaves fewer than three).
+/// Tick positions 1, 2, 5 × 10^k inside `r`; every integer multiple of 10^k where that
+/// leaves fewer than three; and where even that does (a range within one step, e.g.
+/// 0.031 to 0.038), five ticks spread evenly in log over the whole range, to the fewest
+/// significant digits that keep them apart.
 fn ticks(r: &std::ops::Range<f64>) -> Vec<f64> {
     let (lo, hi) = (r.start.log10().floor() as i32, r.end.log10().ceil() as i32);
     let pick = |mults: &[f64]| -> Vec<f64> {
@@ -112,10 +114,29 @@ fn ticks(r: &std::ops::Range<f64>) -> Vec<f64> {
     };
     let k = pick(&[1.0, 2.0, 5.0]);
     if k.len() >= 3 {
-        k
-    } else {
-        pick(&[1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0])
+        return k;
     }
+    let k = pick(&[1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0]);
+    if k.len() >= 3 {
+        return k;
+    }
+    let (a, b) = (r.start.ln(), r.end.ln());
+    let even = |digits: i32| -> Vec<f64> {
+        let mut k: Vec<f64> = (1..=5)
+            .map(|i| (a + (b - a) * i as f64 / 6.0).exp())
+            .map(|v| {
+                let scale = 10f64.powi(v.log10().floor() as i32 + 1 - digits);
+                (v / scale).round() * scale
+            })
+            .filter(|v| r.contains(v))
+            .collect();
+        k.dedup();
+        k
+    };
+    (2..=6)
+        .map(even)
+        .find(|k| k.len() == 5)
+        .unwrap_or_else(|| even(15))
 }
 
 /// A tick label: plain for moderate values, else scientific.
@@ -191,4 +212,25 @@ fn draw<DB: DrawingBackend>(
         .position(SeriesLabelPosition::UpperRight)
         .draw()?;
     root.present()
+}
+
+#[cfg(test)]
+mod tick_tests {
+    use super::ticks;
+
+    /// Ticks cover the whole range: at least three, the first in its lower third and
+    /// the last in its upper third (in log), over wide and narrow ranges alike.
+    #[test]
+    fn ticks_span_the_data_range() {
+        for r in [1e-5..3e2, 0.031..0.038, 0.9..1.1, 12.0..95.0, 2e-3..2.2e-3] {
+            let k = ticks(&r);
+            assert!(k.len() >= 3, "{r:?}: {k:?}");
+            let at = |v: f64| (v.ln() - r.start.ln()) / (r.end.ln() - r.start.ln());
+            assert!(
+                at(k[0]) < 0.34 && at(*k.last().unwrap()) > 0.66,
+                "{r:?}: {k:?}"
+            );
+            assert!(k.iter().all(|v| r.contains(v)), "{r:?}: {k:?}");
+        }
+    }
 }

@@ -86,11 +86,15 @@ pub struct RenderOptions {
     pub aovs: Vec<Aov>,
     /// Tile side in pixels.
     pub tile_size: u32,
-    /// Samples per pixel per pass (0: spp/16 rounded up). The stop flag and the progress
-    /// callback act between tiles of a pass.
+    /// Samples per pixel per pass (0: spp/16 rounded up). The progress callback acts
+    /// between tiles of a pass, the stop flag between samples.
     pub pass_spp: u32,
-    /// Worker threads (0: the current rayon pool).
+    /// Worker threads (0: the current rayon pool); at most
+    /// [`crate::limits::max_threads`].
     pub threads: usize,
+    /// The memory a render may take, in bytes (0: what the system has available;
+    /// [`crate::limits`]).
+    pub max_memory: u64,
     /// A hash of the scene, recorded in the [`crate::RenderState`] so that states of
     /// different scenes refuse to merge (0: unknown).
     pub scene_hash: u64,
@@ -114,6 +118,7 @@ impl Default for RenderOptions {
             tile_size: 16,
             pass_spp: 0,
             threads: 0,
+            max_memory: 0,
             scene_hash: 0,
         }
     }

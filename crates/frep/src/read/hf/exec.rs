@@ -27,6 +27,8 @@ const MAX_CALL_DEPTH: usize = 64;
 struct Frame {
     scalars: HashMap<String, Val>,
     arrays: HashMap<String, Vec<Option<Val>>>,
+    /// Whether the header declares the third array `s[k]` (else `s` is a free name).
+    has_s: bool,
 }
 
 /// A program being executed.
@@ -59,8 +61,10 @@ impl<'a> Exec<'a> {
             .insert("x".into(), x.into_iter().map(Some).collect());
         f.arrays
             .insert("a".into(), a.into_iter().map(Some).collect());
-        f.arrays
-            .insert("s".into(), vec![Some(Val::Num(0.0)); m.s_dim]);
+        if let Some(k) = m.s_dim {
+            f.arrays.insert("s".into(), vec![Some(Val::Num(0.0)); k]);
+            f.has_s = true;
+        }
         self.block(&mut f, &m.body)?;
         f.scalars.get(&m.name).cloned().ok_or_else(|| {
             self.err(
@@ -84,7 +88,8 @@ impl<'a> Exec<'a> {
         match s {
             Stmt::Array(decls) => {
                 for (name, n, p) in decls {
-                    if matches!(name.as_str(), "x" | "a" | "s") || f.scalars.contains_key(name) {
+                    let header = name == "x" || name == "a" || (name == "s" && f.has_s);
+                    if header || f.scalars.contains_key(name) {
                         return Err(self.err(
                             *p,
                             format!("expected a new array name, found '{name}', already in use"),
@@ -429,7 +434,10 @@ fn expr_pos(e: &Expr) -> Pos {
 /// both branches leave becomes select(cond, then, else); one only a branch assigns has
 /// no value afterwards.
 fn merge(cond: &Val, t: Frame, e: Frame) -> Frame {
-    let mut out = Frame::default();
+    let mut out = Frame {
+        has_s: t.has_s,
+        ..Frame::default()
+    };
     for (k, a) in &t.scalars {
         if let Some(b) = e.scalars.get(k) {
             out.scalars.insert(k.clone(), sym::select(cond, a, b));

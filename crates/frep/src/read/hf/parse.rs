@@ -94,7 +94,8 @@ pub(crate) struct ModelDef {
     pub pos: Pos,
     pub x_dim: usize,
     pub a_dim: usize,
-    pub s_dim: usize,
+    /// The optional third header array `s[k]`: absent, `s` is an ordinary name.
+    pub s_dim: Option<usize>,
     pub body: Vec<Stmt>,
     /// The closing brace (where a missing result is reported).
     pub end: Pos,
@@ -158,7 +159,11 @@ fn model(c: &mut Cursor) -> Result<ModelDef, ReadError> {
     let x_dim = header_array(c, "x")?;
     c.expect(",")?;
     let a_dim = header_array(c, "a")?;
-    let s_dim = if c.eat(",") { header_array(c, "s")? } else { 1 };
+    let s_dim = if c.eat(",") {
+        Some(header_array(c, "s")?)
+    } else {
+        None
+    };
     c.expect(")")?;
     c.expect("{")?;
     let body = block(c, &["}"])?;
