@@ -5,7 +5,7 @@
 //! preview), the `mis` estimators over numpy sample arrays, and estimator experiments.
 //! The Python package `frepray` (python/frepray) re-exports these and adds what is
 //! easier in Python (dicts as JSON, pandas tables, Ray). Renders run with the GIL
-//! released; Ctrl-C stops them ([`interrupt`]).
+//! released; Ctrl-C stops them (module `interrupt`).
 #![warn(missing_docs)]
 
 mod errors;
