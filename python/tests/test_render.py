@@ -8,6 +8,7 @@ memory bit for bit."""
 import os
 import signal
 import threading
+import time
 
 import numpy as np
 import pytest
@@ -102,9 +103,23 @@ def test_ctrl_c_stops_a_render_with_a_partial_state(many_lights):
     timer.start()
     try:
         with pytest.raises(KeyboardInterrupt) as e:
-            frepray.render(many_lights, spp=1_000_000, threads=1)
+            frepray.render(many_lights, spp=20_000, threads=1)
     finally:
         timer.cancel()
     state = e.value.state
     assert state.partial
-    assert state.sample_counts().max() < 1_000_000
+    assert state.sample_counts().max() < 20_000
+
+
+def test_render_releases_the_gil(many_lights):
+    # While a render runs on another thread, this one keeps running Python.
+    done = threading.Event()
+    worker = threading.Thread(
+        target=lambda: (frepray.render(many_lights, spp=1, threads=1), done.set()))
+    ticks = 0
+    worker.start()
+    while not done.is_set():
+        ticks += 1
+        time.sleep(0.005)
+    worker.join()
+    assert ticks > 5
