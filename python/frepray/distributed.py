@@ -7,7 +7,7 @@ numbers from ``(seed, pixel, i)`` alone, so the parts hold exactly the samples o
 render of the whole range: the per-pixel sample counts are identical, the sums equal
 to ~1e-12 relative (additions in another order), and for the same split the result is
 bit-identical however the tasks are scheduled, retried or placed.  A task whose worker
-dies, or that raises, is retried (``max_retries``).  See docs/distributed.md.
+dies, or that raises OSError, is retried (``max_retries``).  See docs/distributed.md.
 
 Scenes travel to the workers as their source (a file path, which must exist on every
 node, or the dict as JSON).  ``ray.init()`` is called with defaults if Ray is not
@@ -63,8 +63,11 @@ def _render_part(scene: Scene, a: int, b: int, options: dict, kill_marker: Optio
 
 
 def _remote(fn, max_retries: int, num_cpus: float):
+    # A lost worker is always retried; of exceptions only the transient kind (a file
+    # system or network hiccup): a frepray.Error is deterministic and would recur.
     ray = _ray()
-    return ray.remote(max_retries=max_retries, retry_exceptions=True, num_cpus=num_cpus)(fn)
+    return ray.remote(max_retries=max_retries, retry_exceptions=[OSError],
+                      num_cpus=num_cpus)(fn)
 
 
 def render(

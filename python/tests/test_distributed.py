@@ -65,3 +65,9 @@ def test_distributed_experiment(cluster, many_lights):
         ("balance", 1), ("balance", 2), ("optimal-direct", 1), ("optimal-direct", 2)]
     assert all(r["rmse"] > 0 for r in rows)
     assert all(r["improvement"] == 1.0 for r in rows if r["estimator"] == "balance")
+
+
+def test_scene_errors_are_raised_not_retried(cluster, many_lights):
+    with pytest.raises(frepray.SceneError) as e:
+        distributed.render(many_lights, 4, tasks=2, estimator="nonsense", **SMALL)
+    assert e.value.key == "render.estimator"
