@@ -3,7 +3,11 @@
 # Rust (stable, with rustfmt and clippy) is expected on the machine; crates come from
 # crates.io through cargo; Mesa's software Vulkan driver (lavapipe) from Debian, so that
 # the GPU back end runs and is tested on machines without a GPU (../shared/GPU.md §11.1).
+# The Python package: a virtual environment in .venv (Python ≥ 3.11) with the pinned
+# tools of python/requirements-dev.txt (maturin, numpy, pytest, Ray), and frepray built
+# into it by maturin (release, editable: python/frepray).
 set -euo pipefail
+cd "$(dirname "$0")/.."
 if ! command -v cargo >/dev/null 2>&1; then
   if [ -x "$HOME/.cargo/bin/cargo" ]; then
     export PATH="$HOME/.cargo/bin:$PATH"
@@ -28,3 +32,14 @@ if ! dpkg -s mesa-vulkan-drivers libvulkan1 >/dev/null 2>&1; then
       "(apt-get install mesa-vulkan-drivers libvulkan1) for the GPU tests" >&2
   fi
 fi
+
+PYTHON="${PYTHON:-python3}"
+if [ ! -x .venv/bin/python ]; then
+  "$PYTHON" -c 'import sys; assert sys.version_info >= (3, 11), sys.version' || {
+    echo "setup: $PYTHON must be Python 3.11 or newer (set PYTHON=...)" >&2
+    exit 1
+  }
+  "$PYTHON" -m venv .venv
+fi
+.venv/bin/python -m pip install -q --disable-pip-version-check -r python/requirements-dev.txt
+VIRTUAL_ENV="$PWD/.venv" .venv/bin/maturin develop -q --release -m python/Cargo.toml

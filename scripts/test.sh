@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Sets up and runs every check and test: formatting, clippy, the docs (warnings are
-# errors: broken intra-doc links fail), the dependencies' licences, the whole test suite.
+# errors: broken intra-doc links fail), the dependencies' licences, the whole Rust test
+# suite, then the Python package's tests (pytest, Ray on a local 2-CPU cluster).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
@@ -13,3 +14,4 @@ python3 scripts/check-licenses.py
 # Mesa wants a private runtime directory, else it prints a harmless error per device.
 export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-$(mktemp -d)}"
 FREPRAY_REQUIRE_GPU=1 cargo test --workspace
+.venv/bin/python -m pytest -q --doctest-modules python/tests python/frepray

@@ -22,6 +22,7 @@ mod report;
 mod tests;
 
 pub use manifest::{Comparison, Row};
+pub use metrics::{measure, Metrics, REL_EPSILON};
 
 use manifest::{Manifest, ReferenceInfo, ReferenceSource, RenderRecord, FORMAT};
 use std::path::{Path, PathBuf};

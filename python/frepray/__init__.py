@@ -1,0 +1,120 @@
+"""frepray from Python: FRep scenes rendered with optimal MIS.
+
+Load a scene (a file, or a dict with the JSON schema of docs/scene-format.md), render any
+range of samples into a :class:`RenderState` (per-pixel sums that merge exactly), read
+its image as numpy, evaluate bare models, combine numpy samples with the ``mis``
+estimators, and compare estimators.  See docs/python.md; renders across machines:
+:mod:`frepray.distributed` (docs/distributed.md).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from typing import Any, Iterable, Mapping, Optional, Sequence, Union
+
+from . import mis
+from ._native import (
+    Error,
+    Model,
+    ModelError,
+    RenderError,
+    RenderState,
+    Scene,
+    SceneError,
+    gpu_available,
+    load,
+    merge,
+    model,
+    read_exr,
+    render,
+)
+from ._native import experiment as _experiment
+from ._native import load_json as _load_json
+from ._native import measure
+
+__all__ = [
+    "Error", "SceneError", "RenderError", "ModelError", "Scene", "RenderState", "Model",
+    "load", "load_dict", "render", "merge", "read_exr", "write_exr", "model", "mis",
+    "experiment", "measure", "gpu_available",
+]
+
+
+def _plain(value: Any) -> Any:
+    """numpy scalars and arrays (and tuples) as JSON values."""
+    if hasattr(value, "tolist"):
+        return value.tolist()
+    raise TypeError(f"{type(value).__name__} is not a scene value")
+
+
+def load_dict(scene: Mapping[str, Any], base_dir: Union[str, os.PathLike, None] = None) -> Scene:
+    """A scene given as a dict (the JSON schema; numpy values allowed).  Relative model
+    and map paths are found in ``base_dir`` (default: the working directory).  Raises
+    :class:`SceneError` whose ``key`` is the key path, e.g. ``objects[0].material``."""
+    text = json.dumps(scene, default=_plain)
+    return _load_json(text, None if base_dir is None else os.fspath(base_dir))
+
+
+def write_exr(state_or_image: Any, path: Union[str, os.PathLike]) -> None:
+    """Writes a :class:`RenderState`'s image as a linear float32 EXR."""
+    if isinstance(state_or_image, RenderState):
+        state_or_image.write_exr(os.fspath(path))
+    else:
+        raise TypeError("write_exr takes a RenderState")
+
+
+def experiment(
+    scene: Scene,
+    estimators: Sequence[str],
+    spp: Iterable[int],
+    *,
+    out: Union[str, os.PathLike, None] = None,
+    reference_spp: int = 256,
+    reference: Union[str, os.PathLike, None] = None,
+    reference_estimator: Optional[str] = None,
+    baseline: str = "balance",
+    seed: int = 0,
+    repeats: int = 1,
+    techniques: Optional[str] = None,
+    integrator: Optional[str] = None,
+    width: Optional[int] = None,
+    height: Optional[int] = None,
+    pandas: Optional[bool] = None,
+):
+    """The estimator comparison of ``frepray experiment``: a reference (rendered with
+    ``reference_spp`` samples, or the EXR ``reference``), then every estimator at every
+    spp.  Returns one record per (estimator, spp) with ``time_s``, ``mse``, ``rmse``,
+    ``relmse`` and, against ``baseline``, ``improvement``, ``speed_up``, ``overhead``
+    (DESIGN.md §4) -- a pandas DataFrame when pandas is installed (or ``pandas=True``),
+    else a list of dicts.  ``out`` receives results.json/csv, summary.md, plots and
+    images (a temporary folder when not given); a rerun into the same ``out`` resumes."""
+    import tempfile
+
+    def run(folder: str):
+        return _experiment(
+            scene, folder, list(estimators), [int(s) for s in spp],
+            reference_spp=reference_spp,
+            reference=None if reference is None else os.fspath(reference),
+            reference_estimator=reference_estimator, baseline=baseline, seed=seed,
+            repeats=repeats, techniques=techniques, integrator=integrator,
+            width=width, height=height)
+
+    if out is None:
+        with tempfile.TemporaryDirectory(prefix="frepray-experiment-") as folder:
+            records = run(folder)
+    else:
+        records = run(os.fspath(out))
+    return _table(records, pandas)
+
+
+def _table(records: list, pandas: Optional[bool]):
+    """Records as a DataFrame when asked for (or, by default, when pandas imports)."""
+    if pandas is False:
+        return records
+    try:
+        import pandas as pd
+    except ImportError:
+        if pandas:
+            raise
+        return records
+    return pd.DataFrame.from_records(records)

@@ -1,0 +1,60 @@
+//! The exception hierarchy: `frepray.Error` and its subclasses, and the conversion of
+//! the library's errors into them.
+
+use pyo3::create_exception;
+use pyo3::exceptions::PyException;
+use pyo3::prelude::*;
+
+create_exception!(frepray, Error, PyException, "Any frepray error.");
+create_exception!(
+    frepray,
+    SceneError,
+    Error,
+    "A malformed scene: `.file`, `.line`, `.column` (0 when unknown), `.key` (key path, \
+     e.g. `objects[1].solid`) and `.message`."
+);
+create_exception!(
+    frepray,
+    RenderError,
+    Error,
+    "Rendering, a render state or a render option failed."
+);
+create_exception!(
+    frepray,
+    ModelError,
+    Error,
+    "A model could not be read or built."
+);
+
+/// A [`frepray::SceneError`] as `frepray.SceneError` with its location as attributes.
+pub fn scene_error(py: Python<'_>, e: &scene::SceneError) -> PyErr {
+    let err = SceneError::new_err(e.to_string());
+    let v = err.value(py);
+    let set = |k: &str, val: Bound<'_, PyAny>| {
+        let _ = v.setattr(k, val);
+    };
+    set("file", e.file.clone().into_pyobject(py).unwrap().into_any());
+    set("line", e.line.into_pyobject(py).unwrap().into_any());
+    set("column", e.column.into_pyobject(py).unwrap().into_any());
+    set("key", e.key.clone().into_pyobject(py).unwrap().into_any());
+    set(
+        "message",
+        e.message.clone().into_pyobject(py).unwrap().into_any(),
+    );
+    err
+}
+
+/// A library error as the matching exception.
+pub fn to_py(py: Python<'_>, e: frepray::Error) -> PyErr {
+    match e {
+        frepray::Error::Scene(s) => scene_error(py, &s),
+        frepray::Error::Render(r) => RenderError::new_err(r.to_string()),
+        e @ frepray::Error::Model { .. } => ModelError::new_err(e.to_string()),
+        frepray::Error::Invalid(m) => RenderError::new_err(m),
+    }
+}
+
+/// A render-crate error as `frepray.RenderError`.
+pub fn render_err(e: impl std::fmt::Display) -> PyErr {
+    RenderError::new_err(e.to_string())
+}

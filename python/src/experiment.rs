@@ -1,0 +1,196 @@
+//! `frepray.experiment`: the estimator comparison of `frepray experiment`, and the
+//! metrics it uses (`measure`) for images made elsewhere (e.g. on a Ray cluster).
+
+use crate::errors::{render_err, to_py};
+use crate::interrupt;
+use crate::scene::{resolved, scene_path, Scene};
+use frepray::experiment::{self as exp, ExperimentConfig, Image, Renderer};
+use frepray::RenderOptions;
+use numpy::PyReadonlyArray3;
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList};
+use std::path::PathBuf;
+use std::str::FromStr;
+use std::sync::atomic::AtomicBool;
+use std::sync::Arc;
+
+/// Renders the scene for the experiment driver.
+struct SceneRenderer<'a> {
+    scene: Arc<frepray::Scene>,
+    base: RenderOptions,
+    stop: &'a AtomicBool,
+}
+
+impl Renderer for SceneRenderer<'_> {
+    fn render(
+        &mut self,
+        estimator: &str,
+        spp: u32,
+        seed: u64,
+    ) -> Result<Option<(Image, f64)>, String> {
+        let o = RenderOptions {
+            method: mis::Method::from_str(estimator).map_err(|e| e.to_string())?,
+            spp,
+            seed,
+            ..self.base.clone()
+        };
+        let (state, stats) = self
+            .scene
+            .render_with(&o, 0..spp, self.stop, &|_, _| {})
+            .map_err(|e| e.to_string())?;
+        if stats.stopped {
+            return Ok(None);
+        }
+        Ok(Some((to_image(&state.image()), stats.wall.as_secs_f64())))
+    }
+}
+
+/// The colour of a render image.
+fn to_image(img: &render::Image) -> Image {
+    let (w, h) = (img.width(), img.height());
+    Image {
+        width: w,
+        height: h,
+        rgb: (0..h)
+            .flat_map(|y| (0..w).map(move |x| (x, y)))
+            .map(|(x, y)| img.rgb(x, y).to_array())
+            .collect(),
+    }
+}
+
+/// An `(h, w, ≥3)` array's first three channels as an experiment image.
+fn array_image(a: &PyReadonlyArray3<'_, f64>) -> PyResult<Image> {
+    let a = a.as_array();
+    let (h, w, c) = a.dim();
+    if c < 3 {
+        return Err(PyValueError::new_err("expected an (h, w, 3) image"));
+    }
+    let rgb = (0..h)
+        .flat_map(|y| (0..w).map(move |x| (y, x)))
+        .map(|(y, x)| [a[[y, x, 0]], a[[y, x, 1]], a[[y, x, 2]]])
+        .collect();
+    Ok(Image {
+        width: w as u32,
+        height: h as u32,
+        rgb,
+    })
+}
+
+/// MSE, RMSE and relMSE of `image` against `reference` (float64 `(h, w, 3)`), with the
+/// definitions of `frepray experiment` (DESIGN.md §4).
+#[pyfunction]
+pub fn measure<'py>(
+    py: Python<'py>,
+    image: PyReadonlyArray3<'py, f64>,
+    reference: PyReadonlyArray3<'py, f64>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let (m, _) = exp::measure(&array_image(&image)?, &array_image(&reference)?)
+        .map_err(PyValueError::new_err)?;
+    let d = PyDict::new(py);
+    d.set_item("mse", m.mse)?;
+    d.set_item("rmse", m.mse.sqrt())?;
+    d.set_item("relmse", m.relmse)?;
+    d.set_item("nonfinite", m.nonfinite)?;
+    Ok(d)
+}
+
+/// Runs the comparison: a reference (`reference_spp` samples, or the EXR `reference`),
+/// then every estimator at every spp, written to `out` (results.json, results.csv,
+/// summary.md, plots, images; a rerun resumes). Returns one dict per (estimator, spp):
+/// estimator, spp, time_s, mse, rmse, relmse, improvement, speed_up, overhead.
+#[pyfunction]
+#[pyo3(signature = (scene, out, estimators, spp, reference_spp = 256, reference = None,
+    reference_estimator = None, baseline = "balance", seed = 0, repeats = 1,
+    techniques = None, integrator = None, width = None, height = None))]
+#[allow(clippy::too_many_arguments)]
+pub fn experiment<'py>(
+    py: Python<'py>,
+    scene: &Scene,
+    out: PathBuf,
+    estimators: Vec<String>,
+    spp: Vec<u32>,
+    reference_spp: u32,
+    reference: Option<PathBuf>,
+    reference_estimator: Option<String>,
+    baseline: &str,
+    seed: u64,
+    repeats: u32,
+    techniques: Option<String>,
+    integrator: Option<String>,
+    width: Option<u32>,
+    height: Option<u32>,
+) -> PyResult<Bound<'py, PyList>> {
+    let canon = |s: &str| {
+        mis::Method::from_str(s)
+            .map(|m| m.name().to_string())
+            .map_err(|e| PyValueError::new_err(e.to_string()))
+    };
+    let o = scene::Overrides {
+        techniques: techniques
+            .as_deref()
+            .map(scene::parse_technique_list)
+            .transpose()
+            .map_err(|e| crate::errors::scene_error(py, &e))?,
+        integrator,
+        width,
+        height,
+        ..Default::default()
+    };
+    let s = resolved(py, scene, &o)?;
+    let base = s.options().map_err(|e| to_py(py, e))?;
+    let mut cfg = ExperimentConfig::new(scene_path(scene), out);
+    cfg.command_line = "frepray.experiment (Python)".into();
+    cfg.renderer_settings = format!(
+        "integrator {} techniques {:?} max_depth {} rr_depth {} hide_emitters {} params {:?} scene-hash {:016x}",
+        base.integrator,
+        base.techniques.iter().map(|(t, n)| format!("{}:{n}", t.name())).collect::<Vec<_>>(),
+        base.max_depth,
+        base.rr_depth,
+        base.hide_emitters,
+        base.params,
+        s.hash()
+    );
+    cfg.estimators = estimators
+        .iter()
+        .map(|e| canon(e))
+        .collect::<PyResult<_>>()?;
+    cfg.spp = spp;
+    cfg.reference_spp = reference_spp;
+    cfg.reference = reference;
+    cfg.reference_estimator = reference_estimator.as_deref().map(canon).transpose()?;
+    cfg.baseline = canon(baseline)?;
+    cfg.seed = seed;
+    cfg.repeats = repeats;
+    let (result, interrupted) = interrupt::run(py, |stop| {
+        let mut r = SceneRenderer {
+            scene: s.clone(),
+            base: base.clone(),
+            stop,
+        };
+        exp::run(&cfg, &mut r, &|_| {})
+    });
+    if let Some(err) = interrupted {
+        return Err(err);
+    }
+    let summary = result.map_err(render_err)?;
+    let list = PyList::empty(py);
+    for row in &summary.rows {
+        let d = PyDict::new(py);
+        d.set_item("estimator", &row.estimator)?;
+        d.set_item("spp", row.spp)?;
+        d.set_item("time_s", row.time_s)?;
+        d.set_item("mse", row.mse)?;
+        d.set_item("rmse", row.rmse)?;
+        d.set_item("relmse", row.relmse)?;
+        let c = summary
+            .comparisons
+            .iter()
+            .find(|c| c.estimator == row.estimator && c.spp == row.spp);
+        d.set_item("improvement", c.and_then(|c| c.improvement))?;
+        d.set_item("speed_up", c.and_then(|c| c.speed_up))?;
+        d.set_item("overhead", c.and_then(|c| c.overhead))?;
+        list.append(d)?;
+    }
+    Ok(list)
+}

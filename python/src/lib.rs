@@ -1,0 +1,45 @@
+//! # frepray-py — the `frepray._native` extension module
+//!
+//! Python bindings of the `frepray` library: scenes (files or dicts), renders of sample
+//! ranges into mergeable render states (numpy images), bare models (evaluation and
+//! preview), the `mis` estimators over numpy sample arrays, and estimator experiments.
+//! The Python package `frepray` (python/frepray) re-exports these and adds what is
+//! easier in Python (dicts as JSON, pandas tables, Ray). Renders run with the GIL
+//! released; Ctrl-C stops them (module `interrupt`).
+#![warn(missing_docs)]
+
+mod errors;
+mod experiment;
+mod interrupt;
+mod mis_py;
+mod model;
+mod scene;
+mod state;
+
+use pyo3::prelude::*;
+
+/// The module: classes, functions and exceptions.
+#[pymodule]
+fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    let py = m.py();
+    m.add("Error", py.get_type::<errors::Error>())?;
+    m.add("SceneError", py.get_type::<errors::SceneError>())?;
+    m.add("RenderError", py.get_type::<errors::RenderError>())?;
+    m.add("ModelError", py.get_type::<errors::ModelError>())?;
+    m.add_class::<scene::Scene>()?;
+    m.add_class::<state::RenderState>()?;
+    m.add_class::<model::Model>()?;
+    m.add_function(wrap_pyfunction!(scene::load, m)?)?;
+    m.add_function(wrap_pyfunction!(scene::load_json, m)?)?;
+    m.add_function(wrap_pyfunction!(scene::render, m)?)?;
+    m.add_function(wrap_pyfunction!(scene::_scene_from_source, m)?)?;
+    m.add_function(wrap_pyfunction!(state::merge, m)?)?;
+    m.add_function(wrap_pyfunction!(state::read_exr, m)?)?;
+    m.add_function(wrap_pyfunction!(model::model, m)?)?;
+    m.add_function(wrap_pyfunction!(mis_py::mis_estimate, m)?)?;
+    m.add_function(wrap_pyfunction!(mis_py::mis_methods, m)?)?;
+    m.add_function(wrap_pyfunction!(experiment::experiment, m)?)?;
+    m.add_function(wrap_pyfunction!(experiment::measure, m)?)?;
+    m.add("gpu_available", false)?;
+    Ok(())
+}

@@ -1,0 +1,313 @@
+//! Scenes (a file, or a dict as JSON) and `render`: options from keyword arguments,
+//! patched into the scene's description as overrides, so that they are validated with
+//! the scene's own values exactly as the CLI's flags are.
+
+use crate::errors::{render_err, scene_error, to_py};
+use crate::interrupt;
+use crate::state::RenderState;
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyTuple};
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+/// Where a scene came from: what a worker process needs to load it again.
+#[derive(Clone)]
+enum Source {
+    File(PathBuf),
+    Json { text: String, base_dir: PathBuf },
+}
+
+/// A resolved scene (from `frepray.load` or `frepray.load_dict`), ready to render.
+/// Pickles as its source, so that it travels to other processes (Ray workers).
+#[pyclass(module = "frepray", frozen)]
+pub struct Scene {
+    source: Source,
+    inner: Arc<frepray::Scene>,
+}
+
+impl Scene {
+    fn resolve(&self, py: Python<'_>, o: &scene::Overrides) -> PyResult<frepray::Scene> {
+        match &self.source {
+            Source::File(path) => frepray::load_with(path, o).map_err(|e| to_py(py, e)),
+            Source::Json { text, base_dir } => {
+                let value: serde_json::Value =
+                    serde_json::from_str(text).map_err(|e| PyValueError::new_err(e.to_string()))?;
+                let mut d =
+                    scene::description_from_value(value).map_err(|e| scene_error(py, &e))?;
+                d.apply_overrides(o);
+                let (data, settings) =
+                    scene::resolve(&d, base_dir).map_err(|e| scene_error(py, &o.blame(e)))?;
+                Ok(frepray::Scene::from_data(data, settings))
+            }
+        }
+    }
+}
+
+#[pymethods]
+impl Scene {
+    /// Image width and height in pixels.
+    #[getter]
+    fn resolution(&self) -> (u32, u32) {
+        self.inner.resolution()
+    }
+    /// The scene's hash (recorded in render states; states of different scenes refuse
+    /// to merge).
+    #[getter]
+    fn hash(&self) -> u64 {
+        self.inner.hash()
+    }
+    /// The scene's render settings as a dict (integrator, estimator, spp, seed, …).
+    #[getter]
+    fn settings<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let o = self.inner.options().map_err(|e| to_py(py, e))?;
+        let d = PyDict::new(py);
+        d.set_item("integrator", o.integrator.to_string())?;
+        d.set_item("estimator", o.method.name())?;
+        d.set_item("spp", o.spp)?;
+        d.set_item("seed", o.seed)?;
+        let techniques: Vec<(String, u32)> = o
+            .techniques
+            .iter()
+            .map(|(t, n)| (t.name().to_string(), *n))
+            .collect();
+        d.set_item("techniques", techniques)?;
+        d.set_item("max_depth", o.max_depth)?;
+        let aovs: Vec<&str> = o.aovs.iter().map(|a| a.name()).collect();
+        d.set_item("aovs", aovs)?;
+        Ok(d.into_any())
+    }
+    /// `(kind, text, base_dir)`: "file" and a path, or "json" and the scene as JSON.
+    fn source(&self) -> (String, String, String) {
+        match &self.source {
+            Source::File(p) => ("file".into(), p.display().to_string(), String::new()),
+            Source::Json { text, base_dir } => {
+                ("json".into(), text.clone(), base_dir.display().to_string())
+            }
+        }
+    }
+    fn __reduce__<'py>(
+        &self,
+        py: Python<'py>,
+    ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
+        let f = py
+            .import("frepray._native")?
+            .getattr("_scene_from_source")?;
+        let (k, t, b) = self.source();
+        Ok((f, PyTuple::new(py, [k, t, b])?))
+    }
+    fn __repr__(&self) -> String {
+        let (w, h) = self.inner.resolution();
+        match &self.source {
+            Source::File(p) => format!("<frepray.Scene {} {w}x{h}>", p.display()),
+            Source::Json { .. } => format!("<frepray.Scene (dict) {w}x{h}>"),
+        }
+    }
+}
+
+/// Loads a scene file (TOML or JSON). Raises `SceneError` with the location.
+#[pyfunction]
+pub fn load(py: Python<'_>, path: PathBuf) -> PyResult<Scene> {
+    let inner = py
+        .detach(|| frepray::load(&path))
+        .map_err(|e| to_py(py, e))?;
+    let path = std::path::absolute(&path).unwrap_or(path);
+    Ok(Scene {
+        source: Source::File(path),
+        inner: Arc::new(inner),
+    })
+}
+
+/// A scene given as JSON text (the dict of `frepray.load_dict`); relative model and map
+/// paths are found in `base_dir`. Raises `SceneError` with the key path.
+#[pyfunction]
+#[pyo3(signature = (text, base_dir = None))]
+pub fn load_json(py: Python<'_>, text: String, base_dir: Option<PathBuf>) -> PyResult<Scene> {
+    let value: serde_json::Value =
+        serde_json::from_str(&text).map_err(|e| PyValueError::new_err(e.to_string()))?;
+    let base_dir = base_dir.unwrap_or_else(|| PathBuf::from("."));
+    let base_dir = std::path::absolute(&base_dir).unwrap_or(base_dir);
+    let inner = frepray::load_value(value, &base_dir).map_err(|e| to_py(py, e))?;
+    Ok(Scene {
+        source: Source::Json { text, base_dir },
+        inner: Arc::new(inner),
+    })
+}
+
+/// Rebuilds a pickled scene.
+#[pyfunction]
+pub fn _scene_from_source(
+    py: Python<'_>,
+    kind: &str,
+    text: String,
+    base_dir: String,
+) -> PyResult<Scene> {
+    match kind {
+        "file" => load(py, PathBuf::from(text)),
+        "json" => load_json(py, text, Some(PathBuf::from(base_dir))),
+        _ => Err(PyValueError::new_err(format!(
+            "unknown scene source {kind:?}"
+        ))),
+    }
+}
+
+/// `techniques` as the CLI's `name:count,...` text: a string, a dict `{name: count}` or
+/// a sequence of names or `(name, count)` pairs.
+fn technique_text(t: &Bound<'_, PyAny>) -> PyResult<String> {
+    if let Ok(s) = t.extract::<String>() {
+        return Ok(s);
+    }
+    if let Ok(d) = t.cast::<PyDict>() {
+        let mut parts = vec![];
+        for (k, v) in d.iter() {
+            parts.push(format!(
+                "{}:{}",
+                k.extract::<String>()?,
+                v.extract::<u32>()?
+            ));
+        }
+        return Ok(parts.join(","));
+    }
+    let mut parts = vec![];
+    for item in t.try_iter()? {
+        let item = item?;
+        if let Ok(s) = item.extract::<String>() {
+            parts.push(s);
+        } else {
+            let (name, n): (String, u32) = item.extract()?;
+            parts.push(format!("{name}:{n}"));
+        }
+    }
+    Ok(parts.join(","))
+}
+
+/// Renders samples `samples = (start, end)` (default `(0, spp)`) of every pixel of
+/// `scene` into a `RenderState`. Keyword options override the scene's settings:
+/// `spp`, `seed`, `estimator` (balance, power, maximum, cutoff, optimal-direct, …),
+/// `techniques` ("light:1,bsdf:1", a dict or a list), `integrator`, `width`, `height`,
+/// `max_depth`, `aovs`, `hide_emitters`, `beta`, `cutoff`, `ridge`; `threads` (0: all
+/// cores); `backend` "cpu" (this build has no GPU back end). The GIL is released while
+/// rendering; Ctrl-C stops the render and raises KeyboardInterrupt with the partial
+/// state as its `state` attribute.
+#[pyfunction]
+#[pyo3(signature = (scene, spp = None, seed = None, samples = None, estimator = None,
+    techniques = None, integrator = None, threads = 0, backend = "cpu", width = None,
+    height = None, max_depth = None, aovs = None, hide_emitters = false, beta = None,
+    cutoff = None, ridge = None))]
+#[allow(clippy::too_many_arguments)]
+pub fn render(
+    py: Python<'_>,
+    scene: &Scene,
+    spp: Option<u32>,
+    seed: Option<u64>,
+    samples: Option<(u32, u32)>,
+    estimator: Option<String>,
+    techniques: Option<Bound<'_, PyAny>>,
+    integrator: Option<String>,
+    threads: usize,
+    backend: &str,
+    width: Option<u32>,
+    height: Option<u32>,
+    max_depth: Option<u32>,
+    aovs: Option<Vec<String>>,
+    hide_emitters: bool,
+    beta: Option<f64>,
+    cutoff: Option<f64>,
+    ridge: Option<f64>,
+) -> PyResult<RenderState> {
+    match backend {
+        "cpu" => {}
+        "gpu" => {
+            return Err(render_err(
+                "backend \"gpu\": this build of frepray has no GPU back end (use \"cpu\")",
+            ))
+        }
+        b => {
+            return Err(PyValueError::new_err(format!(
+                "backend {b:?}: expected \"cpu\" or \"gpu\""
+            )))
+        }
+    }
+    let techniques = techniques
+        .map(|t| {
+            let s = technique_text(&t)?;
+            scene::parse_technique_list(&s).map_err(|e| scene_error(py, &e))
+        })
+        .transpose()?;
+    let o = scene::Overrides {
+        spp,
+        estimator,
+        techniques,
+        seed,
+        integrator,
+        width,
+        height,
+        max_depth,
+        aovs,
+        hide_emitters,
+        beta,
+        cutoff,
+        ridge,
+    };
+    let reresolve = o.estimator.is_some()
+        || o.techniques.is_some()
+        || o.integrator.is_some()
+        || o.width.is_some()
+        || o.height.is_some()
+        || o.max_depth.is_some()
+        || o.aovs.is_some()
+        || o.hide_emitters
+        || o.beta.is_some()
+        || o.cutoff.is_some()
+        || o.ridge.is_some();
+    let resolved = if reresolve {
+        Arc::new(scene.resolve(py, &o)?)
+    } else {
+        scene.inner.clone()
+    };
+    let mut options = resolved.options().map_err(|e| to_py(py, e))?;
+    if let Some(n) = spp {
+        options.spp = n;
+    }
+    if let Some(s) = seed {
+        options.seed = s;
+    }
+    options.threads = threads;
+    options.validate().map_err(render_err)?;
+    let range = match samples {
+        Some((a, b)) if a < b => a..b,
+        Some((a, b)) => {
+            return Err(PyValueError::new_err(format!(
+                "samples ({a}, {b}): expected (start, end) with start < end"
+            )))
+        }
+        None => 0..options.spp,
+    };
+    let (result, interrupted) = interrupt::run(py, |stop| {
+        resolved.render_with(&options, range, stop, &|_, _| {})
+    });
+    let (state, _stats) = result.map_err(|e| to_py(py, e))?;
+    let state = RenderState::from(state);
+    if let Some(err) = interrupted {
+        let _ = err.value(py).setattr("state", Py::new(py, state)?);
+        return Err(err);
+    }
+    Ok(state)
+}
+
+/// The scene's source path, for experiments (`<dict>` for a scene given as data).
+pub fn scene_path(scene: &Scene) -> PathBuf {
+    match &scene.source {
+        Source::File(p) => p.clone(),
+        Source::Json { .. } => Path::new("<dict>").into(),
+    }
+}
+
+/// The resolved scene with experiment overrides applied.
+pub fn resolved(
+    py: Python<'_>,
+    scene: &Scene,
+    o: &scene::Overrides,
+) -> PyResult<Arc<frepray::Scene>> {
+    Ok(Arc::new(scene.resolve(py, o)?))
+}

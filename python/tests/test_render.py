@@ -1,0 +1,125 @@
+"""Renders: numpy images, exact merges of sample ranges, the CLI's files, Ctrl-C.
+
+What is exact (docs/render-state.md): merging [0, N) and [N, 2N) gives the per-pixel
+sample counts of one render of [0, 2N) bit for bit and its sums to ~1e-12 relative
+(the additions happen in another order); a merge through bytes equals the merge in
+memory bit for bit."""
+
+import os
+import signal
+import threading
+import time
+
+import numpy as np
+import pytest
+
+import frepray
+from conftest import SMALL, run_cli
+
+N = 3
+
+
+@pytest.mark.parametrize("estimator", ["balance", "optimal-direct"])
+def test_split_merges_into_the_whole(many_lights, estimator):
+    opts = dict(SMALL, estimator=estimator, seed=11)
+    whole = frepray.render(many_lights, samples=(0, 2 * N), **opts)
+    first = frepray.render(many_lights, samples=(0, N), **opts)
+    second = frepray.render(many_lights, samples=(N, 2 * N), **opts)
+
+    merged = frepray.merge([first, second])
+    assert merged.samples == [(0, 2 * N)] == whole.samples
+    assert np.array_equal(merged.sample_counts(), whole.sample_counts())
+    assert (whole.sample_counts() == 2 * N).all()
+    np.testing.assert_allclose(merged.sums(), whole.sums(), rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(merged.image_f64(), whole.image_f64(), rtol=1e-12,
+                               atol=1e-12)
+
+    # In place, and through the serialised form: bit for bit the same.
+    via_bytes = frepray.RenderState.from_bytes(first.to_bytes())
+    via_bytes.merge(frepray.RenderState.from_bytes(second.to_bytes()))
+    assert via_bytes.to_bytes() == merged.to_bytes()
+    assert np.array_equal(via_bytes.sums(), merged.sums())
+
+
+def test_image_arrays(many_lights):
+    st = frepray.render(many_lights, spp=2, aovs=["depth", "normal"], **SMALL)
+    img = st.image()
+    assert img.shape == (16, 24, 3) and img.dtype == np.float32
+    assert np.isfinite(img).all() and img.max() > 0
+    aovs = st.aovs()
+    assert set(aovs) == {"depth", "normal.X", "normal.Y", "normal.Z"}
+    assert all(a.shape == (16, 24) and a.dtype == np.float32 for a in aovs.values())
+    assert np.array_equal(img, st.image_f64()[:, :, :3].astype(np.float32))
+
+
+def test_numpy_equals_the_cli_exr(many_lights, cli, tmp_path):
+    exr = tmp_path / "cli.exr"
+    run_cli(cli, "render", many_lights.source()[1], "-o", exr, "--spp", "2",
+            "--seed", "7", "--mis", "optimal-direct", "--width", "24", "--height", "16",
+            "--aovs", "depth", "--quiet")
+    st = frepray.render(many_lights, spp=2, seed=7, estimator="optimal-direct",
+                        aovs=["depth"], **SMALL)
+    rgb, aovs = frepray.read_exr(exr)
+    img = st.image()
+    assert rgb.shape == img.shape and rgb.dtype == img.dtype == np.float32
+    assert np.array_equal(rgb, img)
+    assert np.array_equal(aovs["depth"], st.aovs()["depth"])
+    # And the EXR Python writes is the same file content.
+    st.write_exr(tmp_path / "py.exr")
+    assert np.array_equal(frepray.read_exr(tmp_path / "py.exr")[0], img)
+
+
+def test_python_states_merge_with_the_cli(many_lights, cli, tmp_path):
+    opts = dict(SMALL, seed=4)
+    a = frepray.render(many_lights, samples=(0, 2), **opts)
+    b = frepray.render(many_lights, samples=(2, 4), **opts)
+    a.write(tmp_path / "a.state")
+    b.write(tmp_path / "b.state")
+    run_cli(cli, "merge", tmp_path / "a.state", tmp_path / "b.state",
+            "-o", tmp_path / "m.exr", "-o", tmp_path / "m.state")
+    merged = frepray.merge([a, b])
+    assert frepray.RenderState.read(tmp_path / "m.state").to_bytes() == merged.to_bytes()
+    assert np.array_equal(frepray.read_exr(tmp_path / "m.exr")[0], merged.image())
+
+
+def test_merge_refuses_overlaps_and_other_renders(many_lights):
+    a = frepray.render(many_lights, samples=(0, 2), **SMALL)
+    with pytest.raises(frepray.RenderError):
+        a.merge(frepray.render(many_lights, samples=(1, 3), **SMALL))
+    with pytest.raises(frepray.RenderError):
+        a.merge(frepray.render(many_lights, samples=(2, 3), seed=99, **SMALL))
+
+
+def test_same_image_at_any_thread_count(many_lights):
+    a = frepray.render(many_lights, spp=2, threads=1, **SMALL)
+    b = frepray.render(many_lights, spp=2, threads=2, **SMALL)
+    assert np.array_equal(a.sums(), b.sums())
+
+
+def test_ctrl_c_stops_a_render_with_a_partial_state(many_lights):
+    # SIGINT to this process while a long render runs: the render stops between tiles
+    # and KeyboardInterrupt carries the partial state.
+    timer = threading.Timer(0.5, os.kill, (os.getpid(), signal.SIGINT))
+    timer.start()
+    try:
+        with pytest.raises(KeyboardInterrupt) as e:
+            frepray.render(many_lights, spp=20_000, threads=1)
+    finally:
+        timer.cancel()
+    state = e.value.state
+    assert state.partial
+    assert state.sample_counts().max() < 20_000
+
+
+def test_render_releases_the_gil(many_lights):
+    # While a render runs on another thread, this one keeps running Python.
+    done = threading.Event()
+    worker = threading.Thread(
+        target=lambda: (frepray.render(many_lights, spp=1, threads=1), done.set()))
+    ticks = 0
+    worker.start()
+    while not done.is_set():
+        ticks += 1
+        time.sleep(0.005)
+    worker.join()
+    assert ticks > 5
