@@ -43,17 +43,18 @@ pub fn run(file: &Path) -> Result<(), String> {
 /// Resolves a scene file and summarises it.
 fn scene(file: &Path) -> Result<(), String> {
     let (data, settings) = crate::scene_render::resolve(file, &Default::default())?;
-    println!("file:          {}", file.display());
-    println!(
+    out!("file:          {}", file.display());
+    out!(
         "resolution:    {}×{}",
-        data.camera.width, data.camera.height
+        data.camera.width,
+        data.camera.height
     );
-    println!(
+    out!(
         "objects:       {} ({} materials)",
         data.objects.len(),
         data.materials.len()
     );
-    println!(
+    out!(
         "lights:        {} area, {} point/spot, environment: {}",
         data.lights.area.len(),
         data.lights.delta.len(),
@@ -63,7 +64,7 @@ fn scene(file: &Path) -> Result<(), String> {
             "no"
         }
     );
-    println!(
+    out!(
         "render:        {} {} spp, {}",
         settings.integrator,
         settings.spp,
@@ -80,21 +81,26 @@ fn model(file: &Path) -> Result<(), String> {
     let solid = Solid::build(&model.shape).map_err(|e| format!("{}: {e}", file.display()))?;
     let b = solid.bounds();
     let (quadrics, perts) = perturbations(&model.shape);
-    println!("file:          {}", file.display());
+    out!("file:          {}", file.display());
     if let Some(n) = &model.name {
-        println!("model:         {n}");
+        out!("model:         {n}");
     }
-    println!(
+    out!(
         "nodes:         {} (deduplicated expression DAG)",
         expr.len()
     );
-    println!("perturbed quadrics: {quadrics}, perturbations: {perts}");
+    out!("perturbed quadrics: {quadrics}, perturbations: {perts}");
     if b.is_empty() {
-        println!("bounds:        empty (F < 0 everywhere in the search domain)");
+        out!("bounds:        empty (F < 0 everywhere in the search domain)");
     } else {
-        println!(
+        out!(
             "bounds:        [{:.6}, {:.6}, {:.6}] .. [{:.6}, {:.6}, {:.6}]",
-            b.lo.x, b.lo.y, b.lo.z, b.hi.x, b.hi.y, b.hi.z
+            b.lo.x,
+            b.lo.y,
+            b.lo.z,
+            b.hi.x,
+            b.hi.y,
+            b.hi.z
         );
     }
     Ok(())

@@ -1,5 +1,20 @@
 //! `frepray`: render functionally defined scenes, check model files.
 
+/// `println!` that ends the program quietly (status 0) when stdout is a closed pipe, as
+/// in `frepray check … | head -1`, instead of panicking.
+macro_rules! out {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        let mut o = std::io::stdout().lock();
+        if let Err(e) = writeln!(o, $($arg)*) {
+            if e.kind() == std::io::ErrorKind::BrokenPipe {
+                std::process::exit(0);
+            }
+            eprintln!("warning: cannot write to stdout: {e}");
+        }
+    }};
+}
+
 mod check;
 mod experiment_cmd;
 mod interrupt;

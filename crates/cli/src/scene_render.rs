@@ -280,13 +280,13 @@ pub fn bench(input: &Path, o: &Overrides) -> Result<(), String> {
     let (scene, opts) = load(input, o)?;
     let stop = crate::stop_on_ctrl_c();
     let stats = render_loop::bench(&scene, &opts, &stop).map_err(|e| e.to_string())?;
-    println!(
+    out!(
         "| scene | integrator | MIS | resolution | spp | time (s) | MSamples/s | MRays/s | camera | secondary | shadow |"
     );
-    println!("| --- | --- | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |");
+    out!("| --- | --- | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |");
     for s in &stats {
         let (c, sec, sh) = s.mrays_per_s_by_kind();
-        println!(
+        out!(
             "| {} | {} | {} | {}×{} | {} | {:.2} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} |",
             input.file_name().unwrap_or_default().to_string_lossy(),
             s.integrator,

@@ -359,3 +359,21 @@ fn dumps_the_resolved_scene_as_json() {
     );
     assert!(!dir.join("never.json").exists());
 }
+
+/// `frepray check … | head -1`: a closed stdout ends the program quietly, no panic.
+#[test]
+fn a_closed_stdout_is_not_a_panic() {
+    let mut child = frepray()
+        .arg("check")
+        .arg(root().join("models/examples/bumpy_ball.frep"))
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Close the reading end before the model is parsed and the summary printed.
+    drop(child.stdout.take());
+    let out = child.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!err.contains("panicked"), "{err}");
+    assert_eq!(out.status.code(), Some(0), "{err}");
+}

@@ -10,6 +10,10 @@ pub struct TexCoord {
     pub p: DVec3,
     /// Surface parameters (0 where a surface has none, as for most FRep solids).
     pub uv: DVec2,
+    /// The outward unit normal (0 where unknown): a solid checker is read a hair inside
+    /// the surface, so that a surface lying on a cell boundary (a floor at z = 0) takes
+    /// the cell behind it instead of flipping between two with the rounding of each hit.
+    pub n: DVec3,
 }
 
 /// The domain of a checker.
@@ -52,7 +56,12 @@ impl Texture {
             Texture::Constant(c) => *c,
             Texture::Checker { a, b, scale, space } => {
                 let cells = match space {
-                    TextureSpace::Point => (tc.p * *scale).floor().to_array().iter().sum::<f64>(),
+                    TextureSpace::Point => {
+                        // 1/1000 of a cell inward: below any visible detail, far above
+                        // the rounding of a hit point.
+                        let p = tc.p * *scale - tc.n * 1e-3;
+                        p.floor().to_array().iter().sum::<f64>()
+                    }
                     TextureSpace::Uv => (tc.uv * *scale).floor().to_array().iter().sum::<f64>(),
                 };
                 if cells.rem_euclid(2.0) < 0.5 {
@@ -81,7 +90,7 @@ mod tests {
         let at = |x, y, z| {
             t.eval(&TexCoord {
                 p: DVec3::new(x, y, z),
-                uv: DVec2::ZERO,
+                ..TexCoord::default()
             })
         };
         assert_eq!(at(0.1, 0.1, 0.1), a);
@@ -99,9 +108,36 @@ mod tests {
         let tc = |x, y| TexCoord {
             p: DVec3::splat(0.1),
             uv: DVec2::new(x, y),
+            n: DVec3::Z,
         };
         assert_eq!(u.eval(&tc(0.1, 0.1)), a);
         assert_eq!(u.eval(&tc(0.3, 0.1)), b);
         assert_eq!(Texture::from(Rgb::X).eval(&tc(5.0, 5.0)), Rgb::X);
+    }
+
+    /// A floor on a cell boundary (z = 0, normal +z): hit points a rounding error above
+    /// or below it take the same cell, the one behind the surface; without the normal
+    /// they would alternate (the salt-and-pepper floors of the shipped scenes).
+    #[test]
+    fn a_surface_on_a_cell_boundary_takes_one_cell() {
+        let t = Texture::Checker {
+            a: Rgb::ONE,
+            b: Rgb::ZERO,
+            scale: 2.0,
+            space: TextureSpace::Point,
+        };
+        let at = |z: f64, n: DVec3| {
+            t.eval(&TexCoord {
+                p: DVec3::new(0.1, 0.1, z),
+                n,
+                ..TexCoord::default()
+            })
+        };
+        for z in [-1e-12, -1e-16, 0.0, 1e-16, 1e-12] {
+            assert_eq!(at(z, DVec3::Z), Rgb::ZERO, "z = {z}");
+            assert_eq!(at(z, -DVec3::Z), Rgb::ONE, "z = {z}, facing down");
+        }
+        // Without a normal the rounding picks the cell: the flip this avoids.
+        assert_ne!(at(-1e-16, DVec3::ZERO), at(1e-16, DVec3::ZERO));
     }
 }

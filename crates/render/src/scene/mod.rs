@@ -106,6 +106,7 @@ impl SurfaceHit {
     pub fn tex_coord(&self) -> TexCoord {
         TexCoord {
             p: self.p,
+            n: self.n,
             ..Default::default()
         }
     }
