@@ -15,6 +15,8 @@
 //!   back, bounds checks off (GPU.md §3.4), for kernel twins and tests;
 //! - [`layout`]: the flat scene's quadrics, perturbations and BVH nodes as `#[repr(C)]`
 //!   structs with their WGSL mirrors;
+//! - [`quadric`]: rays against plain quadrics in WGSL, with the CPU f32 twin they equal
+//!   bit for bit on lavapipe (GPU.md §3.5);
 //! - [`sampler`]: the CPU's random numbers (Philox4x32-10, `render::sampler`) in WGSL with
 //!   32-bit operations only, equal bit for bit on every adapter.
 //!
@@ -31,6 +33,7 @@
 mod adapter;
 mod kernel;
 pub mod layout;
+pub mod quadric;
 pub mod sampler;
 
 pub use adapter::{Gpu, GpuError, GpuInfo, GpuOptions};
