@@ -209,7 +209,7 @@ pub fn run(a: ExperimentArgs) -> Result<(), String> {
     base.validate()?;
     // The hash of the resolved scene covers every file it reads (models, environment
     // maps), not only the scene text: editing a model invalidates earlier renders.
-    base.scene_hash = scene_render::scene_hash(&data)?;
+    base.scene_hash = frepray::scene_hash(&data);
     let scene = Scene::from_data(&data);
     // One spelling per estimator, so that "optimal_direct" and "optimal-direct" are
     // the same point of the sweep.

@@ -128,15 +128,6 @@ pub fn parse_samples(s: &str) -> Result<Range<u32>, String> {
     Ok(a..b)
 }
 
-/// FNV-1a 64 of the resolved scene's JSON: the scene hash of the states it renders
-/// into, so that states of different scenes (or sizes) refuse to merge.
-pub fn scene_hash(data: &SceneData) -> Result<u64, String> {
-    let json = serde_json::to_vec(data).map_err(|e| e.to_string())?;
-    Ok(json.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| {
-        (h ^ u64::from(b)).wrapping_mul(0x0000_0100_0000_01b3)
-    }))
-}
-
 /// Writes the resolved scene as pretty JSON (`--dump-scene`).
 pub fn dump(data: &SceneData, path: &Path) -> Result<(), String> {
     let json = serde_json::to_string_pretty(data).map_err(|e| e.to_string())?;
@@ -174,7 +165,7 @@ pub fn run(
             return Ok(());
         }
     }
-    opts.scene_hash = scene_hash(&data)?;
+    opts.scene_hash = frepray::scene_hash(&data);
     let samples = samples.unwrap_or(0..opts.spp);
     let (width, height) = (data.camera.width, data.camera.height);
     render::limits::check_memory(width, height, &opts).map_err(|e| e.to_string())?;

@@ -84,10 +84,7 @@ pub struct Scene {
 /// FNV-1a 64 of the resolved scene's JSON: it identifies the scene in render states, so
 /// that states of different scenes (or image sizes) refuse to merge.
 pub fn scene_hash(data: &SceneData) -> u64 {
-    let json = serde_json::to_vec(data).expect("SceneData serialises");
-    json.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| {
-        (h ^ u64::from(b)).wrapping_mul(0x0000_0100_0000_01b3)
-    })
+    render::state::fnv1a(&serde_json::to_vec(data).expect("SceneData serialises"))
 }
 
 impl Scene {

@@ -243,8 +243,8 @@ fn corrupt(what: impl std::fmt::Display) -> Error {
 const MAGIC: &[u8; 8] = b"FREPSTAT";
 const VERSION: u32 = 1;
 
-/// FNV-1a, 64 bits.
-fn fnv1a(bytes: &[u8]) -> u64 {
+/// FNV-1a, 64 bits: the state file's checksum and the scene hash of states.
+pub fn fnv1a(bytes: &[u8]) -> u64 {
     bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| {
         (h ^ u64::from(b)).wrapping_mul(0x0000_0100_0000_01b3)
     })
