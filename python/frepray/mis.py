@@ -64,7 +64,7 @@ def estimate(
     *,
     beta: float = 2.0,
     cutoff: float = 0.5,
-    ridge: float = 0.1,
+    ridge: float | None = None,
     warmup: int = 1,
     train: int = 8,
 ) -> np.ndarray:
@@ -74,7 +74,7 @@ def estimate(
     one channel), ``(N, C)`` or ``(N, n_t, C)``.  ``pdfs[t]``: every technique's pdf at
     those samples, ``(N, T)`` or ``(N, n_t, T)``; a sample whose own pdf is 0 counts as
     failed.  ``method``: one of :func:`methods`; ``beta`` (power), ``cutoff``, ``ridge``
-    (optimal), ``warmup`` (progressive), ``train`` (full) are the estimators' parameters.
+    (optimal; ``None``: the method's default, 0.1, or 1 for ``optimal-uncorrelated``), ``warmup`` (progressive), ``train`` (full) are the estimators' parameters.
     """
     if len(f) != len(pdfs):
         raise ValueError(f"{len(f)} arrays of f but {len(pdfs)} of pdfs")

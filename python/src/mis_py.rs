@@ -11,9 +11,9 @@ use std::str::FromStr;
 /// The estimate of `∫ f` by `method` from `f[t]` `(N, n_t, C)` and `pdfs[t]` `(N, n_t,
 /// T)`: N iterations of the multi-sample model, each drawing `n_t` samples of every
 /// technique t, with f's C channels and all T pdfs at every sample (a sample whose own
-/// pdf is 0 counts as failed). Returns float64 `(C,)`.
+/// pdf is 0 counts as failed); `ridge` None: the method's default. Returns float64 `(C,)`.
 #[pyfunction]
-#[pyo3(signature = (method, f, pdfs, beta = 2.0, cutoff = 0.5, ridge = mis::DEFAULT_RIDGE,
+#[pyo3(signature = (method, f, pdfs, beta = 2.0, cutoff = 0.5, ridge = None,
     warmup = mis::DEFAULT_WARMUP, train = mis::DEFAULT_TRAIN))]
 #[allow(clippy::too_many_arguments)]
 pub fn mis_estimate<'py>(
@@ -23,7 +23,7 @@ pub fn mis_estimate<'py>(
     pdfs: Vec<PyReadonlyArray3<'py, f64>>,
     beta: f64,
     cutoff: f64,
-    ridge: f64,
+    ridge: Option<f64>,
     warmup: u64,
     train: u64,
 ) -> PyResult<Bound<'py, PyArray1<f64>>> {

@@ -63,7 +63,7 @@ pub struct ExperimentArgs {
     /// Image height [default: the scene's].
     #[arg(long)]
     height: Option<u32>,
-    /// Optimal-MIS ridge λ [default: 0.1].
+    /// Optimal-MIS ridge λ [default: 0.1; 1 for optimal-uncorrelated].
     #[arg(long, allow_negative_numbers = true)]
     ridge: Option<f64>,
     /// Power heuristic exponent β [default: 2].

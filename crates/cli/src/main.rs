@@ -106,7 +106,7 @@ struct RenderArgs {
     #[arg(long, allow_negative_numbers = true)]
     cutoff: Option<f64>,
     /// Optimal-MIS ridge λ (scenes, `--mis optimal-*`): the solve adds λ/N·tr(Â)/T to
-    /// the diagonal [default: 0.1].
+    /// the diagonal [default: 0.1; 1 for optimal-uncorrelated].
     #[arg(long, allow_negative_numbers = true)]
     ridge: Option<f64>,
     /// Leave emitters seen directly by the camera out of the image (scenes).

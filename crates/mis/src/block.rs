@@ -27,7 +27,7 @@
 //! ```
 //! use mis::{Kernel, Layout, Method, Params};
 //! let layout = Layout::new(&[1, 1], 1);
-//! let k = Kernel::new(Method::OptimalDirect, &layout, &Params { ridge: 0.0, ..Params::default() }).unwrap();
+//! let k = Kernel::new(Method::OptimalDirect, &layout, &Params { ridge: Some(0.0), ..Params::default() }).unwrap();
 //! // Two halves of a run in separate blocks, merged: the same as one block.
 //! let (mut a, mut b, mut whole) = (vec![0.0; k.block_len()], vec![0.0; k.block_len()], vec![0.0; k.block_len()]);
 //! for i in 0..8u64 {
@@ -84,6 +84,8 @@ impl Kernel {
     /// The kernel of `method` with `params` (checked) for `layout`.
     pub fn new(method: Method, layout: &Arc<Layout>, params: &Params) -> Result<Kernel, String> {
         params.validate()?;
+        // The ridge made explicit: `params()` and the blocks' solves use the same λ.
+        let params = &params.resolved(method);
         let code = match method {
             Method::OptimalDirect => Code::Direct,
             Method::OptimalUncorrelated => Code::Uncorrelated,
@@ -120,6 +122,11 @@ impl Kernel {
     /// The method's parameters.
     pub fn params(&self) -> &Params {
         &self.params
+    }
+
+    /// The ridge λ of the solves (made explicit by [`Kernel::new`]).
+    fn ridge(&self) -> f64 {
+        self.params.ridge_for(self.method)
     }
 
     /// Words of one block. A zero-filled block is an empty estimator.
@@ -173,7 +180,7 @@ impl Kernel {
             Code::Weighted(_) | Code::Direct => block[0] += 1.0,
             Code::Uncorrelated => block[(key & 1) as usize] += 1.0,
             Code::Progressive(s) => {
-                progressive::end_iteration(&self.layout, self.params.ridge, s, block)
+                progressive::end_iteration(&self.layout, self.ridge(), s, block)
             }
         }
     }
@@ -188,7 +195,7 @@ impl Kernel {
 
     /// The estimate of a block, one value per channel (0 before the first iteration).
     pub fn estimate(&self, block: &[f64], out: &mut [f64]) {
-        let (l, ridge) = (&*self.layout, self.params.ridge);
+        let (l, ridge) = (&*self.layout, self.ridge());
         match self.code {
             Code::Weighted(_) => weighted::estimate(block, out),
             Code::Direct => direct::estimate(l, ridge, block, out),
@@ -200,7 +207,7 @@ impl Kernel {
     /// Adds block `b` into block `a` (module docs).
     pub fn merge(&self, a: &mut [f64], b: &[f64]) {
         match self.code {
-            Code::Progressive(s) => progressive::merge(&self.layout, self.params.ridge, s, a, b),
+            Code::Progressive(s) => progressive::merge(&self.layout, self.ridge(), s, a, b),
             _ => add(a, b),
         }
     }

@@ -10,7 +10,7 @@
 
 use std::sync::Arc;
 
-use crate::linalg::{relative_ridge, solve, SolveMethod};
+use crate::linalg::{relative_ridge, solve, with_scratch, SolveMethod};
 use crate::{Estimator, Layout, Moments};
 
 /// Words of a direct estimator's block: `[N | moments]`.
@@ -38,10 +38,13 @@ pub(crate) fn estimate(layout: &Layout, ridge: f64, block: &[f64], out: &mut [f6
         return;
     }
     let m = Moments::view(layout, &block[1..]);
-    let mut a = vec![0.0; m.vectors().len()];
-    alpha(layout, ridge, block, &mut a);
-    let an = m.matrix_times_counts(layout);
-    m.full_form(layout, &an, &a, n, out);
+    let t = layout.techniques();
+    with_scratch(m.vectors().len() + t, |buf| {
+        let (a, an) = buf.split_at_mut(m.vectors().len());
+        alpha(layout, ridge, block, a);
+        m.matrix_times_counts_into(layout, an);
+        m.full_form(layout, an, a, n, out);
+    });
 }
 
 /// Optimal MIS, direct (correlated) estimator.

@@ -16,7 +16,7 @@
 //! use mis::{Estimator, Layout, Method, Params};
 //! // ∫₀¹ f with f(x) = 3 + 2x = 3·p₀ + 1·p₁ for p₀ = 1 (uniform), p₁ = 2x (linear): F = 4.
 //! let layout = Layout::new(&[1, 1], 1); // one sample of each technique per iteration
-//! let params = Params { ridge: 0.0, ..Params::default() };
+//! let params = Params { ridge: Some(0.0), ..Params::default() };
 //! let mut optimal = Method::OptimalDirect.build(&layout, &params).unwrap();
 //! let mut balance: mis::AnyEstimator = "balance".parse::<Method>().unwrap().build(&layout, &params).unwrap();
 //! for k in 0..8 {
@@ -52,8 +52,8 @@ pub mod weights;
 pub use block::Kernel;
 pub use direct::Direct;
 pub use estimator::{
-    AnyEstimator, Estimator, Method, Params, UnknownMethod, DEFAULT_RIDGE, DEFAULT_TRAIN,
-    DEFAULT_WARMUP,
+    AnyEstimator, Estimator, Method, Params, UnknownMethod, DEFAULT_RIDGE,
+    DEFAULT_RIDGE_UNCORRELATED, DEFAULT_TRAIN, DEFAULT_WARMUP,
 };
 pub use heuristic::Heuristic;
 pub use layout::Layout;

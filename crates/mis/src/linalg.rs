@@ -7,6 +7,22 @@
 //! a cyclic Jacobi eigen-decomposition (a pseudo-inverse). Sizes are tiny (T ≲ 8), so
 //! everything is plain loops over packed storage.
 
+/// Words of stack scratch (4.1 KiB): the pseudo-inverse's `T + 2T²` at T = 16; longer
+/// buffers go to the heap.
+const STACK_WORDS: usize = 16 + 2 * 16 * 16;
+
+/// Runs `f` on a zeroed scratch buffer of `len` words, on the stack where it fits: the
+/// solves run once per pixel (and per re-solve) and must not allocate for usual T.
+#[inline]
+pub(crate) fn with_scratch<R>(len: usize, f: impl FnOnce(&mut [f64]) -> R) -> R {
+    if len <= STACK_WORDS {
+        let mut buf = [0.0; STACK_WORDS];
+        f(&mut buf[..len])
+    } else {
+        f(&mut vec![0.0; len])
+    }
+}
+
 /// Number of entries of a packed symmetric `t × t` matrix (lower triangle, row by row).
 #[inline]
 pub const fn packed_len(t: usize) -> usize {
@@ -65,29 +81,31 @@ pub fn solve(a: &[f64], t: usize, ridge: f64, rhs: &[f64], alpha: &mut [f64]) ->
         return SolveMethod::Zero;
     }
     let mu = ridge * trace / t as f64;
-    let mut m = a.to_vec();
-    for i in 0..t {
-        m[packed_index(i, i)] += mu;
-    }
-    if cholesky_in_place(&mut m, t) {
-        for (col, out) in rhs.chunks_exact(t).zip(alpha.chunks_exact_mut(t)) {
-            cholesky_solve(&m, t, col, out);
+    with_scratch(a.len(), |m| {
+        let ridged = |m: &mut [f64]| {
+            m.copy_from_slice(a);
+            for i in 0..t {
+                m[packed_index(i, i)] += mu;
+            }
+        };
+        ridged(m);
+        if cholesky_in_place(m, t) {
+            for (col, out) in rhs.chunks_exact(t).zip(alpha.chunks_exact_mut(t)) {
+                cholesky_solve(m, t, col, out);
+            }
+            if alpha.iter().all(|v| v.is_finite()) {
+                return SolveMethod::Cholesky;
+            }
         }
-        if alpha.iter().all(|v| v.is_finite()) {
-            return SolveMethod::Cholesky;
+        // The factorisation overwrote `m` (fully or up to the failing pivot): rebuild it.
+        ridged(m);
+        if pseudo_inverse_solve(m, t, rhs, alpha) {
+            SolveMethod::PseudoInverse
+        } else {
+            alpha.fill(0.0);
+            SolveMethod::Zero
         }
-    }
-    // The factorisation overwrote `m` (fully or up to the failing pivot): rebuild it.
-    m.copy_from_slice(a);
-    for i in 0..t {
-        m[packed_index(i, i)] += mu;
-    }
-    if pseudo_inverse_solve(&m, t, rhs, alpha) {
-        SolveMethod::PseudoInverse
-    } else {
-        alpha.fill(0.0);
-        SolveMethod::Zero
-    }
+    })
 }
 
 /// Overwrites packed `m` with its Cholesky factor L (lower, `m = L Lᵀ`). Returns false
@@ -137,13 +155,21 @@ fn cholesky_solve(l: &[f64], t: usize, b: &[f64], x: &mut [f64]) {
 /// Eigen-decomposition of a packed symmetric matrix by cyclic Jacobi rotations (Golub &
 /// Van Loan, §8.5). Returns (eigenvalues, eigenvectors as columns of a row-major t×t).
 pub fn symmetric_eigen(m: &[f64], t: usize) -> (Vec<f64>, Vec<f64>) {
-    let mut a = vec![0.0; t * t];
+    let (mut values, mut vectors) = (vec![0.0; t], vec![0.0; t * t]);
+    with_scratch(t * t, |a| {
+        symmetric_eigen_in(m, t, a, &mut values, &mut vectors)
+    });
+    (values, vectors)
+}
+
+/// [`symmetric_eigen`] into caller storage: `a` (t², scratch), `values` (t), `v` (t²).
+fn symmetric_eigen_in(m: &[f64], t: usize, a: &mut [f64], values: &mut [f64], v: &mut [f64]) {
     for i in 0..t {
         for j in 0..t {
             a[i * t + j] = m[packed_index(i, j)];
         }
     }
-    let mut v = vec![0.0; t * t];
+    v.fill(0.0);
     for i in 0..t {
         v[i * t + i] = 1.0;
     }
@@ -184,13 +210,30 @@ pub fn symmetric_eigen(m: &[f64], t: usize) -> (Vec<f64>, Vec<f64>) {
             }
         }
     }
-    ((0..t).map(|i| a[i * t + i]).collect(), v)
+    for (i, value) in values.iter_mut().enumerate() {
+        *value = a[i * t + i];
+    }
 }
 
 /// Minimum-norm least-squares solution `x = M⁺ b` for each column of `rhs`, eigenvalues
 /// below [`PIVOT_TOL`]·max treated as zero. Returns false if the result is not finite.
 fn pseudo_inverse_solve(m: &[f64], t: usize, rhs: &[f64], alpha: &mut [f64]) -> bool {
-    let (values, vectors) = symmetric_eigen(m, t);
+    with_scratch(t + 2 * t * t, |buf| {
+        let (values, rest) = buf.split_at_mut(t);
+        let (vectors, a) = rest.split_at_mut(t * t);
+        symmetric_eigen_in(m, t, a, values, vectors);
+        pseudo_inverse_apply(values, vectors, t, rhs, alpha)
+    })
+}
+
+/// `x = V diag(1/λ) Vᵀ b` over the eigenvalues above the threshold.
+fn pseudo_inverse_apply(
+    values: &[f64],
+    vectors: &[f64],
+    t: usize,
+    rhs: &[f64],
+    alpha: &mut [f64],
+) -> bool {
     let max = values.iter().fold(0.0f64, |acc, &v| acc.max(v));
     alpha.fill(0.0);
     if !(max > 0.0 && max.is_finite()) {

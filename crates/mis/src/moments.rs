@@ -133,11 +133,18 @@ impl<S: AsRef<[f64]>> Moments<S> {
 
     /// `Â n` (length T): its mean over iterations estimates `A n = 1`.
     pub fn matrix_times_counts(&self, layout: &Layout) -> Vec<f64> {
+        let mut out = vec![0.0; self.t];
+        self.matrix_times_counts_into(layout, &mut out);
+        out
+    }
+
+    /// [`Moments::matrix_times_counts`] into `out` (length T), without allocating.
+    pub fn matrix_times_counts_into(&self, layout: &Layout, out: &mut [f64]) {
         let a = self.matrix();
         let n = layout.counts();
-        (0..self.t)
-            .map(|i| (0..self.t).map(|k| a[packed_index(i, k)] * n[k]).sum())
-            .collect()
+        for (i, o) in out.iter_mut().enumerate() {
+            *o = (0..self.t).map(|k| a[packed_index(i, k)] * n[k]).sum();
+        }
     }
 
     /// The full-form estimate `Σα + n·(b̂ − Âα)/N` per channel (Kondapaneni et al. 2019,

@@ -15,7 +15,7 @@
 
 use std::sync::Arc;
 
-use crate::linalg::{relative_ridge, solve};
+use crate::linalg::{relative_ridge, solve, with_scratch};
 use crate::{Estimator, Layout, Moments};
 
 /// Words of an uncorrelated estimator's block: `[N_A, N_B | moments A | moments B]`.
@@ -44,21 +44,20 @@ fn cross(layout: &Layout, ridge: f64, block: &[f64], x: usize, y: usize, out: &m
     let t = layout.techniques();
     let (nx, ny) = (block[x], block[y]);
     let (sx, sy) = (set(layout, block, x), set(layout, block, y));
-    let rhs: Vec<f64> = sy.vectors().iter().map(|b| b * (nx / ny)).collect();
-    let mut alpha = vec![0.0; rhs.len()];
-    solve(
-        sx.matrix(),
-        t,
-        relative_ridge(ridge, nx as u64),
-        &rhs,
-        &mut alpha,
-    );
-    let an: Vec<f64> = sx
-        .matrix_times_counts(layout)
-        .iter()
-        .map(|v| v * (ny / nx))
-        .collect();
-    sy.full_form(layout, &an, &alpha, ny, out);
+    let len = sy.vectors().len();
+    with_scratch(2 * len + t, |buf| {
+        let (rhs, rest) = buf.split_at_mut(len);
+        let (alpha, an) = rest.split_at_mut(len);
+        for (r, b) in rhs.iter_mut().zip(sy.vectors()) {
+            *r = b * (nx / ny);
+        }
+        solve(sx.matrix(), t, relative_ridge(ridge, nx as u64), rhs, alpha);
+        sx.matrix_times_counts_into(layout, an);
+        for v in an.iter_mut() {
+            *v *= ny / nx;
+        }
+        sy.full_form(layout, an, alpha, ny, out);
+    });
 }
 
 /// The estimate of a block (module docs).
@@ -73,17 +72,20 @@ pub(crate) fn estimate(layout: &Layout, ridge: f64, block: &[f64], out: &mut [f6
             return;
         }
         let s = set(layout, block, k);
-        let zero = vec![0.0; s.vectors().len()];
-        let t = vec![0.0; layout.techniques()];
-        s.full_form(layout, &t, &zero, n, out);
+        let t = layout.techniques();
+        with_scratch(s.vectors().len() + t, |zeros| {
+            let (alpha, an) = zeros.split_at(s.vectors().len());
+            s.full_form(layout, an, alpha, n, out);
+        });
         return;
     }
-    let mut ba = vec![0.0; out.len()];
     cross(layout, ridge, block, 0, 1, out);
-    cross(layout, ridge, block, 1, 0, &mut ba);
-    for (o, v) in out.iter_mut().zip(&ba) {
-        *o = (nb * *o + na * v) / (na + nb);
-    }
+    with_scratch(out.len(), |ba| {
+        cross(layout, ridge, block, 1, 0, ba);
+        for (o, v) in out.iter_mut().zip(ba.iter()) {
+            *o = (nb * *o + na * v) / (na + nb);
+        }
+    });
 }
 
 /// Optimal MIS with `Â` and `b̂` from alternate iterations.

@@ -116,7 +116,7 @@ fn zero_variance_when_f_is_a_combination_of_the_pdfs() {
     let counts = [1, 2, 1];
     let layout = Layout::new(&counts, 1);
     let exact = Params {
-        ridge: 0.0,
+        ridge: Some(0.0),
         ..Params::default()
     };
     let mut r = rng(3);

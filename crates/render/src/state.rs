@@ -78,7 +78,8 @@ impl StateHeader {
             height,
             integrator: o.integrator,
             method: o.method,
-            params: o.params,
+            // Explicit ridge: a header read back from a file equals the one it was written from.
+            params: o.params.resolved(o.method),
             techniques: o.techniques.clone(),
             max_depth: o.max_depth,
             rr_depth: o.rr_depth,
@@ -114,7 +115,7 @@ impl StateHeader {
             "estimator": self.method.name(),
             "beta": self.params.beta,
             "cutoff": self.params.cutoff,
-            "ridge": self.params.ridge,
+            "ridge": self.params.ridge_for(self.method),
             "warmup": self.params.warmup,
             "train": self.params.train,
             "techniques": self.techniques.iter().map(|(t, n)| json!([t.name(), n])).collect::<Vec<_>>(),
@@ -180,7 +181,7 @@ impl StateHeader {
             params: Params {
                 beta: float("beta")?,
                 cutoff: float("cutoff")?,
-                ridge: float("ridge")?,
+                ridge: Some(float("ridge")?),
                 warmup: uint("warmup")?,
                 train: uint("train")?,
             },

@@ -352,7 +352,7 @@ fn optimal_mis_is_noiseless_when_f_is_a_pdf_multiple() {
         81,
     );
     o.params = Params {
-        ridge: 0.0,
+        ridge: Some(0.0),
         ..Params::default()
     };
     let (worst, rel_std, count) = spread(&run(&scene, &o).0);

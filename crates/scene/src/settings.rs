@@ -253,7 +253,7 @@ pub(crate) fn settings(
     let p = &mut s.params;
     p.beta = r.beta.unwrap_or(p.beta);
     p.cutoff = r.cutoff.unwrap_or(p.cutoff);
-    p.ridge = r.ridge.unwrap_or(p.ridge);
+    p.ridge = r.ridge.or(p.ridge);
     p.warmup = r.warmup.unwrap_or(p.warmup);
     p.train = r.train.unwrap_or(p.train);
     let d = mis::Params::default();
