@@ -13,11 +13,16 @@ const STACK_WORDS: usize = 16 + 2 * 16 * 16;
 
 /// Runs `f` on a zeroed scratch buffer of `len` words, on the stack where it fits: the
 /// solves run once per pixel (and per re-solve) and must not allocate for usual T.
+/// Sizes come in tiers so that zeroing costs what the solve needs, not 4 KiB (T = 3
+/// needs at most 21 words).
 #[inline]
 pub(crate) fn with_scratch<R>(len: usize, f: impl FnOnce(&mut [f64]) -> R) -> R {
-    if len <= STACK_WORDS {
-        let mut buf = [0.0; STACK_WORDS];
-        f(&mut buf[..len])
+    if len <= 32 {
+        f(&mut [0.0; 32][..len])
+    } else if len <= 128 {
+        f(&mut [0.0; 128][..len])
+    } else if len <= STACK_WORDS {
+        f(&mut [0.0; STACK_WORDS][..len])
     } else {
         f(&mut vec![0.0; len])
     }

@@ -82,20 +82,25 @@ impl<S: AsRef<[f64]> + AsMut<[f64]>> Moments<S> {
             self.add_failed(layout, t);
             return None;
         };
-        let inv = 1.0 / s;
+        let inv2 = 1.0 / (s * s);
         let tt = self.t;
+        let pdfs = &pdfs[..tt];
         let (a, b) = self.data.as_mut().split_at_mut(packed_len(tt));
         let mut idx = 0;
-        for i in 0..tt {
-            let qi = pdfs[i] * inv * inv;
-            for &pj in &pdfs[..=i] {
-                a[idx] += qi * pj;
-                idx += 1;
+        for (i, &pi) in pdfs.iter().enumerate() {
+            let qi = pi * inv2;
+            for (aij, &pj) in a[idx..=idx + i].iter_mut().zip(pdfs) {
+                *aij += qi * pj;
             }
+            idx += i + 1;
         }
-        for (fc, bc) in f.iter().zip(b.chunks_exact_mut(tt)) {
-            for (bi, &pi) in bc.iter_mut().zip(pdfs) {
-                *bi += fc * pi * inv * inv;
+        for (&fc, bc) in f.iter().zip(b.chunks_exact_mut(tt)) {
+            // Occluded and missed samples (f = 0) are common: they add nothing to b̂.
+            if fc != 0.0 {
+                let fq = fc * inv2;
+                for (bi, &pi) in bc.iter_mut().zip(pdfs) {
+                    *bi += fq * pi;
+                }
             }
         }
         Some(s)
