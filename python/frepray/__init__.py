@@ -74,7 +74,7 @@ def experiment(
     reference_estimator: Optional[str] = None,
     baseline: str = "balance",
     seed: int = 0,
-    repeats: int = 1,
+    repeats: int = 4,
     techniques: Optional[str] = None,
     integrator: Optional[str] = None,
     width: Optional[int] = None,
@@ -83,9 +83,12 @@ def experiment(
 ):
     """The estimator comparison of ``frepray experiment``: a reference (rendered with
     ``reference_spp`` samples, or the EXR ``reference``), then every estimator at every
-    spp.  Returns one record per (estimator, spp) with ``time_s``, ``mse``, ``rmse``,
-    ``relmse`` and, against ``baseline``, ``improvement``, ``speed_up``, ``overhead``
-    (DESIGN.md §4) -- a pandas DataFrame when pandas is installed (or ``pandas=True``),
+    spp, each at ``repeats`` seeds.  Returns one record per (estimator, spp) with
+    ``time_s``, ``mse``, ``rmse``, ``relmse``, 95 % intervals ``mse_ci``, ``rmse_ci``
+    (``[lo, hi]``, None with one seed), ``trimmed_mse``, ``net_mse`` (less the reference's
+    noise), ``cpu_s`` and, against ``baseline``, ``improvement`` (with
+    ``improvement_ci``, ``improvement_trimmed``, ``median_pixel_ratio``), ``speed_up``
+    (``speed_up_ci``), ``overhead`` (DESIGN.md §4) -- a pandas DataFrame when pandas is installed (or ``pandas=True``),
     else a list of dicts.  ``out`` receives results.json/csv, summary.md, plots and
     images (a temporary folder when not given); a rerun into the same ``out`` resumes."""
     import tempfile

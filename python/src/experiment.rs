@@ -98,10 +98,12 @@ pub fn measure<'py>(
 /// Runs the comparison: a reference (`reference_spp` samples, or the EXR `reference`),
 /// then every estimator at every spp, written to `out` (results.json, results.csv,
 /// summary.md, plots, images; a rerun resumes). Returns one dict per (estimator, spp):
-/// estimator, spp, time_s, mse, rmse, relmse, improvement, speed_up, overhead.
+/// estimator, spp, time_s, mse, rmse, relmse, mse_ci, rmse_ci, trimmed_mse, net_mse,
+/// cpu_s, improvement, improvement_ci, improvement_trimmed, median_pixel_ratio,
+/// speed_up, speed_up_ci, overhead (intervals as [lo, hi] or None with one seed).
 #[pyfunction]
 #[pyo3(signature = (scene, out, estimators, spp, reference_spp = 256, reference = None,
-    reference_estimator = None, baseline = "balance", seed = 0, repeats = 1,
+    reference_estimator = None, baseline = "balance", seed = 0, repeats = exp::DEFAULT_REPEATS,
     techniques = None, integrator = None, width = None, height = None))]
 #[allow(clippy::too_many_arguments)]
 pub fn experiment<'py>(
@@ -183,12 +185,27 @@ pub fn experiment<'py>(
         d.set_item("mse", row.mse)?;
         d.set_item("rmse", row.rmse)?;
         d.set_item("relmse", row.relmse)?;
+        d.set_item("mse_ci", row.mse_ci.map(|c| c.to_vec()))?;
+        d.set_item("rmse_ci", row.rmse_ci.map(|c| c.to_vec()))?;
+        d.set_item("trimmed_mse", row.trimmed_mse)?;
+        d.set_item("net_mse", row.net_mse)?;
+        d.set_item("cpu_s", row.cpu_s)?;
         let c = summary
             .comparisons
             .iter()
             .find(|c| c.estimator == row.estimator && c.spp == row.spp);
         d.set_item("improvement", c.and_then(|c| c.improvement))?;
+        d.set_item(
+            "improvement_ci",
+            c.and_then(|c| c.improvement_ci).map(|c| c.to_vec()),
+        )?;
+        d.set_item("improvement_trimmed", c.and_then(|c| c.improvement_trimmed))?;
+        d.set_item("median_pixel_ratio", c.and_then(|c| c.median_pixel_ratio))?;
         d.set_item("speed_up", c.and_then(|c| c.speed_up))?;
+        d.set_item(
+            "speed_up_ci",
+            c.and_then(|c| c.speed_up_ci).map(|c| c.to_vec()),
+        )?;
         d.set_item("overhead", c.and_then(|c| c.overhead))?;
         list.append(d)?;
     }

@@ -45,8 +45,9 @@ pub struct ExperimentArgs {
     /// First seed; repeat r uses seed + r.
     #[arg(long, default_value_t = 0)]
     seed: u64,
-    /// Independent renders per point (their MSEs are averaged).
-    #[arg(long, default_value_t = 1)]
+    /// Independent seeds per point: MSEs and times are averaged, and with two or more
+    /// every figure gets a 95 % confidence interval.
+    #[arg(long, default_value_t = experiment::DEFAULT_REPEATS)]
     repeats: u32,
     /// The estimator the tables compare against.
     #[arg(long, default_value = "balance")]
@@ -69,6 +70,12 @@ pub struct ExperimentArgs {
     /// Power heuristic exponent β [default: 2].
     #[arg(long, allow_negative_numbers = true)]
     beta: Option<f64>,
+    /// Cutoff heuristic threshold c [default: 0.5].
+    #[arg(long, allow_negative_numbers = true)]
+    cutoff: Option<f64>,
+    /// Maximum path depth (`path`) [default: the scene's].
+    #[arg(long)]
+    max_depth: Option<u32>,
     /// Leave emitters seen directly by the camera out of the images, so that the error
     /// measures the estimators, not the camera's sampling of visible lights.
     #[arg(long)]
@@ -202,6 +209,8 @@ pub fn run(a: ExperimentArgs) -> Result<(), String> {
         hide_emitters: a.hide_emitters,
         ridge: a.ridge,
         beta: a.beta,
+        cutoff: a.cutoff,
+        max_depth: a.max_depth,
         ..Default::default()
     };
     let (data, settings) = scene_render::resolve(&a.scene, &o)?;

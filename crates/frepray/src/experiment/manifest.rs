@@ -22,9 +22,17 @@ pub enum ReferenceSource {
         estimator: String,
         /// Samples per pixel.
         spp: u32,
-        /// The seed.
+        /// The seed of the first part; part k uses `seed + k`.
         seed: u64,
+        /// Independent parts (seeds) the reference averages, 2 since the reference's
+        /// noise is estimated from their difference; 1 in older folders.
+        #[serde(default = "one")]
+        parts: u32,
     },
+}
+
+fn one() -> u32 {
+    1
 }
 
 /// The reference an experiment measures against.
@@ -42,6 +50,11 @@ pub struct ReferenceInfo {
     /// Render time in seconds (rendered references only).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub time_s: Option<f64>,
+    /// The reference's own noise, its estimated variance per value averaged over pixels
+    /// and channels (rendered in two parts: `mean (A − B)²` scaled to the whole); it adds
+    /// to every measured MSE and is subtracted in the net MSE.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub noise_mse: Option<f64>,
 }
 
 /// One finished render.
@@ -67,12 +80,23 @@ pub struct RenderRecord {
     /// Relative MSE (ε in [`super::metrics::REL_EPSILON`]).
     #[serde(with = "finite")]
     pub relmse: f64,
+    /// MSE without the worst pixels ([`super::metrics::TRIM_FRACTION`]).
+    #[serde(with = "finite", default = "nan")]
+    pub trimmed_mse: f64,
+    /// Processor time of the render in seconds (all threads; where the platform tells).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cpu_s: Option<f64>,
     /// Non-finite channel values in the image.
     pub nonfinite: u64,
 }
 
+fn nan() -> f64 {
+    f64::NAN
+}
+
 /// One point of the sweep: the renders of an estimator at a sample count, averaged
-/// over the repeats (MSE, relMSE and time are means; RMSE = √mean MSE).
+/// over the repeats (MSE, relMSE and time are means; RMSE = √mean MSE), with 95 %
+/// intervals over the seeds ([`super::stats`]; `None` with one seed).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Row {
     /// The estimator.
@@ -93,6 +117,21 @@ pub struct Row {
     /// Mean relMSE.
     #[serde(with = "finite")]
     pub relmse: f64,
+    /// 95 % interval of the mean MSE.
+    pub mse_ci: Option<[f64; 2]>,
+    /// 95 % interval of the RMSE (√ of the MSE interval, clamped at 0).
+    pub rmse_ci: Option<[f64; 2]>,
+    /// 95 % interval of the mean relMSE.
+    pub relmse_ci: Option<[f64; 2]>,
+    /// Mean trimmed MSE ([`super::metrics::TRIM_FRACTION`] of the pixels left out).
+    #[serde(with = "finite", default = "nan")]
+    pub trimmed_mse: f64,
+    /// Mean MSE less the reference's own noise, where it is known (may be ≤ 0 when the
+    /// reference is as noisy as the render: then no ratio uses it).
+    pub net_mse: Option<f64>,
+    /// The least processor time over the seeds (renders of a point's seeds interleave
+    /// with the other estimators', so load hits all alike), in seconds.
+    pub cpu_s: Option<f64>,
 }
 
 /// A row against the baseline at equal spp (DESIGN.md §4); `None` where undefined
@@ -103,12 +142,22 @@ pub struct Comparison {
     pub estimator: String,
     /// Samples per pixel.
     pub spp: u32,
-    /// RMSE_baseline / RMSE_method.
+    /// RMSE_baseline / RMSE_method (net of the reference's noise where it is known).
     pub improvement: Option<f64>,
-    /// time_method / time_baseline − 1.
+    /// 95 % interval of the improvement (paired seeds, [`super::stats::ratio_ci`]).
+    pub improvement_ci: Option<[f64; 2]>,
+    /// The improvement in trimmed RMSE (worst pixels left out).
+    pub improvement_trimmed: Option<f64>,
+    /// The median over pixels of the per-pixel ratio of squared errors baseline /
+    /// method (each averaged over seeds and channels): above 1 where most pixels gain.
+    pub median_pixel_ratio: Option<f64>,
+    /// time_method / time_baseline − 1 (processor time where known, else wall time).
     pub overhead: Option<f64>,
-    /// efficiency_method / efficiency_baseline, efficiency = 1 / (MSE × time).
+    /// efficiency_method / efficiency_baseline, efficiency = 1 / (MSE × time), time as
+    /// in the overhead.
     pub speed_up: Option<f64>,
+    /// 95 % interval of the speed-up from the MSEs' spread (the time taken as exact).
+    pub speed_up_ci: Option<[f64; 2]>,
 }
 
 /// The whole file.

@@ -7,6 +7,10 @@ use super::Image;
 /// near-black pixels from dominating the relative error.
 pub const REL_EPSILON: f64 = 1e-2;
 
+/// The share of pixels, the worst by squared error, that the trimmed MSE leaves out:
+/// image RMSE is often carried by a few glossy highlights (docs/results.md).
+pub const TRIM_FRACTION: f64 = 1e-3;
+
 /// The error of one image.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Metrics {
@@ -14,6 +18,8 @@ pub struct Metrics {
     pub mse: f64,
     /// Mean relative squared error, with [`REL_EPSILON`].
     pub relmse: f64,
+    /// MSE without the worst [`TRIM_FRACTION`] of pixels (⌊fraction × pixels⌋ of them).
+    pub trimmed_mse: f64,
     /// How many channel values of the image are NaN or infinite (they make MSE non-finite).
     pub nonfinite: u64,
 }
@@ -101,7 +107,20 @@ pub fn measure(img: &Image, reference: &Image) -> Result<(Metrics, Vec<[f64; 3]>
     let m = Metrics {
         mse: sum / n,
         relmse: rel / n,
+        trimmed_mse: trimmed_mean(&sq),
         nonfinite,
     };
     Ok((m, sq))
+}
+
+/// The mean of per-pixel squared errors (over channels) without the worst
+/// [`TRIM_FRACTION`] of pixels; NaN values count as the worst.
+pub fn trimmed_mean(sq: &[[f64; 3]]) -> f64 {
+    let mut px: Vec<f64> = sq.iter().map(|e| (e[0] + e[1] + e[2]) / 3.0).collect();
+    let drop = (TRIM_FRACTION * px.len() as f64) as usize;
+    let keep = px.len() - drop;
+    if drop > 0 {
+        px.select_nth_unstable_by(keep - 1, |a, b| a.total_cmp(b));
+    }
+    px[..keep].iter().sum::<f64>() / keep as f64
 }

@@ -13,14 +13,18 @@
 //! The renderer is abstract ([`Renderer`]), so that the driver is tested with a
 //! synthetic one of known noise.
 
+mod cpu_time;
 mod exr_io;
 mod manifest;
+mod maps;
 mod metrics;
 mod plot;
 mod report;
+pub mod stats;
 #[cfg(test)]
 mod tests;
 
+pub use cpu_time::process_cpu_seconds;
 pub use manifest::{Comparison, Row};
 pub use metrics::{measure, Metrics, REL_EPSILON};
 
@@ -65,10 +69,22 @@ pub trait Renderer {
         let _ = checkpoint;
         self.render(estimator, spp, seed)
     }
+
+    /// A clock of processor seconds that advances with the work of renders (read
+    /// before and after each): equal-time comparisons use it, since on a shared machine
+    /// it counts less of the others' load than wall time. Default: this process's
+    /// processor time, where the platform tells.
+    fn cpu_clock(&self) -> Option<f64> {
+        cpu_time::process_cpu_seconds()
+    }
 }
 
-/// The checkpoint of an interrupted reference render, in the output folder.
+/// The checkpoint of an interrupted reference render, in the output folder (its first
+/// part; the second is [`REFERENCE_CHECKPOINT_2`]).
 pub const REFERENCE_CHECKPOINT: &str = "reference.partial.state";
+
+/// The checkpoint of the reference's second part.
+pub const REFERENCE_CHECKPOINT_2: &str = "reference-2.partial.state";
 
 /// What to run.
 #[derive(Clone, Debug)]
@@ -93,9 +109,10 @@ pub struct ExperimentConfig {
     /// The output folder (created if missing).
     pub out_dir: PathBuf,
     /// The seed of the first repeat; repeat r uses `seed + r`, a rendered reference
-    /// `seed ^` [`REFERENCE_SEED_MASK`].
+    /// `seed ^` [`REFERENCE_SEED_MASK`] (and that plus one for its second part).
     pub seed: u64,
-    /// Independent seeds per point; MSE, relMSE and time are averaged over them.
+    /// Independent seeds per point; MSE, relMSE and time are averaged over them, and
+    /// with two or more each gets a 95 % interval.
     pub repeats: u32,
     /// The estimator the others are compared against.
     pub baseline: String,
@@ -108,9 +125,14 @@ pub struct ExperimentConfig {
 /// the measured renders'.
 pub const REFERENCE_SEED_MASK: u64 = 0x9E37_79B9_7F4A_7C15;
 
+/// Seeds per point by default: two seeds' MSEs differ by up to 3.9× on glossy scenes
+/// (docs/results.md), so one cannot resolve a few per cent; four give a t interval on
+/// three degrees of freedom.
+pub const DEFAULT_REPEATS: u32 = 4;
+
 impl ExperimentConfig {
     /// Defaults: balance against itself, 1 to 64 spp in powers of two, a reference of
-    /// 4096 spp, seed 0, one repeat.
+    /// 4096 spp, seed 0, [`DEFAULT_REPEATS`] seeds per point.
     pub fn new(scene: impl Into<PathBuf>, out_dir: impl Into<PathBuf>) -> Self {
         Self {
             scene: scene.into(),
@@ -123,7 +145,7 @@ impl ExperimentConfig {
             reference: None,
             out_dir: out_dir.into(),
             seed: 0,
-            repeats: 1,
+            repeats: DEFAULT_REPEATS,
             baseline: "balance".into(),
             size: None,
         }
@@ -250,6 +272,86 @@ fn eta(todo: &[(String, u32, u64)], done: &[(&str, u32, f64)]) -> Option<f64> {
     )
 }
 
+/// The (spp, seed) of each part of a rendered reference of `spp` samples from `seed`:
+/// two independent halves, so that their difference estimates the reference's noise;
+/// one part at 1 spp.
+fn reference_parts(spp: u32) -> Vec<(u32, u64)> {
+    if spp >= 2 {
+        vec![(spp.div_ceil(2), 0), (spp / 2, 1)]
+    } else {
+        vec![(spp, 0)]
+    }
+}
+
+/// Renders the reference in its parts (each continued from its checkpoint), averages
+/// them weighted by their samples and estimates its noise: with parts A and B of n_A and
+/// n_B samples, a value's variance is c/n, so `E (A − B)² = c (1/n_A + 1/n_B)` and the
+/// whole's is `c/(n_A + n_B)`. `None` if stopped.
+fn render_reference(
+    renderer: &mut dyn Renderer,
+    out: &Path,
+    estimator: &str,
+    spp: u32,
+    seed: u64,
+    progress: &dyn Fn(&str),
+) -> Result<Option<(Image, ReferenceInfo)>, String> {
+    let checkpoints = [REFERENCE_CHECKPOINT, REFERENCE_CHECKPOINT_2];
+    let mut parts = Vec::new();
+    let mut time = 0.0;
+    for (k, &(n, offset)) in reference_parts(spp).iter().enumerate() {
+        let s = seed.wrapping_add(offset);
+        progress(&format!("reference: {estimator} {n} spp seed {s}"));
+        let Some((img, t)) =
+            renderer.render_reference(estimator, n, s, &out.join(checkpoints[k]))?
+        else {
+            return Ok(None);
+        };
+        img.validate().map_err(|e| format!("reference: {e}"))?;
+        progress(&format!(
+            "reference: part {} done in {}",
+            k + 1,
+            duration(t)
+        ));
+        time += t;
+        parts.push((n as f64, img));
+    }
+    for c in checkpoints {
+        let _ = std::fs::remove_file(out.join(c));
+    }
+    let (na, first) = &parts[0];
+    let mut img = first.clone();
+    let mut noise = None;
+    if let Some((nb, second)) = parts.get(1) {
+        if (second.width, second.height) != (first.width, first.height) {
+            return Err("reference: its two parts differ in size".into());
+        }
+        let mut diff = 0.0;
+        for (a, b) in img.rgb.iter_mut().zip(&second.rgb) {
+            for c in 0..3 {
+                diff += (a[c] - b[c]).powi(2);
+                a[c] = (na * a[c] + nb * b[c]) / (na + nb);
+            }
+        }
+        let e = diff / (3 * img.rgb.len()) as f64;
+        noise = Some(e / ((1.0 / na + 1.0 / nb) * (na + nb)));
+    }
+    let img = img.rounded_to_f32();
+    let info = ReferenceInfo {
+        source: ReferenceSource::Rendered {
+            estimator: estimator.to_string(),
+            spp,
+            seed,
+            parts: parts.len() as u32,
+        },
+        width: img.width,
+        height: img.height,
+        fingerprint: img.fingerprint(),
+        time_s: Some(time),
+        noise_mse: noise,
+    };
+    Ok(Some((img, info)))
+}
+
 /// The image file of a render, relative to the output folder.
 fn image_file(estimator: &str, spp: u32, seed: u64) -> String {
     format!("images/{estimator}-{spp:05}spp-seed{seed}.exr")
@@ -308,6 +410,7 @@ pub fn run(
                 height: img.height,
                 fingerprint: img.fingerprint(),
                 time_s: None,
+                noise_mse: None,
             };
             (img, info)
         }
@@ -318,6 +421,7 @@ pub fn run(
                 estimator: estimator.clone(),
                 spp,
                 seed,
+                parts: reference_parts(spp).len() as u32,
             };
             let path = out.join("reference.exr");
             let reuse = old
@@ -333,28 +437,15 @@ pub fn run(
                 summary.reused += 1;
                 r
             } else {
-                progress(&format!("reference: {estimator} {spp} spp seed {seed}"));
-                let checkpoint = out.join(REFERENCE_CHECKPOINT);
-                let Some((img, t)) =
-                    renderer.render_reference(estimator, spp, seed, &checkpoint)?
+                let Some((img, info)) =
+                    render_reference(renderer, out, estimator, spp, seed, progress)?
                 else {
                     summary.interrupted = true;
                     progress("interrupted while rendering the reference: rerun to continue it");
                     return Ok(summary);
                 };
-                let _ = std::fs::remove_file(&checkpoint);
-                img.validate().map_err(|e| format!("reference: {e}"))?;
-                let img = img.rounded_to_f32();
                 exr_io::write(&path, &img, None)?;
                 summary.rendered += 1;
-                progress(&format!("reference: done in {}", duration(t)));
-                let info = ReferenceInfo {
-                    source,
-                    width: img.width,
-                    height: img.height,
-                    fingerprint: img.fingerprint(),
-                    time_s: Some(t),
-                };
                 (img, info)
             }
         }
@@ -386,16 +477,19 @@ pub fn run(
         comparisons: vec![],
     };
     let refresh = |m: &mut Manifest| {
-        m.results = report::rows(m, &plan.estimators, &plan.spp, &plan.seeds);
-        m.comparisons = report::compare(&m.results, &cfg.baseline);
+        let noise = m.reference.noise_mse;
+        m.results = report::rows(m, &plan.estimators, &plan.spp, &plan.seeds, noise);
+        m.comparisons = report::compare(m, &m.results, &cfg.baseline, noise);
     };
     refresh(&mut manifest);
     manifest.save(&manifest_path)?;
 
+    // Seeds outside, estimators inside: the renders of one point interleave with the
+    // other estimators', so that a change of load hits all of them alike.
     let mut todo = Vec::new();
     for &spp in &plan.spp {
-        for e in &plan.estimators {
-            for &seed in &plan.seeds {
+        for &seed in &plan.seeds {
+            for e in &plan.estimators {
                 let file = image_file(e, spp, seed);
                 if manifest.find(e, spp, seed).is_some() && out.join(&file).is_file() {
                     summary.reused += 1;
@@ -422,7 +516,10 @@ pub fn run(
         }
         let left = eta(&todo[k..], &done).map_or("?".into(), duration);
         progress(&format!("{head}: rendering (ETA {left})"));
-        let Some((img, time_s)) = renderer.render(est, *spp, *seed)? else {
+        let cpu0 = renderer.cpu_clock();
+        let rendered = renderer.render(est, *spp, *seed)?;
+        let cpu_s = cpu0.zip(renderer.cpu_clock()).map(|(a, b)| b - a);
+        let Some((img, time_s)) = rendered else {
             summary.interrupted = true;
             progress(&format!("{head}: interrupted"));
             break;
@@ -439,6 +536,8 @@ pub fn run(
             mse: m.mse,
             rmse: m.mse.sqrt(),
             relmse: m.relmse,
+            trimmed_mse: m.trimmed_mse,
+            cpu_s,
             nonfinite: m.nonfinite,
         });
         refresh(&mut manifest);
@@ -457,6 +556,15 @@ pub fn run(
         ));
     }
 
+    let points: Vec<(String, u32)> = manifest
+        .results
+        .iter()
+        .map(|r| (r.estimator.clone(), r.spp))
+        .collect();
+    let medians = maps::write(out, &points, &plan.seeds, &cfg.baseline, &reference)?;
+    for c in &mut manifest.comparisons {
+        c.median_pixel_ratio = medians.get(&(c.estimator.clone(), c.spp)).copied();
+    }
     manifest.interrupted = summary.interrupted;
     manifest.save(&manifest_path)?;
     report::write_csv(&out.join("results.csv"), &manifest.results)?;

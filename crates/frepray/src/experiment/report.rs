@@ -2,28 +2,46 @@
 //! (DESIGN.md §4), `results.csv` and `summary.md`.
 
 use super::manifest::{Comparison, Manifest, ReferenceSource, Row};
-use super::metrics::REL_EPSILON;
+use super::metrics::{REL_EPSILON, TRIM_FRACTION};
+use super::stats;
 use std::fmt::Write as _;
 use std::path::Path;
 
 /// The complete points of the sweep, in the order of `spp` then `estimators`: those
-/// whose every seed has a finished render in `m`.
-pub fn rows(m: &Manifest, estimators: &[String], spp: &[u32], seeds: &[u64]) -> Vec<Row> {
+/// whose every seed has a finished render in `m`. `noise` is the reference's own
+/// variance per value, when known.
+pub fn rows(
+    m: &Manifest,
+    estimators: &[String],
+    spp: &[u32],
+    seeds: &[u64],
+    noise: Option<f64>,
+) -> Vec<Row> {
     let mut out = Vec::new();
     for &n in spp {
         for est in estimators {
             let recs: Option<Vec<_>> = seeds.iter().map(|&s| m.find(est, n, s)).collect();
             let Some(recs) = recs else { continue };
-            let k = recs.len() as f64;
-            let mse = recs.iter().map(|r| r.mse).sum::<f64>() / k;
+            let mses: Vec<f64> = recs.iter().map(|r| r.mse).collect();
+            let rels: Vec<f64> = recs.iter().map(|r| r.relmse).collect();
+            let trimmed: Vec<f64> = recs.iter().map(|r| r.trimmed_mse).collect();
+            let mse = stats::mean(&mses);
+            let mse_ci = stats::mean_ci(&mses);
+            let cpu: Option<Vec<f64>> = recs.iter().map(|r| r.cpu_s).collect();
             out.push(Row {
                 estimator: est.clone(),
                 spp: n,
                 seeds: seeds.to_vec(),
-                time_s: recs.iter().map(|r| r.time_s).sum::<f64>() / k,
+                time_s: stats::mean(&recs.iter().map(|r| r.time_s).collect::<Vec<_>>()),
                 mse,
                 rmse: mse.sqrt(),
-                relmse: recs.iter().map(|r| r.relmse).sum::<f64>() / k,
+                relmse: stats::mean(&rels),
+                mse_ci,
+                rmse_ci: mse_ci.map(|c| c.map(|v| v.max(0.0).sqrt())),
+                relmse_ci: stats::mean_ci(&rels),
+                trimmed_mse: stats::mean(&trimmed),
+                net_mse: noise.map(|v| mse - v),
+                cpu_s: cpu.map(|c| c.into_iter().fold(f64::INFINITY, f64::min)),
             });
         }
     }
@@ -36,19 +54,48 @@ fn ratio(a: f64, b: f64) -> Option<f64> {
     (ok(a) && ok(b)).then(|| a / b)
 }
 
-/// Each row against the baseline's row at the same spp (rows without one are left out).
-pub fn compare(rows: &[Row], baseline: &str) -> Vec<Comparison> {
+/// The cost of a row: its least processor time where known, else its mean wall time.
+fn cost(r: &Row, other: &Row) -> (f64, f64) {
+    match (r.cpu_s, other.cpu_s) {
+        (Some(a), Some(b)) => (a, b),
+        _ => (r.time_s, other.time_s),
+    }
+}
+
+/// Each row against the baseline's row at the same spp (rows without one are left
+/// out); the per-seed renders of `m` pair the seeds for the intervals. With the
+/// reference's `noise` known, the MSEs compared are net of it.
+pub fn compare(m: &Manifest, rows: &[Row], baseline: &str, noise: Option<f64>) -> Vec<Comparison> {
     rows.iter()
         .filter_map(|r| {
             let b = rows
                 .iter()
                 .find(|b| b.estimator == baseline && b.spp == r.spp)?;
+            let per_seed = |row: &Row| -> Vec<f64> {
+                row.seeds
+                    .iter()
+                    .filter_map(|&s| m.find(&row.estimator, row.spp, s).map(|x| x.mse))
+                    .collect()
+            };
+            let noise = noise.unwrap_or(0.0);
+            let (mb, mr) = (b.mse - noise, r.mse - noise);
+            let (sb, sr): (Vec<f64>, Vec<f64>) = (
+                per_seed(b).iter().map(|v| v - noise).collect(),
+                per_seed(r).iter().map(|v| v - noise).collect(),
+            );
+            let (tr, tb) = cost(r, b);
+            let time_ratio = ratio(tr, tb);
             Some(Comparison {
                 estimator: r.estimator.clone(),
                 spp: r.spp,
-                improvement: ratio(b.rmse, r.rmse),
-                overhead: ratio(r.time_s, b.time_s).map(|q| q - 1.0),
-                speed_up: ratio(b.mse * b.time_s, r.mse * r.time_s),
+                improvement: ratio(mb, mr).map(f64::sqrt),
+                improvement_ci: stats::ratio_ci(&sb, &sr).map(|c| c.map(f64::sqrt)),
+                improvement_trimmed: ratio(b.trimmed_mse, r.trimmed_mse).map(f64::sqrt),
+                median_pixel_ratio: None,
+                overhead: time_ratio.map(|q| q - 1.0),
+                speed_up: ratio(mb * tb, mr * tr),
+                speed_up_ci: time_ratio
+                    .and_then(|q| stats::ratio_ci(&sb, &sr).map(|c| c.map(|v| v / q))),
             })
         })
         .collect()
@@ -56,12 +103,16 @@ pub fn compare(rows: &[Row], baseline: &str) -> Vec<Comparison> {
 
 /// Writes `results.csv`: one line per point; floats in shortest round-trip form.
 pub fn write_csv(path: &Path, rows: &[Row]) -> Result<(), String> {
-    let mut s = String::from("estimator,spp,repeats,seeds,time_s,mse,rmse,relmse\n");
+    let mut s = String::from(
+        "estimator,spp,repeats,seeds,time_s,mse,rmse,relmse,mse_lo,mse_hi,relmse_lo,\
+         relmse_hi,trimmed_mse,net_mse,cpu_s\n",
+    );
+    let num = |v: Option<f64>| v.map(|x| format!("{x:e}")).unwrap_or_default();
     for r in rows {
         let seeds: Vec<String> = r.seeds.iter().map(u64::to_string).collect();
         let _ = writeln!(
             s,
-            "{},{},{},{},{:e},{:e},{:e},{:e}",
+            "{},{},{},{},{:e},{:e},{:e},{:e},{},{},{},{},{:e},{},{}",
             r.estimator,
             r.spp,
             r.seeds.len(),
@@ -69,7 +120,14 @@ pub fn write_csv(path: &Path, rows: &[Row]) -> Result<(), String> {
             r.time_s,
             r.mse,
             r.rmse,
-            r.relmse
+            r.relmse,
+            num(r.mse_ci.map(|c| c[0])),
+            num(r.mse_ci.map(|c| c[1])),
+            num(r.relmse_ci.map(|c| c[0])),
+            num(r.relmse_ci.map(|c| c[1])),
+            r.trimmed_mse,
+            num(r.net_mse),
+            num(r.cpu_s),
         );
     }
     write_text(path, &s)
@@ -83,6 +141,12 @@ pub fn write_text(path: &Path, text: &str) -> Result<(), String> {
 
 fn opt(v: Option<f64>, f: impl Fn(f64) -> String) -> String {
     v.map(f).unwrap_or_else(|| "—".into())
+}
+
+/// ` [lo, hi]`, or nothing without an interval.
+fn ci_cell(ci: Option<[f64; 2]>, f: impl Fn(f64) -> String) -> String {
+    ci.map(|[a, b]| format!(" [{}, {}]", f(a), f(b)))
+        .unwrap_or_default()
 }
 
 fn ratio_cell(v: Option<f64>) -> String {
@@ -104,12 +168,37 @@ pub fn summary_markdown(m: &Manifest, rows: &[Row], cmp: &[Comparison], done: &s
             estimator,
             spp,
             seed,
-        } => format!("rendered with {estimator} at {spp} spp, seed {seed} (`reference.exr`)"),
+            parts,
+        } => format!(
+            "rendered with {estimator} at {spp} spp from seed {seed} in {parts} independent \
+             part(s) (`reference.exr`)"
+        ),
+    };
+    let noise = match m.reference.noise_mse {
+        Some(v) => {
+            let worst = rows
+                .iter()
+                .filter_map(|r| r.net_mse)
+                .fold(f64::INFINITY, f64::min);
+            let warn = if worst <= 0.0 {
+                " **Some renders are no less noisy than the reference: their ratios are left \
+                 out (—); render the reference with more samples.**"
+            } else {
+                ""
+            };
+            format!(
+                "- Reference noise: {v:.4e} per value (MSE of its two parts' difference, \
+                 scaled); ratios use each MSE less this (net MSE).{warn}\n"
+            )
+        }
+        None => "- Reference noise: unknown (a loaded reference, or 1 spp); ratios use the \
+                 measured MSE, which includes it.\n"
+            .into(),
     };
     let repeats = rows.first().map_or(1, |r| r.seeds.len());
     let _ = writeln!(
         s,
-        "- Reference: {reference}; {}x{} pixels.\n- Baseline: {}. Renderer: {}.\n- {done}\n",
+        "- Reference: {reference}; {}x{} pixels.\n{noise}- Baseline: {}. Renderer: {}.\n- {done}\n",
         m.reference.width,
         m.reference.height,
         m.baseline,
@@ -119,31 +208,48 @@ pub fn summary_markdown(m: &Manifest, rows: &[Row], cmp: &[Comparison], done: &s
             &m.renderer
         },
     );
+    let cost = if rows.iter().all(|r| r.cpu_s.is_some()) {
+        "processor time (the least over the seeds, whose renders interleave with the other \
+         estimators')"
+    } else {
+        "wall time (mean over the seeds)"
+    };
     let _ = writeln!(
         s,
         "Improvement = RMSE_baseline / RMSE_method and Overhead = time_method / \
          time_baseline − 1 at equal spp; Speed Up = efficiency_method / \
-         efficiency_baseline, efficiency = 1 / (MSE × time) (DESIGN.md §4). RMSE and \
-         relMSE = mean (x − ref)² / (ref² + {REL_EPSILON}) over all pixels and channels, \
-         unclamped; MSE and time are means over {repeats} seed(s) per point.\n"
+         efficiency_baseline, efficiency = 1 / (MSE × time) (DESIGN.md §4), with time = \
+         {cost}. RMSE and relMSE = mean (x − ref)² / (ref² + {REL_EPSILON}) over all \
+         pixels and channels, unclamped; MSE and wall time are means over {repeats} seed(s) \
+         per point; [a, b] are 95 % intervals over the seeds (Student's t; ratios by the \
+         delta method on paired seeds; none with one seed). Trimmed: without the worst \
+         {trim} % of pixels. Pixel ratio: the median over pixels of the squared-error ratio \
+         baseline / method (maps in `maps/`).\n",
+        trim = 100.0 * TRIM_FRACTION
     );
-    let head =
-        "| Estimator | spp | RMSE | relMSE | Time (s) | Improvement | Speed Up | Overhead |\n\
-                |---|---:|---:|---:|---:|---:|---:|---:|\n";
+    let head = "| Estimator | spp | RMSE [95 % CI] | relMSE | Wall (s) | CPU (s) | Improvement \
+                [95 % CI] | Impr. trimmed | Pixel ratio | Speed Up [95 % CI] | Overhead |\n\
+                |---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
     let line = |s: &mut String, r: &Row| {
         let c = cmp
             .iter()
             .find(|c| c.estimator == r.estimator && c.spp == r.spp);
         let _ = writeln!(
             s,
-            "| {} | {} | {:.4e} | {:.4e} | {:.4} | {} | {} | {} |",
+            "| {} | {} | {:.4e}{} | {:.4e} | {:.4} | {} | {}{} | {} | {} | {}{} | {} |",
             r.estimator,
             r.spp,
             r.rmse,
+            ci_cell(r.rmse_ci, |v| format!("{v:.3e}")),
             r.relmse,
             r.time_s,
+            opt(r.cpu_s, |v| format!("{v:.3}")),
             ratio_cell(c.and_then(|c| c.improvement)),
+            ci_cell(c.and_then(|c| c.improvement_ci), |v| format!("{v:.3}")),
+            ratio_cell(c.and_then(|c| c.improvement_trimmed)),
+            ratio_cell(c.and_then(|c| c.median_pixel_ratio)),
             ratio_cell(c.and_then(|c| c.speed_up)),
+            ci_cell(c.and_then(|c| c.speed_up_ci), |v| format!("{v:.3}")),
             overhead_cell(c.and_then(|c| c.overhead)),
         );
     };
