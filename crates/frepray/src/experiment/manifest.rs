@@ -77,10 +77,10 @@ pub struct RenderRecord {
     /// √MSE.
     #[serde(with = "finite")]
     pub rmse: f64,
-    /// Relative MSE (ε in [`super::metrics::REL_EPSILON`]).
+    /// Relative MSE (ε in [`super::REL_EPSILON`]).
     #[serde(with = "finite")]
     pub relmse: f64,
-    /// MSE without the worst pixels ([`super::metrics::TRIM_FRACTION`]).
+    /// MSE without the worst pixels ([`super::TRIM_FRACTION`]).
     #[serde(with = "finite", default = "nan")]
     pub trimmed_mse: f64,
     /// Processor time of the render in seconds (all threads; where the platform tells).
@@ -123,7 +123,7 @@ pub struct Row {
     pub rmse_ci: Option<[f64; 2]>,
     /// 95 % interval of the mean relMSE.
     pub relmse_ci: Option<[f64; 2]>,
-    /// Mean trimmed MSE ([`super::metrics::TRIM_FRACTION`] of the pixels left out).
+    /// Mean trimmed MSE ([`super::TRIM_FRACTION`] of the pixels left out).
     #[serde(with = "finite", default = "nan")]
     pub trimmed_mse: f64,
     /// Mean MSE less the reference's own noise, where it is known (may be ≤ 0 when the

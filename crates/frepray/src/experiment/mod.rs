@@ -26,7 +26,7 @@ mod tests;
 
 pub use cpu_time::process_cpu_seconds;
 pub use manifest::{Comparison, Row};
-pub use metrics::{measure, Metrics, REL_EPSILON};
+pub use metrics::{measure, Metrics, REL_EPSILON, TRIM_FRACTION};
 
 use manifest::{Manifest, ReferenceInfo, ReferenceSource, RenderRecord, FORMAT};
 use std::path::{Path, PathBuf};
