@@ -80,6 +80,10 @@ pub struct ExperimentArgs {
     /// measures the estimators, not the camera's sampling of visible lights.
     #[arg(long)]
     hide_emitters: bool,
+    /// Also render every point with camera rays through pixel centres and split the
+    /// variance into its pixel-footprint and direction parts (needs --repeats ≥ 2).
+    #[arg(long)]
+    decompose: bool,
     /// Worker threads (0: one per core).
     #[arg(long, default_value_t = 0)]
     threads: usize,
@@ -109,6 +113,16 @@ impl SceneRenderer {
             ..self.base.clone()
         })
     }
+
+    /// One render of `o`: its image and wall time, or `None` if stopped.
+    fn run(&self, o: &RenderOptions) -> Result<Option<(Image, f64)>, String> {
+        let (state, stats) = render_loop::render(&self.scene, o, &self.stop, &|_, _| {})
+            .map_err(|e| e.to_string())?;
+        if stats.stopped {
+            return Ok(None);
+        }
+        Ok(Some((to_image(&state), stats.wall.as_secs_f64())))
+    }
 }
 
 /// The driver's image of a render state.
@@ -134,12 +148,20 @@ impl Renderer for SceneRenderer {
         seed: u64,
     ) -> Result<Option<(Image, f64)>, String> {
         let o = self.options(estimator, spp, seed)?;
-        let (state, stats) = render_loop::render(&self.scene, &o, &self.stop, &|_, _| {})
-            .map_err(|e| e.to_string())?;
-        if stats.stopped {
-            return Ok(None);
-        }
-        Ok(Some((to_image(&state), stats.wall.as_secs_f64())))
+        self.run(&o)
+    }
+
+    fn render_pixel_centers(
+        &mut self,
+        estimator: &str,
+        spp: u32,
+        seed: u64,
+    ) -> Result<Option<(Image, f64)>, String> {
+        let o = RenderOptions {
+            pixel_center: true,
+            ..self.options(estimator, spp, seed)?
+        };
+        self.run(&o)
     }
 
     /// Renders the reference in [`REFERENCE_CHUNKS`] sample ranges merged as they
@@ -254,6 +276,7 @@ pub fn run(a: ExperimentArgs) -> Result<(), String> {
     cfg.reference = a.reference;
     cfg.seed = a.seed;
     cfg.repeats = a.repeats;
+    cfg.decompose = a.decompose;
     cfg.baseline = canon(&a.baseline)?;
     let mut r = SceneRenderer {
         scene,

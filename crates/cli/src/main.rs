@@ -112,6 +112,10 @@ struct RenderArgs {
     /// Leave emitters seen directly by the camera out of the image (scenes).
     #[arg(long)]
     hide_emitters: bool,
+    /// Trace every camera ray through its pixel's centre (scenes; a diagnostic: no
+    /// pixel-footprint variance, and the image converges to point samples).
+    #[arg(long)]
+    pixel_center: bool,
     /// Extra EXR channels (scenes), e.g. `depth,normal,albedo`.
     #[arg(long)]
     aovs: Option<String>,
@@ -253,6 +257,7 @@ fn render(args: RenderArgs) -> Result<(), String> {
             aovs: args.aovs,
             threads: 0,
             hide_emitters: args.hide_emitters,
+            pixel_center: args.pixel_center,
             beta: args.beta,
             cutoff: args.cutoff,
             ridge: args.ridge,

@@ -34,6 +34,8 @@ pub struct Overrides {
     pub threads: usize,
     /// Leave emitters seen directly by the camera out of the image.
     pub hide_emitters: bool,
+    /// Camera rays through pixel centres (a diagnostic; `RenderOptions::pixel_center`).
+    pub pixel_center: bool,
     /// MIS parameters: power heuristic β, cutoff c, optimal-MIS ridge λ.
     pub beta: Option<f64>,
     /// Cutoff heuristic c.
@@ -110,6 +112,7 @@ pub fn load(input: &Path, o: &Overrides) -> Result<(Scene, RenderOptions), Strin
     let (data, settings) = resolve(input, o)?;
     let mut opts = RenderOptions::from_settings(&settings)?;
     opts.threads = o.threads;
+    opts.pixel_center = o.pixel_center;
     opts.validate()?;
     Ok((Scene::from_data(&data), opts))
 }
@@ -155,6 +158,7 @@ pub fn run(
     let (data, settings) = resolve(input, o)?;
     let mut opts = RenderOptions::from_settings(&settings)?;
     opts.threads = o.threads;
+    opts.pixel_center = o.pixel_center;
     opts.max_memory = max_memory;
     opts.validate()?;
     warn_unused(o, &opts);

@@ -64,6 +64,8 @@ pub struct StateHeader {
     pub hide_emitters: bool,
     /// Extra channels.
     pub aovs: Vec<Aov>,
+    /// Whether camera rays went through pixel centres (a diagnostic render).
+    pub pixel_center: bool,
     /// The seed of the random streams.
     pub seed: u64,
     /// A hash of the scene (0: unknown).
@@ -85,6 +87,7 @@ impl StateHeader {
             rr_depth: o.rr_depth,
             hide_emitters: o.hide_emitters,
             aovs: o.aovs.clone(),
+            pixel_center: o.pixel_center,
             seed: o.seed,
             scene_hash: o.scene_hash,
         }
@@ -101,6 +104,7 @@ impl StateHeader {
             rr_depth: self.rr_depth,
             hide_emitters: self.hide_emitters,
             aovs: self.aovs.clone(),
+            pixel_center: self.pixel_center,
             seed: self.seed,
             scene_hash: self.scene_hash,
             ..RenderOptions::default()
@@ -123,6 +127,7 @@ impl StateHeader {
             "rr_depth": self.rr_depth,
             "hide_emitters": self.hide_emitters,
             "aovs": self.aovs.iter().map(|a| a.name()).collect::<Vec<_>>(),
+            "pixel_center": self.pixel_center,
             "seed": self.seed,
             "scene_hash": format!("{:016x}", self.scene_hash),
         })
@@ -192,6 +197,13 @@ impl StateHeader {
                 .as_bool()
                 .ok_or("header \"hide_emitters\" is not a boolean")?,
             aovs,
+            // Absent in states written before the option existed: jittered.
+            pixel_center: match v.get("pixel_center") {
+                None => false,
+                Some(b) => b
+                    .as_bool()
+                    .ok_or("header \"pixel_center\" is not a boolean")?,
+            },
             seed: uint("seed")?,
             scene_hash: u64::from_str_radix(text("scene_hash")?, 16)
                 .map_err(|e| format!("header \"scene_hash\": {e}"))?,

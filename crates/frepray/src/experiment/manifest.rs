@@ -132,6 +132,9 @@ pub struct Row {
     /// The least processor time over the seeds (renders of a point's seeds interleave
     /// with the other estimators', so load hits all alike), in seconds.
     pub cpu_s: Option<f64>,
+    /// The variance decomposition, where asked for ([`super::decompose`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub variance: Option<super::decompose::Variance>,
 }
 
 /// A row against the baseline at equal spp (DESIGN.md §4); `None` where undefined
@@ -184,6 +187,10 @@ pub struct Manifest {
     pub results: Vec<Row>,
     /// The comparisons against the baseline.
     pub comparisons: Vec<Comparison>,
+    /// Renders with camera rays through pixel centres, for the variance decomposition
+    /// (`time_s` and the errors against the reference mean little for them).
+    #[serde(default)]
+    pub centered: Vec<RenderRecord>,
 }
 
 impl Manifest {

@@ -14,6 +14,7 @@
 //! synthetic one of known noise.
 
 mod cpu_time;
+pub mod decompose;
 mod exr_io;
 mod manifest;
 mod maps;
@@ -77,6 +78,19 @@ pub trait Renderer {
     fn cpu_clock(&self) -> Option<f64> {
         cpu_time::process_cpu_seconds()
     }
+
+    /// Renders like [`Renderer::render`] with every camera ray through its pixel's
+    /// centre, for the variance decomposition ([`ExperimentConfig::decompose`]). The
+    /// default cannot.
+    fn render_pixel_centers(
+        &mut self,
+        estimator: &str,
+        spp: u32,
+        seed: u64,
+    ) -> Result<Option<(Image, f64)>, String> {
+        let _ = (estimator, spp, seed);
+        Err("this renderer cannot trace rays through pixel centres".into())
+    }
 }
 
 /// The checkpoint of an interrupted reference render, in the output folder (its first
@@ -119,6 +133,10 @@ pub struct ExperimentConfig {
     /// The size of the renders (width, height), when known: a given reference of
     /// another size is refused before anything is rendered.
     pub size: Option<(u32, u32)>,
+    /// Also render every point with camera rays through pixel centres and split each
+    /// pixel's variance into the pixel footprint's part and the directions' part
+    /// ([`decompose`]); needs two or more repeats.
+    pub decompose: bool,
 }
 
 /// XORed into the seed for a rendered reference, so that its noise is independent of
@@ -148,6 +166,7 @@ impl ExperimentConfig {
             repeats: DEFAULT_REPEATS,
             baseline: "balance".into(),
             size: None,
+            decompose: false,
         }
     }
 }
@@ -212,6 +231,9 @@ impl Plan {
         }
         if cfg.repeats == 0 {
             return Err("repeats must be at least 1".into());
+        }
+        if cfg.decompose && cfg.repeats < 2 {
+            return Err("the variance decomposition needs two or more repeats".into());
         }
         if cfg.reference.is_none() && cfg.reference_spp == 0 {
             return Err("the reference needs at least 1 sample per pixel".into());
@@ -451,18 +473,18 @@ pub fn run(
         }
     };
     // Renders measured against another reference are stale.
-    let renders = match old {
+    let (renders, centered) = match old {
         Some(m)
             if m.reference.source == ref_info.source
                 && m.reference.fingerprint == ref_info.fingerprint =>
         {
-            m.renders
+            (m.renders, m.centered)
         }
         Some(_) => {
             progress("the reference changed: earlier renders will be redone");
-            vec![]
+            (vec![], vec![])
         }
-        None => vec![],
+        None => (vec![], vec![]),
     };
     let mut manifest = Manifest {
         format: FORMAT,
@@ -475,6 +497,7 @@ pub fn run(
         renders,
         results: vec![],
         comparisons: vec![],
+        centered,
     };
     let refresh = |m: &mut Manifest| {
         let noise = m.reference.noise_mse;
@@ -556,6 +579,14 @@ pub fn run(
         ));
     }
 
+    if cfg.decompose && !summary.interrupted {
+        let stopped = decompose::render_missing(renderer, out, &mut manifest, &plan, progress)?;
+        summary.interrupted |= stopped;
+        manifest.save(&manifest_path)?;
+    }
+    if cfg.decompose {
+        decompose::fill(out, &mut manifest.results)?;
+    }
     let points: Vec<(String, u32)> = manifest
         .results
         .iter()

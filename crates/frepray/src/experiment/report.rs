@@ -42,6 +42,7 @@ pub fn rows(
                 trimmed_mse: stats::mean(&trimmed),
                 net_mse: noise.map(|v| mse - v),
                 cpu_s: cpu.map(|c| c.into_iter().fold(f64::INFINITY, f64::min)),
+                variance: None,
             });
         }
     }
@@ -256,6 +257,32 @@ pub fn summary_markdown(m: &Manifest, rows: &[Row], cmp: &[Comparison], done: &s
     let _ = write!(s, "## Every sample count\n\n{head}");
     for r in rows {
         line(&mut s, r);
+    }
+    if rows.iter().any(|r| r.variance.is_some()) {
+        let _ = write!(
+            s,
+            "\n## Variance: pixel footprint and directions\n\nThe same seeds rendered with \
+             every camera ray through its pixel's centre: the variance left is the \
+             directions' (what MIS weights act on), the rest the pixel footprint's \
+             (`experiment::decompose`). Sums over pixels and channels of the per-pixel \
+             variance over the seeds.\n\n\
+             | Estimator | spp | jittered | centred | direction share | footprint share |\n\
+             |---|---:|---:|---:|---:|---:|\n"
+        );
+        for r in rows {
+            if let Some(v) = r.variance {
+                let _ = writeln!(
+                    s,
+                    "| {} | {} | {:.4e} | {:.4e} | {:.1} % | {:.1} % |",
+                    r.estimator,
+                    r.spp,
+                    v.jittered,
+                    v.centered,
+                    100.0 * v.direction_share,
+                    100.0 * (1.0 - v.direction_share)
+                );
+            }
+        }
     }
     if let Some(max) = rows.iter().map(|r| r.spp).max() {
         let _ = write!(s, "\n## At the largest sample count ({max} spp)\n\n{head}");

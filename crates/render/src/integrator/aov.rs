@@ -11,7 +11,7 @@
 //! its random numbers from dimensions of its own ([`super::dims`]), so that asking for
 //! AOVs changes no other random number of the render.
 
-use super::dims::{ALBEDO, PIXEL};
+use super::dims::ALBEDO;
 use super::vertex::{trace, Trace, Vertex};
 use super::{Integrator, IntegratorKind, Pixel, RayCounts};
 use crate::color::Rgb;
@@ -109,7 +109,7 @@ impl Integrator {
         px: &mut Pixel,
         rays: &mut RayCounts,
     ) {
-        let ray = scene.camera.ray(x, y, rng.get_2d(PIXEL));
+        let ray = self.camera_ray(scene, x, y, rng);
         rays.camera += 1;
         let t = trace(scene, &ray);
         let a = first_hit(scene, &t, &ray, rng);

@@ -84,6 +84,10 @@ pub struct RenderOptions {
     pub hide_emitters: bool,
     /// Extra film channels.
     pub aovs: Vec<Aov>,
+    /// Trace every camera ray through its pixel's centre instead of a uniform point of
+    /// the pixel (a diagnostic: the variance left is the directions' alone, without the
+    /// pixel footprint's; the image converges to point samples, not pixel averages).
+    pub pixel_center: bool,
     /// Tile side in pixels.
     pub tile_size: u32,
     /// Samples per pixel per pass (0: spp/16 rounded up). The progress callback acts
@@ -115,6 +119,7 @@ impl Default for RenderOptions {
             rr_depth: 3,
             hide_emitters: false,
             aovs: Vec::new(),
+            pixel_center: false,
             tile_size: 16,
             pass_spp: 0,
             threads: 0,
@@ -212,6 +217,8 @@ pub(crate) struct Integrator {
     pub hide_emitters: bool,
     /// Whether AOVs are gathered.
     pub aovs: bool,
+    /// Whether camera rays go through pixel centres ([`RenderOptions::pixel_center`]).
+    pub pixel_center: bool,
 }
 
 impl Integrator {
@@ -260,7 +267,27 @@ impl Integrator {
             rr_depth: o.rr_depth,
             hide_emitters: o.hide_emitters,
             aovs: !o.aovs.is_empty(),
+            pixel_center: o.pixel_center,
         })
+    }
+
+    /// The camera ray's position in pixel (x, y) of sample stream `rng`: uniform in the
+    /// pixel, or its centre. The random dimensions are drawn either way, so the rest of
+    /// the sample is the same.
+    pub fn camera_ray(
+        &self,
+        scene: &Scene,
+        x: u32,
+        y: u32,
+        rng: &crate::sampler::SampleStream,
+    ) -> frep::Ray {
+        let u = rng.get_2d(dims::PIXEL);
+        let u = if self.pixel_center {
+            glam::DVec2::splat(0.5)
+        } else {
+            u
+        };
+        scene.camera.ray(x, y, u)
     }
 
     /// The MIS kernel of the per-pixel estimators (None when heuristic weights go straight

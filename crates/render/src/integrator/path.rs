@@ -34,7 +34,6 @@
 //! the α minimising the variance is the optimum for the paths that do, which is what the
 //! per-depth state estimates. Memory: one estimator per pixel for each depth reached.
 
-use super::dims::PIXEL;
 use super::vertex::{trace, Trace, Vertex};
 use super::{Integrator, IntegratorKind, Pixel, RayCounts};
 use crate::color::Rgb;
@@ -55,7 +54,7 @@ impl Integrator {
         px: &mut Pixel,
         rays: &mut RayCounts,
     ) {
-        let ray = scene.camera.ray(x, y, rng.get_2d(PIXEL));
+        let ray = self.camera_ray(scene, x, y, rng);
         rays.camera += 1;
         let first = trace(scene, &ray);
         if self.aovs {
