@@ -80,6 +80,10 @@ pub struct ExperimentArgs {
     /// measures the estimators, not the camera's sampling of visible lights.
     #[arg(long)]
     hide_emitters: bool,
+    /// Trace every camera ray, the reference's too, through its pixel's centre (no
+    /// pixel-footprint variance: what MIS can act on, alone).
+    #[arg(long)]
+    pixel_center: bool,
     /// Also render every point with camera rays through pixel centres and split the
     /// variance into its pixel-footprint and direction parts (needs --repeats ≥ 2).
     #[arg(long)]
@@ -237,6 +241,7 @@ pub fn run(a: ExperimentArgs) -> Result<(), String> {
     };
     let (data, settings) = scene_render::resolve(&a.scene, &o)?;
     let mut base = RenderOptions::from_settings(&settings)?;
+    base.pixel_center = a.pixel_center;
     base.validate()?;
     // The hash of the resolved scene covers every file it reads (models, environment
     // maps), not only the scene text: editing a model invalidates earlier renders.
@@ -257,12 +262,13 @@ pub fn run(a: ExperimentArgs) -> Result<(), String> {
     let mut cfg = ExperimentConfig::new(&a.scene, &a.out);
     cfg.command_line = std::env::args().collect::<Vec<_>>().join(" ");
     cfg.renderer_settings = format!(
-        "integrator {} techniques {:?} max_depth {} rr_depth {} hide_emitters {} resolution {}x{} params {:?} scene-hash {:016x}",
+        "integrator {} techniques {:?} max_depth {} rr_depth {} hide_emitters {}{} resolution {}x{} params {:?} scene-hash {:016x}",
         base.integrator,
         base.techniques.iter().map(|(t, n)| format!("{}:{n}", t.name())).collect::<Vec<_>>(),
         base.max_depth,
         base.rr_depth,
         base.hide_emitters,
+        if base.pixel_center { " pixel-centres" } else { "" },
         scene.camera.width,
         scene.camera.height,
         base.params,
