@@ -184,6 +184,10 @@ struct BenchArgs {
     /// Worker threads (0: one per core).
     #[arg(long, default_value_t = 0)]
     threads: usize,
+    /// The memory each render may take, as for `render` (`512M`, `8G`) [default: what
+    /// the system has available]; a larger one is refused before anything runs.
+    #[arg(long, value_name = "SIZE", value_parser = render::limits::parse_bytes)]
+    max_memory: Option<u64>,
 }
 
 fn main() -> ExitCode {
@@ -391,5 +395,5 @@ fn bench(args: BenchArgs) -> Result<(), String> {
         height: args.height,
         ..Default::default()
     };
-    scene_render::bench(&args.scene, &o)
+    scene_render::bench(&args.scene, &o, args.max_memory.unwrap_or(0))
 }

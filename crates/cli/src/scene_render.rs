@@ -266,9 +266,19 @@ fn warn_unused(o: &Overrides, opts: &RenderOptions) {
     }
 }
 
-/// Runs `direct` and `path` with the scene's settings and prints throughput.
-pub fn bench(input: &Path, o: &Overrides) -> Result<(), String> {
-    let (scene, opts) = load(input, o)?;
+/// Runs `direct` and `path` with the scene's settings and prints throughput; both are
+/// checked against the memory limit (`max_memory`, 0: the available memory) first.
+pub fn bench(input: &Path, o: &Overrides, max_memory: u64) -> Result<(), String> {
+    let (scene, mut opts) = load(input, o)?;
+    opts.max_memory = max_memory;
+    for integrator in [IntegratorKind::Direct, IntegratorKind::Path] {
+        let o = RenderOptions {
+            integrator,
+            ..opts.clone()
+        };
+        render::limits::check_memory(scene.camera.width, scene.camera.height, &o)
+            .map_err(|e| e.to_string())?;
+    }
     let stop = crate::stop_on_ctrl_c();
     let stats = render_loop::bench(&scene, &opts, &stop).map_err(|e| e.to_string())?;
     out!(
