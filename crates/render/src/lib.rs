@@ -47,7 +47,7 @@ mod testutil;
 pub mod texture;
 pub mod warp;
 
-pub use camera::Camera;
+pub use camera::{Camera, Projection};
 pub use color::Rgb;
 pub use error::Error;
 pub use image::Image;

@@ -29,10 +29,16 @@ pub struct SceneDescription {
     pub environment: Option<EnvironmentDesc>,
 }
 
-/// A perspective look-at camera.
+/// A look-at camera, perspective or orthographic.
 #[derive(Clone, Debug, Default, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct CameraDesc {
+    /// "perspective" (default) or "orthographic".
+    #[serde(rename = "type")]
+    pub kind: Option<String>,
+    /// Orthographic: the image's full height in scene units (default: what the field
+    /// of view spans at the target's distance).
+    pub scale: Option<f64>,
     /// Position of the pinhole.
     pub eye: [f64; 3],
     /// A point the camera looks at.

@@ -58,8 +58,8 @@ mod settings;
 mod solids;
 
 pub use data::{
-    CameraData, EnvMapTable, EnvironmentData, Light, LightData, LightKind, MapId, MaterialData,
-    MaterialId, ObjectData, SceneData, SolidId, TextureData, TextureId, TextureSpace,
+    CameraData, CameraKind, EnvMapTable, EnvironmentData, Light, LightData, LightKind, MapId,
+    MaterialData, MaterialId, ObjectData, SceneData, SolidId, TextureData, TextureId, TextureSpace,
 };
 pub use desc::{
     CameraDesc, CheckerDesc, ColorDesc, EnvironmentDesc, LightDesc, MaterialDesc, ObjectDesc,
