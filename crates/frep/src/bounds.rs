@@ -61,7 +61,7 @@ pub fn expr_bounds(expr: &Expr, domain: Aabb) -> Aabb {
 /// A box holding the zero set {F = 0} of `expr` inside `domain`, for framing a view:
 /// the deepest cells (32³ per pass) where interval arithmetic allows a zero and F
 /// changes sign among the cell's corners and centre; passes repeat inside the box found
-/// while it shrinks. Cells without a sampled sign change count only when no cell has
+/// while it shrinks along some axis. Cells without a sampled sign change count only when no cell has
 /// one (a surface smaller than a cell). Empty when F has one sign over the domain.
 /// Not conservative (a feature thinner than a cell may be cut off), unlike
 /// [`expr_bounds`].
@@ -92,7 +92,8 @@ pub fn surface_bounds(expr: &Expr, domain: Aabb) -> Aabb {
         if next.is_empty() {
             return next;
         }
-        let shrunk = next.extent().max_element() < 0.9 * b.extent().max_element();
+        // Along any axis: an unbounded surface (a plane) still tightens across itself.
+        let shrunk = next.extent().cmplt(0.9 * b.extent()).any();
         b = next;
         if !shrunk {
             break;
