@@ -148,6 +148,8 @@ struct RenderArgs {
     /// Hide the progress bar.
     #[arg(long)]
     quiet: bool,
+    #[command(flatten)]
+    film: output::FilmArgs,
 }
 
 /// A model's vertical axis.
@@ -329,6 +331,7 @@ fn render(args: RenderArgs) -> Result<(), String> {
             args.quiet,
             args.max_memory.unwrap_or(0),
             args.overwrite_partial,
+            &args.film,
         );
     }
     let is_model = args
@@ -388,6 +391,7 @@ fn render(args: RenderArgs) -> Result<(), String> {
     if spp == 0 {
         return Err("--spp must be at least 1".into());
     }
+    let film = args.film.over(render::Film::default())?;
     let limit = render::integrator::RenderOptions {
         max_memory: args.max_memory.unwrap_or(0),
         ..preview::options(look, spp, 0)
@@ -446,7 +450,7 @@ fn render(args: RenderArgs) -> Result<(), String> {
     } else {
         args.output.clone()
     };
-    output::write_all(&outs, &formats, &state.image())?;
+    output::write_all(&outs, &formats, &state.image(), &film)?;
     eprintln!(
         "{}{} written",
         if stats.stopped {

@@ -147,12 +147,17 @@ pub fn run(
     quiet: bool,
     max_memory: u64,
     overwrite_partial: bool,
+    film: &output::FilmArgs,
 ) -> Result<(), String> {
     let formats = output::check_scene_outputs(outs)?;
     if let Some(d) = dump_to {
         output::check_writable(d)?;
     }
     let (data, settings) = resolve(input, o)?;
+    let film = film.over(render::Film {
+        exposure: settings.exposure,
+        tonemap: settings.tonemap,
+    })?;
     let mut opts = RenderOptions::from_settings(&settings)?;
     opts.threads = o.threads;
     opts.max_memory = max_memory;
@@ -201,7 +206,7 @@ pub fn run(
     } else {
         outs.to_vec()
     };
-    output::write_state(&outs, &formats, &state)?;
+    output::write_state(&outs, &formats, &state, &film)?;
     eprintln!(
         "{}{} written",
         if stats.stopped {

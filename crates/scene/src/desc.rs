@@ -27,6 +27,19 @@ pub struct SceneDescription {
     pub lights: Vec<LightDesc>,
     /// Light from infinitely far away.
     pub environment: Option<EnvironmentDesc>,
+    /// How the image is shown (PNG exposure and tone mapping).
+    #[serde(default)]
+    pub film: FilmDesc,
+}
+
+/// How a PNG shows the image; EXR files stay linear.
+#[derive(Clone, Debug, Default, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct FilmDesc {
+    /// Stops: PNG values are radiance × 2^exposure (default 0).
+    pub exposure: Option<f64>,
+    /// "clamp" (default), "reinhard" or "aces".
+    pub tonemap: Option<String>,
 }
 
 /// A look-at camera, perspective or orthographic.

@@ -448,6 +448,7 @@ pub(crate) fn resolve_source(
         maps,
         scene_radius,
     };
-    let settings = settings(src, &d.render, &data)?;
+    let mut settings = settings(src, &d.render, &data)?;
+    crate::settings::film(src, &d.film, &mut settings)?;
     Ok((data, settings))
 }
