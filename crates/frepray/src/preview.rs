@@ -352,8 +352,7 @@ impl Model {
         let flat = shape.to_tree().is_ok_and(|t| {
             !Expr::new(&t)
                 .nodes()
-                .iter()
-                .any(|n| *n == frep::Node::Var(frep::Var::Z))
+                .contains(&frep::Node::Var(frep::Var::Z))
         });
         if flat && !b.is_empty() && b.lo.x.is_finite() && b.hi.y.is_finite() {
             let e = b.extent();
