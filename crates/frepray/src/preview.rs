@@ -369,6 +369,32 @@ impl Model {
             return Ok(Model { solid, view_box });
         }
         let view_box = view_box(&solid, shape);
+        // A solid whose box is the whole search domain (intervals proved nothing) but
+        // whose surface is bounded and F < 0 at the domain's corners is bounded by its
+        // surface: rebuilt inside that box (with a margin), rays no longer search the
+        // whole domain (nested R-unions took minutes a picture).
+        let whole = solid.bounds().extent().min_element() >= 2.0 * DEFAULT_DOMAIN * (1.0 - 1e-9);
+        if whole && view_box.clipped == [false; 3] {
+            let corners_outside = (0..8).all(|k| {
+                let m = glam::BVec3::new(k & 1 != 0, k & 2 != 0, k & 4 != 0);
+                let p = DVec3::select(
+                    m,
+                    DVec3::splat(DEFAULT_DOMAIN),
+                    DVec3::splat(-DEFAULT_DOMAIN),
+                );
+                solid.value(p) < 0.0
+            });
+            if let (true, Ok(tree)) = (corners_outside, shape.to_tree()) {
+                let b = view_box.bounds;
+                let pad = 0.05 * b.extent();
+                let bounded = Shape::Function {
+                    tree,
+                    domain: Some(Aabb::new(b.lo - pad, b.hi + pad)),
+                };
+                let solid = Solid::build(&bounded)?;
+                return Ok(Model { solid, view_box });
+            }
+        }
         Ok(Model { solid, view_box })
     }
 }
@@ -470,6 +496,16 @@ mod tests {
     use frep::read::{read_str, Format};
     use glam::DVec2;
 
+    const R_UNION: &str = "m(x[3], a[1]) {
+            b1 = 0.36 - (x[1] - 1)^2 - x[2]^2 - x[3]^2;
+            b2 = 0.36 - x[1]^2 - x[2]^2 - x[3]^2;
+            b3 = 0.36 - (x[1] + 1)^2 - x[2]^2 - x[3]^2;
+            b4 = 0.36 - x[1]^2 - (x[2] - 1)^2 - x[3]^2;
+            b5 = 0.36 - x[1]^2 - (x[2] + 1)^2 - x[3]^2;
+            b6 = 0.36 - x[1]^2 - x[2]^2 - (x[3] - 1)^2;
+            m = ((((b1 | b2) | b3) | b4) | b5) | b6;
+        }";
+
     fn hf(text: &str) -> Model {
         Model::new(&read_str(text, Format::HyperFun, "test.hf").unwrap().shape).unwrap()
     }
@@ -479,16 +515,16 @@ mod tests {
     /// ±100 (a dot in the picture); the view frames the surface.
     #[test]
     fn r_function_csg_is_framed_by_its_surface() {
-        let m = hf("m(x[3], a[1]) {
-            b1 = 0.36 - (x[1] - 1)^2 - x[2]^2 - x[3]^2;
-            b2 = 0.36 - x[1]^2 - x[2]^2 - x[3]^2;
-            b3 = 0.36 - (x[1] + 1)^2 - x[2]^2 - x[3]^2;
-            b4 = 0.36 - x[1]^2 - (x[2] - 1)^2 - x[3]^2;
-            b5 = 0.36 - x[1]^2 - (x[2] + 1)^2 - x[3]^2;
-            b6 = 0.36 - x[1]^2 - x[2]^2 - (x[3] - 1)^2;
-            m = ((((b1 | b2) | b3) | b4) | b5) | b6;
-        }");
-        assert!(view_bounds(&m.solid).extent().min_element() > 100.0);
+        let m = hf(R_UNION);
+        // Intervals prove no cell of the domain empty: the solid's box is the domain.
+        let plain = Solid::build(&read_str(R_UNION, Format::HyperFun, "t.hf").unwrap().shape);
+        assert!(view_bounds(&plain.unwrap()).extent().min_element() > 100.0);
+        // The model is rebuilt inside its surface's box (plus 5 %).
+        assert!(
+            m.solid.bounds().extent().max_element() < 3.6,
+            "{:?}",
+            m.solid.bounds()
+        );
         let b = m.view_box.bounds;
         let want = Aabb::new(DVec3::new(-1.6, -1.6, -0.6), DVec3::new(1.6, 1.6, 1.6));
         assert!(
