@@ -91,6 +91,10 @@ pub struct ExperimentArgs {
     /// Worker threads (0: one per core).
     #[arg(long, default_value_t = 0)]
     threads: usize,
+    /// The memory each render may take, as for `render` (`512M`, `8G`) [default: what
+    /// the system has available]; checked for every estimator before anything runs.
+    #[arg(long, value_name = "SIZE", value_parser = render::limits::parse_bytes)]
+    max_memory: Option<u64>,
     /// Hide progress lines.
     #[arg(long)]
     quiet: bool,
@@ -242,6 +246,7 @@ pub fn run(a: ExperimentArgs) -> Result<(), String> {
     let (data, settings) = scene_render::resolve(&a.scene, &o)?;
     let mut base = RenderOptions::from_settings(&settings)?;
     base.pixel_center = a.pixel_center;
+    base.max_memory = a.max_memory.unwrap_or(0);
     base.validate()?;
     // The hash of the resolved scene covers every file it reads (models, environment
     // maps), not only the scene text: editing a model invalidates earlier renders.
@@ -259,6 +264,17 @@ pub fn run(a: ExperimentArgs) -> Result<(), String> {
         .iter()
         .map(|s| canon(s))
         .collect::<Result<Vec<_>, _>>()?;
+    // Every render of the sweep (and the reference) against the memory limit, before
+    // anything is rendered or written.
+    let reference = a.reference_estimator.as_deref().map(canon).transpose()?;
+    for e in estimators.iter().chain(&reference) {
+        let o = RenderOptions {
+            method: mis::Method::from_str(e).map_err(|e| e.to_string())?,
+            ..base.clone()
+        };
+        render::limits::check_memory(scene.camera.width, scene.camera.height, &o)
+            .map_err(|e| e.to_string())?;
+    }
     let mut cfg = ExperimentConfig::new(&a.scene, &a.out);
     cfg.command_line = std::env::args().collect::<Vec<_>>().join(" ");
     cfg.renderer_settings = format!(
@@ -278,7 +294,7 @@ pub fn run(a: ExperimentArgs) -> Result<(), String> {
     cfg.estimators = estimators;
     cfg.spp = a.spp;
     cfg.reference_spp = a.reference_spp;
-    cfg.reference_estimator = a.reference_estimator.as_deref().map(canon).transpose()?;
+    cfg.reference_estimator = reference;
     cfg.reference = a.reference;
     cfg.seed = a.seed;
     cfg.repeats = a.repeats;

@@ -128,6 +128,15 @@ struct RenderArgs {
     /// A model's vertical axis (models).
     #[arg(long, value_enum, default_value_t = UpArg::Z)]
     up: UpArg,
+    /// The side a model is seen from (models). With z up: front looks along +y, back
+    /// along −y, left along +x, right along −x, top along −z (x right, y up: how Fidget
+    /// shows its 2-D models), bottom along +z; with x or y up the front looks along −z.
+    #[arg(long, value_enum, default_value_t = ViewArg::Iso)]
+    view: ViewArg,
+    /// Parallel rays instead of a 30° perspective (models): the model's outline fills
+    /// the image.
+    #[arg(long)]
+    orthographic: bool,
     /// Worker threads (0: one per core; at most 8 per core). The image does not depend
     /// on it.
     #[arg(long, default_value_t = 0)]
@@ -143,6 +152,8 @@ struct RenderArgs {
     /// Hide the progress bar.
     #[arg(long)]
     quiet: bool,
+    #[command(flatten)]
+    film: output::FilmArgs,
 }
 
 /// A model's vertical axis.
@@ -162,6 +173,39 @@ impl From<UpArg> for preview::Up {
             UpArg::X => preview::Up::X,
             UpArg::Y => preview::Up::Y,
             UpArg::Z => preview::Up::Z,
+        }
+    }
+}
+
+/// The side a model is seen from ([`preview::View`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum ViewArg {
+    /// From the front-left-above diagonal.
+    Iso,
+    /// Along +y (z up).
+    Front,
+    /// Along −y (z up).
+    Back,
+    /// Along +x (z up).
+    Left,
+    /// Along −x (z up).
+    Right,
+    /// Down the up axis (z up: along −z, x right, y up).
+    Top,
+    /// Up the up axis (z up: along +z).
+    Bottom,
+}
+
+impl From<ViewArg> for preview::View {
+    fn from(v: ViewArg) -> Self {
+        match v {
+            ViewArg::Iso => preview::View::Iso,
+            ViewArg::Front => preview::View::Front,
+            ViewArg::Back => preview::View::Back,
+            ViewArg::Left => preview::View::Left,
+            ViewArg::Right => preview::View::Right,
+            ViewArg::Top => preview::View::Top,
+            ViewArg::Bottom => preview::View::Bottom,
         }
     }
 }
@@ -188,6 +232,10 @@ struct BenchArgs {
     /// Worker threads (0: one per core).
     #[arg(long, default_value_t = 0)]
     threads: usize,
+    /// The memory each render may take, as for `render` (`512M`, `8G`) [default: what
+    /// the system has available]; a larger one is refused before anything runs.
+    #[arg(long, value_name = "SIZE", value_parser = render::limits::parse_bytes)]
+    max_memory: Option<u64>,
 }
 
 fn main() -> ExitCode {
@@ -245,6 +293,18 @@ pub fn progress_bar(quiet: bool, unit: &str) -> indicatif::ProgressBar {
 fn render(args: RenderArgs) -> Result<(), String> {
     set_threads(args.threads)?;
     if scene_render::is_scene(&args.input) {
+        let model_only = [
+            ("--view", args.view != ViewArg::Iso),
+            ("--orthographic", args.orthographic),
+            ("--up", args.up != UpArg::Z),
+        ];
+        if let Some((flag, _)) = model_only.iter().find(|(_, set)| *set) {
+            return Err(format!(
+                "{flag} applies to model files (.frep, .hf, .vm); {} is a scene (its \
+                 [camera] sets the view: type = \"orthographic\" for parallel rays)",
+                args.input.display()
+            ));
+        }
         let o = scene_render::Overrides {
             spp: args.spp,
             mis: args.mis,
@@ -276,6 +336,7 @@ fn render(args: RenderArgs) -> Result<(), String> {
             args.quiet,
             args.max_memory.unwrap_or(0),
             args.overwrite_partial,
+            &args.film,
         );
     }
     let is_model = args
@@ -335,29 +396,50 @@ fn render(args: RenderArgs) -> Result<(), String> {
     if spp == 0 {
         return Err("--spp must be at least 1".into());
     }
+    let film = args.film.over(render::Film::default())?;
     let limit = render::integrator::RenderOptions {
         max_memory: args.max_memory.unwrap_or(0),
         ..preview::options(look, spp, 0)
     };
     render::limits::check_memory(width, height, &limit).map_err(|e| e.to_string())?;
     let start = std::time::Instant::now();
-    let solid = preview::load_model(&args.input).map_err(|e| e.to_string())?;
+    let model = preview::load(&args.input).map_err(|e| e.to_string())?;
     let setup = start.elapsed();
+    let clipped: Vec<&str> = ["x", "y", "z"]
+        .into_iter()
+        .zip(model.view_box.clipped)
+        .filter_map(|(a, c)| c.then_some(a))
+        .collect();
+    if !clipped.is_empty() {
+        let b = model.view_box.bounds;
+        eprintln!(
+            "note: the surface is unbounded along {} (it reaches the ±{} search domain); \
+             the view shows [{:.3}, {:.3}] × [{:.3}, {:.3}] × [{:.3}, {:.3}]",
+            clipped.join(", "),
+            frep::bounds::DEFAULT_DOMAIN,
+            b.lo.x,
+            b.hi.x,
+            b.lo.y,
+            b.hi.y,
+            b.lo.z,
+            b.hi.z
+        );
+    }
     let stop = stop_on_ctrl_c();
     let bar = progress_bar(args.quiet, "samples");
-    let result = preview::render(
-        solid,
-        args.up.into(),
+    let o = preview::PreviewOptions {
+        up: args.up.into(),
+        view: args.view.into(),
+        orthographic: args.orthographic,
         width,
         height,
         look,
         spp,
-        &stop,
-        &|done, total| {
-            bar.set_length(total);
-            bar.set_position(done);
-        },
-    );
+    };
+    let result = preview::render_model(model, &o, &stop, &|done, total| {
+        bar.set_length(total);
+        bar.set_position(done);
+    });
     bar.finish_and_clear();
     let (state, stats) = result.map_err(|e| e.to_string())?;
     eprintln!(
@@ -373,7 +455,7 @@ fn render(args: RenderArgs) -> Result<(), String> {
     } else {
         args.output.clone()
     };
-    output::write_all(&outs, &formats, &state.image())?;
+    output::write_all(&outs, &formats, &state.image(), &film)?;
     eprintln!(
         "{}{} written",
         if stats.stopped {
@@ -396,5 +478,5 @@ fn bench(args: BenchArgs) -> Result<(), String> {
         height: args.height,
         ..Default::default()
     };
-    scene_render::bench(&args.scene, &o)
+    scene_render::bench(&args.scene, &o, args.max_memory.unwrap_or(0))
 }

@@ -15,11 +15,14 @@ pub struct MergeArgs {
     /// Output: .png, .exr (the resolved image) or .state (the merged sums); repeatable.
     #[arg(short, long, required = true)]
     output: Vec<PathBuf>,
+    #[command(flatten)]
+    film: output::FilmArgs,
 }
 
 /// Reads, merges and writes; errors name the file that does not fit.
 pub fn run(args: MergeArgs) -> Result<(), String> {
     let formats: Vec<Format> = output::check_scene_outputs(&args.output)?;
+    let film = args.film.over(render::Film::default())?;
     let mut merged: Option<RenderState> = None;
     for path in &args.states {
         let s = RenderState::read(path).map_err(|e| e.to_string())?;
@@ -31,7 +34,7 @@ pub fn run(args: MergeArgs) -> Result<(), String> {
         }
     }
     let merged = merged.expect("clap requires one state");
-    output::write_state(&args.output, &formats, &merged)?;
+    output::write_state(&args.output, &formats, &merged, &film)?;
     eprintln!(
         "merged {} state(s): {}; written {}",
         args.states.len(),

@@ -3,8 +3,62 @@
 //! writing every output even when one fails.
 
 use frepray::preview::Look;
-use render::{Image, RenderState};
+use render::{Film, Image, RenderState, Tonemap};
 use std::path::{Path, PathBuf};
+
+/// How PNG outputs show the image: `--exposure` and `--tonemap` (EXR and state files
+/// stay linear).
+#[derive(clap::Args, Clone, Debug, Default)]
+pub struct FilmArgs {
+    /// PNG only: scale radiance by 2^EV before encoding (+1 doubles, −1 halves) [scenes:
+    /// the scene's `[film] exposure`, else 0]. EXR files stay linear.
+    #[arg(long, value_name = "EV", allow_negative_numbers = true)]
+    pub exposure: Option<f64>,
+    /// PNG only: clamp (values ≥ 1 clip to white), reinhard (v/(1+v): nothing clips)
+    /// or aces (filmic: soft shoulder, white from 7.2) [scenes: the scene's
+    /// `[film] tonemap`, else clamp].
+    #[arg(long, value_name = "CURVE", value_parser = parse_tonemap)]
+    pub tonemap: Option<Tonemap>,
+}
+
+fn parse_tonemap(s: &str) -> Result<Tonemap, String> {
+    s.parse().map_err(|e: scene::UnknownName| e.to_string())
+}
+
+impl FilmArgs {
+    /// The film of these flags over `base` (a scene's `[film]`); errors on an
+    /// exposure that is not finite.
+    pub fn over(&self, base: Film) -> Result<Film, String> {
+        if let Some(e) = self.exposure {
+            if !e.is_finite() {
+                return Err(format!("--exposure {e}: expected a finite number of stops"));
+            }
+        }
+        Ok(Film {
+            exposure: self.exposure.unwrap_or(base.exposure),
+            tonemap: self.tonemap.unwrap_or(base.tonemap),
+        })
+    }
+}
+
+/// The note on a PNG whose pixels clip (1 % or more), with the fraction and what helps.
+pub fn clip_note(outs: &[PathBuf], formats: &[Format], img: &Image, film: &Film) {
+    let Some(png) = outs.iter().zip(formats).find(|(_, f)| **f == Format::Png) else {
+        return;
+    };
+    let f = img.clipped_fraction(film);
+    if f >= 0.01 {
+        eprintln!(
+            "note: {}: {:.1} % of pixels clip (a channel ≥ 1 after exposure {} and tone \
+             mapping {}); --exposure -1 halves the brightness, --tonemap reinhard or aces \
+             compresses highlights",
+            png.0.display(),
+            100.0 * f,
+            film.exposure,
+            film.tonemap
+        );
+    }
+}
 
 /// An image format frepray writes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -128,10 +182,10 @@ pub fn list(paths: &[std::path::PathBuf]) -> String {
         .join(", ")
 }
 
-/// Writes an image whole or not at all (not as a state).
-pub fn write(path: &Path, img: &Image, format: Format) -> Result<(), String> {
+/// Writes an image whole or not at all (not as a state); a PNG through `film`.
+pub fn write(path: &Path, img: &Image, format: Format, film: &Film) -> Result<(), String> {
     match format {
-        Format::Png => img.write_png(path),
+        Format::Png => img.write_png_film(path, film),
         Format::Exr | Format::State => img.write_exr(path),
     }
     .map_err(|e| format!("{}: {e}", path.display()))
@@ -144,6 +198,7 @@ pub fn write_state(
     outs: &[PathBuf],
     formats: &[Format],
     state: &RenderState,
+    film: &Film,
 ) -> Result<(), String> {
     let mut image = None;
     let mut failed = Vec::new();
@@ -151,23 +206,32 @@ pub fn write_state(
         let r = if f == Format::State {
             state.write(p).map_err(|e| e.to_string())
         } else {
-            write(p, image.get_or_insert_with(|| state.image()), f)
+            write(p, image.get_or_insert_with(|| state.image()), f, film)
         };
         if let Err(e) = r {
             failed.push(e);
         }
+    }
+    if let Some(img) = &image {
+        clip_note(outs, formats, img, film);
     }
     written_or(outs.len(), failed)
 }
 
 /// Writes an image to every output; every one is attempted, the error names each that
 /// failed.
-pub fn write_all(outs: &[PathBuf], formats: &[Format], img: &Image) -> Result<(), String> {
+pub fn write_all(
+    outs: &[PathBuf],
+    formats: &[Format],
+    img: &Image,
+    film: &Film,
+) -> Result<(), String> {
     let failed: Vec<String> = outs
         .iter()
         .zip(formats)
-        .filter_map(|(p, &f)| write(p, img, f).err())
+        .filter_map(|(p, &f)| write(p, img, f, film).err())
         .collect();
+    clip_note(outs, formats, img, film);
     written_or(outs.len(), failed)
 }
 
@@ -203,7 +267,7 @@ mod tests {
             dir.join("c.png"),
         ];
         let formats: Vec<Format> = outs.iter().map(|p| format_for_scene(p).unwrap()).collect();
-        let e = write_state(&outs, &formats, &state).unwrap_err();
+        let e = write_state(&outs, &formats, &state, &Film::default()).unwrap_err();
         assert!(e.contains("1 of 3") && e.contains("b.state"), "{e}");
         assert!(outs[0].is_file() && outs[2].is_file());
         assert!(check_writable(&outs[1])

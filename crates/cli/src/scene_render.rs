@@ -150,12 +150,17 @@ pub fn run(
     quiet: bool,
     max_memory: u64,
     overwrite_partial: bool,
+    film: &output::FilmArgs,
 ) -> Result<(), String> {
     let formats = output::check_scene_outputs(outs)?;
     if let Some(d) = dump_to {
         output::check_writable(d)?;
     }
     let (data, settings) = resolve(input, o)?;
+    let film = film.over(render::Film {
+        exposure: settings.exposure,
+        tonemap: settings.tonemap,
+    })?;
     let mut opts = RenderOptions::from_settings(&settings)?;
     opts.threads = o.threads;
     opts.pixel_center = o.pixel_center;
@@ -205,7 +210,7 @@ pub fn run(
     } else {
         outs.to_vec()
     };
-    output::write_state(&outs, &formats, &state)?;
+    output::write_state(&outs, &formats, &state, &film)?;
     eprintln!(
         "{}{} written",
         if stats.stopped {
@@ -270,9 +275,19 @@ fn warn_unused(o: &Overrides, opts: &RenderOptions) {
     }
 }
 
-/// Runs `direct` and `path` with the scene's settings and prints throughput.
-pub fn bench(input: &Path, o: &Overrides) -> Result<(), String> {
-    let (scene, opts) = load(input, o)?;
+/// Runs `direct` and `path` with the scene's settings and prints throughput; both are
+/// checked against the memory limit (`max_memory`, 0: the available memory) first.
+pub fn bench(input: &Path, o: &Overrides, max_memory: u64) -> Result<(), String> {
+    let (scene, mut opts) = load(input, o)?;
+    opts.max_memory = max_memory;
+    for integrator in [IntegratorKind::Direct, IntegratorKind::Path] {
+        let o = RenderOptions {
+            integrator,
+            ..opts.clone()
+        };
+        render::limits::check_memory(scene.camera.width, scene.camera.height, &o)
+            .map_err(|e| e.to_string())?;
+    }
     let stop = crate::stop_on_ctrl_c();
     let stats = render_loop::bench(&scene, &opts, &stop).map_err(|e| e.to_string())?;
     out!(

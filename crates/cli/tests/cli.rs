@@ -377,3 +377,125 @@ fn a_closed_stdout_is_not_a_panic() {
     assert!(!err.contains("panicked"), "{err}");
     assert_eq!(out.status.code(), Some(0), "{err}");
 }
+
+/// A half-space is framed around its plane (and says it is clipped), not from 660
+/// units away; a 2-D Fidget-style model seen from the top through the orthographic lens
+/// fills its outline (the disc covers π/4 of its square); `--view` and
+/// `--orthographic` are refused for scenes.
+#[test]
+fn views_of_unbounded_and_2d_models() {
+    let dir = out_dir("views");
+    let half = dir.join("half.hf");
+    std::fs::write(&half, "half(x[3], a[1]) { half = -x[3]; }\n").unwrap();
+    let o = frepray()
+        .arg("render")
+        .arg(&half)
+        .args([
+            "--width",
+            "16",
+            "--height",
+            "16",
+            "--integrator",
+            "depth",
+            "-o",
+        ])
+        .arg(dir.join("half.exr"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(err.contains("unbounded along x, y"), "{err}");
+    let depth = channel(&dir.join("half.exr"), "depth");
+    // Every ray that looks down hits the plane a few units away.
+    let hits: Vec<f32> = depth.iter().copied().filter(|&d| d > 0.0).collect();
+    assert!(hits.len() > depth.len() / 2, "{depth:?}");
+    assert!(hits.iter().all(|&d| d < 30.0), "{hits:?}");
+
+    let disc = dir.join("disc.vm");
+    std::fs::write(
+        &disc,
+        "_0 var-x\n_1 var-y\n_2 square _0\n_3 square _1\n_4 add _2 _3\n_5 const 0.25\n_6 sub _4 _5\n",
+    )
+    .unwrap();
+    let o = frepray()
+        .arg("render")
+        .arg(&disc)
+        .args(["--view", "top", "--orthographic", "--integrator", "normals"])
+        .args(["--width", "40", "--height", "40", "-o"])
+        .arg(dir.join("disc.exr"))
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let nz = channel(&dir.join("disc.exr"), "normal.Z");
+    let cap = nz.iter().filter(|&&z| z > 0.999).count() as f64 / nz.len() as f64;
+    // π/4 of the outline, which fills 1/1.05² of the image.
+    let want = std::f64::consts::FRAC_PI_4 / 1.05f64.powi(2);
+    assert!((cap - want).abs() < 0.05, "{cap} vs {want}");
+
+    let o = frepray()
+        .arg("render")
+        .arg(root().join("scenes/cornell.toml"))
+        .args(["--view", "top", "-o"])
+        .arg(dir.join("scene.png"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && err.contains("--view applies to model files"),
+        "{err}"
+    );
+}
+
+/// `--exposure` and `--tonemap` change the PNG, never the EXR; a scene's
+/// `[film] exposure` is its default; clipping is reported.
+#[test]
+fn exposure_and_tone_mapping_shape_the_png_only() {
+    let dir = out_dir("exposure");
+    let scene = root().join("scenes/cornell.toml");
+    let render = |name: &str, extra: &[&str]| {
+        let o = frepray()
+            .arg("render")
+            .arg(&scene)
+            .args(["--width", "24", "--height", "18", "--spp", "2"])
+            .args(extra)
+            .arg("-o")
+            .arg(dir.join(format!("{name}.png")))
+            .arg("-o")
+            .arg(dir.join(format!("{name}.exr")))
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr).into_owned();
+        assert!(o.status.success(), "{err}");
+        let png = std::fs::read(dir.join(format!("{name}.png"))).unwrap();
+        (png, channel(&dir.join(format!("{name}.exr")), "R"), err)
+    };
+    let (plain, plain_r, _) = render("plain", &[]);
+    let (dark, dark_r, _) = render("dark", &["--exposure", "-3"]);
+    let (soft, soft_r, soft_err) = render("soft", &["--tonemap", "reinhard"]);
+    assert_eq!(plain_r, dark_r);
+    assert_eq!(plain_r, soft_r);
+    assert_ne!(plain, dark);
+    assert_ne!(plain, soft);
+    assert!(!soft_err.contains("clip"), "{soft_err}");
+    let (blown, _, err) = render("blown", &["--exposure", "8"]);
+    assert!(err.contains("% of pixels clip"), "{err}");
+    assert_ne!(blown, plain);
+    // The scene's own [film] exposure is the default, and the flag overrides it.
+    let text = std::fs::read_to_string(&scene).unwrap();
+    let film = dir.join("film.toml");
+    let text = text.replace("[camera]", "[film]\nexposure = -3\n\n[camera]");
+    let text = text.replace(
+        "\"models/",
+        &format!("\"{}/scenes/models/", root().display()),
+    );
+    std::fs::write(&film, text).unwrap();
+    let o = frepray()
+        .arg("render")
+        .arg(&film)
+        .args(["--width", "24", "--height", "18", "--spp", "2", "-o"])
+        .arg(dir.join("film.png"))
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(std::fs::read(dir.join("film.png")).unwrap(), dark);
+}

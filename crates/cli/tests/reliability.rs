@@ -320,6 +320,43 @@ fn oversize_renders_and_thread_counts_are_refused_with_an_estimate() {
     assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 0);
 }
 
+/// `experiment` and `bench` take `--max-memory` too, and refuse an oversize render up
+/// front with the message of `render` (the experiment writes nothing).
+#[test]
+fn experiment_and_bench_check_memory_up_front() {
+    let dir = out_dir("memory-commands");
+    let out = dir.join("exp");
+    for args in [
+        vec!["experiment", "--spp", "1", "--reference-spp", "2", "-o"],
+        vec!["bench", "--spp", "1"],
+    ] {
+        let mut cmd = frepray();
+        cmd.args(&args);
+        if args[0] == "experiment" {
+            cmd.arg(&out);
+        }
+        let o = run_within(
+            cmd.arg(root().join("scenes/cornell.toml")).args([
+                "--width",
+                "256",
+                "--height",
+                "256",
+                "--max-memory",
+                "1M",
+            ]),
+            Duration::from_secs(20),
+        );
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(1), "{args:?}: {err}");
+        assert!(
+            err.contains("256×256 render with these settings needs about")
+                && err.contains("more than the --max-memory (1.0 MiB)"),
+            "{args:?}: {err}"
+        );
+    }
+    assert!(!out.exists());
+}
+
 /// Editing a model that a scene reads invalidates the experiment's finished renders.
 #[test]
 fn experiment_cache_follows_the_models_a_scene_reads() {

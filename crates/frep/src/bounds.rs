@@ -4,6 +4,12 @@
 //! dropped; the others are split until a depth limit, and the union of what remains is a
 //! box guaranteed (up to the search domain) to hold the solid. The search is repeated
 //! inside the box it found, which tightens it quickly for compact models.
+//!
+//! [`surface_bounds`] bounds the zero set {F = 0} instead (what a picture shows): cells
+//! whose interval of F holds 0 are split to a fixed depth, and a deepest cell counts
+//! where F changes sign among its corners and centre. Sampling, not intervals, decides
+//! there because nested R-functions (`f1 + f2 + sqrt(f1² + f2²)`, HyperFun's `|`)
+//! widen intervals so much that no cell of the search domain is ever proved empty.
 
 use crate::expr::Expr;
 use crate::interval::Interval;
@@ -52,6 +58,111 @@ pub fn expr_bounds(expr: &Expr, domain: Aabb) -> Aabb {
     b
 }
 
+/// A box holding the zero set {F = 0} of `expr` inside `domain`, for framing a view:
+/// the deepest cells (32³ per pass) where interval arithmetic allows a zero and F
+/// changes sign among the cell's corners and centre; passes repeat inside the box found
+/// while it shrinks along some axis. Cells without a sampled sign change count only when no cell has
+/// one (a surface smaller than a cell). Empty when F has one sign over the domain.
+/// Not conservative (a feature thinner than a cell may be cut off), unlike
+/// [`expr_bounds`].
+pub fn surface_bounds(expr: &Expr, domain: Aabb) -> Aabb {
+    let mut search = SurfaceSearch {
+        expr,
+        intervals: Vec::with_capacity(expr.len()),
+        points: Vec::with_capacity(expr.len()),
+        sure: Aabb::EMPTY,
+        maybe: Aabb::EMPTY,
+        budget: 0,
+    };
+    let mut b = domain;
+    for _ in 0..16 {
+        search.sure = Aabb::EMPTY;
+        search.maybe = Aabb::EMPTY;
+        search.budget = BUDGET / expr.len().max(1);
+        search.refine(b, SURFACE_DEPTH);
+        if search.budget == 0 {
+            // Cut short: what was not searched is kept whole.
+            return search.sure.union(&search.maybe);
+        }
+        let next = if search.sure.is_empty() {
+            search.maybe
+        } else {
+            search.sure
+        };
+        if next.is_empty() {
+            return next;
+        }
+        // Along any axis: an unbounded surface (a plane) still tightens across itself.
+        let shrunk = next.extent().cmplt(0.9 * b.extent()).any();
+        b = next;
+        if !shrunk {
+            break;
+        }
+    }
+    b
+}
+
+/// One pass of [`surface_bounds`]: the boxes of cells with and without a sampled sign
+/// change, and the node evaluations left.
+struct SurfaceSearch<'a> {
+    expr: &'a Expr,
+    intervals: Vec<Interval>,
+    points: Vec<f64>,
+    sure: Aabb,
+    maybe: Aabb,
+    budget: usize,
+}
+
+impl SurfaceSearch<'_> {
+    fn refine(&mut self, cell: Aabb, depth: u32) {
+        if self.sure.lo.cmple(cell.lo).all() && self.sure.hi.cmpge(cell.hi).all() {
+            return;
+        }
+        if self.budget == 0 {
+            self.maybe = self.maybe.union(&cell);
+            return;
+        }
+        self.budget -= 1;
+        let i = |k: usize| Interval::new(cell.lo[k], cell.hi[k]);
+        let v = self.expr.eval_with(i(0), i(1), i(2), &mut self.intervals);
+        if v.lo > 0.0 || v.hi < 0.0 {
+            return;
+        }
+        if depth == 0 {
+            let (mut inside, mut outside) = (false, false);
+            for k in 0..9 {
+                let p = if k == 8 {
+                    cell.center()
+                } else {
+                    DVec3::select(
+                        glam::BVec3::new(k & 1 != 0, k & 2 != 0, k & 4 != 0),
+                        cell.hi,
+                        cell.lo,
+                    )
+                };
+                let f = self.expr.eval_with(p.x, p.y, p.z, &mut self.points);
+                inside |= f >= 0.0;
+                outside |= f < 0.0;
+            }
+            if inside && outside {
+                self.sure = self.sure.union(&cell);
+            } else {
+                self.maybe = self.maybe.union(&cell);
+            }
+            return;
+        }
+        let c = cell.center();
+        for k in 0..8 {
+            let m = glam::BVec3::new(k & 1 != 0, k & 2 != 0, k & 4 != 0);
+            let sub = Aabb::new(DVec3::select(m, c, cell.lo), DVec3::select(m, cell.hi, c));
+            self.refine(sub, depth - 1);
+        }
+    }
+}
+
+/// Octree depth of a pass of [`surface_bounds`] (32³ cells at most: where intervals
+/// prune nothing, a pass evaluates every cell of every level).
+const SURFACE_DEPTH: u32 = 5;
 /// Octree depth of the first pass (64³ cells at most).
 const START_DEPTH: u32 = 6;
 /// Deepest octree tried when passes stop shrinking the box.
@@ -139,6 +250,32 @@ mod tests {
             "{b:?}"
         );
         assert!(b.hi.z >= 1.1 && b.hi.z < 1.3, "{b:?}");
+    }
+
+    /// Eight balls joined by nested R-unions: intervals prove no cell of the ±100
+    /// domain empty (the solid's box is the whole domain), the zero set's box is tight.
+    #[test]
+    fn nested_r_unions_have_a_tight_surface_box() {
+        let (x, y, z) = (Tree::x(), Tree::y(), Tree::z());
+        let ball = |cx: f64| 0.36 - ((&x - cx).square() + y.square() + z.square());
+        let mut f = ball(-1.75);
+        for k in 1..8 {
+            let g = ball(-1.75 + 0.5 * k as f64);
+            f = &f + &g + (f.square() + g.square()).sqrt();
+        }
+        let e = Expr::new(&f);
+        let d = Aabb::new(DVec3::splat(-DEFAULT_DOMAIN), DVec3::splat(DEFAULT_DOMAIN));
+        assert!(expr_bounds(&e, d).extent().min_element() > 100.0);
+        let b = surface_bounds(&e, d);
+        let want = Aabb::new(DVec3::new(-2.35, -0.6, -0.6), DVec3::new(2.35, 0.6, 0.6));
+        assert!(
+            b.lo.cmple(want.lo + 0.05).all() && b.hi.cmpge(want.hi - 0.05).all(),
+            "{b:?}"
+        );
+        assert!((b.extent() - want.extent()).max_element() < 0.2, "{b:?}");
+        // The complement has the same surface; a function of one sign has none.
+        assert!((surface_bounds(&Expr::new(&-f), d).extent() - b.extent()).length() < 1e-9);
+        assert!(surface_bounds(&Expr::new(&(-1.0 - x.square())), d).is_empty());
     }
 
     #[test]

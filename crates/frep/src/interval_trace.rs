@@ -221,11 +221,23 @@ impl ExprView<'_> {
         // Crossings are located to 1e-5 of the resolution (1e-12 of the solid's size).
         let tol = eps_t * 1e-5;
         let root = self.tape;
-        // Where the range was clipped by the grown bounds, F < 0 is known (a solid cut by
-        // its search domain is thereby capped at the domain's faces).
-        let ia = t0 <= t_min && inside_at(root, ray, t0);
-        let ib = t1 >= t_max && inside_at(root, ray, t1);
-        TRACE.with_borrow_mut(|tr| {
+        // Where the range was clipped by the grown bounds, F < 0 is known outside them:
+        // a solid cut by its search domain is capped at the domain's faces. A ray that
+        // enters the bounds inside the solid crosses there; one that leaves them inside
+        // it crosses there unless F crosses first. (The segments below carry the true
+        // signs of F at the ends, so that a crossing inside is found between them.)
+        let (ia, ib) = (inside_at(root, ray, t0), inside_at(root, ray, t1));
+        let cap = |t: f64| {
+            let n = match normal {
+                true => face_normal(&grown, ray.at(t)),
+                false => DVec3::Z,
+            };
+            Some((t, n))
+        };
+        if t0 > t_min && ia {
+            return cap(t0);
+        }
+        let inner = TRACE.with_borrow_mut(|tr| {
             let Trace {
                 stack,
                 arena,
@@ -299,8 +311,29 @@ impl ExprView<'_> {
                 });
             }
             None
-        })
+        });
+        match inner {
+            None if t1 < t_max && ib => cap(t1),
+            found => found,
+        }
     }
+}
+
+/// The outward normal of the face of `b` nearest to `p` (a point on its boundary).
+fn face_normal(b: &Aabb, p: DVec3) -> DVec3 {
+    let mut best = (f64::INFINITY, DVec3::Z);
+    for k in 0..3 {
+        let unit = DVec3::AXES[k];
+        for (d, n) in [
+            ((p[k] - b.lo[k]).abs(), -unit),
+            ((b.hi[k] - p[k]).abs(), unit),
+        ] {
+            if d < best.0 {
+                best = (d, n);
+            }
+        }
+    }
+    best.1
 }
 
 impl Surface for ExprSurface {
@@ -412,5 +445,36 @@ mod tests {
             }
             assert!(hits > 50, "{name}: only {hits} hits");
         }
+    }
+
+    /// A half-space (its solid cut by the search domain) is hit at its plane, not
+    /// missed for the domain's far face; a prism cut by its declared domain is capped
+    /// there, entering and leaving.
+    #[test]
+    fn solids_cut_by_their_domain_are_hit_and_capped() {
+        use crate::{Shape, Solid};
+        let half = Solid::build(&Shape::function(0.5 - Tree::z())).unwrap();
+        for d in [-DVec3::Z, DVec3::new(0.1, 0.2, -1.0).normalize()] {
+            let r = Ray::new(DVec3::new(0.0, 0.0, 5.0), d);
+            let h = half.intersect(&r, 0.0, f64::INFINITY).expect("the plane");
+            assert!(
+                (r.at(h.t).z - 0.5).abs() < 1e-9 && h.normal.z > 0.999,
+                "{h:?}"
+            );
+        }
+        let disc = 0.25 - Tree::x().square() - Tree::y().square();
+        let domain = Some(Aabb::new(DVec3::splat(-1.0), DVec3::splat(1.0)));
+        let prism = Solid::build(&Shape::Function { tree: disc, domain }).unwrap();
+        let down = Ray::new(DVec3::new(0.1, 0.0, 3.0), -DVec3::Z);
+        let h = prism.intersect(&down, 0.0, f64::INFINITY).expect("the cap");
+        assert!(
+            (down.at(h.t).z - 1.0).abs() < 1e-3 && h.normal == DVec3::Z,
+            "{h:?}"
+        );
+        let up = Ray::new(DVec3::new(0.1, 0.0, 0.0), DVec3::Z);
+        let h = prism
+            .intersect(&up, 0.0, f64::INFINITY)
+            .expect("the cap, leaving");
+        assert!((up.at(h.t).z - 1.0).abs() < 1e-3, "{h:?}");
     }
 }

@@ -43,7 +43,7 @@ pub mod experiment;
 pub mod preview;
 
 pub use render::integrator::{Aov, IntegratorKind, RenderOptions};
-pub use render::{Image, RenderState, RenderStats, StateHeader};
+pub use render::{Film, Image, RenderState, RenderStats, StateHeader, Tonemap};
 pub use scene::{Overrides, RenderSettings, SceneData, SceneError, SceneFormat};
 
 use std::ops::Range;

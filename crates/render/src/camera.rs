@@ -1,18 +1,37 @@
-//! A perspective pinhole camera (pbrt-v4 §5.2) with a box pixel filter.
+//! Perspective (pinhole) and orthographic cameras (pbrt-v4 §5.1–5.2) with a box pixel
+//! filter.
 
 use frep::Ray;
 use glam::{DVec2, DVec3};
 
-/// A perspective camera looking from `eye` toward a target, with a vertical field of
-/// view; pixel (0, 0) is the top-left corner of the image.
+/// How a camera maps pixels to rays.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Projection {
+    /// Rays from the eye through an image plane: tan of half the vertical field of view.
+    Perspective {
+        /// tan(vfov / 2).
+        tan_half_fov: f64,
+    },
+    /// Parallel rays along the view direction from a rectangle through the eye,
+    /// perpendicular to it, `2 · half_height` scene units tall (pbrt-v4's
+    /// OrthographicCamera with a screen window of ± `half_height`).
+    Orthographic {
+        /// Half the image's height in scene units.
+        half_height: f64,
+    },
+}
+
+/// A camera looking from `eye` toward a target, perspective or orthographic; pixel
+/// (0, 0) is the top-left corner of the image.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Camera {
-    /// Position of the pinhole.
+    /// Position of the pinhole (perspective) or the centre of the image rectangle
+    /// (orthographic).
     pub eye: DVec3,
     forward: DVec3,
     right: DVec3,
     up: DVec3,
-    tan_half_fov: f64,
+    projection: Projection,
     /// Image width in pixels.
     pub width: u32,
     /// Image height in pixels.
@@ -41,22 +60,56 @@ impl Camera {
             forward,
             right,
             up,
-            tan_half_fov: (vfov_degrees.to_radians() / 2.0).tan(),
+            projection: Projection::Perspective {
+                tan_half_fov: (vfov_degrees.to_radians() / 2.0).tan(),
+            },
             width,
             height,
+        }
+    }
+    /// An orthographic camera: rays parallel to `target − eye`, starting on the plane
+    /// through `eye` perpendicular to it, over a rectangle `view_height` scene units tall
+    /// (and `view_height · width / height` wide) centred on `eye`.
+    pub fn orthographic(
+        eye: DVec3,
+        target: DVec3,
+        up: DVec3,
+        view_height: f64,
+        width: u32,
+        height: u32,
+    ) -> Self {
+        assert!(
+            view_height > 0.0 && view_height.is_finite(),
+            "orthographic view height"
+        );
+        Self {
+            projection: Projection::Orthographic {
+                half_height: 0.5 * view_height,
+            },
+            ..Self::look_at(eye, target, up, 90.0, width, height)
         }
     }
     /// Unit view direction.
     pub fn forward(&self) -> DVec3 {
         self.forward
     }
+    /// The projection.
+    pub fn projection(&self) -> Projection {
+        self.projection
+    }
     /// The ray through pixel (x, y) at sub-pixel `offset` ∈ [0,1)² (box filter:
     /// offsets uniform over the pixel), with a unit direction.
     pub fn ray(&self, x: u32, y: u32, offset: DVec2) -> Ray {
         let aspect = self.width as f64 / self.height as f64;
-        let sx =
-            (2.0 * (x as f64 + offset.x) / self.width as f64 - 1.0) * self.tan_half_fov * aspect;
-        let sy = (1.0 - 2.0 * (y as f64 + offset.y) / self.height as f64) * self.tan_half_fov;
+        let (scale, ortho) = match self.projection {
+            Projection::Perspective { tan_half_fov } => (tan_half_fov, false),
+            Projection::Orthographic { half_height } => (half_height, true),
+        };
+        let sx = (2.0 * (x as f64 + offset.x) / self.width as f64 - 1.0) * scale * aspect;
+        let sy = (1.0 - 2.0 * (y as f64 + offset.y) / self.height as f64) * scale;
+        if ortho {
+            return Ray::new(self.eye + sx * self.right + sy * self.up, self.forward);
+        }
         Ray::new(
             self.eye,
             (self.forward + sx * self.right + sy * self.up).normalize(),
@@ -93,5 +146,34 @@ mod tests {
         assert!(br.x > 0.0 && br.z < 0.0);
         assert!((br.z / br.y + 30f64.to_radians().tan()).abs() < 1e-9);
         assert!((br.x / br.y - 2.0 * 30f64.to_radians().tan()).abs() < 1e-9);
+    }
+
+    /// Orthographic rays are parallel to the view direction and start on the plane
+    /// through the eye perpendicular to it, over a rectangle of the given height.
+    #[test]
+    fn orthographic_rays_are_parallel_from_the_image_plane() {
+        let (eye, target) = (DVec3::new(1.0, -5.0, 2.0), DVec3::new(1.0, 0.0, 2.0));
+        let c = Camera::orthographic(eye, target, DVec3::Z, 3.0, 200, 100);
+        assert!(matches!(
+            c.projection(),
+            Projection::Orthographic { half_height } if half_height == 1.5
+        ));
+        let mut corners = Vec::new();
+        for (x, y, o) in [
+            (0, 0, DVec2::ZERO),
+            (199, 99, DVec2::ONE),
+            (100, 50, DVec2::ZERO),
+            (37, 81, DVec2::new(0.3, 0.7)),
+        ] {
+            let r = c.ray(x, y, o);
+            assert!((r.d - DVec3::Y).length() < 1e-15, "{r:?}");
+            assert!((r.o - eye).dot(DVec3::Y).abs() < 1e-12, "{r:?}");
+            corners.push(r.o);
+        }
+        // Top-left (−x, +z) and bottom-right corners span 6 × 3 (aspect 2); the centre
+        // pixel's corner is the eye.
+        assert!((corners[0] - (eye + DVec3::new(-3.0, 0.0, 1.5))).length() < 1e-12);
+        assert!((corners[1] - (eye + DVec3::new(3.0, 0.0, -1.5))).length() < 1e-12);
+        assert!((corners[2] - eye).length() < 1e-12);
     }
 }

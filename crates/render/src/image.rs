@@ -12,6 +12,7 @@ use exr::prelude::{
     AnyChannel, AnyChannels, Encoding, FlatSamples, Layer, LayerAttributes, SmallVec, WritableImage,
 };
 use image::ImageEncoder;
+pub use scene::Tonemap;
 use std::io;
 use std::path::Path;
 
@@ -23,6 +24,25 @@ pub struct Image {
     aov_names: Vec<String>,
     /// `[R, G, B, AOVs…]` per pixel, row by row.
     data: Vec<f64>,
+}
+
+/// How a PNG shows linear radiance: scaled by 2^`exposure` (stops), then mapped by
+/// `tonemap`, then clamped to [0, 1] and sRGB-encoded. EXR files stay linear (as pbrt
+/// and Mitsuba write them); the default (0 stops, clamp) is the plain clamp frepray
+/// always wrote.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Film {
+    /// Stops of exposure: +1 doubles, −1 halves.
+    pub exposure: f64,
+    /// The tone curve.
+    pub tonemap: Tonemap,
+}
+
+impl Film {
+    /// The display value of a linear value (before the clamp and the sRGB curve).
+    pub fn map(&self, v: f64) -> f64 {
+        self.tonemap.apply(v * self.exposure.exp2())
+    }
 }
 
 impl Image {
@@ -141,10 +161,15 @@ impl Image {
     /// Writes the colour as an 8-bit sRGB PNG (clamped to [0, 1], for display only),
     /// whole or not at all.
     pub fn write_png(&self, path: impl AsRef<Path>) -> io::Result<()> {
+        self.write_png_film(path, &Film::default())
+    }
+    /// Writes the colour as an 8-bit sRGB PNG after `film`'s exposure and tone mapping
+    /// (then clamped to [0, 1]), whole or not at all.
+    pub fn write_png_film(&self, path: impl AsRef<Path>, film: &Film) -> io::Result<()> {
         let bytes: Vec<u8> = self
             .data
             .chunks_exact(self.channels())
-            .flat_map(|p| [srgb_u8(p[0]), srgb_u8(p[1]), srgb_u8(p[2])])
+            .flat_map(|p| [0, 1, 2].map(|c| srgb_u8(film.map(p[c]))))
             .collect();
         write_atomically(path.as_ref(), |w| {
             image::codecs::png::PngEncoder::new(w)
@@ -156,6 +181,17 @@ impl Image {
                 )
                 .map_err(io::Error::other)
         })
+    }
+    /// The fraction of pixels a PNG written with `film` shows clipped: some channel at
+    /// 1 or more after the exposure and tone mapping (white or a saturated colour).
+    pub fn clipped_fraction(&self, film: &Film) -> f64 {
+        let n = (self.width as usize * self.height as usize).max(1);
+        let clipped = self
+            .data
+            .chunks_exact(self.channels())
+            .filter(|p| p[..3].iter().any(|&v| film.map(v) >= 1.0))
+            .count();
+        clipped as f64 / n as f64
     }
     /// Reads the first layer of an EXR file: channels R, G, B (required) and every other
     /// channel as an AOV, in the file's (alphabetical) order. Errors name the file and
@@ -308,6 +344,38 @@ mod tests {
     }
 
     /// Writing into a directory that does not exist fails and creates nothing.
+    /// Exposure scales by 2^EV before the curve; the default film writes the bytes the
+    /// plain clamp always wrote; reinhard and aces compress what clamp clips.
+    #[test]
+    fn exposure_and_tone_mapping() {
+        let film = |exposure, tonemap| Film { exposure, tonemap };
+        let plain = Film::default();
+        for v in [0.0, 0.3, 1.0, 7.0] {
+            assert_eq!(plain.map(v), v);
+        }
+        assert_eq!(film(1.0, Tonemap::Clamp).map(0.25), 0.5);
+        assert_eq!(film(-2.0, Tonemap::Clamp).map(2.0), 0.5);
+        assert_eq!(film(0.0, Tonemap::Reinhard).map(1.0), 0.5);
+        let aces = film(0.0, Tonemap::Aces);
+        assert!((aces.map(1.0) - 0.8038).abs() < 1e-3 && aces.map(0.0) == 0.0);
+        // White at v ≈ 7.24 (the fit's root of 0.08v² − 0.56v − 0.14).
+        assert!(aces.map(7.0) < 1.0 && aces.map(7.5) > 1.0);
+        let mut img = Image::new(2, 1, &[]);
+        img.set_rgb(0, 0, Rgb::new(0.5, 0.5, 0.5));
+        img.set_rgb(1, 0, Rgb::new(3.0, 0.2, 0.2));
+        assert_eq!(img.clipped_fraction(&plain), 0.5);
+        assert_eq!(img.clipped_fraction(&film(-2.0, Tonemap::Clamp)), 0.0);
+        assert_eq!(img.clipped_fraction(&film(0.0, Tonemap::Reinhard)), 0.0);
+        let dir = scratch("film");
+        let (a, b) = (dir.join("plain.png"), dir.join("film.png"));
+        img.write_png(&a).unwrap();
+        img.write_png_film(&b, &plain).unwrap();
+        assert_eq!(std::fs::read(&a).unwrap(), std::fs::read(&b).unwrap());
+        img.write_png_film(&b, &film(-2.0, Tonemap::Clamp)).unwrap();
+        assert_ne!(std::fs::read(&a).unwrap(), std::fs::read(&b).unwrap());
+        fs::remove_dir_all(dir).unwrap();
+    }
+
     #[test]
     fn failed_write_leaves_no_file() {
         let d = scratch("fail");

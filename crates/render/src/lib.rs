@@ -47,10 +47,10 @@ mod testutil;
 pub mod texture;
 pub mod warp;
 
-pub use camera::Camera;
+pub use camera::{Camera, Projection};
 pub use color::Rgb;
 pub use error::Error;
-pub use image::Image;
+pub use image::{Film, Image, Tonemap};
 pub use material::Material;
 pub use render_loop::{render, render_range, RenderStats};
 pub use sampler::{SampleStream, Sampler};

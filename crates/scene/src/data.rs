@@ -69,10 +69,36 @@ pub struct SceneData {
     pub scene_radius: f64,
 }
 
-/// A perspective pinhole camera with a box filter.
+/// A camera's projection.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum CameraKind {
+    /// A pinhole at `eye` with a vertical field of view `fov`.
+    #[default]
+    Perspective,
+    /// Parallel rays along the view direction over a rectangle `scale` tall.
+    Orthographic,
+}
+
+impl CameraKind {
+    /// Whether this is the default (perspective), which the resolved scene leaves out
+    /// (so that the hashes of perspective scenes are those they always had).
+    pub fn is_perspective(&self) -> bool {
+        *self == CameraKind::Perspective
+    }
+}
+
+/// A perspective or orthographic camera with a box filter.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct CameraData {
-    /// Position of the pinhole.
+    /// The projection (left out of the JSON when perspective).
+    #[serde(rename = "type", skip_serializing_if = "CameraKind::is_perspective")]
+    pub kind: CameraKind,
+    /// Orthographic: the image's full height in scene units (left out when
+    /// perspective).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub scale: Option<f64>,
+    /// Position of the pinhole (orthographic: the centre of the image rectangle).
     pub eye: [f64; 3],
     /// A point the camera looks at (not the eye).
     pub target: [f64; 3],

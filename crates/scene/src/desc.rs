@@ -27,12 +27,31 @@ pub struct SceneDescription {
     pub lights: Vec<LightDesc>,
     /// Light from infinitely far away.
     pub environment: Option<EnvironmentDesc>,
+    /// How the image is shown (PNG exposure and tone mapping).
+    #[serde(default)]
+    pub film: FilmDesc,
 }
 
-/// A perspective look-at camera.
+/// How a PNG shows the image; EXR files stay linear.
+#[derive(Clone, Debug, Default, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct FilmDesc {
+    /// Stops: PNG values are radiance × 2^exposure (default 0).
+    pub exposure: Option<f64>,
+    /// "clamp" (default), "reinhard" or "aces".
+    pub tonemap: Option<String>,
+}
+
+/// A look-at camera, perspective or orthographic.
 #[derive(Clone, Debug, Default, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct CameraDesc {
+    /// "perspective" (default) or "orthographic".
+    #[serde(rename = "type")]
+    pub kind: Option<String>,
+    /// Orthographic: the image's full height in scene units (default: what the field
+    /// of view spans at the target's distance).
+    pub scale: Option<f64>,
     /// Position of the pinhole.
     pub eye: [f64; 3],
     /// A point the camera looks at.

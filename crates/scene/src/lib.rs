@@ -58,13 +58,13 @@ mod settings;
 mod solids;
 
 pub use data::{
-    CameraData, EnvMapTable, EnvironmentData, Light, LightData, LightKind, MapId, MaterialData,
-    MaterialId, ObjectData, SceneData, SolidId, TextureData, TextureId, TextureSpace,
+    CameraData, CameraKind, EnvMapTable, EnvironmentData, Light, LightData, LightKind, MapId,
+    MaterialData, MaterialId, ObjectData, SceneData, SolidId, TextureData, TextureId, TextureSpace,
 };
 pub use desc::{
-    CameraDesc, CheckerDesc, ColorDesc, EnvironmentDesc, LightDesc, MaterialDesc, ObjectDesc,
-    RenderDesc, RgbDesc, RotateDesc, ScaleDesc, SceneDescription, TechniqueDesc, TransformDesc,
-    TransformStep,
+    CameraDesc, CheckerDesc, ColorDesc, EnvironmentDesc, FilmDesc, LightDesc, MaterialDesc,
+    ObjectDesc, RenderDesc, RgbDesc, RotateDesc, ScaleDesc, SceneDescription, TechniqueDesc,
+    TransformDesc, TransformStep,
 };
 pub use distribution::{Distribution1D, Distribution2D};
 pub use environment::{read_exr_rgb, MapError};
@@ -77,7 +77,7 @@ pub use load::{
 pub use overrides::{parse_technique_list, Overrides};
 pub use resolve::METALS;
 pub use settings::{
-    Emitters, IntegratorKind, RenderSettings, TechniqueKind, UnknownName, AOV_NAMES,
+    Emitters, IntegratorKind, RenderSettings, TechniqueKind, Tonemap, UnknownName, AOV_NAMES,
 };
 pub use solids::SolidPool;
 

@@ -4,8 +4,8 @@
 
 use crate::check::{check_keys, number, transform, vec3};
 use crate::data::{
-    CameraData, MaterialData, MaterialId, ObjectData, SceneData, TextureData, TextureId,
-    TextureSpace,
+    CameraData, CameraKind, MaterialData, MaterialId, ObjectData, SceneData, TextureData,
+    TextureId, TextureSpace,
 };
 use crate::desc::{CameraDesc, ColorDesc, MaterialDesc, ObjectDesc, SceneDescription};
 use crate::environment::environment;
@@ -64,7 +64,38 @@ fn camera(src: &Source, c: &CameraDesc) -> Result<CameraData, SceneError> {
     if side.is_nan() || side < 1e-9 {
         return Err(src.at_value(&kp!["camera", "up"], "up is parallel to the view direction"));
     }
+    let kind = match c.kind.as_deref() {
+        None | Some("perspective") => CameraKind::Perspective,
+        Some("orthographic") => CameraKind::Orthographic,
+        Some(other) => {
+            return Err(src.at_value(
+                &kp!["camera", "type"],
+                format!("unknown camera type {other:?}; valid types: perspective, orthographic"),
+            ))
+        }
+    };
+    let scale = match (kind, c.scale) {
+        (CameraKind::Perspective, None) => None,
+        (CameraKind::Perspective, Some(_)) => {
+            return Err(src.at_value(
+                &kp!["camera", "scale"],
+                "scale applies to an orthographic camera (type = \"orthographic\")",
+            ))
+        }
+        (CameraKind::Orthographic, Some(v)) => Some(number(
+            src,
+            &kp!["camera", "scale"],
+            v,
+            f64::MIN_POSITIVE,
+            f64::INFINITY,
+        )?),
+        (CameraKind::Orthographic, None) => {
+            Some(2.0 * forward.length() * (fov.to_radians() / 2.0).tan())
+        }
+    };
     Ok(CameraData {
+        kind,
+        scale,
         eye: eye.to_array(),
         target: target.to_array(),
         up: up.to_array(),
@@ -417,6 +448,7 @@ pub(crate) fn resolve_source(
         maps,
         scene_radius,
     };
-    let settings = settings(src, &d.render, &data)?;
+    let mut settings = settings(src, &d.render, &data)?;
+    crate::settings::film(src, &d.film, &mut settings)?;
     Ok((data, settings))
 }

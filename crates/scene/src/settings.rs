@@ -51,6 +51,70 @@ impl fmt::Display for IntegratorKind {
     }
 }
 
+/// How a PNG maps linear radiance (after the exposure) to display values in [0, 1];
+/// EXR files stay linear (as pbrt and Mitsuba keep them).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum Tonemap {
+    /// Values above 1 clip to white (the default: what frepray always wrote).
+    #[default]
+    Clamp,
+    /// v / (1 + v) per channel (Reinhard et al. 2002, eq. 3): nothing clips, highlights
+    /// compress, mid-tones darken (0.5 becomes 1/3).
+    Reinhard,
+    /// Narkowicz's fit of the ACES filmic curve (2015), per channel: a toe and a soft
+    /// shoulder; v = 1 becomes 0.80, white from v ≈ 7.2 (clamp: from v = 1).
+    Aces,
+}
+
+impl Tonemap {
+    /// Every curve, in the order of their names.
+    pub const ALL: [Tonemap; 3] = [Tonemap::Clamp, Tonemap::Reinhard, Tonemap::Aces];
+    /// The name used in scene files and on the command line.
+    pub const fn name(self) -> &'static str {
+        match self {
+            Tonemap::Clamp => "clamp",
+            Tonemap::Reinhard => "reinhard",
+            Tonemap::Aces => "aces",
+        }
+    }
+    /// The display value of a linear value `v` (already scaled by the exposure); the
+    /// PNG encoder clamps it to [0, 1] and applies the sRGB curve.
+    pub fn apply(self, v: f64) -> f64 {
+        match self {
+            Tonemap::Clamp => v,
+            Tonemap::Reinhard => {
+                let v = v.max(0.0);
+                v / (1.0 + v)
+            }
+            Tonemap::Aces => {
+                let v = v.max(0.0);
+                (v * (2.51 * v + 0.03)) / (v * (2.43 * v + 0.59) + 0.14)
+            }
+        }
+    }
+}
+
+impl fmt::Display for Tonemap {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl FromStr for Tonemap {
+    type Err = UnknownName;
+    /// The curve named `s`; the error lists the valid names.
+    fn from_str(s: &str) -> Result<Self, UnknownName> {
+        Tonemap::ALL
+            .into_iter()
+            .find(|t| t.name() == s)
+            .ok_or_else(|| UnknownName {
+                what: "tone mapping",
+                name: s.to_string(),
+                valid: names(&Tonemap::ALL, Tonemap::name),
+            })
+    }
+}
+
 fn names<T: Copy>(all: &[T], name: fn(T) -> &'static str) -> String {
     all.iter().map(|&t| name(t)).collect::<Vec<_>>().join(", ")
 }
@@ -186,6 +250,10 @@ pub struct RenderSettings {
     pub hide_emitters: bool,
     /// Extra output channels to write beside R, G, B, from [`AOV_NAMES`] (default none).
     pub aovs: Vec<String>,
+    /// `[film] exposure`: PNG values are radiance × 2^exposure (default 0).
+    pub exposure: f64,
+    /// `[film] tonemap`: the PNG's curve (default clamp).
+    pub tonemap: Tonemap,
 }
 
 impl Default for RenderSettings {
@@ -201,6 +269,8 @@ impl Default for RenderSettings {
             rr_depth: 3,
             hide_emitters: false,
             aovs: Vec::new(),
+            exposure: 0.0,
+            tonemap: Tonemap::Clamp,
         }
     }
 }
@@ -225,6 +295,29 @@ impl RenderSettings {
         }
         Ok(())
     }
+}
+
+/// Reads `[film]`: the exposure (a finite number of stops) and the tone mapping.
+pub(crate) fn film(
+    src: &Source,
+    f: &crate::desc::FilmDesc,
+    s: &mut RenderSettings,
+) -> Result<(), SceneError> {
+    if let Some(e) = f.exposure {
+        s.exposure = crate::check::number(
+            src,
+            &kp!["film", "exposure"],
+            e,
+            f64::NEG_INFINITY,
+            f64::INFINITY,
+        )?;
+    }
+    if let Some(t) = &f.tonemap {
+        s.tonemap = t
+            .parse()
+            .map_err(|e: UnknownName| src.at_value(&kp!["film", "tonemap"], e.to_string()))?;
+    }
+    Ok(())
 }
 
 /// Reads `[render]`; the techniques are checked against the resolved scene.

@@ -3,8 +3,8 @@
 //! right; overrides are validated like the file's own values.
 
 use scene::{
-    load, load_value, parse, parse_with, EnvironmentData, LightKind, Overrides, SceneData,
-    SceneFormat, TechniqueDesc, TechniqueKind,
+    load, load_value, parse, parse_with, CameraKind, EnvironmentData, LightKind, Overrides,
+    SceneData, SceneFormat, TechniqueDesc, TechniqueKind,
 };
 use serde_json::{json, Value};
 use std::path::{Path, PathBuf};
@@ -96,6 +96,41 @@ fn base() -> Value {
         ],
         "lights": [{"type": "sphere", "center": [0, 0, 5], "radius": 0.5, "power": 10}]
     })
+}
+
+/// `camera.type = "orthographic"` with a `scale` (default: what the field of view spans
+/// at the target); a perspective camera's resolved JSON is what it always was.
+#[test]
+fn orthographic_cameras_resolve_with_a_scale() {
+    let mut v = base();
+    let (d, _) = load_value(v.clone(), &scenes_dir()).unwrap();
+    assert_eq!(
+        (d.camera.kind, d.camera.scale),
+        (CameraKind::Perspective, None)
+    );
+    let json = serde_json::to_value(&d).unwrap();
+    assert!(json["camera"].get("type").is_none() && json["camera"].get("scale").is_none());
+    v["camera"]["type"] = json!("orthographic");
+    let (d, _) = load_value(v.clone(), &scenes_dir()).unwrap();
+    assert_eq!(d.camera.kind, CameraKind::Orthographic);
+    let want = 2.0 * 4.0 * 20f64.to_radians().tan();
+    assert!((d.camera.scale.unwrap() - want).abs() < 1e-12);
+    v["camera"]["scale"] = json!(3);
+    let (d, _) = load_value(v.clone(), &scenes_dir()).unwrap();
+    let json = serde_json::to_value(&d).unwrap();
+    assert_eq!(
+        (json["camera"]["type"].as_str(), d.camera.scale),
+        (Some("orthographic"), Some(3.0))
+    );
+    let mut bad = v.clone();
+    bad["camera"]["scale"] = json!(-1);
+    value_error(bad, "camera.scale", "positive");
+    let mut bad = v.clone();
+    bad["camera"]["type"] = json!("fisheye");
+    value_error(bad, "camera.type", "valid types: perspective, orthographic");
+    let mut bad = v.clone();
+    bad["camera"]["type"] = json!("perspective");
+    value_error(bad, "camera.scale", "applies to an orthographic camera");
 }
 
 #[test]
