@@ -90,7 +90,9 @@ struct RenderArgs {
     #[arg(long)]
     mis: Option<String>,
     /// Sampling techniques and samples of each (scenes), e.g. `light:1,bsdf:1`; names:
-    /// bsdf, light, light-area, environment, cosine.
+    /// bsdf, light-power (alias light), light-uniform, light-area, light-spatial,
+    /// light#k (MIS light k: area lights in file order, then the environment), light#*
+    /// (every MIS light), environment, cosine; at most 32.
     #[arg(long)]
     techniques: Option<String>,
     /// Random seed (scenes): the same seed gives the same image at any thread count.

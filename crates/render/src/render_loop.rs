@@ -173,6 +173,7 @@ pub fn render_range(
         ..options.clone()
     };
     let it = Integrator::new(&o)?;
+    it.check_scene(scene).map_err(Error::Options)?;
     let (width, height) = (scene.camera.width, scene.camera.height);
     crate::limits::check_threads(o.threads)?;
     crate::limits::check_memory(width, height, &o)?;

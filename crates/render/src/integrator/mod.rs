@@ -179,8 +179,10 @@ impl RenderOptions {
     }
 }
 
-/// At most this many techniques (every [`Technique`] once).
-pub const MAX_TECHNIQUES: usize = Technique::ALL.len();
+/// At most this many techniques. Each costs a pdf evaluation for every draw of every
+/// technique (O(T²) per vertex) and, for the optimal estimators, `T(T+1)/2 + 3T` words
+/// of state per pixel and depth (at 32: 624 words, 4.9 KiB; docs/render-state.md).
+pub const MAX_TECHNIQUES: usize = 32;
 
 /// How the draws at a vertex are combined.
 #[derive(Clone, Debug)]
@@ -261,6 +263,25 @@ impl Integrator {
             hide_emitters: o.hide_emitters,
             aovs: !o.aovs.is_empty(),
         })
+    }
+
+    /// Checks the techniques against the scene's lights: `light#k` needs k below the
+    /// number of MIS lights (area lights, then the environment).
+    pub fn check_scene(&self, scene: &Scene) -> Result<(), String> {
+        let count = scene.lights.count();
+        for t in &self.techniques {
+            if let Technique::Light(k) = *t {
+                if k >= count {
+                    return Err(format!(
+                        "technique {}: the scene has {count} MIS light{} (area lights, then \
+                         the environment), numbered from 0",
+                        t.name(),
+                        if count == 1 { "" } else { "s" }
+                    ));
+                }
+            }
+        }
+        Ok(())
     }
 
     /// The MIS kernel of the per-pixel estimators (None when heuristic weights go straight

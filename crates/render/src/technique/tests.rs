@@ -76,7 +76,8 @@ fn planar_lights() -> Lights {
     )
 }
 
-/// Each technique's samples follow its pdf (chi-square over 32 × 64 cells, 300 000
+/// Each technique's samples follow its pdf (also `light-uniform`, `light-spatial` and
+/// `light#k`, whose pdfs are mixtures over lights behind lights in scene B) (chi-square over 32 × 64 cells, 300 000
 /// samples, significance 1e-3), its pdf integrates to the fraction of non-specular
 /// samples it yields (1 for the light, environment and cosine techniques; quadrature
 /// tolerance 3e-3 plus 4 binomial σ), and a sample's pdf equals pdf(wi). Scene A has
@@ -94,6 +95,14 @@ fn techniques_match_pdfs() {
         (&a, Technique::CosineHemisphere),
         (&b, Technique::LightArea),
         (&b, Technique::LightPower),
+        (&a, Technique::LightUniform),
+        (&b, Technique::LightUniform),
+        (&a, Technique::LightSpatial),
+        (&b, Technique::LightSpatial),
+        (&a, Technique::Light(0)),
+        (&a, Technique::Light(1)),
+        (&a, Technique::Light(3)),
+        (&b, Technique::Light(1)),
     ];
     let coat = CoatTable::new(1.5, 0.2);
     let bsdfs = [
@@ -176,8 +185,8 @@ fn irradiance(lights: &Lights, t: Technique, n: u64, seed: u64) -> (f64, f64) {
 /// Irradiance under a sphere light (E = π L sin²θ, θ the half-angle it subtends)
 /// and under a parallel rectangle centred above the point (E = π L F, F the form
 /// factor of a differential area to a parallel rectangle, sum of four corner terms
-/// F = (1/2π)[X/√(1+X²) atan(Y/√(1+X²)) + Y/√(1+Y²) atan(X/√(1+Y²))]), with light,
-/// light-area, BSDF and cosine sampling, 200 000 samples each: within 4 standard
+/// F = (1/2π)[X/√(1+X²) atan(Y/√(1+X²)) + Y/√(1+Y²) atan(X/√(1+Y²))]), with light
+/// (by power, uniform, spatial, `light#0`), light-area, BSDF and cosine sampling, 200 000 samples each: within 4 standard
 /// errors (two-sided confidence 99.99 %), standard errors below 1 % of E.
 #[test]
 fn irradiance_matches_analytic() {
@@ -218,6 +227,9 @@ fn irradiance_matches_analytic() {
     for (name, lights, exact) in [("sphere", &sphere, e_sphere), ("rect", &rect, e_rect)] {
         for t in [
             Technique::LightPower,
+            Technique::LightUniform,
+            Technique::LightSpatial,
+            Technique::Light(0),
             Technique::LightArea,
             Technique::Bsdf,
             Technique::CosineHemisphere,
