@@ -73,6 +73,9 @@ pub struct ExperimentArgs {
     /// measures the estimators, not the camera's sampling of visible lights.
     #[arg(long)]
     hide_emitters: bool,
+    /// Per-light mode: one MIS estimator per light, summed.
+    #[arg(long)]
+    per_light: bool,
     /// Worker threads (0: one per core).
     #[arg(long, default_value_t = 0)]
     threads: usize,
@@ -200,6 +203,7 @@ pub fn run(a: ExperimentArgs) -> Result<(), String> {
         width: a.width,
         height: a.height,
         hide_emitters: a.hide_emitters,
+        per_light: a.per_light,
         ridge: a.ridge,
         beta: a.beta,
         ..Default::default()
@@ -237,6 +241,10 @@ pub fn run(a: ExperimentArgs) -> Result<(), String> {
         base.params,
         base.scene_hash
     );
+    if base.per_light > 0 {
+        // Only when on, so that the settings of earlier runs read as before.
+        cfg.renderer_settings += &format!(" per-light {}", base.per_light);
+    }
     cfg.size = Some((scene.camera.width, scene.camera.height));
     cfg.estimators = estimators;
     cfg.spp = a.spp;

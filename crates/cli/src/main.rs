@@ -91,6 +91,7 @@ struct RenderArgs {
     mis: Option<String>,
     /// Sampling techniques and samples of each (scenes), e.g. `light:1,bsdf:1`; names:
     /// bsdf, light-power (alias light), light-uniform, light-area, light-spatial,
+    /// light-trained (trained per spatial cell in a pass before the render),
     /// light#k (MIS light k: area lights in file order, then the environment), light#*
     /// (every MIS light), environment, cosine; at most 32.
     #[arg(long)]
@@ -114,6 +115,11 @@ struct RenderArgs {
     /// Leave emitters seen directly by the camera out of the image (scenes).
     #[arg(long)]
     hide_emitters: bool,
+    /// Per-light mode (scenes): one MIS estimator per light (area lights, then the
+    /// environment), each fed only the radiance of the light its draws reach; the pixel
+    /// is their sum. Changes only the optimal estimators' result.
+    #[arg(long)]
+    per_light: bool,
     /// Extra EXR channels (scenes), e.g. `depth,normal,albedo`.
     #[arg(long)]
     aovs: Option<String>,
@@ -258,6 +264,7 @@ fn render(args: RenderArgs) -> Result<(), String> {
             beta: args.beta,
             cutoff: args.cutoff,
             ridge: args.ridge,
+            per_light: args.per_light,
         };
         let samples = args
             .samples

@@ -40,6 +40,8 @@ pub struct Overrides {
     pub cutoff: Option<f64>,
     /// Optimal-MIS ridge λ (the solve uses λ/N · tr(Â)/T).
     pub ridge: Option<f64>,
+    /// One MIS estimator per light.
+    pub per_light: bool,
 }
 
 impl Overrides {
@@ -71,6 +73,7 @@ impl Overrides {
             beta: self.beta,
             cutoff: self.cutoff,
             ridge: self.ridge,
+            per_light: self.per_light,
         })
     }
 }
@@ -90,6 +93,7 @@ fn flag(key: &str) -> &'static str {
         "render.beta" => "--beta",
         "render.cutoff" => "--cutoff",
         "render.ridge" => "--ridge",
+        "render.per_light" => "--per-light",
         _ => "an override",
     }
 }

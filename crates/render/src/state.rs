@@ -2,10 +2,11 @@
 //! merges exactly, serialises to a documented file and resolves to an [`Image`].
 //!
 //! **What is stored.** One record per pixel, row by row, of [`Record::stride`] words:
-//! `[N | outside-MIS Σ (R, G, B) | AOV Σ (7 or 0) | one MIS block per vertex depth]`
+//! `[N | outside-MIS Σ (R, G, B) | AOV Σ (7 or 0) | one MIS block per vertex depth (per
+//! vertex depth and MIS light in per-light mode, block d·L + l for depth d and light l)]`
 //! (`integrator/state.rs`, [`mis::Kernel`]). Sums, never estimates (DESIGN.md §4); an
 //! estimate is resolved from them only by [`RenderState::image`]: per pixel
-//! `Σ_outside/N + Σ_d (N_d/N)·estimate_d` (module docs of [`crate::integrator`]).
+//! `Σ_outside/N + Σ_blocks (N_b/N)·estimate_b` (module docs of [`crate::integrator`]).
 //!
 //! **Merging.** Two states of the same scene and settings ([`StateHeader`] equal) over
 //! disjoint sample ranges merge by adding their records ([`mis::Kernel::merge`] for the MIS
@@ -24,7 +25,7 @@
 //! | 8 | magic `FREPSTAT` |
 //! | 4 | format version, u32 (1) |
 //! | 4 | header length H, u32 |
-//! | H | header, UTF-8 JSON: size, integrator, estimator and parameters, techniques, depths, AOVs, seed, scene hash, sample ranges, partial flag, record stride |
+//! | H | header, UTF-8 JSON: size, integrator, estimator and parameters, techniques, depths, AOVs, per-light count, seed, scene hash, sample ranges, partial flag, record stride |
 //! | 8 | word count W = width · height · stride, u64 |
 //! | 8W | the records, f64 |
 //! | 8 | FNV-1a 64 hash of every byte before it, u64 |
@@ -64,6 +65,8 @@ pub struct StateHeader {
     pub hide_emitters: bool,
     /// Extra channels.
     pub aovs: Vec<Aov>,
+    /// Per-light mode: the number of MIS lights with an estimator each (0: off).
+    pub per_light: u32,
     /// The seed of the random streams.
     pub seed: u64,
     /// A hash of the scene (0: unknown).
@@ -84,6 +87,7 @@ impl StateHeader {
             rr_depth: o.rr_depth,
             hide_emitters: o.hide_emitters,
             aovs: o.aovs.clone(),
+            per_light: o.per_light,
             seed: o.seed,
             scene_hash: o.scene_hash,
         }
@@ -100,6 +104,7 @@ impl StateHeader {
             rr_depth: self.rr_depth,
             hide_emitters: self.hide_emitters,
             aovs: self.aovs.clone(),
+            per_light: self.per_light,
             seed: self.seed,
             scene_hash: self.scene_hash,
             ..RenderOptions::default()
@@ -122,6 +127,7 @@ impl StateHeader {
             "rr_depth": self.rr_depth,
             "hide_emitters": self.hide_emitters,
             "aovs": self.aovs.iter().map(|a| a.name()).collect::<Vec<_>>(),
+            "per_light": self.per_light,
             "seed": self.seed,
             "scene_hash": format!("{:016x}", self.scene_hash),
         })
@@ -191,6 +197,11 @@ impl StateHeader {
                 .as_bool()
                 .ok_or("header \"hide_emitters\" is not a boolean")?,
             aovs,
+            // Absent from states written before per-light mode existed: off.
+            per_light: match v.get("per_light") {
+                None => 0,
+                Some(_) => u32_("per_light")?,
+            },
             seed: uint("seed")?,
             scene_hash: u64::from_str_radix(text("scene_hash")?, 16)
                 .map_err(|e| format!("header \"scene_hash\": {e}"))?,
@@ -328,8 +339,8 @@ impl RenderState {
         let mut v = Rgb::new(rec[o], rec[o + 1], rec[o + 2]) / n;
         if let Some(k) = &self.kernel {
             let mut out = [0.0; 3];
-            for d in 0..self.record.depths {
-                let block = &rec[self.record.depth(d)];
+            for i in 0..self.record.blocks() {
+                let block = &rec[self.record.block_range(i)];
                 let nd = k.iterations(block);
                 if nd > 0 {
                     k.estimate(block, &mut out);
@@ -399,8 +410,8 @@ impl RenderState {
                 *x += y;
             }
             if let Some(k) = &self.kernel {
-                for d in 0..self.record.depths {
-                    let r = self.record.depth(d);
+                for i in 0..self.record.blocks() {
+                    let r = self.record.block_range(i);
                     k.merge(&mut a[r.clone()], &b[r]);
                 }
             }

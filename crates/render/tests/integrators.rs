@@ -35,6 +35,7 @@ fn every_technique_and_method_converges_to_the_analytic_image() {
         Technique::LightUniform,
         Technique::LightArea,
         Technique::LightSpatial,
+        Technique::LightTrained,
         Technique::CosineHemisphere,
     ]
     .into_iter()

@@ -103,6 +103,9 @@ pub enum TechniqueKind {
     /// A light chosen ∝ a bound on its unoccluded contribution at the shading point
     /// (pbrt-v4's `LightBounds::Importance`), then sampled.
     LightSpatial,
+    /// A light chosen by a pmf learned per spatial cell from contributions measured in a
+    /// training pass (visibility included), mixed with a uniform floor, then sampled.
+    LightTrained,
     /// Light k alone (`light#k`, k the MIS light's index, 0-based), sampled as
     /// [`TechniqueKind::LightPower`] samples it.
     Light(u32),
@@ -115,12 +118,13 @@ pub enum TechniqueKind {
 impl TechniqueKind {
     /// Every technique without a parameter, in the order of their names (`light#k` is
     /// one per light).
-    pub const ALL: [TechniqueKind; 7] = [
+    pub const ALL: [TechniqueKind; 8] = [
         TechniqueKind::Bsdf,
         TechniqueKind::LightPower,
         TechniqueKind::LightUniform,
         TechniqueKind::LightArea,
         TechniqueKind::LightSpatial,
+        TechniqueKind::LightTrained,
         TechniqueKind::Environment,
         TechniqueKind::CosineHemisphere,
     ];
@@ -132,6 +136,7 @@ impl TechniqueKind {
             TechniqueKind::LightUniform => "light-uniform",
             TechniqueKind::LightArea => "light-area",
             TechniqueKind::LightSpatial => "light-spatial",
+            TechniqueKind::LightTrained => "light-trained",
             TechniqueKind::Light(k) => return Cow::Owned(format!("light#{k}")),
             TechniqueKind::Environment => "environment",
             TechniqueKind::CosineHemisphere => "cosine",
@@ -153,8 +158,8 @@ impl fmt::Display for TechniqueKind {
 fn technique_names() -> String {
     let mut v: Vec<String> = TechniqueKind::ALL.iter().map(|t| t.name().into()).collect();
     v.insert(2, "light (= light-power)".into());
-    v.insert(6, "light#k (MIS light k, 0-based)".into());
-    v.insert(7, "light#* (every MIS light)".into());
+    v.insert(7, "light#k (MIS light k, 0-based)".into());
+    v.insert(8, "light#* (every MIS light)".into());
     v.join(", ")
 }
 
@@ -230,6 +235,10 @@ pub struct RenderSettings {
     pub hide_emitters: bool,
     /// Extra output channels to write beside R, G, B, from [`AOV_NAMES`] (default none).
     pub aovs: Vec<String>,
+    /// Per-light mode (`per_light = true`): the number of MIS lights, each of which gets
+    /// its own MIS estimator (Kondapaneni et al. 2019: "the illumination from individual
+    /// light sources is evaluated separately"); 0 (default): one estimator for all.
+    pub per_light: u32,
 }
 
 impl Default for RenderSettings {
@@ -245,6 +254,7 @@ impl Default for RenderSettings {
             rr_depth: 3,
             hide_emitters: false,
             aovs: Vec::new(),
+            per_light: 0,
         }
     }
 }
@@ -274,6 +284,7 @@ impl RenderSettings {
                 TechniqueKind::LightPower
                 | TechniqueKind::LightUniform
                 | TechniqueKind::LightSpatial
+                | TechniqueKind::LightTrained
                     if !area && !env =>
                 {
                     "an area light or an environment"
@@ -383,6 +394,16 @@ pub(crate) fn settings(
     s.max_depth = r.max_depth.unwrap_or(s.max_depth);
     s.rr_depth = r.rr_depth.unwrap_or(s.rr_depth);
     s.hide_emitters = r.hide_emitters.unwrap_or(s.hide_emitters);
+    if r.per_light == Some(true) {
+        let n = Emitters::from(scene).lights;
+        if n == 0 {
+            return Err(src.at_value(
+                &kp!["render", "per_light"],
+                "per-light mode needs an area light or an environment",
+            ));
+        }
+        s.per_light = n as u32;
+    }
     if let Some(aovs) = &r.aovs {
         for (i, a) in aovs.iter().enumerate() {
             let at = kp!["render", "aovs", i];

@@ -10,11 +10,13 @@ mod area;
 mod delta;
 mod environment;
 mod select;
+mod trained;
 
 pub use area::{AreaLight, Crossing, Shape};
 pub use delta::DeltaLight;
 pub use environment::{EnvMap, Environment};
 pub use select::{importance, Selection};
+pub use trained::{TrainedSelection, TRAIN_FLOOR, TRAIN_GRID};
 
 use crate::color::{luminance, Rgb};
 use crate::distribution::Distribution1D;

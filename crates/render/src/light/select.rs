@@ -9,14 +9,14 @@
 //! lights included), as MIS needs (Veach 1997, §9.2). Both are O(number of lights) per
 //! query.
 
-use super::{AreaLight, LightSample, Lights, Shape};
+use super::{AreaLight, LightSample, Lights, Shape, TrainedSelection};
 use crate::color::luminance;
 use crate::warp::safe_sqrt;
 use glam::{DVec2, DVec3};
 
 /// A light-selection pmf.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum Selection {
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Selection<'a> {
     /// ∝ luminance of power (the environment's from the scene radius, pbrt-v4 §12.5).
     Power,
     /// Uniform over the MIS lights.
@@ -27,6 +27,9 @@ pub enum Selection {
     Spatial,
     /// MIS light k alone.
     One(usize),
+    /// The trained table's pmf at the shading point ([`TrainedSelection`]); no light
+    /// when the table covers another number of lights.
+    Trained(&'a TrainedSelection),
 }
 
 /// `cos(max(0, θa − θb))` from the sines and cosines of θa and θb (pbrt-v4
@@ -132,7 +135,7 @@ impl Lights {
 
     /// P(MIS light k | p, n) under `sel` (`total`: [`Self::importance_total`], for
     /// [`Selection::Spatial`]).
-    fn pmf_with(&self, sel: Selection, p: DVec3, n: DVec3, k: usize, total: f64) -> f64 {
+    fn pmf_with(&self, sel: Selection<'_>, p: DVec3, n: DVec3, k: usize, total: f64) -> f64 {
         let count = self.count();
         if k >= count {
             return 0.0;
@@ -141,6 +144,8 @@ impl Lights {
             Selection::Power => self.by_power.as_ref().map_or(0.0, |d| d.pmf(k)),
             Selection::Uniform => 1.0 / count as f64,
             Selection::One(j) => f64::from(u8::from(j == k)),
+            Selection::Trained(t) if t.lights() == count => t.pmf(p)[k],
+            Selection::Trained(_) => 0.0,
             Selection::Spatial => {
                 let pe = self.spatial_env();
                 if k == self.area.len() {
@@ -155,7 +160,7 @@ impl Lights {
     }
 
     /// P(MIS light k | p, n) under `sel`.
-    pub fn selection_pmf(&self, sel: Selection, p: DVec3, n: DVec3, k: usize) -> f64 {
+    pub fn selection_pmf(&self, sel: Selection<'_>, p: DVec3, n: DVec3, k: usize) -> f64 {
         let total = match sel {
             Selection::Spatial => self.importance_total(p, n),
             _ => 0.0,
@@ -165,7 +170,7 @@ impl Lights {
 
     /// Picks a MIS light with `uc` under `sel` at (p, n); None when no light has
     /// probability there.
-    fn select(&self, sel: Selection, p: DVec3, n: DVec3, uc: f64) -> Option<usize> {
+    fn select(&self, sel: Selection<'_>, p: DVec3, n: DVec3, uc: f64) -> Option<usize> {
         let count = self.count();
         if count == 0 {
             return None;
@@ -174,6 +179,20 @@ impl Lights {
             Selection::Power => Some(self.by_power.as_ref()?.sample_discrete(uc).0),
             Selection::Uniform => Some(((uc * count as f64) as usize).min(count - 1)),
             Selection::One(k) => (k < count).then_some(k),
+            Selection::Trained(t) => {
+                if t.lights() != count {
+                    return None;
+                }
+                let pmf = t.pmf(p);
+                let mut acc = 0.0;
+                for (i, &w) in pmf.iter().enumerate() {
+                    acc += w;
+                    if uc < acc {
+                        return Some(i);
+                    }
+                }
+                pmf.iter().rposition(|&w| w > 0.0)
+            }
             Selection::Spatial => {
                 let pe = self.spatial_env();
                 if uc < pe {
@@ -215,7 +234,7 @@ impl Lights {
     /// with `u`; the pdf is [`Self::pdf_selected`], the mixture over every light.
     pub fn sample_selected(
         &self,
-        sel: Selection,
+        sel: Selection<'_>,
         p: DVec3,
         n: DVec3,
         uc: f64,
@@ -236,7 +255,7 @@ impl Lights {
 
     /// Σ_k P(k | p, n) · p_k(wi) over the MIS lights: the density of
     /// [`Self::sample_selected`].
-    pub fn pdf_selected(&self, sel: Selection, p: DVec3, n: DVec3, wi: DVec3) -> f64 {
+    pub fn pdf_selected(&self, sel: Selection<'_>, p: DVec3, n: DVec3, wi: DVec3) -> f64 {
         if let Selection::One(k) = sel {
             return if k < self.count() {
                 self.pdf_one(p, k, wi)

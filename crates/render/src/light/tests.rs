@@ -293,7 +293,7 @@ fn small_cone_sampling() {
 
 /// Light selection pmfs sum to 1 over the MIS lights at a point every light can reach:
 /// uniform is 1/count, `One(k)` picks k, spatial gives the environment ½ and is 0 for a
-/// one-sided light seen from behind; sampling picks lights with these probabilities
+/// one-sided light seen from behind, trained mixes its weights with the 0.1 floor; sampling picks lights with these probabilities
 /// (30 000 stratified `uc`, within 1e-3).
 #[test]
 fn selection_pmfs() {
@@ -319,11 +319,15 @@ fn selection_pmfs() {
     );
     let (p, n) = (DVec3::ZERO, DVec3::Z);
     assert_eq!(lights.count(), 4);
+    // A trained table of one cell: weights 3, 1, 0, 0 → pmf 0.9·(3/4, 1/4, 0, 0) + 0.025.
+    let table =
+        TrainedSelection::from_weights(DVec3::splat(-1.0), DVec3::ONE, 1, 4, &[3.0, 1.0, 0.0, 0.0]);
     for sel in [
         Selection::Power,
         Selection::Uniform,
         Selection::Spatial,
         Selection::One(2),
+        Selection::Trained(&table),
     ] {
         let pm: Vec<f64> = (0..4).map(|k| lights.selection_pmf(sel, p, n, k)).collect();
         assert!(
@@ -357,6 +361,12 @@ fn selection_pmfs() {
         }
     }
     assert_eq!(lights.selection_pmf(Selection::One(2), p, n, 2), 1.0);
+    let trained: Vec<f64> = (0..4)
+        .map(|k| lights.selection_pmf(Selection::Trained(&table), p, n, k))
+        .collect();
+    for (t, e) in trained.iter().zip([0.7, 0.25, 0.025, 0.025]) {
+        assert!((t - e).abs() < 1e-12, "{trained:?}");
+    }
     // Out of range: no sample, no density.
     assert!(lights
         .sample_selected(Selection::One(4), p, n, 0.5, DVec2::splat(0.5))

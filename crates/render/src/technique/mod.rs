@@ -5,7 +5,7 @@
 
 use crate::bsdf::{Bsdf, BsdfSample};
 use crate::frame::Frame;
-use crate::light::{LightSample, Lights, Selection};
+use crate::light::{LightSample, Lights, Selection, TrainedSelection};
 use crate::warp::{cosine_hemisphere, cosine_hemisphere_pdf};
 use glam::{DVec2, DVec3};
 use std::borrow::Cow;
@@ -23,6 +23,8 @@ pub struct ShadingPoint<'a> {
     pub bsdf: &'a Bsdf<'a>,
     /// The scene's lights.
     pub lights: &'a Lights,
+    /// The trained light selection of this render, if it has one (`light-trained`).
+    pub trained: Option<&'a TrainedSelection>,
 }
 
 /// A direction drawn by a technique.
@@ -70,6 +72,9 @@ pub enum Technique {
     LightSpatial,
     /// MIS light k alone (area lights in file order, then the environment).
     Light(usize),
+    /// A light chosen by the pmf trained for the shading point's cell
+    /// ([`TrainedSelection`]), then sampled; fails without a trained table.
+    LightTrained,
     /// The environment's own sampling.
     Environment,
     /// Cosine-weighted directions about the normal, on the viewer's side.
@@ -85,6 +90,7 @@ impl From<scene::TechniqueKind> for Technique {
             scene::TechniqueKind::LightArea => Technique::LightArea,
             scene::TechniqueKind::LightSpatial => Technique::LightSpatial,
             scene::TechniqueKind::Light(k) => Technique::Light(k as usize),
+            scene::TechniqueKind::LightTrained => Technique::LightTrained,
             scene::TechniqueKind::Environment => Technique::Environment,
             scene::TechniqueKind::CosineHemisphere => Technique::CosineHemisphere,
         }
@@ -93,12 +99,13 @@ impl From<scene::TechniqueKind> for Technique {
 
 impl Technique {
     /// Every technique without a parameter (`light#k` is one per light).
-    pub const ALL: [Technique; 7] = [
+    pub const ALL: [Technique; 8] = [
         Technique::Bsdf,
         Technique::LightPower,
         Technique::LightUniform,
         Technique::LightArea,
         Technique::LightSpatial,
+        Technique::LightTrained,
         Technique::Environment,
         Technique::CosineHemisphere,
     ];
@@ -117,18 +124,21 @@ impl Technique {
             Technique::LightArea => scene::TechniqueKind::LightArea,
             Technique::LightSpatial => scene::TechniqueKind::LightSpatial,
             Technique::Light(k) => scene::TechniqueKind::Light(k as u32),
+            Technique::LightTrained => scene::TechniqueKind::LightTrained,
             Technique::Environment => scene::TechniqueKind::Environment,
             Technique::CosineHemisphere => scene::TechniqueKind::CosineHemisphere,
         }
     }
 
-    /// The light selection of a technique that selects a light and samples it.
-    pub fn selection(self) -> Option<Selection> {
+    /// The light selection of a technique that selects a light and samples it, at
+    /// `ctx` (None for the others, and for `light-trained` without a table).
+    pub fn selection<'a>(self, ctx: &ShadingPoint<'a>) -> Option<Selection<'a>> {
         match self {
             Technique::LightPower => Some(Selection::Power),
             Technique::LightUniform => Some(Selection::Uniform),
             Technique::LightSpatial => Some(Selection::Spatial),
             Technique::Light(k) => Some(Selection::One(k)),
+            Technique::LightTrained => ctx.trained.map(Selection::Trained),
             _ => None,
         }
     }
@@ -159,12 +169,11 @@ impl Technique {
             Technique::LightPower
             | Technique::LightUniform
             | Technique::LightSpatial
-            | Technique::Light(_) => {
-                let sel = self.selection().expect("a selecting technique");
-                ctx.lights
-                    .sample_selected(sel, ctx.p, ctx.n, uc, u)
-                    .map(TechniqueSample::from_light)
-            }
+            | Technique::LightTrained
+            | Technique::Light(_) => ctx
+                .lights
+                .sample_selected(self.selection(ctx)?, ctx.p, ctx.n, uc, u)
+                .map(TechniqueSample::from_light),
             Technique::LightArea => ctx
                 .lights
                 .sample_by_area(ctx.p, uc, u)
@@ -195,10 +204,10 @@ impl Technique {
             Technique::LightPower
             | Technique::LightUniform
             | Technique::LightSpatial
-            | Technique::Light(_) => {
-                let sel = self.selection().expect("a selecting technique");
-                ctx.lights.pdf_selected(sel, ctx.p, ctx.n, wi)
-            }
+            | Technique::LightTrained
+            | Technique::Light(_) => self
+                .selection(ctx)
+                .map_or(0.0, |sel| ctx.lights.pdf_selected(sel, ctx.p, ctx.n, wi)),
             Technique::LightArea => ctx.lights.pdf_by_area(ctx.p, wi),
             Technique::Environment => ctx.lights.pdf_environment(wi),
             Technique::CosineHemisphere => cosine_hemisphere_pdf(Self::facing_normal(ctx).dot(wi)),
