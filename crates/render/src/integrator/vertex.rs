@@ -239,7 +239,7 @@ impl Integrator {
                     _ => Rgb::ZERO,
                 };
                 crate::technique::pdfs(&self.techniques, &ctx, s.wi, &mut pdfs[..t_count]);
-                let light = if self.per_light > 0 {
+                let light = if self.record.lights > 1 {
                     light_reached(scene, &spawn(v.p, v.n, s.wi))
                 } else {
                     None
