@@ -248,6 +248,7 @@ pub fn render(
         beta,
         cutoff,
         ridge,
+        per_light: false,
     };
     let reresolve = o.estimator.is_some()
         || o.techniques.is_some()

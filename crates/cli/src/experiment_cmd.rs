@@ -88,6 +88,9 @@ pub struct ExperimentArgs {
     /// variance into its pixel-footprint and direction parts (needs --repeats ≥ 2).
     #[arg(long)]
     decompose: bool,
+    /// Per-light mode: one MIS estimator per light, summed.
+    #[arg(long)]
+    per_light: bool,
     /// Worker threads (0: one per core).
     #[arg(long, default_value_t = 0)]
     threads: usize,
@@ -237,6 +240,7 @@ pub fn run(a: ExperimentArgs) -> Result<(), String> {
         width: a.width,
         height: a.height,
         hide_emitters: a.hide_emitters,
+        per_light: a.per_light,
         ridge: a.ridge,
         beta: a.beta,
         cutoff: a.cutoff,
@@ -290,6 +294,10 @@ pub fn run(a: ExperimentArgs) -> Result<(), String> {
         base.params,
         base.scene_hash
     );
+    if base.per_light > 0 {
+        // Only when on, so that the settings of earlier runs read as before.
+        cfg.renderer_settings += &format!(" per-light {}", base.per_light);
+    }
     cfg.size = Some((scene.camera.width, scene.camera.height));
     cfg.estimators = estimators;
     cfg.spp = a.spp;

@@ -90,7 +90,10 @@ struct RenderArgs {
     #[arg(long)]
     mis: Option<String>,
     /// Sampling techniques and samples of each (scenes), e.g. `light:1,bsdf:1`; names:
-    /// bsdf, light, light-area, environment, cosine.
+    /// bsdf, light-power (alias light), light-uniform, light-area, light-spatial,
+    /// light-trained (trained per spatial cell in a pass before the render),
+    /// light#k (MIS light k: area lights in file order, then the environment), light#*
+    /// (every MIS light), environment, cosine; at most 32.
     #[arg(long)]
     techniques: Option<String>,
     /// Random seed (scenes): the same seed gives the same image at any thread count.
@@ -116,6 +119,11 @@ struct RenderArgs {
     /// pixel-footprint variance, and the image converges to point samples).
     #[arg(long)]
     pixel_center: bool,
+    /// Per-light mode (scenes): one MIS estimator per light (area lights, then the
+    /// environment), each fed only the radiance of the light its draws reach; the pixel
+    /// is their sum. Changes only the optimal estimators' result.
+    #[arg(long)]
+    per_light: bool,
     /// Extra EXR channels (scenes), e.g. `depth,normal,albedo`.
     #[arg(long)]
     aovs: Option<String>,
@@ -321,6 +329,7 @@ fn render(args: RenderArgs) -> Result<(), String> {
             beta: args.beta,
             cutoff: args.cutoff,
             ridge: args.ridge,
+            per_light: args.per_light,
         };
         let samples = args
             .samples

@@ -42,6 +42,8 @@ pub struct Overrides {
     pub cutoff: Option<f64>,
     /// Optimal-MIS ridge λ (the solve uses λ/N · tr(Â)/T).
     pub ridge: Option<f64>,
+    /// One MIS estimator per light.
+    pub per_light: bool,
 }
 
 impl Overrides {
@@ -73,6 +75,7 @@ impl Overrides {
             beta: self.beta,
             cutoff: self.cutoff,
             ridge: self.ridge,
+            per_light: self.per_light,
         })
     }
 }
@@ -92,6 +95,7 @@ fn flag(key: &str) -> &'static str {
         "render.beta" => "--beta",
         "render.cutoff" => "--cutoff",
         "render.ridge" => "--ridge",
+        "render.per_light" => "--per-light",
         _ => "an override",
     }
 }

@@ -15,7 +15,7 @@
 //!     vec![AreaLight::new(Shape::Sphere { center: DVec3::new(0.0, 0.0, 2.0), radius: 1.0 }, Rgb::ONE)],
 //!     vec![], None, 3.0);
 //! let bsdf = Bsdf::new(DVec3::Z, Bxdf::Diffuse(DiffuseBxdf { r: Rgb::ONE }));
-//! let ctx = ShadingPoint { p: DVec3::ZERO, n: DVec3::Z, wo: DVec3::Z, bsdf: &bsdf, lights: &lights };
+//! let ctx = ShadingPoint { p: DVec3::ZERO, n: DVec3::Z, wo: DVec3::Z, bsdf: &bsdf, lights: &lights, trained: None };
 //! let s = Technique::LightPower.sample(&ctx, 0.5, DVec2::new(0.3, 0.7)).unwrap();
 //! // The sample's pdf is the technique's pdf for its direction: uniform over the cone.
 //! let cone = 1.0 / (2.0 * std::f64::consts::PI * (1.0 - 0.75f64.sqrt()));

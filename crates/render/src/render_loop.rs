@@ -172,7 +172,8 @@ pub fn render_range(
         spp: samples.end - samples.start,
         ..options.clone()
     };
-    let it = Integrator::new(&o)?;
+    let mut it = Integrator::new(&o)?;
+    it.prepare(scene).map_err(Error::Options)?;
     let (width, height) = (scene.camera.width, scene.camera.height);
     crate::limits::check_threads(o.threads)?;
     crate::limits::check_memory(width, height, &o)?;

@@ -2,10 +2,11 @@
 //! merges exactly, serialises to a documented file and resolves to an [`Image`].
 //!
 //! **What is stored.** One record per pixel, row by row, of [`Record::stride`] words:
-//! `[N | outside-MIS Σ (R, G, B) | AOV Σ (7 or 0) | one MIS block per vertex depth]`
+//! `[N | outside-MIS Σ (R, G, B) | AOV Σ (7 or 0) | one MIS block per vertex depth (per
+//! vertex depth and MIS light in per-light mode, block d·L + l for depth d and light l)]`
 //! (`integrator/state.rs`, [`mis::Kernel`]). Sums, never estimates (DESIGN.md §4); an
 //! estimate is resolved from them only by [`RenderState::image`]: per pixel
-//! `Σ_outside/N + Σ_d (N_d/N)·estimate_d` (module docs of [`crate::integrator`]).
+//! `Σ_outside/N + Σ_blocks (N_b/N)·estimate_b` (module docs of [`crate::integrator`]).
 //!
 //! **Merging.** Two states of the same scene and settings ([`StateHeader`] equal) over
 //! disjoint sample ranges merge by adding their records ([`mis::Kernel::merge`] for the MIS
@@ -24,7 +25,7 @@
 //! | 8 | magic `FREPSTAT` |
 //! | 4 | format version, u32 (1) |
 //! | 4 | header length H, u32 |
-//! | H | header, UTF-8 JSON: size, integrator, estimator and parameters, techniques, depths, AOVs, seed, scene hash, sample ranges, partial flag, record stride |
+//! | H | header, UTF-8 JSON: size, integrator, estimator and parameters, techniques, depths, AOVs, per-light count, seed, scene hash, sample ranges, partial flag, record stride |
 //! | 8 | word count W = width · height · stride, u64 |
 //! | 8W | the records, f64 |
 //! | 8 | FNV-1a 64 hash of every byte before it, u64 |
@@ -66,6 +67,8 @@ pub struct StateHeader {
     pub aovs: Vec<Aov>,
     /// Whether camera rays went through pixel centres (a diagnostic render).
     pub pixel_center: bool,
+    /// Per-light mode: the number of MIS lights with an estimator each (0: off).
+    pub per_light: u32,
     /// The seed of the random streams.
     pub seed: u64,
     /// A hash of the scene (0: unknown).
@@ -88,6 +91,7 @@ impl StateHeader {
             hide_emitters: o.hide_emitters,
             aovs: o.aovs.clone(),
             pixel_center: o.pixel_center,
+            per_light: o.per_light,
             seed: o.seed,
             scene_hash: o.scene_hash,
         }
@@ -105,6 +109,7 @@ impl StateHeader {
             hide_emitters: self.hide_emitters,
             aovs: self.aovs.clone(),
             pixel_center: self.pixel_center,
+            per_light: self.per_light,
             seed: self.seed,
             scene_hash: self.scene_hash,
             ..RenderOptions::default()
@@ -128,6 +133,7 @@ impl StateHeader {
             "hide_emitters": self.hide_emitters,
             "aovs": self.aovs.iter().map(|a| a.name()).collect::<Vec<_>>(),
             "pixel_center": self.pixel_center,
+            "per_light": self.per_light,
             "seed": self.seed,
             "scene_hash": format!("{:016x}", self.scene_hash),
         })
@@ -203,6 +209,11 @@ impl StateHeader {
                 Some(b) => b
                     .as_bool()
                     .ok_or("header \"pixel_center\" is not a boolean")?,
+            },
+            // Absent from states written before per-light mode existed: off.
+            per_light: match v.get("per_light") {
+                None => 0,
+                Some(_) => u32_("per_light")?,
             },
             seed: uint("seed")?,
             scene_hash: u64::from_str_radix(text("scene_hash")?, 16)
@@ -341,8 +352,8 @@ impl RenderState {
         let mut v = Rgb::new(rec[o], rec[o + 1], rec[o + 2]) / n;
         if let Some(k) = &self.kernel {
             let mut out = [0.0; 3];
-            for d in 0..self.record.depths {
-                let block = &rec[self.record.depth(d)];
+            for i in 0..self.record.blocks() {
+                let block = &rec[self.record.block_range(i)];
                 let nd = k.iterations(block);
                 if nd > 0 {
                     k.estimate(block, &mut out);
@@ -412,8 +423,8 @@ impl RenderState {
                 *x += y;
             }
             if let Some(k) = &self.kernel {
-                for d in 0..self.record.depths {
-                    let r = self.record.depth(d);
+                for i in 0..self.record.blocks() {
+                    let r = self.record.block_range(i);
                     k.merge(&mut a[r.clone()], &b[r]);
                 }
             }

@@ -337,7 +337,9 @@ fn malformed_toml_is_located() {
         toml(&t),
         pos(&t, "\"lights\"", 0),
         "render.techniques[1].technique",
-        "valid names: bsdf, light, light-area, environment, cosine",
+        "valid names: bsdf, light-power, light (= light-power), light-uniform, light-area, \
+         light-spatial, light-trained, light#k (MIS light k, 0-based), light#* (every MIS \
+         light), environment, cosine",
     );
     // Bad MIS name.
     let t = case("\"optimal-direct\"", "\"optimal\"");

@@ -78,9 +78,18 @@ fn two_ranges_merge_into_the_render_of_their_union() {
         Method::OptimalDirect,
         Method::OptimalUncorrelated,
     ];
-    for integrator in [IntegratorKind::Direct, IntegratorKind::Path] {
+    // Per-light mode (2 lights) too: a block per depth and light.
+    for (integrator, per_light) in [
+        (IntegratorKind::Direct, 0),
+        (IntegratorKind::Path, 0),
+        (IntegratorKind::Direct, 2),
+        (IntegratorKind::Path, 2),
+    ] {
         for m in exact {
-            let o = options(integrator, m);
+            let o = RenderOptions {
+                per_light,
+                ..options(integrator, m)
+            };
             let whole = run(&scene, &o, 0..8);
             let mut a = run(&scene, &o, 0..3);
             let b = run(&scene, &o, 3..8);
@@ -117,11 +126,15 @@ fn progressive_states_merge_their_moments_exactly() {
         let r = *a.record();
         let (c, t) = (3, 3);
         // Block: [N | Σ F (C) | α (C·T) | moments].
-        let moments = r.depth(0).start + 1 + c + c * t..r.depth(0).end;
+        let moments = r.depth_light(0, 0).start + 1 + c + c * t..r.depth_light(0, 0).end;
         let s = r.stride();
         for (pa, pw) in a.data().chunks_exact(s).zip(whole.data().chunks_exact(s)) {
             assert_eq!(pa[0], pw[0], "{m}: sample counts");
-            assert_eq!(pa[r.depth(0).start], pw[r.depth(0).start], "{m}: N_d");
+            assert_eq!(
+                pa[r.depth_light(0, 0).start],
+                pw[r.depth_light(0, 0).start],
+                "{m}: N_d"
+            );
             let rel = max_rel(&pa[moments.clone()], &pw[moments.clone()]);
             assert!(rel < 1e-12, "{m}: moments differ by {rel:e}");
         }
@@ -177,6 +190,20 @@ fn mismatched_or_overlapping_states_are_refused() {
         .unwrap_err()
         .to_string()
         .contains("estimator"));
+    let per_light = run(
+        &scene,
+        &RenderOptions {
+            per_light: 2,
+            ..o.clone()
+        },
+        2..4,
+    );
+    assert!(a
+        .clone()
+        .merge(&per_light)
+        .unwrap_err()
+        .to_string()
+        .contains("per_light"));
     // A gap is allowed: ranges need not be adjacent.
     a.merge(&run(&scene, &o, 5..6)).unwrap();
     assert_eq!(a.samples(), &[0..2, 5..6]);

@@ -97,6 +97,8 @@ pub struct RenderDesc {
     pub hide_emitters: Option<bool>,
     /// Extra output channels (AOVs) by name.
     pub aovs: Option<Vec<String>>,
+    /// One MIS estimator per light instead of one for all (default false).
+    pub per_light: Option<bool>,
 }
 
 /// One sampling technique with its number of samples per camera sample.

@@ -34,6 +34,8 @@ pub struct Overrides {
     pub cutoff: Option<f64>,
     /// `render.ridge`.
     pub ridge: Option<f64>,
+    /// Sets `render.per_light` when true.
+    pub per_light: bool,
 }
 
 impl SceneDescription {
@@ -52,6 +54,9 @@ impl SceneDescription {
         set(&mut r.ridge, &o.ridge);
         if o.hide_emitters {
             r.hide_emitters = Some(true);
+        }
+        if o.per_light {
+            r.per_light = Some(true);
         }
         if o.width.is_some() || o.height.is_some() {
             let [w, h] = self.camera.resolution.unwrap_or(crate::DEFAULT_RESOLUTION);
@@ -85,6 +90,7 @@ impl Overrides {
             ("render.beta", self.beta.is_some()),
             ("render.cutoff", self.cutoff.is_some()),
             ("render.ridge", self.ridge.is_some()),
+            ("render.per_light", self.per_light),
         ];
         given.iter().filter(|g| g.1).map(|g| g.0).collect()
     }

@@ -6,6 +6,7 @@ use crate::data::SceneData;
 use crate::desc::RenderDesc;
 use crate::error::{kp, SceneError};
 use crate::locate::Source;
+use std::borrow::Cow;
 use std::fmt;
 use std::str::FromStr;
 
@@ -148,14 +149,30 @@ impl FromStr for IntegratorKind {
 
 /// A sampling technique (DESIGN.md §4): draws a direction at a shading point and
 /// reports its pdf for any direction.
+///
+/// The light techniques choose one of the scene's *MIS lights* and sample it. The MIS
+/// lights are the area lights in the order of the scene file's `lights` list (point and
+/// spot lights skipped: they are sampled outside MIS), then, last, the environment.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum TechniqueKind {
     /// Importance sampling of the BSDF.
     Bsdf,
-    /// A light chosen ∝ power (area lights and the environment), then sampled.
+    /// A light chosen ∝ power (area lights and the environment), then sampled
+    /// (`light-power`, alias `light`).
     LightPower,
+    /// A light chosen uniformly among the MIS lights, then sampled.
+    LightUniform,
     /// A point uniform over the total area of the area lights.
     LightArea,
+    /// A light chosen ∝ a bound on its unoccluded contribution at the shading point
+    /// (pbrt-v4's `LightBounds::Importance`), then sampled.
+    LightSpatial,
+    /// A light chosen by a pmf learned per spatial cell from contributions measured in a
+    /// training pass (visibility included), mixed with a uniform floor, then sampled.
+    LightTrained,
+    /// Light k alone (`light#k`, k the MIS light's index, 0-based), sampled as
+    /// [`TechniqueKind::LightPower`] samples it.
+    Light(u32),
     /// The environment's own sampling.
     Environment,
     /// Cosine-weighted directions about the normal.
@@ -163,43 +180,71 @@ pub enum TechniqueKind {
 }
 
 impl TechniqueKind {
-    /// Every technique, in the order of their names.
-    pub const ALL: [TechniqueKind; 5] = [
+    /// Every technique without a parameter, in the order of their names (`light#k` is
+    /// one per light).
+    pub const ALL: [TechniqueKind; 8] = [
         TechniqueKind::Bsdf,
         TechniqueKind::LightPower,
+        TechniqueKind::LightUniform,
         TechniqueKind::LightArea,
+        TechniqueKind::LightSpatial,
+        TechniqueKind::LightTrained,
         TechniqueKind::Environment,
         TechniqueKind::CosineHemisphere,
     ];
     /// The name used in scene files and on the command line.
-    pub const fn name(self) -> &'static str {
-        match self {
+    pub fn name(self) -> Cow<'static, str> {
+        Cow::Borrowed(match self {
             TechniqueKind::Bsdf => "bsdf",
-            TechniqueKind::LightPower => "light",
+            TechniqueKind::LightPower => "light-power",
+            TechniqueKind::LightUniform => "light-uniform",
             TechniqueKind::LightArea => "light-area",
+            TechniqueKind::LightSpatial => "light-spatial",
+            TechniqueKind::LightTrained => "light-trained",
+            TechniqueKind::Light(k) => return Cow::Owned(format!("light#{k}")),
             TechniqueKind::Environment => "environment",
             TechniqueKind::CosineHemisphere => "cosine",
-        }
+        })
+    }
+    /// Whether the technique samples a light (and so needs one).
+    pub fn is_light(self) -> bool {
+        !matches!(self, TechniqueKind::Bsdf | TechniqueKind::CosineHemisphere)
     }
 }
 
 impl fmt::Display for TechniqueKind {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
+        f.write_str(&self.name())
     }
+}
+
+/// The valid technique names, for messages.
+fn technique_names() -> String {
+    let mut v: Vec<String> = TechniqueKind::ALL.iter().map(|t| t.name().into()).collect();
+    v.insert(2, "light (= light-power)".into());
+    v.insert(7, "light#k (MIS light k, 0-based)".into());
+    v.insert(8, "light#* (every MIS light)".into());
+    v.join(", ")
 }
 
 impl FromStr for TechniqueKind {
     type Err = UnknownName;
-    /// The technique named `s`; the error lists the valid names.
+    /// The technique named `s` (`light` is `light-power`; `light#k` is light k, not
+    /// checked against a scene here); the error lists the valid names.
     fn from_str(s: &str) -> Result<Self, UnknownName> {
+        if s == "light" {
+            return Ok(TechniqueKind::LightPower);
+        }
+        if let Some(k) = s.strip_prefix("light#").and_then(|k| k.parse().ok()) {
+            return Ok(TechniqueKind::Light(k));
+        }
         TechniqueKind::ALL
             .into_iter()
             .find(|t| t.name() == s)
             .ok_or_else(|| UnknownName {
                 what: "technique",
                 name: s.to_string(),
-                valid: names(&TechniqueKind::ALL, TechniqueKind::name),
+                valid: technique_names(),
             })
     }
 }
@@ -211,6 +256,9 @@ pub struct Emitters {
     pub area: bool,
     /// Whether there is an environment.
     pub environment: bool,
+    /// The number of MIS lights: area lights and the environment (the `k` of
+    /// `light#k` counts these).
+    pub lights: usize,
 }
 
 impl From<&SceneData> for Emitters {
@@ -218,6 +266,7 @@ impl From<&SceneData> for Emitters {
         Emitters {
             area: !d.lights.area.is_empty(),
             environment: d.environment.is_some(),
+            lights: d.lights.area.len() + usize::from(d.environment.is_some()),
         }
     }
 }
@@ -254,6 +303,10 @@ pub struct RenderSettings {
     pub exposure: f64,
     /// `[film] tonemap`: the PNG's curve (default clamp).
     pub tonemap: Tonemap,
+    /// Per-light mode (`per_light = true`): the number of MIS lights, each of which gets
+    /// its own MIS estimator (Kondapaneni et al. 2019: "the illumination from individual
+    /// light sources is evaluated separately"); 0 (default): one estimator for all.
+    pub per_light: u32,
 }
 
 impl Default for RenderSettings {
@@ -271,6 +324,7 @@ impl Default for RenderSettings {
             aovs: Vec::new(),
             exposure: 0.0,
             tonemap: Tonemap::Clamp,
+            per_light: 0,
         }
     }
 }
@@ -283,15 +337,33 @@ impl RenderSettings {
         let Emitters {
             area,
             environment: env,
+            lights,
         } = scene.into();
         for &(t, _) in &self.techniques {
+            if let TechniqueKind::Light(k) = t {
+                if k as usize >= lights {
+                    return Err(format!(
+                        "technique \"{t}\": the scene has {lights} MIS light{} (area lights, \
+                         then the environment), numbered from 0",
+                        if lights == 1 { "" } else { "s" }
+                    ));
+                }
+                continue;
+            }
             let missing = match t {
-                TechniqueKind::LightPower if !area && !env => "an area light or an environment",
+                TechniqueKind::LightPower
+                | TechniqueKind::LightUniform
+                | TechniqueKind::LightSpatial
+                | TechniqueKind::LightTrained
+                    if !area && !env =>
+                {
+                    "an area light or an environment"
+                }
                 TechniqueKind::LightArea if !area => "an area light",
                 TechniqueKind::Environment if !env => "an environment",
                 _ => continue,
             };
-            return Err(format!("technique {:?} needs {missing}", t.name()));
+            return Err(format!("technique \"{t}\" needs {missing}"));
         }
         Ok(())
     }
@@ -377,23 +449,29 @@ pub(crate) fn settings(
             if list.is_empty() {
                 return Err(src.at_value(&kp!["render", "techniques"], "no techniques given"));
             }
+            let lights = Emitters::from(scene).lights as u32;
             for (i, t) in list.iter().enumerate() {
                 let at = kp!["render", "techniques", i, "technique"];
-                let tech: TechniqueKind = t
-                    .technique
-                    .parse()
-                    .map_err(|e: UnknownName| src.at_value(&at, e.to_string()))?;
-                if s.techniques.iter().any(|&(u, _)| u == tech) {
-                    return Err(
-                        src.at_value(&at, format!("technique {:?} given twice", t.technique))
-                    );
-                }
+                // `light#*`: one `light#k` per MIS light.
+                let techs: Vec<TechniqueKind> = if t.technique == "light#*" {
+                    (0..lights).map(TechniqueKind::Light).collect()
+                } else {
+                    vec![t
+                        .technique
+                        .parse()
+                        .map_err(|e: UnknownName| src.at_value(&at, e.to_string()))?]
+                };
                 let n = t.samples.unwrap_or(1);
                 if n == 0 {
                     let at = kp!["render", "techniques", i, "samples"];
                     return Err(src.at_value(&at, "samples must be at least 1"));
                 }
-                s.techniques.push((tech, n));
+                for tech in techs {
+                    if s.techniques.iter().any(|&(u, _)| u == tech) {
+                        return Err(src.at_value(&at, format!("technique \"{tech}\" given twice")));
+                    }
+                    s.techniques.push((tech, n));
+                }
             }
             s.check_techniques(scene)
                 .map_err(|e| src.at_value(&kp!["render", "techniques"], e))?;
@@ -409,6 +487,16 @@ pub(crate) fn settings(
     s.max_depth = r.max_depth.unwrap_or(s.max_depth);
     s.rr_depth = r.rr_depth.unwrap_or(s.rr_depth);
     s.hide_emitters = r.hide_emitters.unwrap_or(s.hide_emitters);
+    if r.per_light == Some(true) {
+        let n = Emitters::from(scene).lights;
+        if n == 0 {
+            return Err(src.at_value(
+                &kp!["render", "per_light"],
+                "per-light mode needs an area light or an environment",
+            ));
+        }
+        s.per_light = n as u32;
+    }
     if let Some(aovs) = &r.aovs {
         for (i, a) in aovs.iter().enumerate() {
             let at = kp!["render", "aovs", i];

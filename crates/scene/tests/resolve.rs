@@ -298,3 +298,42 @@ fn overrides_are_validated_once_like_the_files_values() {
     let e = parse_with(&text, SceneFormat::Toml, &f, &none).unwrap_err();
     assert_eq!(e.key, "render.techniques", "{e}");
 }
+
+/// Technique names: `light` is `light-power`; `light#k` names MIS light k and is
+/// refused past the last, naming the count; `light#*` expands to one technique per MIS
+/// light with the given count; a repeat (`light#0` twice through `light#*`) is refused.
+#[test]
+fn light_technique_names() {
+    let f = scenes_dir().join("many-lights.toml");
+    let text = std::fs::read_to_string(&f).unwrap();
+    let with = |list: &str| {
+        let o = Overrides {
+            techniques: Some(scene::parse_technique_list(list).unwrap()),
+            ..Default::default()
+        };
+        parse_with(&text, SceneFormat::Toml, &f, &o)
+    };
+    let (d, s) = with("light:2,light-uniform,light-spatial,light#1").unwrap();
+    assert_eq!(
+        s.techniques,
+        vec![
+            (TechniqueKind::LightPower, 2),
+            (TechniqueKind::LightUniform, 1),
+            (TechniqueKind::LightSpatial, 1),
+            (TechniqueKind::Light(1), 1),
+        ]
+    );
+    assert_eq!(TechniqueKind::LightPower.name(), "light-power");
+    assert_eq!("light-power".parse(), Ok(TechniqueKind::LightPower));
+    let n = d.lights.area.len() + usize::from(d.environment.is_some());
+    assert!(n > 2, "{n}");
+    let (_, s) = with("bsdf,light#*:3").unwrap();
+    assert_eq!(s.techniques.len(), n + 1);
+    assert_eq!(s.techniques[n], (TechniqueKind::Light(n as u32 - 1), 3));
+    let e = with(&format!("light#{n}")).unwrap_err();
+    assert!(e.message.contains(&format!("has {n} MIS lights")), "{e}");
+    let e = with("light#0,light#*").unwrap_err();
+    assert!(e.message.contains("twice"), "{e}");
+    let e = with("light#x").unwrap_err();
+    assert!(e.message.contains("light#k"), "{e}");
+}

@@ -28,6 +28,21 @@
 //! there): their BSDF draws are all outside. Without a BSDF technique in the list, one
 //! extra BSDF draw per vertex serves the delta lobes (and the path's continuation).
 //!
+//! **Per-light mode** ([`RenderOptions::per_light`]; Kondapaneni et al. 2019, §7: "the
+//! illumination from individual light sources is evaluated separately … we add the
+//! contributions together"). The directions at a vertex are split into one domain per
+//! MIS light: those whose nearest light along the ray (objects ignored) is that light,
+//! the environment's being those that meet no area light. Each light keeps its own
+//! estimator per pixel and depth; a draw feeds the estimator of the light it reaches,
+//! with the same `(f, pdfs)` as otherwise, and counts as a *failed* draw in every other
+//! light's (it lies outside that domain: the `mis` crate's extended-domain model keeps
+//! `A·n = 1` per light). The pixel is the sum over lights. A heuristic's weight depends
+//! only on the pdfs at the draw, so the heuristics give the same image as without the
+//! mode (to rounding); the optimal estimators solve one α per light, which can weight a
+//! technique differently for each light. The state grows by the number of lights
+//! (docs/render-state.md). With `path` and a heuristic there are no estimators, and the
+//! mode changes nothing.
+//!
 //! **Surfaces missed.** An iteration whose camera ray reaches no surface (or, in `path`,
 //! whose path ended before depth d) gives no sample to that depth's estimator and is not
 //! counted in its iterations `N_d`; the pixel value is `Σ_d (N_d/N)·estimate_d` plus the
@@ -40,13 +55,16 @@ mod aov;
 mod dims;
 mod path;
 mod state;
+mod train;
 mod vertex;
 
 pub use aov::Aov;
 pub(crate) use dims::Dims;
 pub(crate) use state::Pixel;
 pub use state::{RayCounts, Record};
+pub use train::TRAIN_SPP;
 
+use crate::light::TrainedSelection;
 use crate::sampler::Sampler;
 pub use crate::scene::IntegratorKind;
 use crate::scene::{RenderSettings, Scene};
@@ -88,6 +106,10 @@ pub struct RenderOptions {
     /// the pixel (a diagnostic: the variance left is the directions' alone, without the
     /// pixel footprint's; the image converges to point samples, not pixel averages).
     pub pixel_center: bool,
+    /// Per-light mode: 0 for one MIS estimator per pixel and depth; n (the scene's
+    /// number of MIS lights, [`crate::light::Lights::count`]) for one per pixel, depth
+    /// and light, each fed only the radiance of the light its draws reach (module docs).
+    pub per_light: u32,
     /// Tile side in pixels.
     pub tile_size: u32,
     /// Samples per pixel per pass (0: spp/16 rounded up). The progress callback acts
@@ -120,6 +142,7 @@ impl Default for RenderOptions {
             hide_emitters: false,
             aovs: Vec::new(),
             pixel_center: false,
+            per_light: 0,
             tile_size: 16,
             pass_spp: 0,
             threads: 0,
@@ -145,6 +168,7 @@ impl RenderOptions {
             rr_depth: s.rr_depth,
             hide_emitters: s.hide_emitters,
             aovs: s.aovs.iter().map(|a| a.parse()).collect::<Result<_, _>>()?,
+            per_light: s.per_light,
             ..Self::default()
         })
     }
@@ -184,8 +208,21 @@ impl RenderOptions {
     }
 }
 
-/// At most this many techniques (every [`Technique`] once).
-pub const MAX_TECHNIQUES: usize = Technique::ALL.len();
+/// The trained light selection a render of `scene` with `o` would use (None when no
+/// technique needs one): the training pass of `integrator/train.rs`, for inspection.
+pub fn trained_selection(
+    scene: &Scene,
+    o: &RenderOptions,
+) -> Result<Option<TrainedSelection>, String> {
+    let mut it = Integrator::new(o)?;
+    it.prepare(scene)?;
+    Ok(it.trained.map(|t| (*t).clone()))
+}
+
+/// At most this many techniques. Each costs a pdf evaluation for every draw of every
+/// technique (O(T²) per vertex) and, for the optimal estimators, `T(T+1)/2 + 3T` words
+/// of state per pixel and depth (at 32: 624 words, 4.9 KiB; docs/render-state.md).
+pub const MAX_TECHNIQUES: usize = 32;
 
 /// How the draws at a vertex are combined.
 #[derive(Clone, Debug)]
@@ -219,6 +256,12 @@ pub(crate) struct Integrator {
     pub aovs: bool,
     /// Whether camera rays go through pixel centres ([`RenderOptions::pixel_center`]).
     pub pixel_center: bool,
+    /// Per-light mode: the number of MIS lights (0: off).
+    pub per_light: usize,
+    /// The render's seed (the training pass derives its streams from it).
+    pub seed: u64,
+    /// The trained light selection, once [`Self::prepare`] has trained it.
+    pub trained: Option<Arc<TrainedSelection>>,
 }
 
 impl Integrator {
@@ -247,6 +290,11 @@ impl Integrator {
         let record = Record {
             aov: if o.aovs.is_empty() { 0 } else { 7 },
             depths,
+            lights: if depths > 0 && o.per_light > 0 {
+                o.per_light as usize
+            } else {
+                1
+            },
             block: match &combine {
                 Combine::Estimator(k) => k.block_len(),
                 Combine::Heuristic(_) => 0,
@@ -268,7 +316,44 @@ impl Integrator {
             hide_emitters: o.hide_emitters,
             aovs: !o.aovs.is_empty(),
             pixel_center: o.pixel_center,
+            per_light: o.per_light as usize,
+            seed: o.seed,
+            trained: None,
         })
+    }
+
+    /// Checks the options against the scene's lights: `light#k` needs k below the
+    /// number of MIS lights (area lights, then the environment), per-light mode their
+    /// number.
+    pub fn check_scene(&self, scene: &Scene) -> Result<(), String> {
+        let count = scene.lights.count();
+        if self.per_light > 0 && self.per_light != count {
+            return Err(format!(
+                "per-light mode for {} lights, but the scene has {count} MIS lights",
+                self.per_light
+            ));
+        }
+        for t in &self.techniques {
+            if let Technique::Light(k) = *t {
+                if k >= count {
+                    return Err(format!(
+                        "technique {}: the scene has {count} MIS light{} (area lights, then \
+                         the environment), numbered from 0",
+                        t.name(),
+                        if count == 1 { "" } else { "s" }
+                    ));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Checks the options against `scene` ([`Self::check_scene`]) and runs the training
+    /// pass of `light-trained` if it is listed (`integrator/train.rs`).
+    pub fn prepare(&mut self, scene: &Scene) -> Result<(), String> {
+        self.check_scene(scene)?;
+        self.trained = self.train(scene).map(Arc::new);
+        Ok(())
     }
 
     /// The camera ray's position in pixel (x, y) of sample stream `rng`: uniform in the
@@ -370,5 +455,27 @@ mod tests {
         assert_eq!((o.integrator, o.spp), (settings.integrator, settings.spp));
         settings.aovs = vec!["position".into()];
         assert!(RenderOptions::from_settings(&settings).is_err());
+    }
+
+    /// Up to [`MAX_TECHNIQUES`] techniques; the per-pixel state of optimal-direct is
+    /// `4 + (1 + T(T+1)/2 + 3T)·depths·lights` words (docs/render-state.md).
+    #[test]
+    fn technique_limit_and_state_size() {
+        let many = |t: usize, method, per_light| RenderOptions {
+            method,
+            per_light,
+            techniques: (0..t).map(|k| (Technique::Light(k), 1)).collect(),
+            ..RenderOptions::default()
+        };
+        assert!(many(MAX_TECHNIQUES, Method::Balance, 0).validate().is_ok());
+        let e = many(MAX_TECHNIQUES + 1, Method::Balance, 0)
+            .validate()
+            .unwrap_err();
+        assert!(e.contains("at most 32"), "{e}");
+        let stride = |t, m, l| Integrator::new(&many(t, m, l)).unwrap().record.stride();
+        assert_eq!(stride(32, Method::OptimalDirect, 0), 4 + 1 + 528 + 96);
+        assert_eq!(stride(3, Method::OptimalDirect, 0), 4 + 1 + 6 + 9);
+        assert_eq!(stride(3, Method::OptimalDirect, 10), 4 + 10 * 16);
+        assert_eq!(stride(3, Method::Balance, 10), 4 + 10 * 4);
     }
 }

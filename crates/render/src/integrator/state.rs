@@ -42,8 +42,10 @@ impl AddAssign for RayCounts {
 pub struct Record {
     /// AOV words (7: depth, normal, albedo; or 0).
     pub aov: usize,
-    /// MIS blocks, one per vertex depth.
+    /// Vertex depths with MIS blocks.
     pub depths: usize,
+    /// MIS blocks per depth: 1, or in per-light mode one per MIS light.
+    pub lights: usize,
     /// Words of one MIS block.
     pub block: usize,
 }
@@ -55,12 +57,20 @@ impl Record {
     pub const AOV: usize = 4;
     /// Words of one record.
     pub fn stride(&self) -> usize {
-        Self::AOV + self.aov + self.depths * self.block
+        Self::AOV + self.aov + self.blocks() * self.block
     }
-    /// The range of depth `d`'s block.
-    pub fn depth(&self, d: usize) -> std::ops::Range<usize> {
-        let at = Self::AOV + self.aov + d * self.block;
+    /// MIS blocks per record: depths × lights.
+    pub fn blocks(&self) -> usize {
+        self.depths * self.lights
+    }
+    /// The range of block `i` (depth `i / lights`, light `i % lights`).
+    pub fn block_range(&self, i: usize) -> std::ops::Range<usize> {
+        let at = Self::AOV + self.aov + i * self.block;
         at..at + self.block
+    }
+    /// The range of the block of depth `d` and light `l` (0 when not per light).
+    pub fn depth_light(&self, d: usize, l: usize) -> std::ops::Range<usize> {
+        self.block_range(d * self.lights + l)
     }
 }
 
@@ -98,9 +108,20 @@ impl Pixel<'_> {
     }
 
     /// A draw of technique `k` at vertex `depth` with integrand `f` (throughput included)
-    /// and every technique's pdf.
+    /// and every technique's pdf. `light` is the MIS light the draw's ray reaches
+    /// (nearest along it, objects ignored): in per-light mode its block gets the draw
+    /// and every other light's block a failed draw (the draw lies outside that light's
+    /// domain); None (no light) fails in every block. Ignored otherwise.
     #[inline]
-    pub fn add_draw(&mut self, it: &Integrator, depth: usize, k: usize, f: Rgb, pdfs: &[f64]) {
+    pub fn add_draw(
+        &mut self,
+        it: &Integrator,
+        depth: usize,
+        k: usize,
+        f: Rgb,
+        pdfs: &[f64],
+        light: Option<usize>,
+    ) {
         match &it.combine {
             Combine::Heuristic(h) => {
                 // w_k f / (n_k p_k) (Veach 1997, eq. 9.4); a draw with own pdf 0 adds 0.
@@ -119,8 +140,19 @@ impl Pixel<'_> {
                 }
             }
             Combine::Estimator(kernel) => {
-                let r = it.record.depth(depth);
-                kernel.add_sample(&mut self.rec[r], self.key, k, &f.to_array(), pdfs)
+                if it.record.lights == 1 {
+                    let r = it.record.depth_light(depth, 0);
+                    kernel.add_sample(&mut self.rec[r], self.key, k, &f.to_array(), pdfs);
+                    return;
+                }
+                for l in 0..it.record.lights {
+                    let r = it.record.depth_light(depth, l);
+                    if Some(l) == light {
+                        kernel.add_sample(&mut self.rec[r], self.key, k, &f.to_array(), pdfs);
+                    } else {
+                        kernel.add_failed(&mut self.rec[r], self.key, k);
+                    }
+                }
             }
         }
     }
@@ -129,8 +161,10 @@ impl Pixel<'_> {
     #[inline]
     pub fn add_failed(&mut self, it: &Integrator, depth: usize, k: usize) {
         if let Combine::Estimator(kernel) = &it.combine {
-            let r = it.record.depth(depth);
-            kernel.add_failed(&mut self.rec[r], self.key, k);
+            for l in 0..it.record.lights {
+                let r = it.record.depth_light(depth, l);
+                kernel.add_failed(&mut self.rec[r], self.key, k);
+            }
         }
     }
 
@@ -138,8 +172,10 @@ impl Pixel<'_> {
     #[inline]
     pub fn end_vertex(&mut self, it: &Integrator, depth: usize) {
         if let Combine::Estimator(kernel) = &it.combine {
-            let r = it.record.depth(depth);
-            kernel.end_iteration(&mut self.rec[r], self.key);
+            for l in 0..it.record.lights {
+                let r = it.record.depth_light(depth, l);
+                kernel.end_iteration(&mut self.rec[r], self.key);
+            }
         }
     }
 }

@@ -72,6 +72,20 @@ pub(crate) fn incident(scene: &Scene, ray: &Ray, rays: &mut RayCounts) -> Rgb {
     }
 }
 
+/// The MIS light a ray reaches if nothing but lights were in the scene: the nearest
+/// area light along it, else the environment (index `area().len()`), else None. It
+/// decides which per-light estimator a draw feeds; an object in front of the light
+/// makes the draw's integrand 0, not its light another.
+pub(crate) fn light_reached(scene: &Scene, ray: &Ray) -> Option<usize> {
+    match scene.lights.intersect(ray, 0.0, f64::INFINITY) {
+        Some(h) => Some(h.light),
+        None => scene
+            .lights
+            .environment()
+            .map(|_| scene.lights.area().len()),
+    }
+}
+
 /// A shading point: the hit, its BSDF and the direction toward the viewer.
 pub(crate) struct Vertex<'s> {
     pub p: DVec3,
@@ -196,6 +210,7 @@ impl Integrator {
             wo: v.wo,
             bsdf: &v.bsdf,
             lights: &scene.lights,
+            trained: self.trained.as_deref(),
         };
         let t_count = self.techniques.len();
         let mut pdfs = [0.0; MAX_TECHNIQUES];
@@ -224,7 +239,12 @@ impl Integrator {
                     _ => Rgb::ZERO,
                 };
                 crate::technique::pdfs(&self.techniques, &ctx, s.wi, &mut pdfs[..t_count]);
-                px.add_draw(self, depth, k, beta * fc * li, &pdfs[..t_count]);
+                let light = if self.record.lights > 1 {
+                    light_reached(scene, &spawn(v.p, v.n, s.wi))
+                } else {
+                    None
+                };
+                px.add_draw(self, depth, k, beta * fc * li, &pdfs[..t_count], light);
             }
         }
         px.end_vertex(self, depth);

@@ -9,10 +9,14 @@
 mod area;
 mod delta;
 mod environment;
+mod select;
+mod trained;
 
 pub use area::{AreaLight, Crossing, Shape};
 pub use delta::DeltaLight;
 pub use environment::{EnvMap, Environment};
+pub use select::{importance, Selection};
+pub use trained::{TrainedSelection, TRAIN_FLOOR, TRAIN_GRID};
 
 use crate::color::{luminance, Rgb};
 use crate::distribution::Distribution1D;
@@ -169,41 +173,13 @@ impl Lights {
     }
     /// Light sampling: a light (or the environment) chosen ∝ power with `uc`, then
     /// its preferred sampling ([`AreaLight::sample_li`]); pdf = [`Self::pdf_by_power`].
+    /// [`Self::sample_selected`] with [`Selection::Power`].
     pub fn sample_by_power(&self, p: DVec3, uc: f64, u: DVec2) -> Option<LightSample> {
-        let (i, _, _) = self.by_power.as_ref()?.sample_discrete(uc);
-        let mut s = if i == self.area.len() {
-            self.env_sample(u)?
-        } else {
-            LightSample {
-                light: Some(i),
-                ..self.area[i].sample_li(p, u)?
-            }
-        };
-        s.pdf = self.pdf_by_power(p, s.wi);
-        (s.pdf > 0.0).then_some(s)
+        self.sample_selected(Selection::Power, p, DVec3::ZERO, uc, u)
     }
     /// Σ_lights P(light) · pdf_light(wi), over every light the direction meets.
     pub fn pdf_by_power(&self, p: DVec3, wi: DVec3) -> f64 {
-        let Some(d) = &self.by_power else {
-            return 0.0;
-        };
-        let mut pdf: f64 = self
-            .area
-            .iter()
-            .enumerate()
-            .map(|(i, l)| {
-                let pm = d.pmf(i);
-                if pm > 0.0 {
-                    pm * l.pdf_li(p, wi)
-                } else {
-                    0.0
-                }
-            })
-            .sum();
-        if let Some(e) = &self.environment {
-            pdf += d.pmf(self.area.len()) * e.pdf(wi);
-        }
-        pdf
+        self.pdf_selected(Selection::Power, p, DVec3::ZERO, wi)
     }
     /// Uniform light-area sampling: an area light chosen ∝ area, then a point uniform
     /// on it, i.e. a point uniform over the total emitting area; pdf =

@@ -82,6 +82,7 @@ impl From<&Scene> for Emitters {
         Emitters {
             area: !s.lights.area().is_empty(),
             environment: s.lights.environment().is_some(),
+            lights: s.lights.count(),
         }
     }
 }

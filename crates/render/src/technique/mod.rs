@@ -5,9 +5,10 @@
 
 use crate::bsdf::{Bsdf, BsdfSample};
 use crate::frame::Frame;
-use crate::light::{LightSample, Lights};
+use crate::light::{LightSample, Lights, Selection, TrainedSelection};
 use crate::warp::{cosine_hemisphere, cosine_hemisphere_pdf};
 use glam::{DVec2, DVec3};
+use std::borrow::Cow;
 
 /// What a technique needs to know about the point being shaded.
 #[derive(Clone, Copy, Debug)]
@@ -22,6 +23,8 @@ pub struct ShadingPoint<'a> {
     pub bsdf: &'a Bsdf<'a>,
     /// The scene's lights.
     pub lights: &'a Lights,
+    /// The trained light selection of this render, if it has one (`light-trained`).
+    pub trained: Option<&'a TrainedSelection>,
 }
 
 /// A direction drawn by a technique.
@@ -60,8 +63,18 @@ pub enum Technique {
     Bsdf,
     /// A light chosen ∝ power (area lights and the environment), then sampled.
     LightPower,
+    /// A light chosen uniformly, then sampled.
+    LightUniform,
     /// A point uniform over the total area of the area lights.
     LightArea,
+    /// A light chosen ∝ a bound on its contribution at the shading point
+    /// ([`crate::light::importance`]), then sampled.
+    LightSpatial,
+    /// MIS light k alone (area lights in file order, then the environment).
+    Light(usize),
+    /// A light chosen by the pmf trained for the shading point's cell
+    /// ([`TrainedSelection`]), then sampled; fails without a trained table.
+    LightTrained,
     /// The environment's own sampling.
     Environment,
     /// Cosine-weighted directions about the normal, on the viewer's side.
@@ -73,7 +86,11 @@ impl From<scene::TechniqueKind> for Technique {
         match k {
             scene::TechniqueKind::Bsdf => Technique::Bsdf,
             scene::TechniqueKind::LightPower => Technique::LightPower,
+            scene::TechniqueKind::LightUniform => Technique::LightUniform,
             scene::TechniqueKind::LightArea => Technique::LightArea,
+            scene::TechniqueKind::LightSpatial => Technique::LightSpatial,
+            scene::TechniqueKind::Light(k) => Technique::Light(k as usize),
+            scene::TechniqueKind::LightTrained => Technique::LightTrained,
             scene::TechniqueKind::Environment => Technique::Environment,
             scene::TechniqueKind::CosineHemisphere => Technique::CosineHemisphere,
         }
@@ -81,24 +98,21 @@ impl From<scene::TechniqueKind> for Technique {
 }
 
 impl Technique {
-    /// Every technique.
-    pub const ALL: [Technique; 5] = [
+    /// Every technique without a parameter (`light#k` is one per light).
+    pub const ALL: [Technique; 8] = [
         Technique::Bsdf,
         Technique::LightPower,
+        Technique::LightUniform,
         Technique::LightArea,
+        Technique::LightSpatial,
+        Technique::LightTrained,
         Technique::Environment,
         Technique::CosineHemisphere,
     ];
 
-    /// A short name (for tables and scene files).
-    pub fn name(self) -> &'static str {
-        match self {
-            Technique::Bsdf => "bsdf",
-            Technique::LightPower => "light",
-            Technique::LightArea => "light-area",
-            Technique::Environment => "environment",
-            Technique::CosineHemisphere => "cosine",
-        }
+    /// A short name (for tables and scene files): the scene files' name.
+    pub fn name(self) -> Cow<'static, str> {
+        self.kind().name()
     }
 
     /// The scene files' name for this technique.
@@ -106,9 +120,26 @@ impl Technique {
         match self {
             Technique::Bsdf => scene::TechniqueKind::Bsdf,
             Technique::LightPower => scene::TechniqueKind::LightPower,
+            Technique::LightUniform => scene::TechniqueKind::LightUniform,
             Technique::LightArea => scene::TechniqueKind::LightArea,
+            Technique::LightSpatial => scene::TechniqueKind::LightSpatial,
+            Technique::Light(k) => scene::TechniqueKind::Light(k as u32),
+            Technique::LightTrained => scene::TechniqueKind::LightTrained,
             Technique::Environment => scene::TechniqueKind::Environment,
             Technique::CosineHemisphere => scene::TechniqueKind::CosineHemisphere,
+        }
+    }
+
+    /// The light selection of a technique that selects a light and samples it, at
+    /// `ctx` (None for the others, and for `light-trained` without a table).
+    pub fn selection<'a>(self, ctx: &ShadingPoint<'a>) -> Option<Selection<'a>> {
+        match self {
+            Technique::LightPower => Some(Selection::Power),
+            Technique::LightUniform => Some(Selection::Uniform),
+            Technique::LightSpatial => Some(Selection::Spatial),
+            Technique::Light(k) => Some(Selection::One(k)),
+            Technique::LightTrained => ctx.trained.map(Selection::Trained),
+            _ => None,
         }
     }
 
@@ -135,9 +166,13 @@ impl Technique {
                     light: None,
                 })
             }
-            Technique::LightPower => ctx
+            Technique::LightPower
+            | Technique::LightUniform
+            | Technique::LightSpatial
+            | Technique::LightTrained
+            | Technique::Light(_) => ctx
                 .lights
-                .sample_by_power(ctx.p, uc, u)
+                .sample_selected(self.selection(ctx)?, ctx.p, ctx.n, uc, u)
                 .map(TechniqueSample::from_light),
             Technique::LightArea => ctx
                 .lights
@@ -166,7 +201,13 @@ impl Technique {
     pub fn pdf(self, ctx: &ShadingPoint, wi: DVec3) -> f64 {
         match self {
             Technique::Bsdf => ctx.bsdf.pdf(ctx.wo, wi),
-            Technique::LightPower => ctx.lights.pdf_by_power(ctx.p, wi),
+            Technique::LightPower
+            | Technique::LightUniform
+            | Technique::LightSpatial
+            | Technique::LightTrained
+            | Technique::Light(_) => self
+                .selection(ctx)
+                .map_or(0.0, |sel| ctx.lights.pdf_selected(sel, ctx.p, ctx.n, wi)),
             Technique::LightArea => ctx.lights.pdf_by_area(ctx.p, wi),
             Technique::Environment => ctx.lights.pdf_environment(wi),
             Technique::CosineHemisphere => cosine_hemisphere_pdf(Self::facing_normal(ctx).dot(wi)),

@@ -3,7 +3,7 @@
 use super::*;
 use crate::bsdf::{Bxdf, CoatTable, DiffuseBxdf, PlasticBxdf};
 use crate::color::Rgb;
-use crate::light::{AreaLight, EnvMap, Environment, Shape};
+use crate::light::{AreaLight, EnvMap, Environment, Shape, TrainedSelection};
 use crate::sampler::Sampler;
 use crate::testutil::{sphere_chi2, SphereBins};
 use frep::Ray;
@@ -76,7 +76,25 @@ fn planar_lights() -> Lights {
     )
 }
 
-/// Each technique's samples follow its pdf (chi-square over 32 × 64 cells, 300 000
+/// A trained table over [−1, 1]³ in 2³ cells with uneven weights (light k of cell c
+/// weighs (k + 1)² + c, one light 0 in every cell: the floor keeps it).
+fn trained_table(lights: &Lights) -> TrainedSelection {
+    let n = lights.count();
+    let w: Vec<f64> = (0..8 * n)
+        .map(|i| {
+            let (c, k) = (i / n, i % n);
+            if k == 1 {
+                0.0
+            } else {
+                ((k + 1) * (k + 1) + c) as f64
+            }
+        })
+        .collect();
+    TrainedSelection::from_weights(DVec3::splat(-1.0), DVec3::ONE, 2, n, &w)
+}
+
+/// Each technique's samples follow its pdf (also `light-uniform`, `light-spatial` and
+/// `light#k`, whose pdfs are mixtures over lights behind lights in scene B) (chi-square over 32 × 64 cells, 300 000
 /// samples, significance 1e-3), its pdf integrates to the fraction of non-specular
 /// samples it yields (1 for the light, environment and cosine techniques; quadrature
 /// tolerance 3e-3 plus 4 binomial σ), and a sample's pdf equals pdf(wi). Scene A has
@@ -94,6 +112,16 @@ fn techniques_match_pdfs() {
         (&a, Technique::CosineHemisphere),
         (&b, Technique::LightArea),
         (&b, Technique::LightPower),
+        (&a, Technique::LightUniform),
+        (&b, Technique::LightUniform),
+        (&a, Technique::LightSpatial),
+        (&b, Technique::LightSpatial),
+        (&a, Technique::Light(0)),
+        (&a, Technique::Light(1)),
+        (&a, Technique::Light(3)),
+        (&b, Technique::Light(1)),
+        (&a, Technique::LightTrained),
+        (&b, Technique::LightTrained),
     ];
     let coat = CoatTable::new(1.5, 0.2);
     let bsdfs = [
@@ -110,12 +138,14 @@ fn techniques_match_pdfs() {
     let n = 300_000;
     for bsdf in &bsdfs {
         for (lights, t) in cases {
+            let table = trained_table(lights);
             let ctx = ShadingPoint {
                 p: DVec3::new(0.1, 0.0, 0.0),
                 n: bsdf.frame.n,
                 wo: DVec3::new(0.3, -0.4, 0.8).normalize(),
                 bsdf,
                 lights,
+                trained: Some(&table),
             };
             let r = sphere_chi2(
                 &bins,
@@ -150,6 +180,7 @@ fn techniques_match_pdfs() {
 /// Monte Carlo irradiance E = ∫ L cos θ dω at the origin (normal +z) with `n`
 /// samples of technique `t`: (mean, standard error).
 fn irradiance(lights: &Lights, t: Technique, n: u64, seed: u64) -> (f64, f64) {
+    let table = trained_table(lights);
     let bsdf = Bsdf::new(DVec3::Z, Bxdf::Diffuse(DiffuseBxdf { r: Rgb::ONE }));
     let ctx = ShadingPoint {
         p: DVec3::ZERO,
@@ -157,6 +188,7 @@ fn irradiance(lights: &Lights, t: Technique, n: u64, seed: u64) -> (f64, f64) {
         wo: DVec3::Z,
         bsdf: &bsdf,
         lights,
+        trained: Some(&table),
     };
     let s = Sampler::new(seed);
     let (mut sum, mut sum2) = (0.0, 0.0);
@@ -176,8 +208,8 @@ fn irradiance(lights: &Lights, t: Technique, n: u64, seed: u64) -> (f64, f64) {
 /// Irradiance under a sphere light (E = π L sin²θ, θ the half-angle it subtends)
 /// and under a parallel rectangle centred above the point (E = π L F, F the form
 /// factor of a differential area to a parallel rectangle, sum of four corner terms
-/// F = (1/2π)[X/√(1+X²) atan(Y/√(1+X²)) + Y/√(1+Y²) atan(X/√(1+Y²))]), with light,
-/// light-area, BSDF and cosine sampling, 200 000 samples each: within 4 standard
+/// F = (1/2π)[X/√(1+X²) atan(Y/√(1+X²)) + Y/√(1+Y²) atan(X/√(1+Y²))]), with light
+/// (by power, uniform, spatial, `light#0`), light-area, BSDF and cosine sampling, 200 000 samples each: within 4 standard
 /// errors (two-sided confidence 99.99 %), standard errors below 1 % of E.
 #[test]
 fn irradiance_matches_analytic() {
@@ -218,6 +250,10 @@ fn irradiance_matches_analytic() {
     for (name, lights, exact) in [("sphere", &sphere, e_sphere), ("rect", &rect, e_rect)] {
         for t in [
             Technique::LightPower,
+            Technique::LightUniform,
+            Technique::LightSpatial,
+            Technique::Light(0),
+            Technique::LightTrained,
             Technique::LightArea,
             Technique::Bsdf,
             Technique::CosineHemisphere,

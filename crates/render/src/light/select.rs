@@ -1,0 +1,281 @@
+//! Light selection: how a light technique picks one of the *MIS lights* (the area
+//! lights, then the environment) before sampling it, and the mixture density that
+//! results.
+//!
+//! Every strategy samples the chosen light the same way ([`AreaLight::sample_li`], or
+//! the environment's own sampling), so a strategy is only its selection pmf `P(k | x)`,
+//! and its density of a direction ω at the shading point x is the mixture
+//! `p(ω) = Σ_k P(k | x) · p_k(ω)` over every light the direction meets (lights behind
+//! lights included), as MIS needs (Veach 1997, §9.2). Both are O(number of lights) per
+//! query.
+
+use super::{AreaLight, LightSample, Lights, Shape, TrainedSelection};
+use crate::color::luminance;
+use crate::warp::safe_sqrt;
+use glam::{DVec2, DVec3};
+
+/// A light-selection pmf.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Selection<'a> {
+    /// ∝ luminance of power (the environment's from the scene radius, pbrt-v4 §12.5).
+    Power,
+    /// Uniform over the MIS lights.
+    Uniform,
+    /// ∝ [`importance`] at the shading point (pbrt-v4's BVH light sampler without the
+    /// BVH): the environment, if any, with probability ½ (pbrt-v4's share for infinite
+    /// lights), the area lights with the rest ∝ their importance.
+    Spatial,
+    /// MIS light k alone.
+    One(usize),
+    /// The trained table's pmf at the shading point ([`TrainedSelection`]); no light
+    /// when the table covers another number of lights.
+    Trained(&'a TrainedSelection),
+}
+
+/// `cos(max(0, θa − θb))` from the sines and cosines of θa and θb (pbrt-v4
+/// `CosSubClamped`).
+fn cos_sub_clamped(sin_a: f64, cos_a: f64, sin_b: f64, cos_b: f64) -> f64 {
+    if cos_a > cos_b {
+        1.0
+    } else {
+        cos_a * cos_b + sin_a * sin_b
+    }
+}
+
+/// `sin(max(0, θa − θb))` (pbrt-v4 `SinSubClamped`).
+fn sin_sub_clamped(sin_a: f64, cos_a: f64, sin_b: f64, cos_b: f64) -> f64 {
+    if cos_a > cos_b {
+        0.0
+    } else {
+        sin_a * cos_b - cos_a * sin_b
+    }
+}
+
+/// A bound on the unoccluded contribution of area light `l` at point `p` with normal
+/// `n` (pbrt-v4 `LightBounds::Importance`, §12.6.3): `Φ · cos θ' · cos θi' / d²`, with
+/// Φ the luminance of the light's power, d the distance to the centre of its bounding
+/// sphere (at least the sphere's radius), θ' the smallest angle between the light's
+/// normal cone and a direction from the light toward p, and θi' the smallest angle
+/// between ±n and a direction from p into the bounding sphere. It is 0 only where the
+/// light cannot shine on p (p behind a one-sided planar light). Unlike pbrt-v4 (a box
+/// and `|diagonal|/2` as the least distance), the bound uses the light's bounding
+/// sphere and its radius squared.
+pub fn importance(l: &AreaLight, p: DVec3, n: DVec3) -> f64 {
+    // Bounding sphere, normal-cone axis and cos θo (the spread of the normals), and
+    // whether the cone counts on both sides; cos θe = 0 (emission within π/2 of a
+    // normal) for every shape.
+    let (center, radius, axis, cos_o, two_sided) = match l.shape {
+        Shape::Sphere { center, radius } => (center, radius, DVec3::Z, -1.0, false),
+        Shape::Rect {
+            corner,
+            edge_u,
+            edge_v,
+        } => (
+            corner + (edge_u + edge_v) / 2.0,
+            (edge_u + edge_v).length().max((edge_u - edge_v).length()) / 2.0,
+            edge_u.cross(edge_v).normalize(),
+            1.0,
+            l.two_sided,
+        ),
+        Shape::Disk {
+            center,
+            normal,
+            radius,
+        } => (center, radius, normal, 1.0, l.two_sided),
+    };
+    let phi = luminance(l.power());
+    let v = p - center;
+    let dist2 = v.length_squared();
+    let d2 = dist2.max(radius * radius);
+    let w = if dist2 > 0.0 { v / dist2.sqrt() } else { axis };
+    let mut cos_w = axis.dot(w);
+    if two_sided {
+        cos_w = cos_w.abs();
+    }
+    let sin_w = safe_sqrt(1.0 - cos_w * cos_w);
+    // The cone of directions from p into the bounding sphere: cos θb.
+    let cos_b = if dist2 <= radius * radius {
+        -1.0
+    } else {
+        safe_sqrt(1.0 - radius * radius / dist2)
+    };
+    let sin_b = safe_sqrt(1.0 - cos_b * cos_b);
+    let sin_o = safe_sqrt(1.0 - cos_o * cos_o);
+    let cos_x = cos_sub_clamped(sin_w, cos_w, sin_o, cos_o);
+    let sin_x = sin_sub_clamped(sin_w, cos_w, sin_o, cos_o);
+    let cos_p = cos_sub_clamped(sin_x, cos_x, sin_b, cos_b);
+    if cos_p <= 0.0 {
+        return 0.0;
+    }
+    let cos_i = n.dot(w).abs();
+    let sin_i = safe_sqrt(1.0 - cos_i * cos_i);
+    let cos_ip = cos_sub_clamped(sin_i, cos_i, sin_b, cos_b);
+    (phi * cos_p * cos_ip / d2).max(0.0)
+}
+
+impl Lights {
+    /// The number of MIS lights: area lights, then the environment.
+    pub fn count(&self) -> usize {
+        self.area.len() + usize::from(self.environment.is_some())
+    }
+
+    /// Σ over area lights of [`importance`] at (p, n).
+    fn importance_total(&self, p: DVec3, n: DVec3) -> f64 {
+        self.area.iter().map(|l| importance(l, p, n)).sum()
+    }
+
+    /// The probability of the environment under [`Selection::Spatial`].
+    fn spatial_env(&self) -> f64 {
+        match (self.environment.is_some(), self.area.is_empty()) {
+            (false, _) => 0.0,
+            (true, true) => 1.0,
+            (true, false) => 0.5,
+        }
+    }
+
+    /// P(MIS light k | p, n) under `sel` (`total`: [`Self::importance_total`], for
+    /// [`Selection::Spatial`]).
+    fn pmf_with(&self, sel: Selection<'_>, p: DVec3, n: DVec3, k: usize, total: f64) -> f64 {
+        let count = self.count();
+        if k >= count {
+            return 0.0;
+        }
+        match sel {
+            Selection::Power => self.by_power.as_ref().map_or(0.0, |d| d.pmf(k)),
+            Selection::Uniform => 1.0 / count as f64,
+            Selection::One(j) => f64::from(u8::from(j == k)),
+            Selection::Trained(t) if t.lights() == count => t.pmf(p)[k],
+            Selection::Trained(_) => 0.0,
+            Selection::Spatial => {
+                let pe = self.spatial_env();
+                if k == self.area.len() {
+                    pe
+                } else if total > 0.0 {
+                    (1.0 - pe) * importance(&self.area[k], p, n) / total
+                } else {
+                    0.0
+                }
+            }
+        }
+    }
+
+    /// P(MIS light k | p, n) under `sel`.
+    pub fn selection_pmf(&self, sel: Selection<'_>, p: DVec3, n: DVec3, k: usize) -> f64 {
+        let total = match sel {
+            Selection::Spatial => self.importance_total(p, n),
+            _ => 0.0,
+        };
+        self.pmf_with(sel, p, n, k, total)
+    }
+
+    /// Picks a MIS light with `uc` under `sel` at (p, n); None when no light has
+    /// probability there.
+    fn select(&self, sel: Selection<'_>, p: DVec3, n: DVec3, uc: f64) -> Option<usize> {
+        let count = self.count();
+        if count == 0 {
+            return None;
+        }
+        match sel {
+            Selection::Power => Some(self.by_power.as_ref()?.sample_discrete(uc).0),
+            Selection::Uniform => Some(((uc * count as f64) as usize).min(count - 1)),
+            Selection::One(k) => (k < count).then_some(k),
+            Selection::Trained(t) => {
+                if t.lights() != count {
+                    return None;
+                }
+                let pmf = t.pmf(p);
+                let mut acc = 0.0;
+                for (i, &w) in pmf.iter().enumerate() {
+                    acc += w;
+                    if uc < acc {
+                        return Some(i);
+                    }
+                }
+                pmf.iter().rposition(|&w| w > 0.0)
+            }
+            Selection::Spatial => {
+                let pe = self.spatial_env();
+                if uc < pe {
+                    return Some(self.area.len());
+                }
+                let total = self.importance_total(p, n);
+                if total.is_nan() || total <= 0.0 {
+                    return None;
+                }
+                // Walk the lights again to the one `uc` falls in (no allocation).
+                let target = (uc - pe) / (1.0 - pe) * total;
+                let mut acc = 0.0;
+                let mut last = None;
+                for (i, l) in self.area.iter().enumerate() {
+                    let w = importance(l, p, n);
+                    if w > 0.0 {
+                        acc += w;
+                        last = Some(i);
+                        if target < acc {
+                            return Some(i);
+                        }
+                    }
+                }
+                last
+            }
+        }
+    }
+
+    /// The density of MIS light `k`'s own sampling at direction `wi` from `p`.
+    fn pdf_one(&self, p: DVec3, k: usize, wi: DVec3) -> f64 {
+        if k == self.area.len() {
+            self.environment.as_ref().map_or(0.0, |e| e.pdf(wi))
+        } else {
+            self.area[k].pdf_li(p, wi)
+        }
+    }
+
+    /// Light sampling under `sel`: a MIS light chosen with `uc`, then its own sampling
+    /// with `u`; the pdf is [`Self::pdf_selected`], the mixture over every light.
+    pub fn sample_selected(
+        &self,
+        sel: Selection<'_>,
+        p: DVec3,
+        n: DVec3,
+        uc: f64,
+        u: DVec2,
+    ) -> Option<LightSample> {
+        let i = self.select(sel, p, n, uc)?;
+        let mut s = if i == self.area.len() {
+            self.env_sample(u)?
+        } else {
+            LightSample {
+                light: Some(i),
+                ..self.area[i].sample_li(p, u)?
+            }
+        };
+        s.pdf = self.pdf_selected(sel, p, n, s.wi);
+        (s.pdf > 0.0 && s.pdf.is_finite()).then_some(s)
+    }
+
+    /// Σ_k P(k | p, n) · p_k(wi) over the MIS lights: the density of
+    /// [`Self::sample_selected`].
+    pub fn pdf_selected(&self, sel: Selection<'_>, p: DVec3, n: DVec3, wi: DVec3) -> f64 {
+        if let Selection::One(k) = sel {
+            return if k < self.count() {
+                self.pdf_one(p, k, wi)
+            } else {
+                0.0
+            };
+        }
+        let total = match sel {
+            Selection::Spatial => self.importance_total(p, n),
+            _ => 0.0,
+        };
+        (0..self.count())
+            .map(|k| {
+                let pm = self.pmf_with(sel, p, n, k, total);
+                if pm > 0.0 {
+                    pm * self.pdf_one(p, k, wi)
+                } else {
+                    0.0
+                }
+            })
+            .sum()
+    }
+}
