@@ -94,9 +94,11 @@ struct Tally {
 
 fn fuzz(t: Target, execs: u64, seed: u64) -> i32 {
     let dirs = Dirs::new(t);
-    let oom = dirs.crashes.join("oom-last");
-    let dead = dirs.crashes.join("signal-last");
-    guard::install(&oom, &dead, dirs.hangs.join("killed-last"));
+    // Named by process, so that a later run does not overwrite what killed this one.
+    let pid = std::process::id();
+    let oom = dirs.crashes.join(format!("memory-{pid}"));
+    let dead = dirs.crashes.join(format!("signal-{pid}"));
+    guard::install(&oom, &dead, dirs.hangs.join(format!("killed-{pid}")));
     std::panic::set_hook(Box::new(|info| {
         let at = info
             .location()
@@ -170,7 +172,12 @@ fn fuzz(t: Target, execs: u64, seed: u64) -> i32 {
     }
     let mut next_report = Instant::now() + Duration::from_secs(30);
     let mut found = 0;
-    while tally.execs < execs && !corpus.is_empty() {
+    // `FUZZ_MAX_SECONDS` stops a run early (with its summary) to fit a time budget.
+    let budget = std::env::var("FUZZ_MAX_SECONDS")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .map_or(Duration::MAX, Duration::from_secs);
+    while tally.execs < execs && !corpus.is_empty() && start.elapsed() < budget {
         // Favour the newest finds (the frontier of coverage) and short inputs (fast to
         // run: the shorter of two picks).
         let i = if rng.below(2) == 0 {
@@ -194,14 +201,15 @@ fn fuzz(t: Target, execs: u64, seed: u64) -> i32 {
         if Instant::now() > next_report {
             next_report += Duration::from_secs(30);
             eprintln!(
-                "{}: {} execs, {:.0}/s, corpus {}, edges {}, crashes {}, hangs {}",
+                "{}: {} execs, {:.0}/s, corpus {}, edges {}, crashes {}, hangs {}, heap {:.1} MiB",
                 t.name(),
                 tally.execs,
                 tally.execs as f64 / start.elapsed().as_secs_f64(),
                 corpus.len(),
                 cov.edges,
                 tally.crashes,
-                tally.hangs
+                tally.hangs,
+                guard::peak_heap() as f64 / (1 << 20) as f64
             );
         }
     }

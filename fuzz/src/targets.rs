@@ -25,6 +25,9 @@ pub enum Target {
     TomlResolve,
     /// JSON scenes parsed and resolved, and resolved again as data (`load_value`).
     JsonResolve,
+    /// Fails on purpose as `$FUZZ_SELFTEST` says (panic, slow, memory, stack), to show
+    /// that each guard catches and saves its input (`run.sh selftest`).
+    SelfTest,
 }
 
 impl Target {
@@ -41,7 +44,8 @@ impl Target {
 
     /// The target named on the command line.
     pub fn from_name(s: &str) -> Option<Target> {
-        Target::ALL.into_iter().find(|t| t.name() == s)
+        let all = Target::ALL.into_iter().chain([Target::SelfTest]);
+        all.into_iter().find(|t| t.name() == s)
     }
 
     /// Its name on the command line.
@@ -49,6 +53,7 @@ impl Target {
         match self {
             Target::TomlResolve => "toml-resolve",
             Target::JsonResolve => "json-resolve",
+            Target::SelfTest => "selftest",
             t => t.ext(),
         }
     }
@@ -61,6 +66,7 @@ impl Target {
             Target::Vm => "vm",
             Target::Toml | Target::TomlResolve => "toml",
             Target::Json | Target::JsonResolve => "json",
+            Target::SelfTest => "selftest",
         }
     }
 }
@@ -73,6 +79,11 @@ pub fn root() -> PathBuf {
 /// Every shipped file of the target's kind under `models/`, `scenes/` and the shared
 /// models (`../shared/models`), and the docs' code blocks in its language.
 pub fn seeds(t: Target) -> Vec<Vec<u8>> {
+    if t == Target::SelfTest {
+        return vec![std::env::var("FUZZ_SELFTEST")
+            .unwrap_or_default()
+            .into_bytes()];
+    }
     let r = root();
     let mut files = Vec::new();
     for dir in [
@@ -205,5 +216,26 @@ pub fn run(t: Target, input: &[u8], sandbox: &Path) {
                 drop(scene::load_value(v, sandbox));
             }
         }
+        Target::SelfTest => self_test(input),
+    }
+}
+
+fn self_test(input: &[u8]) {
+    match input {
+        b"panic" => panic!("selftest"),
+        b"slow" => std::thread::sleep(std::time::Duration::from_millis(1100)),
+        b"memory" => drop(std::hint::black_box(vec![1u8; 2 << 30])),
+        b"stack" => drop(deep(std::hint::black_box(1 << 40))),
+        _ => {}
+    }
+}
+
+/// Recursion without bound (a stack overflow).
+fn deep(n: u64) -> u64 {
+    let pad = std::hint::black_box([n; 64]);
+    if n == 0 {
+        0
+    } else {
+        deep(n - 1).wrapping_add(pad[3])
     }
 }
