@@ -242,3 +242,24 @@ fn read_file_reports_unreadable_files() {
     assert_eq!((e.line, e.column), (0, 0));
     assert!(e.message.contains(".frep, .hf or .vm"), "{e}");
 }
+
+/// A model path naming a device, pipe or folder is refused before it is opened:
+/// `/dev/zero` reports length 0 and then never ends (read, it filled memory), and a FIFO
+/// blocks the reader for ever. Scenes name model files, so a scene could do either.
+#[cfg(unix)]
+#[test]
+fn read_file_refuses_devices_pipes_and_folders() {
+    let dir = std::env::temp_dir().join(format!("frep-read-special-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let zero = dir.join("zero.frep");
+    let _ = std::fs::remove_file(&zero);
+    std::os::unix::fs::symlink("/dev/zero", &zero).unwrap();
+    let folder = dir.join("folder.vm");
+    std::fs::create_dir_all(&folder).unwrap();
+    for p in [&zero, &folder] {
+        let e = read_file(p).unwrap_err();
+        assert_eq!((e.line, e.column), (0, 0));
+        assert!(e.message.contains("found a folder, device or pipe"), "{e}");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
