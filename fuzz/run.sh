@@ -5,7 +5,8 @@
 # nightly, no libFuzzer), then prints one RESULT line per target: executions, corpus
 # size, edges, crashes, hangs, peak memory. Exit status 1 when anything crashed or hung.
 # `fuzz/run.sh selftest 1` checks that each guard (panic, hang, memory, stack) works;
-# FUZZ_MAX_SECONDS=N stops each target after N seconds (the summary says how far it got).
+# FUZZ_MAX_SECONDS=N stops each target after N seconds, as does SIGTERM or Ctrl-C (the
+# summary says how far it got).
 # --target keeps the flags off build scripts and proc macros (they run on the host).
 set -euo pipefail
 cd "$(dirname "$0")"

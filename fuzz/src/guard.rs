@@ -106,6 +106,12 @@ pub fn install(oom: &std::path::Path, dead: &std::path::Path, hang: std::path::P
             libc::sigaction(sig, &a, std::ptr::null_mut());
         }
     }
+    // SAFETY: the handler only stores to an atomic.
+    unsafe {
+        for sig in [libc::SIGTERM, libc::SIGINT] {
+            libc::signal(sig, on_stop as *const () as libc::sighandler_t);
+        }
+    }
     std::thread::spawn(move || loop {
         std::thread::sleep(Duration::from_millis(250));
         let t0 = STARTED.load(Ordering::SeqCst);
@@ -118,6 +124,13 @@ pub fn install(oom: &std::path::Path, dead: &std::path::Path, hang: std::path::P
             std::process::exit(3);
         }
     });
+}
+
+/// Set by SIGTERM or SIGINT: the run stops after the current execution and reports.
+pub static STOP: AtomicBool = AtomicBool::new(false);
+
+extern "C" fn on_stop(_: libc::c_int) {
+    STOP.store(true, Ordering::SeqCst);
 }
 
 extern "C" fn on_signal(sig: libc::c_int) {

@@ -13,6 +13,7 @@ use mutate::{mutate, tokens, Rng};
 use std::collections::BTreeMap;
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::{Path, PathBuf};
+use std::sync::atomic::Ordering;
 use std::sync::Mutex;
 use std::time::{Duration, Instant};
 use targets::Target;
@@ -172,12 +173,16 @@ fn fuzz(t: Target, execs: u64, seed: u64) -> i32 {
     }
     let mut next_report = Instant::now() + Duration::from_secs(30);
     let mut found = 0;
-    // `FUZZ_MAX_SECONDS` stops a run early (with its summary) to fit a time budget.
+    // `FUZZ_MAX_SECONDS` (or SIGTERM, SIGINT) stops a run early, with its summary, to fit
+    // a time budget.
     let budget = std::env::var("FUZZ_MAX_SECONDS")
         .ok()
         .and_then(|s| s.parse().ok())
         .map_or(Duration::MAX, Duration::from_secs);
-    while tally.execs < execs && !corpus.is_empty() && start.elapsed() < budget {
+    let go = |tally: &Tally| {
+        tally.execs < execs && start.elapsed() < budget && !guard::STOP.load(Ordering::Relaxed)
+    };
+    while go(&tally) && !corpus.is_empty() {
         // Favour the newest finds (the frontier of coverage) and short inputs (fast to
         // run: the shorter of two picks).
         let i = if rng.below(2) == 0 {
