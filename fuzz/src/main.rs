@@ -31,7 +31,13 @@ static PANIC: Mutex<Option<String>> = Mutex::new(None);
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
-    let usage = "usage: frepray-fuzz TARGET EXECS [SEED]  (TARGET: frep, hf, vm, toml, json, toml-resolve, json-resolve)";
+    let usage = "usage: frepray-fuzz TARGET EXECS [SEED] | TARGET replay FILE...  (TARGET: frep, hf, vm, toml, json, toml-resolve, json-resolve)";
+    if let (Some(t), Some("replay")) = (
+        args.get(1).and_then(|s| Target::from_name(s)),
+        args.get(2).map(|s| s.as_str()),
+    ) {
+        std::process::exit(replay(t, &args[3..]));
+    }
     let (Some(t), Some(execs)) = (
         args.get(1).and_then(|s| Target::from_name(s)),
         args.get(2)
@@ -46,6 +52,25 @@ fn main() {
             .map_or(1, |d| d.as_nanos() as u64)
     });
     std::process::exit(fuzz(t, execs, seed));
+}
+
+/// Runs saved inputs once each (a crash or hang found earlier), saying how each ended
+/// and how long it took; status 1 when one panicked.
+fn replay(t: Target, files: &[String]) -> i32 {
+    let sandbox = targets::Sandbox::new();
+    let mut status = 0;
+    for f in files {
+        let input = std::fs::read(f).unwrap_or_else(|e| panic!("{f}: {e}"));
+        let t0 = Instant::now();
+        let r = catch_unwind(AssertUnwindSafe(|| targets::run(t, &input, &sandbox.dir)));
+        let took = t0.elapsed();
+        if r.is_err() {
+            status = 1;
+        }
+        let how = if r.is_ok() { "ok" } else { "PANIC" };
+        println!("{f}: {how} in {took:?}, {} bytes", input.len());
+    }
+    status
 }
 
 /// The output folders of a target.
@@ -120,9 +145,11 @@ fn fuzz(t: Target, execs: u64, seed: u64) -> i32 {
     }
     let seeds = targets::seeds(t);
     let dict = tokens(seeds.iter().map(|s| s.as_slice()));
+    // Saved finds are reused up to the mutants' size limit.
     let mut saved: Vec<PathBuf> = std::fs::read_dir(&dirs.corpus)
         .map(|r| r.flatten().map(|e| e.path()).collect())
         .unwrap_or_default();
+    saved.retain(|p| std::fs::metadata(p).is_ok_and(|m| m.len() <= mutate::MAX_GROWTH as u64));
     saved.sort();
     let mut rng = Rng::new(seed);
     let mut tally = Tally::default();
