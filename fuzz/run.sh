@@ -17,8 +17,6 @@ export RUSTFLAGS="-Cpasses=sancov-module -Cllvm-args=-sanitizer-coverage-level=3
 -Cllvm-args=-sanitizer-coverage-inline-8bit-counters -Cdebug-assertions -Coverflow-checks"
 cargo build --release --quiet --target "$host"
 bin="target/$host/release/frepray-fuzz"
-# Files left by a run that died with nothing to save.
-find crashes hangs -type f -empty -delete 2>/dev/null || true
 if [ "$1" = selftest ]; then
     # Each guard on an input made to trip it: the input must be saved and reported.
     rm -rf crashes/selftest hangs/selftest

@@ -188,6 +188,26 @@ pub fn execute(input: &[u8], f: impl FnOnce()) -> Duration {
     t.elapsed()
 }
 
+/// Removes empty death files (`NAME-PID`) of processes no longer running: a running
+/// fuzzer's file is open and may yet receive the input that kills it.
+pub fn tidy_stale(dir: &std::path::Path) {
+    let Ok(rd) = std::fs::read_dir(dir) else {
+        return;
+    };
+    for e in rd.flatten() {
+        let name = e.file_name().to_string_lossy().into_owned();
+        let pid = name
+            .rsplit_once('-')
+            .and_then(|(_, p)| p.parse::<u32>().ok());
+        let empty = e.metadata().is_ok_and(|m| m.len() == 0);
+        if let (Some(pid), true) = (pid, empty) {
+            if !std::path::Path::new(&format!("/proc/{pid}")).exists() {
+                let _ = std::fs::remove_file(e.path());
+            }
+        }
+    }
+}
+
 /// Removes the death files when nothing was written to them.
 pub fn tidy(paths: &[&std::path::Path]) {
     for p in paths {

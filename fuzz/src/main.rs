@@ -121,6 +121,8 @@ struct Tally {
 fn fuzz(t: Target, execs: u64, seed: u64) -> i32 {
     let dirs = Dirs::new(t);
     // Named by process, so that a later run does not overwrite what killed this one.
+    guard::tidy_stale(&dirs.crashes);
+    guard::tidy_stale(&dirs.hangs);
     let pid = std::process::id();
     let oom = dirs.crashes.join(format!("memory-{pid}"));
     let dead = dirs.crashes.join(format!("signal-{pid}"));
