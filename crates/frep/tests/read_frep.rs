@@ -279,3 +279,32 @@ fn a_solid_used_many_times_is_lowered_once() {
     assert!(t.elapsed().as_secs_f64() < 5.0, "took {:?}", t.elapsed());
     assert!(expr(&m).eval([0.0, 0.0, 0.0]).is_finite());
 }
+
+/// Work grows without bound in a few lines when a function calls another twice per level
+/// or a solid is copied into a union with itself level after level: 2^25 calls ran for
+/// minutes, 2^22 parts took seconds and memory (found by fuzzing). Evaluation has a work
+/// limit (a million steps for a small file) and says so.
+#[test]
+fn exponential_models_stop_at_the_work_limit() {
+    let calls: String = (1..26)
+        .map(|i| format!("let f{i}(t) = f{}(t) * f{}(t)\n", i - 1, i - 1))
+        .collect();
+    let calls = format!("let f0(t) = t + 1\n{calls}output f25(x)\n");
+    let parts: String = (1..40)
+        .map(|i| format!("let s{i} = union(s{}, s{})\n", i - 1, i - 1))
+        .collect();
+    let parts = format!("let s0 = sphere([0, 0, 0], 1)\n{parts}output s39\n");
+    let nested = format!(
+        "let f(s) = {}s{}\noutput {}sphere([0, 0, 0], 1){}\n",
+        "rotate_z(1, ".repeat(100),
+        ")".repeat(100),
+        "f(".repeat(150),
+        ")".repeat(150)
+    );
+    for text in [calls, parts, nested] {
+        let t = std::time::Instant::now();
+        let e = read_str(&text, Format::Frep, "t.frep").unwrap_err();
+        assert!(e.message.contains("within 1000000 steps"), "{e}");
+        assert!(t.elapsed().as_secs_f64() < 5.0, "took {:?}", t.elapsed());
+    }
+}
