@@ -308,3 +308,23 @@ fn exponential_models_stop_at_the_work_limit() {
         assert!(t.elapsed().as_secs_f64() < 5.0, "took {:?}", t.elapsed());
     }
 }
+
+/// A recursive function whose body nests deeply overflowed the stack (found by fuzzing:
+/// 200 calls of a body 40 levels deep). Nesting through expressions and calls together
+/// is capped, within the 2 MB stack of a spawned thread.
+#[test]
+fn deep_recursion_through_nested_bodies_is_an_error() {
+    for k in [40, 190] {
+        let text = format!(
+            "let post(h) = intersection(cylinder(z, 0.1), {}post(1.5))\noutput post(1)\n",
+            "-".repeat(k)
+        );
+        let e = std::thread::Builder::new()
+            .stack_size(2 << 20)
+            .spawn(move || read_str(&text, Format::Frep, "t.frep").unwrap_err())
+            .unwrap()
+            .join()
+            .unwrap();
+        assert!(e.message.contains("nested at most 1000 deep in all"), "{e}");
+    }
+}

@@ -37,7 +37,15 @@ struct Interp<'a> {
     work: u64,
     /// The most work allowed (see [`work_limit`]).
     max_work: u64,
+    /// Expressions being evaluated, one inside the other (see [`MAX_NESTING`]).
+    nesting: usize,
 }
+
+/// How deeply evaluations may nest in all, through expressions and calls together: each
+/// is capped at [`MAX_DEPTH`], but a recursive function whose body nests 40 deep, 200
+/// calls down, overflowed the stack (found by fuzzing). A thousand levels take about
+/// 1 MB of stack.
+const MAX_NESTING: usize = 5 * MAX_DEPTH;
 
 /// The most work a model may take to evaluate (expressions evaluated plus the parts of
 /// every solid made): a million steps, or eight per byte of a larger file. A few kB of
@@ -85,7 +93,19 @@ impl Interp<'_> {
     /// Evaluates `e`, charging it and the solid it makes to the work budget.
     fn eval(&mut self, e: &Ast, locals: &HashMap<String, V>) -> Result<V, ReadError> {
         self.charge(1, e.pos())?;
-        let v = self.eval_node(e, locals)?;
+        if self.nesting >= MAX_NESTING {
+            return Err(self.err(
+                e.pos(),
+                format!(
+                    "expected expressions and calls nested at most {MAX_NESTING} deep in all, \
+                     found deeper (a recursive function?)"
+                ),
+            ));
+        }
+        self.nesting += 1;
+        let v = self.eval_node(e, locals);
+        self.nesting -= 1;
+        let v = v?;
         if let V::Solid(s, _) = &v {
             let n = parts(s, self.max_work + 1 - self.work);
             self.charge(n, e.pos())?;
@@ -306,6 +326,7 @@ pub(crate) fn read(text: &str, file: &str) -> Result<Model, ReadError> {
         depth: 0,
         work: 0,
         max_work: work_limit(text),
+        nesting: 0,
     };
     let mut output: Option<(Option<String>, Shape)> = None;
     let mut domain = None;
