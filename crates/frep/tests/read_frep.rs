@@ -265,7 +265,7 @@ fn read_file_refuses_devices_pipes_and_folders() {
 }
 
 /// A solid bound by `let` and used many times in arithmetic is lowered to a tree once:
-/// this 51 kB model (found by fuzzing: `fuzz/run.sh frep`) took 16 s when every `-b`
+/// this 51 kB model (like one `fuzz/run.sh frep` found) took 16 s when every `-b`
 /// lowered `b` again, quadratic in the file; now about 30 ms.
 #[test]
 fn a_solid_used_many_times_is_lowered_once() {
@@ -282,7 +282,7 @@ fn a_solid_used_many_times_is_lowered_once() {
 
 /// Work grows without bound in a few lines when a function calls another twice per level
 /// or a solid is copied into a union with itself level after level: 2^25 calls ran for
-/// minutes, 2^22 parts took seconds and memory (found by fuzzing). Evaluation has a work
+/// minutes, 2^22 parts took seconds and memory (found while fuzzing). Evaluation has a work
 /// limit (a million steps for a small file) and says so.
 #[test]
 fn exponential_models_stop_at_the_work_limit() {

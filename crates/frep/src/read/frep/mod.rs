@@ -50,7 +50,7 @@ const MAX_NESTING: usize = 5 * MAX_DEPTH;
 /// The most work a model may take to evaluate (expressions evaluated plus the parts of
 /// every solid made): a million steps, or eight per byte of a larger file. A few kB of
 /// text can otherwise call a function 2^k times or copy a solid into 2^k parts (`let s1 =
-/// union(s0, s0)`, `let s2 = union(s1, s1)`, …): found by fuzzing, such files ran for
+/// union(s0, s0)`, `let s2 = union(s1, s1)`, …): found while fuzzing, such files ran for
 /// minutes or filled memory; within the limit they fail in about a tenth of a second.
 fn work_limit(text: &str) -> u64 {
     (text.len() as u64 * 8).max(1_000_000)
