@@ -61,7 +61,7 @@ pub const MAX_GROWTH: usize = 4096;
 /// Mutates `data` in place with 1 to 8 stacked edits; `dict` holds the language's tokens,
 /// `other` an input of the corpus to splice from.
 pub fn mutate(data: &mut Vec<u8>, rng: &mut Rng, dict: &[Vec<u8>], other: &[u8]) {
-    let cap = data.len().max(MAX_GROWTH).min(MAX_INPUT);
+    let cap = data.len().clamp(MAX_GROWTH, MAX_INPUT);
     let n = 1 << rng.below(4);
     for _ in 0..n {
         edit(data, rng, dict, other);
@@ -94,7 +94,7 @@ fn edit(d: &mut Vec<u8>, rng: &mut Rng, dict: &[Vec<u8>], other: &[u8]) {
             ][rng.below(12)];
             d.insert(i, b);
         }
-        4 | 5 | 6 if !dict.is_empty() => {
+        4..=6 if !dict.is_empty() => {
             // Insert or overwrite with a token.
             let t = &dict[rng.below(dict.len())];
             let i = at(rng);
