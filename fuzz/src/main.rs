@@ -21,7 +21,7 @@ use targets::Target;
 #[global_allocator]
 static ALLOC: guard::Counting = guard::Counting;
 
-/// An execution longer than this is a hang.
+/// An execution taking more CPU time than this is a hang.
 const HANG: Duration = Duration::from_secs(1);
 /// Inputs kept per distinct panic location.
 const KEEP_PER_CRASH: usize = 5;

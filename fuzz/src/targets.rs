@@ -223,7 +223,13 @@ pub fn run(t: Target, input: &[u8], sandbox: &Path) {
 fn self_test(input: &[u8]) {
     match input {
         b"panic" => panic!("selftest"),
-        b"slow" => std::thread::sleep(std::time::Duration::from_millis(1100)),
+        b"slow" => {
+            // 1.1 s of CPU time, the measure of a hang.
+            let t = crate::guard::thread_cpu();
+            while crate::guard::thread_cpu() - t < std::time::Duration::from_millis(1100) {
+                std::hint::black_box(0);
+            }
+        }
         b"memory" => drop(std::hint::black_box(vec![1u8; 2 << 30])),
         b"stack" => drop(deep(std::hint::black_box(1 << 40))),
         _ => {}
