@@ -430,7 +430,7 @@ fn hf_s_is_reserved_only_when_the_header_declares_it() {
     }
 }
 
-/// Memory and copying are bounded: 200 arrays of a million elements took 5 GB, and a
+/// Memory and copying are bounded: 200 arrays of a million elements took gigabytes, and a
 /// branch on the coordinates inside a loop copied a million-element array at every
 /// iteration (80 s). Both stop at the limit of four million variables and array
 /// elements made or copied, with an error at the declaration or the branch.

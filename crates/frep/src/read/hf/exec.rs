@@ -24,7 +24,7 @@ const MAX_CALL_DEPTH: usize = 64;
 
 /// The most variables and array elements one model may make or copy: arrays are
 /// declared up to a million elements each and a branch on the coordinates copies every
-/// variable, so 200 arrays took 5 GB and a branch in a loop copied a million-element
+/// variable, so 200 arrays took gigabytes and a branch in a loop copied a million-element
 /// array a million times (found while fuzzing). Four million take about 100 MB.
 pub(crate) const MAX_CELLS: usize = 4_000_000;
 
