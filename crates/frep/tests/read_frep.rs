@@ -242,3 +242,89 @@ fn read_file_reports_unreadable_files() {
     assert_eq!((e.line, e.column), (0, 0));
     assert!(e.message.contains(".frep, .hf or .vm"), "{e}");
 }
+
+/// A model path naming a device, pipe or folder is refused before it is opened:
+/// `/dev/zero` reports length 0 and then never ends (read, it filled memory), and a FIFO
+/// blocks the reader for ever. Scenes name model files, so a scene could do either.
+#[cfg(unix)]
+#[test]
+fn read_file_refuses_devices_pipes_and_folders() {
+    let dir = std::env::temp_dir().join(format!("frep-read-special-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let zero = dir.join("zero.frep");
+    let _ = std::fs::remove_file(&zero);
+    std::os::unix::fs::symlink("/dev/zero", &zero).unwrap();
+    let folder = dir.join("folder.vm");
+    std::fs::create_dir_all(&folder).unwrap();
+    for p in [&zero, &folder] {
+        let e = read_file(p).unwrap_err();
+        assert_eq!((e.line, e.column), (0, 0));
+        assert!(e.message.contains("found a folder, device or pipe"), "{e}");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A solid bound by `let` and used many times in arithmetic is lowered to a tree once:
+/// this 51 kB model (like one `fuzz/run.sh frep` found) took 16 s when every `-b`
+/// lowered `b` again, quadratic in the file; now about 30 ms.
+#[test]
+fn a_solid_used_many_times_is_lowered_once() {
+    let b = format!(
+        "let b = rotate_z(30, sphere([0, 0, 0], 1) {})\n",
+        "+ x * 0.001 ".repeat(3000)
+    );
+    let g = format!("let g = {}\noutput g\n", vec!["-b"; 3000].join(" + "));
+    let t = std::time::Instant::now();
+    let m = frep(&(b + &g));
+    assert!(t.elapsed().as_secs_f64() < 5.0, "took {:?}", t.elapsed());
+    assert!(expr(&m).eval([0.0, 0.0, 0.0]).is_finite());
+}
+
+/// Work grows without bound in a few lines when a function calls another twice per level
+/// or a solid is copied into a union with itself level after level: 2^25 calls ran for
+/// minutes, 2^22 parts took seconds and memory (found while fuzzing). Evaluation has a work
+/// limit (a million steps for a small file) and says so.
+#[test]
+fn exponential_models_stop_at_the_work_limit() {
+    let calls: String = (1..26)
+        .map(|i| format!("let f{i}(t) = f{}(t) * f{}(t)\n", i - 1, i - 1))
+        .collect();
+    let calls = format!("let f0(t) = t + 1\n{calls}output f25(x)\n");
+    let parts: String = (1..40)
+        .map(|i| format!("let s{i} = union(s{}, s{})\n", i - 1, i - 1))
+        .collect();
+    let parts = format!("let s0 = sphere([0, 0, 0], 1)\n{parts}output s39\n");
+    let nested = format!(
+        "let f(s) = {}s{}\noutput {}sphere([0, 0, 0], 1){}\n",
+        "rotate_z(1, ".repeat(100),
+        ")".repeat(100),
+        "f(".repeat(150),
+        ")".repeat(150)
+    );
+    for text in [calls, parts, nested] {
+        let t = std::time::Instant::now();
+        let e = read_str(&text, Format::Frep, "t.frep").unwrap_err();
+        assert!(e.message.contains("within 1000000 steps"), "{e}");
+        assert!(t.elapsed().as_secs_f64() < 5.0, "took {:?}", t.elapsed());
+    }
+}
+
+/// A recursive function whose body nests deeply overflowed the stack (found by fuzzing:
+/// 200 calls of a body 40 levels deep). Nesting through expressions and calls together
+/// is capped, within the 2 MB stack of a spawned thread.
+#[test]
+fn deep_recursion_through_nested_bodies_is_an_error() {
+    for k in [40, 190] {
+        let text = format!(
+            "let post(h) = intersection(cylinder(z, 0.1), {}post(1.5))\noutput post(1)\n",
+            "-".repeat(k)
+        );
+        let e = std::thread::Builder::new()
+            .stack_size(2 << 20)
+            .spawn(move || read_str(&text, Format::Frep, "t.frep").unwrap_err())
+            .unwrap()
+            .join()
+            .unwrap();
+        assert!(e.message.contains("nested at most 1000 deep in all"), "{e}");
+    }
+}

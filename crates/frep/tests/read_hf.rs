@@ -429,3 +429,27 @@ fn hf_s_is_reserved_only_when_the_header_declares_it() {
         assert!(e.to_string().contains("already in use"), "{e}");
     }
 }
+
+/// Memory and copying are bounded: 200 arrays of a million elements took gigabytes, and a
+/// branch on the coordinates inside a loop copied a million-element array at every
+/// iteration (80 s). Both stop at the limit of four million variables and array
+/// elements made or copied, with an error at the declaration or the branch.
+#[test]
+fn arrays_made_or_copied_are_bounded() {
+    let arrays: String = (0..200)
+        .map(|i| format!("  array b{i}[1000000];\n"))
+        .collect();
+    let many = format!("m(x[3], a[1])\n{{\n{arrays}  m = x[1];\n}}\n");
+    let copied = "m(x[3], a[1])\n{\n  array b[1000000];\n  i = 0;\n  m = x[1];\n  \
+                  while i < 1000 loop\n    if x[1] > 0 then m = m + 1; endif;\n    \
+                  i = i + 1;\n  endloop;\n}\n";
+    for (text, line) in [(many.as_str(), 7), (copied, 7)] {
+        let t = std::time::Instant::now();
+        let e = read_str(text, Format::HyperFun, "t.hf").unwrap_err();
+        assert!(e.message.contains("at most 4000000 variables"), "{e}");
+        assert_eq!(e.line, line, "{e}");
+        assert!(t.elapsed().as_secs_f64() < 5.0, "took {:?}", t.elapsed());
+    }
+    // A million-element array with a branch outside any loop is fine.
+    hf("m(x[3], a[1])\n{\n  array b[1000000];\n  m = x[1];\n  if x[2] > 0 then m = x[2]; endif;\n}\n");
+}

@@ -31,6 +31,10 @@ impl ExrChannels {
 /// the file name: callers add it); a panic of the decoder on a malformed file is caught
 /// and reported as an error.
 pub fn read_exr(path: &Path) -> Result<ExrChannels, String> {
+    // A FIFO would block the decoder for ever: only plain files are opened.
+    if std::fs::metadata(path).is_ok_and(|m| !m.is_file()) {
+        return Err("expected an EXR file, found a folder, device or pipe".to_string());
+    }
     let read = std::panic::catch_unwind(|| exr::prelude::read_first_flat_layer_from_file(path))
         .map_err(|_| "the EXR decoder failed on this file".to_string())?;
     let img = read.map_err(|e| format!("not a readable EXR file ({e})"))?;

@@ -168,6 +168,31 @@ fn errors_in_values_name_the_key_path() {
     value_error(v, "objects[0].model", "nope.frep");
 }
 
+/// Paths in a scene naming a device or a pipe are refused, not opened: a model at
+/// `/dev/zero` was read until memory ran out, and a map or model at a FIFO with no
+/// writer blocked resolution for ever.
+#[cfg(unix)]
+#[test]
+fn models_and_maps_that_are_devices_or_pipes_are_refused() {
+    let dir = std::env::temp_dir().join(format!("scene-special-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let zero = dir.join("zero.frep");
+    let _ = std::fs::remove_file(&zero);
+    std::os::unix::fs::symlink("/dev/zero", &zero).unwrap();
+    let mut v = base();
+    v["objects"][0] = json!({"model": zero, "material": "white"});
+    value_error(v, "objects[0].model", "found a folder, device or pipe");
+    let fifo = dir.join("fifo.exr");
+    let _ = std::fs::remove_file(&fifo);
+    let made = std::process::Command::new("mkfifo").arg(&fifo).status();
+    if made.is_ok_and(|s| s.success()) {
+        let mut v = base();
+        v["environment"] = json!({"map": fifo});
+        value_error(v, "environment.map", "found a folder, device or pipe");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 #[test]
 fn light_selection_cdf_sums_to_one() {
     for name in ["many-lights.toml", "environment.toml", "cornell.toml"] {

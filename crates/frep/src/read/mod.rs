@@ -132,9 +132,19 @@ pub fn read_file(path: &Path) -> Result<Model, ReadError> {
                 "expected a file ending in .frep, .hf or .vm, found another extension",
             )
         })?;
-    let len = std::fs::metadata(path)
-        .map_err(|e| ReadError::at(&file, 0, 0, format!("cannot read the file: {e}")))?
-        .len();
+    let meta = std::fs::metadata(path)
+        .map_err(|e| ReadError::at(&file, 0, 0, format!("cannot read the file: {e}")))?;
+    // A device or pipe reports length 0 and may never end (`/dev/zero`) or block for
+    // ever (a FIFO with no writer): only plain files are opened.
+    if !meta.is_file() {
+        return Err(ReadError::at(
+            &file,
+            0,
+            0,
+            "expected a model file, found a folder, device or pipe",
+        ));
+    }
+    let len = meta.len();
     if len > MAX_MODEL_BYTES {
         return Err(ReadError::at(
             &file,

@@ -145,7 +145,7 @@ fn moved(a: &Args, m: Affine, solid: usize) -> R<V> {
             a.pos,
         ));
     }
-    Ok(V::Solid(Shape::Transformed(m, Box::new(a.shape(solid)?))))
+    Ok(V::solid(Shape::Transformed(m, Box::new(a.shape(solid)?))))
 }
 
 /// Calls built-in `name` with bound arguments.
@@ -234,7 +234,7 @@ pub(crate) fn call(name: &str, a: &Args) -> R<V> {
                 })
                 .map(|q| Shape::Perturbed(PerturbedQuadric::new(q)))
                 .collect();
-            V::Solid(Shape::Intersection(faces))
+            V::solid(Shape::Intersection(faces))
         }
         "torus" => {
             let (big, r) = (a.num(0)?, a.num(1)?);
@@ -252,7 +252,7 @@ pub(crate) fn call(name: &str, a: &Args) -> R<V> {
         "perturb" => {
             let mut pq = match a.v(0) {
                 V::Quadric(q) => PerturbedQuadric::new(*q),
-                V::Solid(Shape::Perturbed(p)) => p.clone(),
+                V::Solid(Shape::Perturbed(p), _) => p.clone(),
                 o => {
                     return Err((
                         format!("expected a quadric as the base, found {}", o.kind()),
@@ -271,7 +271,7 @@ pub(crate) fn call(name: &str, a: &Args) -> R<V> {
                     }
                 }
             }
-            V::Solid(Shape::Perturbed(pq))
+            V::solid(Shape::Perturbed(pq))
         }
         "union" | "intersection" | "difference" => {
             let all = a.all();
@@ -285,7 +285,7 @@ pub(crate) fn call(name: &str, a: &Args) -> R<V> {
             for (v, p) in &all {
                 shapes.push(v.shape().map_err(|m| (m, *p))?);
             }
-            V::Solid(match name {
+            V::solid(match name {
                 "union" => Shape::Union(shapes),
                 "intersection" => Shape::Intersection(shapes),
                 _ => {

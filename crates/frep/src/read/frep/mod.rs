@@ -33,6 +33,46 @@ struct Interp<'a> {
     file: &'a str,
     globals: HashMap<String, Binding>,
     depth: usize,
+    /// Work done so far: expressions evaluated and solid parts made.
+    work: u64,
+    /// The most work allowed (see [`work_limit`]).
+    max_work: u64,
+    /// Expressions being evaluated, one inside the other (see [`MAX_NESTING`]).
+    nesting: usize,
+}
+
+/// How deeply evaluations may nest in all, through expressions and calls together: each
+/// is capped at [`MAX_DEPTH`], but a recursive function whose body nests 40 deep, 200
+/// calls down, overflowed the stack (found by fuzzing). A thousand levels take about
+/// 1 MB of stack.
+const MAX_NESTING: usize = 5 * MAX_DEPTH;
+
+/// The most work a model may take to evaluate (expressions evaluated plus the parts of
+/// every solid made): a million steps, or eight per byte of a larger file. A few kB of
+/// text can otherwise call a function 2^k times or copy a solid into 2^k parts (`let s1 =
+/// union(s0, s0)`, `let s2 = union(s1, s1)`, …): found while fuzzing, such files ran for
+/// minutes or filled memory; within the limit they fail in about a tenth of a second.
+fn work_limit(text: &str) -> u64 {
+    (text.len() as u64 * 8).max(1_000_000)
+}
+
+/// The parts of a shape, counting at most `cap` of them.
+fn parts(s: &Shape, cap: u64) -> u64 {
+    let mut n = 0;
+    let mut stack = vec![s];
+    while let Some(s) = stack.pop() {
+        n += 1;
+        if n >= cap {
+            break;
+        }
+        match s {
+            Shape::Function { .. } | Shape::Perturbed(_) => {}
+            Shape::Union(v) | Shape::Intersection(v) => stack.extend(v),
+            Shape::Difference(a, b) => stack.extend([&**a, &**b]),
+            Shape::Transformed(_, a) => stack.push(a),
+        }
+    }
+    n
 }
 
 /// Names that cannot be redefined.
@@ -50,7 +90,45 @@ impl Interp<'_> {
         ReadError::at(self.file, p.line, p.col, m)
     }
 
+    /// Evaluates `e`, charging it and the solid it makes to the work budget.
     fn eval(&mut self, e: &Ast, locals: &HashMap<String, V>) -> Result<V, ReadError> {
+        self.charge(1, e.pos())?;
+        if self.nesting >= MAX_NESTING {
+            return Err(self.err(
+                e.pos(),
+                format!(
+                    "expected expressions and calls nested at most {MAX_NESTING} deep in all, \
+                     found deeper (a recursive function?)"
+                ),
+            ));
+        }
+        self.nesting += 1;
+        let v = self.eval_node(e, locals);
+        self.nesting -= 1;
+        let v = v?;
+        if let V::Solid(s, _) = &v {
+            let n = parts(s, self.max_work + 1 - self.work);
+            self.charge(n, e.pos())?;
+        }
+        Ok(v)
+    }
+
+    fn charge(&mut self, n: u64, p: Pos) -> Result<(), ReadError> {
+        self.work += n;
+        if self.work > self.max_work {
+            let m = self.max_work;
+            return Err(self.err(
+                p,
+                format!(
+                    "expected the model to evaluate within {m} steps, found more \
+                     (a function called or a solid copied exponentially often?)"
+                ),
+            ));
+        }
+        Ok(())
+    }
+
+    fn eval_node(&mut self, e: &Ast, locals: &HashMap<String, V>) -> Result<V, ReadError> {
         Ok(match e {
             Ast::Num(v, _) => V::Num(*v),
             Ast::Name(n, p) => match n.as_str() {
@@ -246,6 +324,9 @@ pub(crate) fn read(text: &str, file: &str) -> Result<Model, ReadError> {
         file,
         globals: HashMap::new(),
         depth: 0,
+        work: 0,
+        max_work: work_limit(text),
+        nesting: 0,
     };
     let mut output: Option<(Option<String>, Shape)> = None;
     let mut domain = None;

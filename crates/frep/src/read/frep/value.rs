@@ -10,6 +10,7 @@ use crate::quadric::Quadric;
 use crate::read::sym::powi_tree;
 use crate::shape::Shape;
 use crate::tree::{Tree, TreeOp};
+use std::sync::{Arc, OnceLock};
 
 /// A `.frep` value.
 #[derive(Clone, Debug)]
@@ -22,10 +23,23 @@ pub(crate) enum V {
     Quadric(Quadric),
     /// f · q³, a perturbation (compact, q ≥ 0 only, inside `perturb`).
     Term(f64, Quadric),
-    Solid(Shape),
+    /// A solid, with its expression tree once one was asked for.
+    Solid(Shape, Lowered),
 }
 
+/// A solid's expression tree, made the first time it is asked for and shared by every
+/// copy of the value: a solid bound by `let` and used N times in arithmetic (`-b`,
+/// `b * 2`) was otherwise lowered N times, quadratic in the file (a 60 kB model took a
+/// second; found by fuzzing).
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Lowered(Arc<OnceLock<Result<Tree, String>>>);
+
 impl V {
+    /// A solid value.
+    pub fn solid(s: Shape) -> V {
+        V::Solid(s, Lowered::default())
+    }
+
     /// The kind of value, for "expected …, found …" errors.
     pub fn kind(&self) -> &'static str {
         match self {
@@ -34,7 +48,7 @@ impl V {
             V::Field(_) => "a function of x, y, z",
             V::Quadric(_) => "a quadric",
             V::Term(..) => "a perturbation term f * q^3",
-            V::Solid(_) => "a solid",
+            V::Solid(..) => "a solid",
         }
     }
 
@@ -44,7 +58,7 @@ impl V {
             V::Field(t) => Shape::function(t.clone()),
             V::Quadric(q) => Shape::Perturbed(PerturbedQuadric::new(*q)),
             V::Term(..) => Shape::function(self.tree()?),
-            V::Solid(s) => s.clone(),
+            V::Solid(s, _) => s.clone(),
             V::Num(_) | V::List(_) => {
                 return Err(format!("expected a solid, found {}", self.kind()))
             }
@@ -58,7 +72,7 @@ impl V {
             V::Field(t) => t.clone(),
             V::Quadric(q) => q.to_tree(),
             V::Term(f, q) => *f * q.to_tree().powi(3),
-            V::Solid(s) => s.to_tree()?,
+            V::Solid(s, l) => l.0.get_or_init(|| s.to_tree()).clone()?,
             V::List(_) => {
                 return Err("expected a number or a function of x, y, z, found a list".into())
             }

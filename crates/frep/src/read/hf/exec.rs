@@ -22,6 +22,12 @@ pub(crate) const MAX_ITERATIONS: usize = 1_000_000;
 /// The deepest chain of calls of one model by another.
 const MAX_CALL_DEPTH: usize = 64;
 
+/// The most variables and array elements one model may make or copy: arrays are
+/// declared up to a million elements each and a branch on the coordinates copies every
+/// variable, so 200 arrays took gigabytes and a branch in a loop copied a million-element
+/// array a million times (found while fuzzing). Four million take about 100 MB.
+pub(crate) const MAX_CELLS: usize = 4_000_000;
+
 /// The variables of one running model.
 #[derive(Clone, Default)]
 struct Frame {
@@ -37,6 +43,15 @@ pub(crate) struct Exec<'a> {
     pub file: &'a str,
     iterations: usize,
     depth: usize,
+    /// Variables and array elements made or copied so far (see [`MAX_CELLS`]).
+    cells: usize,
+}
+
+impl Frame {
+    /// Its variables and array elements.
+    fn cells(&self) -> usize {
+        self.scalars.len() + self.arrays.values().map(Vec::len).sum::<usize>()
+    }
 }
 
 impl<'a> Exec<'a> {
@@ -47,7 +62,22 @@ impl<'a> Exec<'a> {
             file,
             iterations: 0,
             depth: 0,
+            cells: 0,
         }
+    }
+
+    fn charge_cells(&mut self, n: usize, p: Pos) -> Result<(), ReadError> {
+        self.cells += n;
+        if self.cells > MAX_CELLS {
+            return Err(self.err(
+                p,
+                format!(
+                    "expected at most {MAX_CELLS} variables and array elements made or \
+                     copied in all, found more"
+                ),
+            ));
+        }
+        Ok(())
     }
 
     fn err(&self, p: Pos, msg: impl Into<String>) -> ReadError {
@@ -62,6 +92,7 @@ impl<'a> Exec<'a> {
         f.arrays
             .insert("a".into(), a.into_iter().map(Some).collect());
         if let Some(k) = m.s_dim {
+            self.charge_cells(k, m.pos)?;
             f.arrays.insert("s".into(), vec![Some(Val::Num(0.0)); k]);
             f.has_s = true;
         }
@@ -95,6 +126,7 @@ impl<'a> Exec<'a> {
                             format!("expected a new array name, found '{name}', already in use"),
                         ));
                     }
+                    self.charge_cells(*n, *p)?;
                     f.arrays.insert(name.clone(), vec![None; *n]);
                 }
             }
@@ -143,6 +175,7 @@ impl<'a> Exec<'a> {
                     Some(v) if v != 0.0 => self.block(f, then)?,
                     Some(_) => self.block(f, other)?,
                     None => {
+                        self.charge_cells(2 * f.cells(), c.pos())?;
                         let mut ft = f.clone();
                         self.block(&mut ft, then)?;
                         let mut fe = f.clone();

@@ -70,6 +70,20 @@ pub(crate) enum Expr {
     Compare(Box<Expr>, Vec<(Cmp, Pos, Expr)>),
 }
 
+impl Expr {
+    /// Where the expression starts.
+    pub(crate) fn pos(&self) -> Pos {
+        match self {
+            Expr::Num(_, p)
+            | Expr::Name(_, p)
+            | Expr::Index(_, _, p)
+            | Expr::Call(_, _, p)
+            | Expr::Unary(_, _, p) => *p,
+            Expr::Chain(a, _) | Expr::Compare(a, _) => a.pos(),
+        }
+    }
+}
+
 /// A statement.
 #[derive(Clone, Debug)]
 pub(crate) enum Stmt {
