@@ -99,8 +99,9 @@ def test_same_image_at_any_thread_count(many_lights):
 def test_ctrl_c_stops_a_render_with_a_partial_state(many_lights):
     # SIGINT to this process while a long render runs: the render stops within a
     # sample and KeyboardInterrupt carries the partial state. Python's own SIGINT handler
-    # is installed for the test: an earlier test's library (Ray defers SIGINT in some
-    # calls) must not decide what Ctrl-C does here. The render is bounded (about a
+    # is installed for the test: a test run started in the background (`cmd &` in a
+    # script) inherits SIGINT ignored, and Python then installs no handler, so the
+    # signal was lost and the render ran on for hours. The render is bounded (about a
     # minute at 24 x 16 unstopped), so a lost signal fails the test instead of hanging.
     previous = signal.signal(signal.SIGINT, signal.default_int_handler)
     timer = threading.Timer(0.5, os.kill, (os.getpid(), signal.SIGINT))
