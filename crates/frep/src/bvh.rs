@@ -289,6 +289,17 @@ impl Bvh {
         self.as_ref().nearest(ray, t_min, t_max, hit)
     }
 
+    /// Any-hit traversal: see [`BvhRef::any_hit`].
+    pub fn any_hit(
+        &self,
+        ray: &Ray,
+        t_min: f64,
+        t_max: f64,
+        hit: impl FnMut(usize) -> bool,
+    ) -> bool {
+        self.as_ref().any_hit(ray, t_min, t_max, hit)
+    }
+
     /// Calls `visit(item)` for every item whose box holds `p` (and every unbounded item).
     pub fn for_each_containing(&self, p: DVec3, visit: impl FnMut(usize)) {
         self.as_ref().for_each_containing(p, visit)
@@ -331,23 +342,56 @@ impl BvhRef<'_> {
         &self,
         ray: &Ray,
         t_min: f64,
-        mut t_max: f64,
+        t_max: f64,
         mut hit: impl FnMut(usize, f64) -> Option<f64>,
     ) -> Option<(usize, f64)> {
         let mut best = None;
-        let mut offer = |i: u32, t_max: &mut f64, best: &mut Option<(usize, f64)>| {
+        self.walk(ray, t_min, t_max, |i, t_max| {
             if let Some(t) = hit(i as usize, *t_max) {
                 if t <= *t_max {
                     *t_max = t;
-                    *best = Some((i as usize, t));
+                    best = Some((i as usize, t));
                 }
             }
-        };
+            false
+        });
+        best
+    }
+
+    /// Any-hit traversal (shadow rays): whether `hit(item)` holds for some item whose box
+    /// the segment meets; stops at the first that does.
+    pub fn any_hit(
+        &self,
+        ray: &Ray,
+        t_min: f64,
+        t_max: f64,
+        mut hit: impl FnMut(usize) -> bool,
+    ) -> bool {
+        let mut found = false;
+        self.walk(ray, t_min, t_max, |i, _| {
+            found = hit(i as usize);
+            found
+        });
+        found
+    }
+
+    /// The traversal both queries share: `offer(item, &mut t_max)` for each item met,
+    /// nearer subtrees first, unbounded items before all; it may shrink t_max, and
+    /// stops the walk by returning true.
+    fn walk(
+        &self,
+        ray: &Ray,
+        t_min: f64,
+        mut t_max: f64,
+        mut offer: impl FnMut(u32, &mut f64) -> bool,
+    ) {
         for &i in self.unbounded {
-            offer(i, &mut t_max, &mut best);
+            if offer(i, &mut t_max) {
+                return;
+            }
         }
         if self.nodes.is_empty() {
-            return best;
+            return;
         }
         let slab = Slab::new(ray);
         let neg = [ray.d.x < 0.0, ray.d.y < 0.0, ray.d.z < 0.0];
@@ -360,8 +404,10 @@ impl BvhRef<'_> {
                 if node.count > 0 {
                     let s = node.offset as usize;
                     for k in s..s + node.count as usize {
-                        if slab.enter(&self.item_bounds[k], t_min, t_max).is_some() {
-                            offer(self.order[k], &mut t_max, &mut best);
+                        if slab.enter(&self.item_bounds[k], t_min, t_max).is_some()
+                            && offer(self.order[k], &mut t_max)
+                        {
+                            return;
                         }
                     }
                 } else {
@@ -378,7 +424,7 @@ impl BvhRef<'_> {
                 }
             }
             if top == 0 {
-                return best;
+                return;
             }
             top -= 1;
             cur = stack[top] as usize;
@@ -496,7 +542,18 @@ mod tests {
                 let mut got = Vec::new();
                 bvh.collect(&ray, t0, t1, &mut got);
                 got.sort_unstable();
-                assert_eq!(got, brute(&boxes, &ray, t0, t1), "n={n}");
+                let want = brute(&boxes, &ray, t0, t1);
+                assert_eq!(got, want, "n={n}");
+                // Any-hit for "an odd item": the same answer, and nothing offered once
+                // one held.
+                let (mut held, mut late) = (false, 0);
+                let any = bvh.any_hit(&ray, t0, t1, |i| {
+                    late += usize::from(held);
+                    held |= i % 2 == 1;
+                    i % 2 == 1
+                });
+                assert_eq!(any, want.iter().any(|i| i % 2 == 1), "n={n}");
+                assert_eq!(late, 0, "n={n}");
             }
             for _ in 0..100 {
                 let p = DVec3::new(

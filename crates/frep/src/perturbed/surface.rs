@@ -5,6 +5,7 @@
 //! are not bounded ellipsoids are tested by every query. The crossing itself is the
 //! exact piecewise-polynomial scan of [`super::scan`].
 
+use super::along::{positive_set, q_local};
 use super::scan::{self, Coeffs};
 use super::{Perturbation, PerturbedQuadric};
 use crate::bvh::{Bvh, BvhRef};
@@ -166,7 +167,17 @@ impl PerturbedView<'_> {
     }
 
     /// The first t in (t_min, t_max) where F' changes sign (exact scan, no allocation).
+    /// A plain quadric (no perturbations) takes the closed form instead.
     pub fn first_crossing(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<f64> {
+        if self.perturbations.is_empty() {
+            self.clip(ray, t_min, t_max)?;
+            return quadric_first_crossing(&self.base.c, ray, t_min, t_max);
+        }
+        self.scan_first_crossing(ray, t_min, t_max)
+    }
+
+    /// [`Self::first_crossing`] by the scan, whatever the perturbations.
+    fn scan_first_crossing(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<f64> {
         let (lo, hi, sign) = self.clip(ray, t_min, t_max)?;
         let src = Supports {
             perturbations: self.perturbations,
@@ -187,6 +198,20 @@ impl PerturbedView<'_> {
             sign,
         )
     }
+}
+
+/// The first simple root of the quadric along the ray in (t_min, t_max): the least end of
+/// its positive set there ([`positive_set`]: stable quadratic formula; a double root is a
+/// touch, not a crossing). Planes, boxes and plain quadrics need no Bernstein scan. The
+/// quadratic is expanded about the ray's origin whatever t_min is, so that a walk from
+/// one root to the next (t_min = the last root) never finds the same root again.
+fn quadric_first_crossing(c: &Coeffs<f64>, ray: &Ray, t_min: f64, t_max: f64) -> Option<f64> {
+    let (set, n) = positive_set(q_local(c, ray.o.to_array(), ray.d.to_array()));
+    set[..n]
+        .iter()
+        .flat_map(|&(a, b)| [a, b])
+        .filter(|&t| t > t_min && t < t_max && t.is_finite())
+        .min_by(f64::total_cmp)
 }
 
 /// The perturbations whose support box the ray meets on a part of [lo, hi], nearer BVH
@@ -300,16 +325,23 @@ mod tests {
                 for (t_min, t_max) in [(0.0, f64::INFINITY), (-5.0, 4.0), (3.1, 3.5)] {
                     let a = q.along(o, d);
                     let want = quadratic_roots(a, t_min, t_max).first().copied();
+                    // The closed form `first_crossing` takes, and the general scan.
                     let got = s.first_crossing(&ray, t_min, t_max);
-                    match (got, want) {
-                        (Some(g), Some(w)) => {
-                            // Rounding of the quadratic's terms over its slope.
-                            let terms = 1.0 + a[0].abs() + (a[1] * w).abs() + (a[2] * w * w).abs();
-                            let tol = 1e-14 * terms / (a[1] + 2.0 * a[2] * w).abs();
-                            assert!((g - w).abs() < tol, "{q:?}: {g} vs {w}, tol {tol}")
+                    let scanned = s.view().scan_first_crossing(&ray, t_min, t_max);
+                    for (how, got) in [("closed form", got), ("scan", scanned)] {
+                        match (got, want) {
+                            (Some(g), Some(w)) => {
+                                // Rounding of the quadratic's terms over its slope.
+                                let terms =
+                                    1.0 + a[0].abs() + (a[1] * w).abs() + (a[2] * w * w).abs();
+                                let tol = 1e-14 * terms / (a[1] + 2.0 * a[2] * w).abs();
+                                assert!((g - w).abs() < tol, "{how} {q:?}: {g} vs {w}, tol {tol}")
+                            }
+                            (None, None) => {}
+                            _ => panic!(
+                                "{how} {q:?} {ray:?} [{t_min}, {t_max}]: {got:?} vs {want:?}"
+                            ),
                         }
-                        (None, None) => {}
-                        _ => panic!("{q:?} {ray:?} [{t_min}, {t_max}]: {got:?} vs {want:?}"),
                     }
                     checked += got.is_some() as usize;
                 }

@@ -6,7 +6,7 @@ use super::LightSample;
 use crate::color::Rgb;
 use crate::frame::Frame;
 use crate::warp::{safe_sqrt, spherical_direction, uniform_disk_concentric, uniform_sphere};
-use frep::Ray;
+use frep::{Aabb, Ray};
 use glam::{DVec2, DVec3};
 use std::f64::consts::PI;
 
@@ -77,6 +77,36 @@ impl AreaLight {
             Shape::Rect { edge_u, edge_v, .. } => edge_u.cross(edge_v).length(),
             Shape::Disk { radius, .. } => PI * radius * radius,
         }
+    }
+    /// A box holding the surface, grown by a hair (1e-9 of its size, and of its distance
+    /// from the origin) so that every crossing [`Self::crossings`] reports, edges
+    /// included, lies inside it; a flat shape's box has a thickness.
+    pub fn bounds(&self) -> Aabb {
+        let (lo, hi) = match self.shape {
+            Shape::Sphere { center, radius } => (center - radius, center + radius),
+            Shape::Rect {
+                corner,
+                edge_u,
+                edge_v,
+            } => {
+                let corners = [corner + edge_u, corner + edge_v, corner + edge_u + edge_v];
+                corners
+                    .iter()
+                    .fold((corner, corner), |(lo, hi), &c| (lo.min(c), hi.max(c)))
+            }
+            Shape::Disk {
+                center,
+                normal,
+                radius,
+            } => {
+                // A disk's extent along axis i is r·√(1 − n_i²).
+                let half = (DVec3::ONE - normal * normal).max(DVec3::ZERO);
+                let half = DVec3::new(half.x.sqrt(), half.y.sqrt(), half.z.sqrt()) * radius;
+                (center - half, center + half)
+            }
+        };
+        let pad = 1e-9 * (1.0 + (hi - lo).max_element() + lo.abs().max(hi.abs()).max_element());
+        Aabb::new(lo - pad, hi + pad)
     }
     /// Emitted power Φ = π A L (twice that when two-sided).
     pub fn power(&self) -> Rgb {

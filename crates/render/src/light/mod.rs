@@ -20,7 +20,7 @@ pub use trained::{TrainedSelection, TRAIN_FLOOR, TRAIN_GRID};
 
 use crate::color::{luminance, Rgb};
 use crate::distribution::Distribution1D;
-use frep::Ray;
+use frep::{Bvh, Ray};
 use glam::{DVec2, DVec3};
 
 /// A direction toward a light, drawn from a shading point.
@@ -64,6 +64,9 @@ pub struct Lights {
     by_power: Option<Distribution1D>,
     /// Area lights ∝ area.
     by_area: Option<Distribution1D>,
+    /// A BVH over the area lights' boxes: a ray meets, and a direction has density
+    /// under, only the lights whose box it crosses, so queries cost O(log n).
+    bvh: Bvh,
 }
 
 impl Lights {
@@ -83,6 +86,7 @@ impl Lights {
         let areas: Vec<f64> = area.iter().map(|l| l.area()).collect();
         let by_area = (!areas.is_empty()).then(|| Distribution1D::new(&areas));
         Self {
+            bvh: Bvh::new(&area.iter().map(AreaLight::bounds).collect::<Vec<_>>()),
             area,
             delta,
             environment,
@@ -108,6 +112,7 @@ impl Lights {
             "by_area"
         );
         Self {
+            bvh: Bvh::new(&area.iter().map(AreaLight::bounds).collect::<Vec<_>>()),
             area,
             delta,
             environment,
@@ -129,19 +134,20 @@ impl Lights {
     }
     /// The nearest area light along `ray` (unit direction) with t in (t_min, t_max).
     pub fn intersect(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<LightHit> {
-        let mut best: Option<LightHit> = None;
-        for (i, l) in self.area.iter().enumerate() {
-            let lim = best.map_or(t_max, |b| b.t);
-            if let Some(c) = l.intersect(ray, t_min, lim) {
-                best = Some(LightHit {
-                    light: i,
-                    t: c.t,
-                    n: c.n,
-                    radiance: l.emitted(c.n, -ray.d),
-                });
-            }
-        }
-        best
+        let mut n = DVec3::ZERO;
+        let (i, t) = self.bvh.nearest(ray, t_min, t_max, |i, lim| {
+            let c = self.area[i].intersect(ray, t_min, lim)?;
+            n = c.n;
+            Some(c.t)
+        })?;
+        // `n` is the last accepted crossing's, the nearest: `nearest` only accepts hits
+        // below its shrinking t_max.
+        Some(LightHit {
+            light: i,
+            t,
+            n,
+            radiance: self.area[i].emitted(n, -ray.d),
+        })
     }
     /// Radiance arriving at `ray.o` from direction `ray.d` when nothing but lights
     /// lies in (t_min, t_max): the nearest area light, or the environment if the ray

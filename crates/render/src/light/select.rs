@@ -12,6 +12,7 @@
 use super::{AreaLight, LightSample, Lights, Shape, TrainedSelection};
 use crate::color::luminance;
 use crate::warp::safe_sqrt;
+use frep::Ray;
 use glam::{DVec2, DVec3};
 
 /// A light-selection pmf.
@@ -120,7 +121,7 @@ impl Lights {
     }
 
     /// Σ over area lights of [`importance`] at (p, n).
-    fn importance_total(&self, p: DVec3, n: DVec3) -> f64 {
+    pub(super) fn importance_total(&self, p: DVec3, n: DVec3) -> f64 {
         self.area.iter().map(|l| importance(l, p, n)).sum()
     }
 
@@ -135,7 +136,14 @@ impl Lights {
 
     /// P(MIS light k | p, n) under `sel` (`total`: [`Self::importance_total`], for
     /// [`Selection::Spatial`]).
-    fn pmf_with(&self, sel: Selection<'_>, p: DVec3, n: DVec3, k: usize, total: f64) -> f64 {
+    pub(super) fn pmf_with(
+        &self,
+        sel: Selection<'_>,
+        p: DVec3,
+        n: DVec3,
+        k: usize,
+        total: f64,
+    ) -> f64 {
         let count = self.count();
         if k >= count {
             return 0.0;
@@ -222,7 +230,7 @@ impl Lights {
     }
 
     /// The density of MIS light `k`'s own sampling at direction `wi` from `p`.
-    fn pdf_one(&self, p: DVec3, k: usize, wi: DVec3) -> f64 {
+    pub(super) fn pdf_one(&self, p: DVec3, k: usize, wi: DVec3) -> f64 {
         if k == self.area.len() {
             self.environment.as_ref().map_or(0.0, |e| e.pdf(wi))
         } else {
@@ -267,15 +275,21 @@ impl Lights {
             Selection::Spatial => self.importance_total(p, n),
             _ => 0.0,
         };
-        (0..self.count())
-            .map(|k| {
-                let pm = self.pmf_with(sel, p, n, k, total);
-                if pm > 0.0 {
-                    pm * self.pdf_one(p, k, wi)
-                } else {
-                    0.0
-                }
-            })
-            .sum()
+        let term = |k: usize| {
+            let pm = self.pmf_with(sel, p, n, k, total);
+            if pm > 0.0 {
+                pm * self.pdf_one(p, k, wi)
+            } else {
+                0.0
+            }
+        };
+        // Only the area lights the ray from p along wi crosses have density there.
+        let mut sum = 0.0;
+        self.bvh
+            .for_each_hit(&Ray::new(p, wi), 0.0, f64::INFINITY, |k| sum += term(k));
+        if self.environment.is_some() {
+            sum += term(self.area.len());
+        }
+        sum
     }
 }

@@ -404,3 +404,127 @@ fn importance_is_positive_where_light_arrives() {
     }
     assert!(seen > 100);
 }
+
+/// The light BVH changes no answer: over 60 lights of every shape (from `shapes()`,
+/// scattered and scaled), rays from 400 points in 64 directions each meet the nearest
+/// light the brute-force loop over all lights finds, and every selection's mixture pdf
+/// equals the brute-force sum over all lights to 1e-12 (relative), grazing edges
+/// included; every crossing lies inside its light's box.
+#[test]
+fn light_bvh_answers_as_the_brute_force_loop() {
+    let mut area = Vec::new();
+    for k in 0..60 {
+        let (_, l) = shapes()[k % 4];
+        let off = DVec3::new(
+            (k as f64 * 1.7).sin() * 4.0,
+            (k as f64 * 2.3).cos() * 4.0,
+            (k % 7) as f64 * 0.6 - 1.5,
+        );
+        let s = 0.3 + (k % 5) as f64 * 0.2;
+        let shape = match l.shape {
+            Shape::Sphere { center, radius } => Shape::Sphere {
+                center: center * s + off,
+                radius: radius * s,
+            },
+            Shape::Rect {
+                corner,
+                edge_u,
+                edge_v,
+            } => Shape::Rect {
+                corner: corner * s + off,
+                edge_u: edge_u * s,
+                edge_v: edge_v * s,
+            },
+            Shape::Disk {
+                center,
+                normal,
+                radius,
+            } => Shape::Disk {
+                center: center * s + off,
+                normal,
+                radius: radius * s,
+            },
+        };
+        area.push(AreaLight { shape, ..l });
+    }
+    let lights = Lights::new(
+        area.clone(),
+        vec![],
+        Some(Environment::Constant(Rgb::splat(0.1))),
+        10.0,
+    );
+    let table = TrainedSelection::from_weights(
+        DVec3::splat(-6.0),
+        DVec3::splat(6.0),
+        2,
+        61,
+        &(0..8 * 61).map(|i| (i % 13) as f64).collect::<Vec<_>>(),
+    );
+    let sels = [
+        Selection::Power,
+        Selection::Uniform,
+        Selection::Spatial,
+        Selection::Trained(&table),
+    ];
+    let (mut hits, mut dense) = (0, 0);
+    for i in 0..400 {
+        let a = i as f64 * 0.37;
+        let p = DVec3::new(5.0 * a.sin(), 5.0 * (1.3 * a).cos(), 2.0 * (0.7 * a).sin());
+        let n = DVec3::new(a.cos(), 0.2, a.sin()).normalize();
+        for j in 0..64 {
+            let b = j as f64 * 0.61 + a;
+            let wi = if j % 8 == 0 {
+                // Straight at a light's edge: grazing the box.
+                let l = &area[(i + j) % area.len()];
+                let (q, _) = l.sample_point(DVec2::new(1.0, (j as f64 * 0.13).fract()));
+                (q - p).normalize()
+            } else {
+                DVec3::new(b.sin() * (0.5 * b).cos(), (1.7 * b).cos(), (0.9 * b).sin()).normalize()
+            };
+            let ray = Ray::new(p, wi);
+            let brute = area
+                .iter()
+                .enumerate()
+                .filter_map(|(k, l)| l.intersect(&ray, 0.0, f64::INFINITY).map(|c| (k, c.t)))
+                .min_by(|x, y| x.1.total_cmp(&y.1));
+            let got = lights
+                .intersect(&ray, 0.0, f64::INFINITY)
+                .map(|h| (h.light, h.t));
+            assert_eq!(got, brute, "p {p} wi {wi}");
+            hits += got.is_some() as usize;
+            for (k, l) in area.iter().enumerate() {
+                let (c, m) = l.crossings(p, wi);
+                for c in c[..m].iter().flatten() {
+                    assert!(
+                        l.bounds().contains(p + wi * c.t),
+                        "light {k}: {c:?} outside its box"
+                    );
+                }
+            }
+            for sel in sels {
+                let total = if sel == Selection::Spatial {
+                    lights.importance_total(p, n)
+                } else {
+                    0.0
+                };
+                let want: f64 = (0..lights.count())
+                    .map(|k| {
+                        let pm = lights.pmf_with(sel, p, n, k, total);
+                        if pm > 0.0 {
+                            pm * lights.pdf_one(p, k, wi)
+                        } else {
+                            0.0
+                        }
+                    })
+                    .sum();
+                let got = lights.pdf_selected(sel, p, n, wi);
+                assert!(
+                    (got - want).abs() <= 1e-12 * want,
+                    "{sel:?}: {got} vs {want}"
+                );
+                dense += (want > 0.1) as usize;
+            }
+        }
+    }
+    assert!(hits > 2000 && dense > 2000, "{hits} hits, {dense} dense");
+}

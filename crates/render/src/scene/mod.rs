@@ -183,12 +183,8 @@ impl Scene {
 
     /// Whether any object surface lies in (t_min, t_max) (shadow rays).
     pub fn occluded(&self, ray: &Ray, t_min: f64, t_max: f64) -> bool {
-        let mut hit = false;
-        self.bvh.for_each_hit(ray, t_min, t_max, |i| {
-            if !hit && self.objects[i].solid.intersect(ray, t_min, t_max).is_some() {
-                hit = true;
-            }
-        });
-        hit
+        self.bvh.any_hit(ray, t_min, t_max, |i| {
+            self.objects[i].solid.intersect(ray, t_min, t_max).is_some()
+        })
     }
 }
