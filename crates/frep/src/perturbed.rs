@@ -5,7 +5,7 @@
 //! so F' is C² and each perturbation only acts inside its support q_i ≥ 0.
 //! [`PerturbedSurface`] intersects rays with such a solid exactly.
 
-mod along;
+pub(crate) mod along;
 mod scan;
 mod surface;
 
