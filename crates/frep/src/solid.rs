@@ -279,19 +279,34 @@ impl Solid {
                 return None;
             }
             let (pos, m) = positive_set(q_local(&view.base.c, o, d));
-            let mut out = [(0.0, 0.0, 0u8, 0u8); MAX_PARTS + 2];
-            let mut len = 0;
-            for &(a, b, ka, kb) in &set[..n] {
-                for &(c, e) in &pos[..m] {
-                    let (lo, klo) = if c > a { (c, k as u8) } else { (a, ka) };
-                    let (hi, khi) = if e < b { (e, k as u8) } else { (b, kb) };
-                    if lo < hi && len < out.len() {
-                        out[len] = (lo, hi, klo, khi);
+            let cut = |(a, b, ka, kb): (f64, f64, u8, u8), (c, e): (f64, f64)| {
+                let (lo, klo) = if c > a { (c, k as u8) } else { (a, ka) };
+                let (hi, khi) = if e < b { (e, k as u8) } else { (b, kb) };
+                (lo < hi).then_some((lo, hi, klo, khi))
+            };
+            if m == 1 {
+                // The common case (a convex part): cut each interval in place.
+                let mut len = 0;
+                for j in 0..n {
+                    if let Some(v) = cut(set[j], pos[0]) {
+                        set[len] = v;
                         len += 1;
                     }
                 }
+                n = len;
+            } else {
+                let mut out = [(0.0, 0.0, 0u8, 0u8); MAX_PARTS + 2];
+                let mut len = 0;
+                for &v in &set[..n] {
+                    for &w in &pos[..m] {
+                        if let Some(c) = cut(v, w).filter(|_| len < out.len()) {
+                            out[len] = c;
+                            len += 1;
+                        }
+                    }
+                }
+                (set, n) = (out, len);
             }
-            (set, n) = (out, len);
             if n == 0 {
                 return Some(None);
             }

@@ -205,11 +205,13 @@ impl Lights {
         let Some(d) = &self.by_area else {
             return 0.0;
         };
-        self.area
-            .iter()
-            .enumerate()
-            .map(|(i, l)| d.pmf(i) * l.pdf_area(p, wi))
-            .sum()
+        // Only the lights the ray from p along wi crosses have density there.
+        let mut sum = 0.0;
+        self.bvh
+            .for_each_hit(&Ray::new(p, wi), 0.0, f64::INFINITY, |i| {
+                sum += d.pmf(i) * self.area[i].pdf_area(p, wi)
+            });
+        sum
     }
     /// Environment sampling (None without an environment).
     pub fn sample_environment(&self, u: DVec2) -> Option<LightSample> {

@@ -408,8 +408,8 @@ fn importance_is_positive_where_light_arrives() {
 /// The light BVH changes no answer: over 60 lights of every shape (from `shapes()`,
 /// scattered and scaled), rays from 400 points in 64 directions each meet the nearest
 /// light the brute-force loop over all lights finds, and every selection's mixture pdf
-/// equals the brute-force sum over all lights to 1e-12 (relative), grazing edges
-/// included; every crossing lies inside its light's box.
+/// (and light-area's) equals the brute-force sum over all lights to 1e-12 (relative),
+/// grazing edges included; every crossing lies inside its light's box.
 #[test]
 fn light_bvh_answers_as_the_brute_force_loop() {
     let mut area = Vec::new();
@@ -501,6 +501,16 @@ fn light_bvh_answers_as_the_brute_force_loop() {
                     );
                 }
             }
+            let by_area: f64 = area
+                .iter()
+                .enumerate()
+                .map(|(k, l)| lights.by_area.as_ref().unwrap().pmf(k) * l.pdf_area(p, wi))
+                .sum();
+            let got = lights.pdf_by_area(p, wi);
+            assert!(
+                (got - by_area).abs() <= 1e-12 * by_area,
+                "by area: {got} vs {by_area}"
+            );
             for sel in sels {
                 let total = if sel == Selection::Spatial {
                     lights.importance_total(p, n)
