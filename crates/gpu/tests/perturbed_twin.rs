@@ -2,11 +2,13 @@
 //! `first_crossing_f32_gpu`, bit for bit on lavapipe (GPU.md §3.5); the twin against
 //! frep's f64 scan; and the kernel's loop budget (GPU.md §3.1, §9).
 //!
-//! Three surfaces, 4 096 fixed rays each: random rays from outside, rays grazing the
+//! Four surfaces, 4 096 fixed rays each: random rays from outside, rays grazing the
 //! base surface, rays aimed at the rims of perturbation supports, and rays starting
 //! inside the bounds; the overflow surface adds rays along a row of 3·K overlapping
 //! supports (resolved by halving the range) and rays through a cluster of more than K
-//! supports around one point (which no halving separates: reported as overflow).
+//! supports around one point (which no halving separates: reported as overflow); the
+//! plane (an unbounded base, and a half-space perturbation, an unbounded BVH item) has
+//! rays from t = −∞ and to ∞, which the scan cuts into Cauchy-bounded sub-pieces.
 
 mod common;
 
@@ -51,6 +53,8 @@ struct Case {
     supports: Vec<(DVec3, f64)>,
     /// Extra rays (o, d) particular to the case.
     extra: Vec<(DVec3, DVec3)>,
+    /// An unbounded base (the plane y = 0, solid below): rays of their own.
+    plane: bool,
 }
 
 fn case(
@@ -71,6 +75,32 @@ fn case(
         radii,
         supports: perts.iter().map(|&(_, c, r)| (c, r)).collect(),
         extra,
+        plane: false,
+    }
+}
+
+/// The plane y = 0 (solid below) with bumps and dents over [−2, 2]², and one
+/// perturbation with an unbounded support (the half-space x ≤ −3: an unbounded BVH
+/// item): the scan's unbounded pieces and Cauchy-bound sub-pieces.
+fn plane_case(rng: &mut Rng) -> Case {
+    let mut pq = PerturbedQuadric::new(Quadric::plane(DVec3::Y, 0.0));
+    let mut supports = Vec::new();
+    for _ in 0..40 {
+        let c = DVec3::new(rng.range(-2.0, 2.0), 0.0, rng.range(-2.0, 2.0));
+        let r = rng.range(0.2, 0.5);
+        let sign = if rng.next() < 0.6 { 1.0 } else { -1.0 };
+        pq.push(sign * r * rng.range(0.2, 1.0), Quadric::sphere(c, r));
+        supports.push((c, r));
+    }
+    pq.push(-1e-3, Quadric::plane(DVec3::X, -3.0));
+    Case {
+        name: "plane, 40 bumps and dents and a half-space",
+        surface: pq.surface(),
+        center: DVec3::ZERO,
+        radii: DVec3::splat(2.0),
+        supports,
+        extra: vec![],
+        plane: true,
     }
 }
 
@@ -156,6 +186,7 @@ fn cases() -> Vec<Case> {
             row,
             extra,
         ),
+        plane_case(&mut rng),
     ]
 }
 
@@ -180,6 +211,27 @@ fn rays(c: &Case, seed: u64) -> Vec<TestRay> {
         .map(|&(o, d)| ray(o, d, 0.0, f32::INFINITY))
         .collect();
     let n0 = out.len();
+    if c.plane {
+        // From above and below, aimed at the bumps or anywhere; t from 0 or from −∞
+        // (left-unbounded pieces), to ∞ (right-unbounded ones) or 8.
+        for i in 0..N {
+            let o = DVec3::new(
+                rng.range(-4.0, 4.0),
+                rng.range(-1.0, 2.0),
+                rng.range(-4.0, 4.0),
+            );
+            let d = if i % 2 == 0 {
+                let (sc, sr) = c.supports[(rng.next() * c.supports.len() as f64) as usize];
+                (sc + sr * rng.unit() - o).normalize()
+            } else {
+                rng.unit()
+            };
+            let t_min = if i % 3 == 0 { f32::NEG_INFINITY } else { 0.0 };
+            let t_max = if i % 5 == 0 { 8.0 } else { f32::INFINITY };
+            out.push(ray(o, d, t_min, t_max));
+        }
+        return out;
+    }
     for i in n0..N {
         let t_max = if i % 7 == 0 {
             2.5 * size as f32
@@ -349,7 +401,7 @@ fn perturbed_kernel_equals_its_twin_bit_for_bit() {
             differ.len(),
             differ[..differ.len().min(10)].join("\n")
         );
-        if !c.extra.is_empty() {
+        if c.name.starts_with("rod") {
             // Rays along the row (even) meet more than K supports and are resolved by
             // halving; rays through the cluster (odd) overflow however they are halved.
             let k = frep::perturbed::GPU_ACTIVE;
@@ -449,22 +501,35 @@ fn relative_peak(view: &frep::PerturbedView, ray: &Ray, a: f64, b: f64) -> f64 {
 /// The twin (hence the kernel, equal to it bit for bit) against frep's f64 scan on the
 /// same rays (o, d, t_min, t_max widened exactly to f64), rays reported as overflowing
 /// left out. Asserted: the same hit or miss, and |Δt| ≤ 1e-4 × the object's size,
-/// except on near-tangent rays, those where |F'| stays within 5·10⁴·ε₃₂·M (0.6 % of M)
-/// between the two answers (M as in [`relative_peak`]; for a flip, between the f64
-/// crossing and the next: the sliver the f32 scan does not resolve). The f32 scan only
+/// except on near-tangent rays, those where |F'| stays within 2·10³·ε₃₂·M (2.4e-4 of M)
+/// where the two disagree (M as in [`relative_peak`]): from the f64 crossing to the
+/// next (at most to the f32 one) where the f32 scan answers later or misses, from the
+/// f32 crossing to its next (at most to the f64 one) where it answers earlier or alone. The f32 scan only
 /// counts signs beyond its rounding bound, 32·ε₃₂ times the piece's coefficient
 /// magnitudes in Bernstein form, which exceed M by the growth of the power form over a
 /// piece. Measured (these rays): sphere 8 flips, 13 near-tangent rays in all (largest
 /// |F'| 3.4e2 ε₃₂·M), other |Δt| ≤ 4.2e-5 of 3 292 hits; ellipsoid 2 flips, 24
-/// near-tangent (1.2e4), other |Δt| ≤ 9.4e-5 of 3 864; rod (size 2.5) 2 flips, 8
-/// near-tangent (1.7e4), other |Δt| ≤ 1.8e-5 of 3 095. The flips are rays grazing the
-/// base surface within 1e-3 of its size.
+/// near-tangent (1.3e2), other |Δt| ≤ 9.4e-5 of 3 864; rod (size 2.5) 2 flips, 8
+/// near-tangent (1.3e2), other |Δt| ≤ 1.8e-5 of 3 095; plane (size 2) 0 flips, 2
+/// near-tangent (6.6), other |Δt| ≤ 1.2e-4 of 2 030. The flips are rays grazing the base
+/// surface within 1e-3 of its size.
+///
+/// Not asserted, only reported: on the plane, rays from t = −∞ (98 of 1 312 differ: the
+/// f32 scan misses or misplaces crossings of left-unbounded ranges that f64 finds) and
+/// crossings beyond 100 × the size (53 of 74 differ), where F' spans more than f32
+/// resolves.
 #[test]
 fn twin_agrees_with_the_f64_scan() {
     for (ci, c) in cases().iter().enumerate() {
         let view = c.surface.view();
         let size = c.radii.max_element();
-        let (mut hits, mut flips, mut overflows, mut near) = (0, 0, 0, 0);
+        let (mut hits, mut flips, mut overflows, mut near, mut far) = (0, 0, 0, 0, 0);
+        let (mut from_infinity, mut from_infinity_differ, mut far_differ) = (0, 0, 0);
+        let same = |t32: Crossing, t64: Option<f64>| match (t32, t64) {
+            (Crossing::Hit(a), Some(b)) => (f64::from(a) - b).abs() <= 1e-4 * size,
+            (Crossing::Miss, None) => true,
+            _ => false,
+        };
         let (mut max_dt, mut max_peak) = (0.0f64, 0.0f64);
         for r in rays(c, 100 + ci as u64) {
             let ray = Ray::new(
@@ -472,7 +537,30 @@ fn twin_agrees_with_the_f64_scan() {
                 DVec3::new(r[3].into(), r[4].into(), r[5].into()),
             );
             let t64 = view.first_crossing(&ray, r[6].into(), r[7].into());
-            let (a, b, dt) = match (twin(c, &r), t64) {
+            let t32 = twin(c, &r);
+            // Far along an unbounded range (the plane's half-space perturbation grows as
+            // q³): f32 cannot resolve F' over its dynamic range there (see the report).
+            let beyond = |t: f64| t.abs() > 100.0 * size;
+            if t64.is_some_and(beyond) || matches!(t32, Crossing::Hit(t) if beyond(t.into())) {
+                far += 1;
+                far_differ += usize::from(!same(t32, t64));
+                continue;
+            }
+            if r[6] == f32::NEG_INFINITY {
+                // Left-unbounded ranges: the f32 scan misses crossings there that f64
+                // finds (a limit of frep's f32 scan, reported, not asserted).
+                from_infinity += 1;
+                from_infinity_differ += usize::from(!same(t32, t64));
+                continue;
+            }
+            // The f64 sliver [t, next crossing] the f32 scan skipped when it answers
+            // later, or the f32 sliver when it answers earlier.
+            let next64 = |t: f64| view.first_crossing(&ray, t, f64::INFINITY).unwrap_or(t);
+            let next32 = |t: f32| match twin(c, &[r[0], r[1], r[2], r[3], r[4], r[5], t, r[7]]) {
+                Crossing::Hit(n) => f64::from(n),
+                _ => f64::from(t),
+            };
+            let (a, b, dt) = match (t32, t64) {
                 (Crossing::Overflow, _) => {
                     overflows += 1;
                     continue;
@@ -480,17 +568,20 @@ fn twin_agrees_with_the_f64_scan() {
                 (Crossing::Miss, None) => continue,
                 (Crossing::Hit(a), Some(b)) => {
                     hits += 1;
-                    let a = f64::from(a);
-                    (a.min(b), a.max(b), (a - b).abs())
+                    let dt = (f64::from(a) - b).abs();
+                    if f64::from(a) > b {
+                        (b, next64(b).min(f64::from(a)), dt)
+                    } else {
+                        (f64::from(a), next32(a).min(b), dt)
+                    }
                 }
-                (t32, t64) => {
+                (Crossing::Miss, Some(b)) => {
                     flips += 1;
-                    let t = match t32 {
-                        Crossing::Hit(t) => f64::from(t),
-                        _ => t64.unwrap_or_default(),
-                    };
-                    let next = view.first_crossing(&ray, t, f64::INFINITY).unwrap_or(t);
-                    (t, next, f64::INFINITY)
+                    (b, next64(b), f64::INFINITY)
+                }
+                (Crossing::Hit(a), None) => {
+                    flips += 1;
+                    (f64::from(a), next32(a), f64::INFINITY)
                 }
             };
             if dt <= 1e-4 * size {
@@ -501,18 +592,24 @@ fn twin_agrees_with_the_f64_scan() {
             max_peak = max_peak.max(peak);
             near += 1;
             assert!(
-                peak <= 5e4,
-                "{}: {r:?}: f32 and f64 answers {a}, {b}; |F'| up to {peak:e} ε₃₂·M between",
+                peak <= 2e3,
+                "{}: {r:?}: f32 {t32:?}, f64 {t64:?}; |F'| up to {peak:e} ε₃₂·M between",
                 c.name
             );
         }
         println!(
-            "{}: {hits} hits, {flips} flips, {overflows} overflows; {near} near-tangent \
+            "{}: {hits} hits, {flips} flips, {overflows} overflows, {far} far; {near} near-tangent \
              (largest |F'| between {max_peak:.2e} ε₃₂·M); other |Δt| ≤ {max_dt:.2e} \
              ({:.2e} of the size)",
             c.name,
             max_dt / size
         );
+        if from_infinity + far > 0 {
+            println!(
+                "  not asserted: from t = −∞, {from_infinity_differ} of {from_infinity} rays \
+                 differ from f64; crossings beyond 100 × the size, {far_differ} of {far}"
+            );
+        }
         assert!(hits > 1000, "{hits}");
     }
 }
