@@ -3,6 +3,11 @@
 //! CPU f32 twin it equals bit for bit on lavapipe (GPU.md §3.5), frep's
 //! [`PerturbedView::first_crossing_f32_gpu`].
 //!
+//! Both sides visit candidates in the same order, the order in which each piece sums
+//! them: unbounded items first, then the BVH's items in ascending leaf position, which a
+//! pre-order walk yields without sorting (the kernel's escape-index walk,
+//! [`crate::layout::skip_nodes`]; frep's [`frep::BvhRef::for_each_hit_f32`]).
+//!
 //! The kernel keeps fixed capacities: K = [`frep::perturbed::GPU_ACTIVE`] active
 //! perturbations; a range with more is halved, left first, at most
 //! [`frep::perturbed::GPU_SPLITS`] times; a ray that still overflows is reported as

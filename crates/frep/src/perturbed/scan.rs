@@ -41,7 +41,8 @@ use std::mem::MaybeUninit;
 pub const MAX_ACTIVE: usize = 64;
 
 /// The GPU kernel's active-set capacity K (GPU.md §6.1), which the f32 path
-/// ([`first_crossing_gpu`]) uses too so that both overflow on the same rays.
+/// ([`PerturbedView::first_crossing_f32_gpu`](super::PerturbedView::first_crossing_f32_gpu))
+/// uses too, so that both overflow on the same rays.
 pub const GPU_ACTIVE: usize = 32;
 
 /// How many times the GPU kernel halves an overflowing range before it reports the ray

@@ -121,8 +121,8 @@ impl PerturbedView<'_> {
     }
 
     /// [`first_crossing_f32`](Self::first_crossing_f32), and whether the scan overflowed
-    /// the kernel's capacities (more than [`scan::GPU_ACTIVE`] active perturbations after
-    /// [`scan::GPU_SPLITS`] halvings): there the CPU streams and still answers, while the
+    /// the kernel's capacities (more than [`GPU_ACTIVE`](super::GPU_ACTIVE) active perturbations after
+    /// [`GPU_SPLITS`](super::GPU_SPLITS) halvings): there the CPU streams and still answers, while the
     /// kernel reports the ray as overflowing.
     ///
     /// Everything is the kernel's arithmetic: the clip to the bounds and the BVH walk use

@@ -6,7 +6,10 @@
 // min-selection, each piece as a degree ≤ 6 polynomial with its rounding bound, converted to
 // Bernstein form and searched left first with an explicit interval stack. An overflowing
 // range is halved, left first, at most MAX_SPLITS deep; past that the ray is reported as
-// overflowing (status 2), never as a miss. Every loop iteration adds to `loops` (§3.1).
+// overflowing (status 2), never as a miss. Every loop iteration adds to `loops` (§3.1);
+// fixed-size work on 3, 7 or 10 values is written out, not looped. Each costly function
+// (piece, first_negative_bounded, refine) has one call site: llvmpipe inlines every call,
+// and a shader with several took minutes to compile.
 // Needs the structs of layout.rs and these bindings, declared by the kernel:
 //   objects: array<GpuObject>, quadrics: array<GpuQuadric>,
 //   perturbations: array<GpuPerturbation>, nodes: array<GpuBvhNode>, items: array<GpuItemBox>.
