@@ -402,6 +402,29 @@ mod tests {
         assert!(y > 0.0);
     }
 
+    /// The f32 scan over a left-unbounded range: the plane y = 0 with a half-space
+    /// perturbation growing as (−3 − x)³ meets a slanted ray 1 633 units behind its
+    /// origin; Cauchy's bound there makes sub-pieces millions of units long, whose h⁶
+    /// overflows f32 (the scan used to give up there and answer a miss).
+    #[test]
+    fn f32_scan_finds_far_crossings_of_unbounded_ranges() {
+        let pq = PerturbedQuadric::new(Quadric::plane(DVec3::Y, 0.0))
+            .with(-1e-3, Quadric::plane(DVec3::X, -3.0));
+        let s = pq.surface();
+        let (o, d) = (
+            Vec3::new(0.964_901_57, -0.191_183_48, -2.828_187_5),
+            Vec3::new(0.034_240_786, 0.085_781_8, 0.995_725_4),
+        );
+        let ray = Ray::new(o.as_dvec3(), d.as_dvec3());
+        let t64 = s.first_crossing(&ray, f64::NEG_INFINITY, 8.0).unwrap();
+        let t32 = s.first_crossing_f32(o, d, f32::NEG_INFINITY, 8.0).unwrap();
+        assert!((t64 + 1633.353).abs() < 1e-2, "{t64}");
+        assert!(
+            (f64::from(t32) - t64).abs() < 1e-4 * t64.abs(),
+            "{t32} vs {t64}"
+        );
+    }
+
     #[test]
     fn value_gradient_and_bounds_agree_with_the_definition() {
         let mut pq =

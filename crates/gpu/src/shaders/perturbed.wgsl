@@ -380,14 +380,14 @@ fn build_piece(ta: f32, tb: f32, inside: f32) {
     }
 }
 
-// p(h·x) (Poly::scaled).
+// p(h·x) (Poly::scaled); a zero coefficient stays zero where h^k overflows.
 fn scaled(c0: array<f32, 7>, n: u32, h: f32) -> array<f32, 7> {
     var c = c0;
     var hk = 1.0;
     for (var k = 1u; k <= n; k++) {
         loops++;
         hk = hk * h;
-        c[k] = c[k] * hk;
+        if (c[k] != 0.0) { c[k] = c[k] * hk; }
     }
     return c;
 }
