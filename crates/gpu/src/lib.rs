@@ -12,7 +12,8 @@
 //!   `FREPRAY_GPU_SUBGROUPS=off`), and a clear error, never a panic, where there is no
 //!   adapter or a device limit is too small;
 //! - [`Kernel`]: one WGSL compute entry point over storage buffers, dispatched and read
-//!   back, bounds checks off (GPU.md §3.4), for kernel twins and tests;
+//!   back (with [`Kernel::new_unchecked`], bounds checks off: GPU.md §3.4), for kernel
+//!   twins and tests;
 //! - [`layout`]: the flat scene's objects, quadrics, perturbations, BVH nodes (also in the
 //!   escape layout) and item boxes as `#[repr(C)]`
 //!   structs with their WGSL mirrors;

@@ -25,6 +25,10 @@
 //! the array path, so it gives the same answer bit for bit, at O(pieces × candidates)
 //! cost; chunks expand pieces about their own ends, so they agree to rounding. Either
 //! way no sign change is missed.
+//!
+//! The f32 path is the GPU kernel's twin and uses the kernel's capacities,
+//! [`GPU_ACTIVE`] = 32 and [`GPU_SPLITS`] = 4 halvings; where it streams, the kernel
+//! reports the ray as overflowing instead (GPU.md §6.1).
 
 pub(crate) use super::along::Coeffs;
 use super::along::{positive_set, q_local, q_local_mag};
