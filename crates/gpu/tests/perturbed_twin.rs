@@ -406,6 +406,7 @@ fn perturbed_kernel_equals_its_twin_bit_for_bit() {
             // halving; rays through the cluster (odd) overflow however they are halved.
             let k = frep::perturbed::GPU_ACTIVE;
             let (mut crowded, mut row_overflows, mut cluster_overflows) = (0, 0, 0);
+            let mut hits_behind_overflow = 0;
             for (i, &(gpu, _)) in run.results[..c.extra.len()].iter().enumerate() {
                 let r = &run.rays[i];
                 let inv = [r[3], r[4], r[5]].map(|x| 1.0 / x);
@@ -421,13 +422,20 @@ fn perturbed_kernel_equals_its_twin_bit_for_bit() {
                     row_overflows += usize::from(over);
                 } else {
                     cluster_overflows += usize::from(over);
+                    // What the CPU finds by streaming where the kernel reports overflow:
+                    // reading overflow as a miss would lose these hits.
+                    let (o, d) = (Vec3::new(r[0], r[1], r[2]), Vec3::new(r[3], r[4], r[5]));
+                    let streamed = c.surface.first_crossing_f32(o, d, r[6], r[7]);
+                    hits_behind_overflow += usize::from(over && streamed.is_some());
                 }
             }
             println!(
                 "  row rays: {crowded} meet > K supports, {row_overflows} overflow; \
-                 cluster rays: {cluster_overflows} overflow"
+                 cluster rays: {cluster_overflows} overflow, {hits_behind_overflow} of them \
+                 hits for the CPU's streaming"
             );
             assert!(crowded > 200 && row_overflows == 0 && cluster_overflows > 100);
+            assert!(hits_behind_overflow > 100);
         }
         assert!(
             hits > 100 && misses > 100,
