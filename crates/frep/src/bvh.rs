@@ -9,7 +9,7 @@
 //! empty boxes are dropped. It serves the perturbations of one perturbed quadric and, at
 //! scene level, the objects of a scene.
 
-use crate::ray::{Aabb, Ray};
+use crate::ray::{slab_f32, Aabb, Ray};
 use glam::DVec3;
 
 /// The most items a leaf holds.
@@ -420,6 +420,57 @@ impl BvhRef<'_> {
                     stack[top] = far as u32;
                     top += 1;
                     cur = near;
+                    continue;
+                }
+            }
+            if top == 0 {
+                return;
+            }
+            top -= 1;
+            cur = stack[top] as usize;
+        }
+    }
+
+    /// The GPU's walk (GPU.md §6.1): calls `visit(item)` for every unbounded item, then
+    /// for every item whose box, and every ancestor's box, rounded outward to f32
+    /// ([`Aabb::outward_f32`]) meets o + t·d for t ∈ [t0, t1] by the f32 slab test
+    /// ([`slab_f32`], `inv` = 1/d), in pre-order: first child before second, so items come
+    /// in ascending leaf position, the order the WGSL kernel's escape-index walk yields.
+    pub fn for_each_hit_f32(
+        &self,
+        o: [f32; 3],
+        inv: [f32; 3],
+        t0: f32,
+        t1: f32,
+        mut visit: impl FnMut(usize),
+    ) {
+        for &i in self.unbounded {
+            visit(i as usize);
+        }
+        if self.nodes.is_empty() {
+            return;
+        }
+        let meets = |b: &Aabb| {
+            let (lo, hi) = b.outward_f32();
+            slab_f32(lo, hi, o, inv, t0, t1).is_some()
+        };
+        let mut stack = [0u32; STACK];
+        let mut top = 0;
+        let mut cur = 0usize;
+        loop {
+            let node = &self.nodes[cur];
+            if meets(&node.bounds) {
+                if node.count > 0 {
+                    let s = node.offset as usize;
+                    for k in s..s + node.count as usize {
+                        if meets(&self.item_bounds[k]) {
+                            visit(self.order[k] as usize);
+                        }
+                    }
+                } else {
+                    stack[top] = node.offset;
+                    top += 1;
+                    cur += 1;
                     continue;
                 }
             }

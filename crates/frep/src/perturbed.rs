@@ -9,7 +9,7 @@ pub(crate) mod along;
 mod scan;
 mod surface;
 
-pub use scan::MAX_ACTIVE;
+pub use scan::{GPU_ACTIVE, GPU_SPLITS, MAX_ACTIVE};
 pub use surface::{PerturbedSurface, PerturbedView};
 
 use crate::quadric::Quadric;

@@ -207,13 +207,17 @@ impl<T: Float> Poly<T> {
         *self = self.add(&cube);
     }
 
-    /// p(h·x): the coefficient of x^k is multiplied by h^k.
+    /// p(h·x): the coefficient of x^k is multiplied by h^k. A zero coefficient stays
+    /// zero even where h^k overflows (in f32 from h ≈ 2.6e6 at degree 6), instead of
+    /// becoming 0·∞ = NaN: a cubed linear q_i has zero coefficients above degree 3.
     pub fn scaled(&self, h: T) -> Self {
         let mut p = *self;
         let mut hk = T::one();
         for k in 1..=p.n {
             hk = hk * h;
-            p.c[k] = p.c[k] * hk;
+            if p.c[k] != T::zero() {
+                p.c[k] = p.c[k] * hk;
+            }
         }
         p
     }

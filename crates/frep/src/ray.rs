@@ -81,6 +81,32 @@ impl Aabb {
     pub fn contains(&self, p: DVec3) -> bool {
         p.cmpge(self.lo).all() && p.cmple(self.hi).all()
     }
+    /// The box rounded outward to f32, `(lo, hi)`: the smallest f32 box holding it, so
+    /// that culling by it stays conservative (GPU.md §5.1). −∞ and +∞ stay; NaN widens
+    /// to infinity.
+    pub fn outward_f32(&self) -> ([f32; 3], [f32; 3]) {
+        let down = |v: f64| {
+            let f = v as f32;
+            if f.is_nan() {
+                f32::NEG_INFINITY
+            } else if f64::from(f) > v {
+                f.next_down()
+            } else {
+                f
+            }
+        };
+        let up = |v: f64| {
+            let f = v as f32;
+            if f.is_nan() {
+                f32::INFINITY
+            } else if f64::from(f) < v {
+                f.next_up()
+            } else {
+                f
+            }
+        };
+        (self.lo.to_array().map(down), self.hi.to_array().map(up))
+    }
     /// The parameter range where the ray is inside the box, clipped to `[t0, t1]`
     /// (slab method, Kay & Kajiya 1986), or None.
     #[inline]
@@ -96,4 +122,28 @@ impl Aabb {
         let hi = t1.min(far.x).min(far.y).min(far.z);
         (lo <= hi).then_some((lo, hi))
     }
+}
+
+/// The slab test in f32, the GPU's (GPU.md §6.1): the range of [t0, t1] where the ray o +
+/// t·d (with `inv` = 1/d per axis) is inside the box (lo, hi), or None. Per axis the
+/// range narrows to [min(a, b), max(a, b)] with f32's `min`/`max`, which ignore a NaN
+/// operand (0·∞, an origin on the slab of a parallel ray), as [`Aabb::clip`] does in f64.
+/// The WGSL kernel repeats it operation for operation.
+#[inline]
+pub fn slab_f32(
+    lo: [f32; 3],
+    hi: [f32; 3],
+    o: [f32; 3],
+    inv: [f32; 3],
+    t0: f32,
+    t1: f32,
+) -> Option<(f32, f32)> {
+    let (mut near, mut far) = (t0, t1);
+    for k in 0..3 {
+        let a = (lo[k] - o[k]) * inv[k];
+        let b = (hi[k] - o[k]) * inv[k];
+        near = near.max(a.min(b));
+        far = far.min(a.max(b));
+    }
+    (near <= far).then_some((near, far))
 }

@@ -16,13 +16,48 @@ impl Kernel {
     /// Compiles `entry` of the WGSL `source` with `inputs` input buffers. Shader errors
     /// are returned with naga's message.
     pub fn new(gpu: &Gpu, source: &str, entry: &str, inputs: usize) -> Result<Kernel, GpuError> {
+        Self::build(gpu, source, entry, inputs, false)
+    }
+
+    /// [`Kernel::new`] without the bounds checks and loop bounding naga inserts
+    /// (`ShaderRuntimeChecks::unchecked`), which cost up to 20× on private arrays on
+    /// lavapipe (GPU.md §3.4).
+    ///
+    /// # Safety
+    ///
+    /// Every index of the kernel must be in bounds and every loop finite, by
+    /// construction: nothing checks them at run time.
+    pub unsafe fn new_unchecked(
+        gpu: &Gpu,
+        source: &str,
+        entry: &str,
+        inputs: usize,
+    ) -> Result<Kernel, GpuError> {
+        Self::build(gpu, source, entry, inputs, true)
+    }
+
+    fn build(
+        gpu: &Gpu,
+        source: &str,
+        entry: &str,
+        inputs: usize,
+        unchecked: bool,
+    ) -> Result<Kernel, GpuError> {
         let scope = gpu.device.push_error_scope(wgpu::ErrorFilter::Validation);
-        let module = gpu
-            .device
-            .create_shader_module(wgpu::ShaderModuleDescriptor {
-                label: Some(entry),
-                source: wgpu::ShaderSource::Wgsl(source.into()),
-            });
+        let desc = wgpu::ShaderModuleDescriptor {
+            label: Some(entry),
+            source: wgpu::ShaderSource::Wgsl(source.into()),
+        };
+        let module = if unchecked {
+            // SAFETY: `new_unchecked`'s caller guarantees in-bounds indexing and finite
+            // loops; wgpu then skips the runtime checks only.
+            unsafe {
+                gpu.device
+                    .create_shader_module_trusted(desc, wgpu::ShaderRuntimeChecks::unchecked())
+            }
+        } else {
+            gpu.device.create_shader_module(desc)
+        };
         let pipeline = gpu
             .device
             .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {

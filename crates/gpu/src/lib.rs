@@ -12,11 +12,15 @@
 //!   `FREPRAY_GPU_SUBGROUPS=off`), and a clear error, never a panic, where there is no
 //!   adapter or a device limit is too small;
 //! - [`Kernel`]: one WGSL compute entry point over storage buffers, dispatched and read
-//!   back, bounds checks off (GPU.md §3.4), for kernel twins and tests;
-//! - [`layout`]: the flat scene's quadrics, perturbations and BVH nodes as `#[repr(C)]`
+//!   back (with [`Kernel::new_unchecked`], bounds checks off: GPU.md §3.4), for kernel
+//!   twins and tests;
+//! - [`layout`]: the flat scene's objects, quadrics, perturbations, BVH nodes (also in the
+//!   escape layout) and item boxes as `#[repr(C)]`
 //!   structs with their WGSL mirrors;
 //! - [`quadric`]: rays against plain quadrics in WGSL, with the CPU f32 twin they equal
 //!   bit for bit on lavapipe (GPU.md §3.5);
+//! - [`perturbed`]: rays against perturbed quadrics in WGSL (frep's exact scan, GPU.md
+//!   §6.1), equal bit for bit on lavapipe to frep's f32 twin, with overflow reported;
 //! - [`sampler`]: the CPU's random numbers (Philox4x32-10, `render::sampler`) in WGSL with
 //!   32-bit operations only, equal bit for bit on every adapter.
 //!
@@ -33,6 +37,7 @@
 mod adapter;
 mod kernel;
 pub mod layout;
+pub mod perturbed;
 pub mod quadric;
 pub mod sampler;
 

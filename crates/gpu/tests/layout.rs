@@ -4,7 +4,7 @@
 
 mod common;
 
-use gpu::layout::{GpuBvhNode, GpuPerturbation, GpuQuadric, LAYOUT_WGSL};
+use gpu::layout::{GpuBvhNode, GpuItemBox, GpuObject, GpuPerturbation, GpuQuadric, LAYOUT_WGSL};
 use gpu::{GpuOptions, Kernel};
 
 fn run(body: &str, ty: &str, words: usize) -> Option<Vec<u32>> {
@@ -72,4 +72,54 @@ fn bvh_node_layout() {
         count_axis: 107,
     };
     assert_eq!(n, &[want, want]);
+}
+
+#[test]
+fn item_box_layout() {
+    let Some(out) = run(
+        "v.lo_x = 0.0; v.lo_y = 1.0; v.lo_z = 2.0; v.item = 103u; \
+         v.hi_x = 4.0; v.hi_y = 5.0; v.hi_z = 6.0; v.pad = 107u;",
+        "GpuItemBox",
+        8,
+    ) else {
+        return;
+    };
+    let b: &[GpuItemBox] = bytemuck::cast_slice(&out);
+    let want = GpuItemBox {
+        lo: [0.0, 1.0, 2.0],
+        item: 103,
+        hi: [4.0, 5.0, 6.0],
+        pad: 107,
+    };
+    assert_eq!(b, &[want, want]);
+}
+
+#[test]
+fn object_layout() {
+    let Some(out) = run(
+        "v.kind = 100u; v.material = 101u; v.flags = 102u; v.unbounded = 103u; \
+         v.lo_x = 4.0; v.lo_y = 5.0; v.lo_z = 6.0; v.first_node = 107u; \
+         v.hi_x = 8.0; v.hi_y = 9.0; v.hi_z = 10.0; v.node_count = 111u; \
+         v.first_item = 112u; v.item_count = 113u; v.first_op = 114u; v.op_count = 115u;",
+        "GpuObject",
+        16,
+    ) else {
+        return;
+    };
+    let o: &[GpuObject] = bytemuck::cast_slice(&out);
+    let want = GpuObject {
+        kind: 100,
+        material: 101,
+        flags: 102,
+        unbounded: 103,
+        lo: [4.0, 5.0, 6.0],
+        first_node: 107,
+        hi: [8.0, 9.0, 10.0],
+        node_count: 111,
+        first_item: 112,
+        item_count: 113,
+        first_op: 114,
+        op_count: 115,
+    };
+    assert_eq!(o, &[want, want]);
 }

@@ -25,11 +25,16 @@
 //! the array path, so it gives the same answer bit for bit, at O(pieces × candidates)
 //! cost; chunks expand pieces about their own ends, so they agree to rounding. Either
 //! way no sign change is missed.
+//!
+//! The f32 path is the GPU kernel's twin and uses the kernel's capacities,
+//! [`GPU_ACTIVE`] = 32 and [`GPU_SPLITS`] = 4 halvings; where it streams, the kernel
+//! reports the ray as overflowing instead (GPU.md §6.1).
 
 pub(crate) use super::along::Coeffs;
 use super::along::{positive_set, q_local, q_local_mag};
 use crate::poly::{Bernstein, Poly};
 use num_traits::Float;
+use std::cell::Cell;
 use std::mem::MaybeUninit;
 
 /// The most perturbations one scan keeps in its fixed-capacity active set; past it, the
@@ -38,6 +43,15 @@ use std::mem::MaybeUninit;
 /// a quarter of the rays that enter its bounds meet more than 32 supports, 2 % more than
 /// 64) for 9 KiB of stack per scan.
 pub const MAX_ACTIVE: usize = 64;
+
+/// The GPU kernel's active-set capacity K (GPU.md §6.1), which the f32 path
+/// ([`PerturbedView::first_crossing_f32_gpu`](super::PerturbedView::first_crossing_f32_gpu))
+/// uses too, so that both overflow on the same rays.
+pub const GPU_ACTIVE: usize = 32;
+
+/// How many times the GPU kernel halves an overflowing range before it reports the ray
+/// as overflowing (where the CPU streams); the f32 path uses it too.
+pub const GPU_SPLITS: usize = 4;
 
 /// Breakpoints a full active set can make: a quadratic has at most two real roots.
 const MAX_BREAKS: usize = 2 * MAX_ACTIVE;
@@ -186,14 +200,32 @@ pub(crate) fn first_crossing<T: Float, S: Source<T>>(
     sign: T,
 ) -> Option<T> {
     let ray = (o, d, t_min, t_max, sign);
-    first_crossing_within(base, perturbations, ray, range, MAX_ACTIVE)
+    first_crossing_within(base, perturbations, ray, range, MAX_ACTIVE, MAX_SPLITS).0
+}
+
+/// [`first_crossing`] with the GPU kernel's capacities ([`GPU_ACTIVE`], [`GPU_SPLITS`]),
+/// and whether the scan had to stream: the rays the kernel reports as overflowing.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn first_crossing_gpu<T: Float, S: Source<T>>(
+    base: &Coeffs<T>,
+    perturbations: &S,
+    o: [T; 3],
+    d: [T; 3],
+    range: (T, T),
+    t_min: T,
+    t_max: T,
+    sign: T,
+) -> (Option<T>, bool) {
+    let ray = (o, d, t_min, t_max, sign);
+    first_crossing_within(base, perturbations, ray, range, GPU_ACTIVE, GPU_SPLITS)
 }
 
 /// How many times an overflowing range is halved before the scan streams.
 const MAX_SPLITS: usize = 6;
 
-/// [`first_crossing`] with the overflow threshold `capacity` (≤ [`MAX_ACTIVE`]); tests
-/// force the overflow paths with a small capacity.
+/// [`first_crossing`] with the overflow threshold `capacity` (≤ [`MAX_ACTIVE`]) and at
+/// most `max_splits` halvings before streaming; tests force the overflow paths with a
+/// small capacity. Also returns whether the scan streamed.
 #[allow(clippy::type_complexity)]
 fn first_crossing_within<T: Float, S: Source<T>>(
     base: &Coeffs<T>,
@@ -201,10 +233,11 @@ fn first_crossing_within<T: Float, S: Source<T>>(
     (o, d, t_min, t_max, sign): ([T; 3], [T; 3], T, T, T),
     range: (T, T),
     capacity: usize,
-) -> Option<T> {
+    max_splits: usize,
+) -> (Option<T>, bool) {
     let (lo, hi) = range;
     if lo.is_nan() || hi.is_nan() || lo >= hi {
-        return None;
+        return (None, false);
     }
     let ray = Along {
         base,
@@ -214,8 +247,11 @@ fn first_crossing_within<T: Float, S: Source<T>>(
         t_min,
         t_max,
         capacity: capacity.min(MAX_ACTIVE),
+        max_splits,
+        streamed: Cell::new(false),
     };
-    ray.chunk(lo, hi, sign, 0).ok().flatten()
+    let t = ray.chunk(lo, hi, sign, 0).ok().flatten();
+    (t, ray.streamed.get())
 }
 
 /// One ray against one source: what every chunk of the scan shares.
@@ -227,6 +263,9 @@ struct Along<'a, T, S> {
     t_min: T,
     t_max: T,
     capacity: usize,
+    max_splits: usize,
+    /// Set when a chunk streamed (the GPU kernel's overflow report).
+    streamed: Cell<bool>,
 }
 
 /// A point strictly inside (lo, hi) to split an overflowing range at, if there is one.
@@ -267,7 +306,7 @@ impl<T: Float, S: Source<T>> Along<'_, T, S> {
         if overflow {
             // A chunk boundary is one more breakpoint: F' is the same polynomial on both
             // sides, and the sign carries over.
-            if let Some(m) = split_point(lo, hi).filter(|_| depth < MAX_SPLITS) {
+            if let Some(m) = split_point(lo, hi).filter(|_| depth < self.max_splits) {
                 return match self.chunk(lo, m, sign, depth + 1) {
                     Err(s) => self.chunk(m, hi, s, depth + 1),
                     decided => decided,
@@ -296,6 +335,7 @@ impl<T: Float, S: Source<T>> Along<'_, T, S> {
 
     /// The last resort: the active set re-read from the source for every piece.
     fn streamed(&self, lo: T, hi: T, sign: T) -> Result<Option<T>, T> {
+        self.streamed.set(true);
         let streamed = Streamed {
             src: self.src,
             o: self.o,
@@ -560,7 +600,8 @@ mod tests {
             let o = [2.0 * u.cos(), 1.5 * (0.7 * u).sin(), 2.0 * u.sin()];
             let d = [-o[0] + 0.2 * u.sin(), -o[1], -o[2] + 0.1];
             let ray = (o, d, 0.0, f64::INFINITY, 0.0);
-            let want = first_crossing_within(&base, &perts, ray, (0.0, 4.0), MAX_ACTIVE);
+            let (want, _) =
+                first_crossing_within(&base, &perts, ray, (0.0, 4.0), MAX_ACTIVE, MAX_SPLITS);
             let along = Along {
                 base: &base,
                 src: &perts,
@@ -569,6 +610,8 @@ mod tests {
                 t_min: 0.0,
                 t_max: f64::INFINITY,
                 capacity: 0,
+                max_splits: MAX_SPLITS,
+                streamed: Cell::new(false),
             };
             let streamed = along.streamed(0.0, 4.0, 0.0).ok().flatten();
             assert_eq!(
@@ -577,7 +620,8 @@ mod tests {
                 "ray {k}"
             );
             for cap in [0, 1, 3] {
-                let got = first_crossing_within(&base, &perts, ray, (0.0, 4.0), cap);
+                let (got, _) =
+                    first_crossing_within(&base, &perts, ray, (0.0, 4.0), cap, MAX_SPLITS);
                 // Chunk ends expand the pieces about other points: rounding only.
                 match (got, want) {
                     (Some(g), Some(w)) => assert!((g - w).abs() < 1e-12, "ray {k}: {g} vs {w}"),

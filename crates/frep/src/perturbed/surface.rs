@@ -10,7 +10,7 @@ use super::scan::{self, Coeffs};
 use super::{Perturbation, PerturbedQuadric};
 use crate::bvh::{Bvh, BvhRef};
 use crate::quadric::Quadric;
-use crate::ray::{Aabb, Ray};
+use crate::ray::{slab_f32, Aabb, Ray};
 use crate::surface::Surface;
 use glam::{DVec3, Vec3};
 
@@ -115,28 +115,53 @@ impl PerturbedView<'_> {
     }
 
     /// The first t in (t_min, t_max) where F' changes sign, computed in f32 throughout
-    /// the polynomial scan (the GPU path's arithmetic; RESEARCH.md §4 measures it). The
-    /// BVH and the bounds clip run in f64, which only selects what the scan sees.
+    /// (RESEARCH.md §4 measures it): the CPU twin of the GPU kernel (GPU.md §6.1), which
+    /// it equals bit for bit on lavapipe. See [`first_crossing_f32_gpu`](Self::first_crossing_f32_gpu).
     pub fn first_crossing_f32(&self, o: Vec3, d: Vec3, t_min: f32, t_max: f32) -> Option<f32> {
-        let ray = Ray::new(o.as_dvec3(), d.as_dvec3());
-        let (lo, hi, sign) = self.clip(&ray, t_min as f64, t_max as f64)?;
-        let to32 = |c: &[f64; 10]| c.map(|v| v as f32);
-        let src = Supports {
+        self.first_crossing_f32_gpu(o, d, t_min, t_max).0
+    }
+
+    /// [`first_crossing_f32`](Self::first_crossing_f32), and whether the scan overflowed
+    /// the kernel's capacities (more than [`GPU_ACTIVE`](super::GPU_ACTIVE) active perturbations after
+    /// [`GPU_SPLITS`](super::GPU_SPLITS) halvings): there the CPU streams and still answers, while the
+    /// kernel reports the ray as overflowing.
+    ///
+    /// Everything is the kernel's arithmetic: the clip to the bounds and the BVH walk use
+    /// boxes rounded outward to f32 and the f32 slab test ([`crate::ray::slab_f32`]); each
+    /// range is queried widened by an ulp at both ends; candidates come in pre-order
+    /// ([`BvhRef::for_each_hit_f32`]), the order in which each piece sums them.
+    pub fn first_crossing_f32_gpu(
+        &self,
+        o: Vec3,
+        d: Vec3,
+        t_min: f32,
+        t_max: f32,
+    ) -> (Option<f32>, bool) {
+        if t_min.is_nan() || t_max.is_nan() || t_min >= t_max || self.bounds.is_empty() {
+            return (None, false);
+        }
+        let (o, d) = (o.to_array(), d.to_array());
+        let inv = d.map(|v| 1.0 / v);
+        let (blo, bhi) = self.bounds.outward_f32();
+        let Some((lo, hi)) = slab_f32(blo, bhi, o, inv, t_min, t_max) else {
+            return (None, false);
+        };
+        let sign = if lo > t_min { -1.0 } else { 0.0 };
+        let src = F32 {
             perturbations: self.perturbations,
             bvh: self.bvh,
-            ray: &ray,
-            lo,
-            hi,
+            o,
+            inv,
         };
-        scan::first_crossing::<f32, _>(
-            &to32(&self.base.c),
-            &F32(src),
-            o.to_array(),
-            d.to_array(),
-            (lo as f32, hi as f32),
+        scan::first_crossing_gpu::<f32, _>(
+            &self.base.c.map(|v| v as f32),
+            &src,
+            o,
+            d,
+            (lo, hi),
             t_min,
             t_max,
-            sign as f32,
+            sign,
         )
     }
 
@@ -183,8 +208,6 @@ impl PerturbedView<'_> {
             perturbations: self.perturbations,
             bvh: self.bvh,
             ray,
-            lo,
-            hi,
         };
         let base: &Coeffs<f64> = &self.base.c;
         scan::first_crossing(
@@ -220,8 +243,6 @@ struct Supports<'a> {
     perturbations: &'a [Perturbation],
     bvh: BvhRef<'a>,
     ray: &'a Ray,
-    lo: f64,
-    hi: f64,
 }
 
 impl scan::Source<f64> for Supports<'_> {
@@ -234,21 +255,24 @@ impl scan::Source<f64> for Supports<'_> {
     }
 }
 
-/// The same perturbations rounded to f32 (the GPU's arithmetic).
-struct F32<'a>(Supports<'a>);
+/// The perturbations rounded to f32 whose f32 support box the ray meets, walked as the
+/// GPU kernel walks them (the source of [`PerturbedView::first_crossing_f32_gpu`]).
+struct F32<'a> {
+    perturbations: &'a [Perturbation],
+    bvh: BvhRef<'a>,
+    o: [f32; 3],
+    inv: [f32; 3],
+}
 
 impl scan::Source<f32> for F32<'_> {
     #[inline]
     fn for_each(&self, lo: f32, hi: f32, mut visit: impl FnMut(f32, &Coeffs<f32>)) {
-        // The whole range is queried with its f64 ends, as the clip gave them; a chunk
-        // with its f32 ends, widened by an ulp each way so that no box is lost.
-        let s = &self.0;
-        let (lo, hi) = if (lo, hi) == (s.lo as f32, s.hi as f32) {
-            (s.lo, s.hi)
-        } else {
-            (lo.next_down() as f64, hi.next_up() as f64)
-        };
-        s.for_each(lo, hi, |f, q| visit(f as f32, &q.map(|v| v as f32)));
+        // Widened by an ulp each way, so that a box the rounded range ends touch is kept.
+        let (lo, hi) = (lo.next_down(), hi.next_up());
+        self.bvh.for_each_hit_f32(self.o, self.inv, lo, hi, |i| {
+            let p = &self.perturbations[i];
+            visit(p.f as f32, &p.q.c.map(|v| v as f32))
+        });
     }
 }
 
@@ -408,6 +432,29 @@ mod tests {
             "y = {y}"
         );
         assert!(y > 0.0);
+    }
+
+    /// The f32 scan over a left-unbounded range: the plane y = 0 with a half-space
+    /// perturbation growing as (−3 − x)³ meets a slanted ray 1 633 units behind its
+    /// origin; Cauchy's bound there makes sub-pieces millions of units long, whose h⁶
+    /// overflows f32 (the scan used to give up there and answer a miss).
+    #[test]
+    fn f32_scan_finds_far_crossings_of_unbounded_ranges() {
+        let pq = PerturbedQuadric::new(Quadric::plane(DVec3::Y, 0.0))
+            .with(-1e-3, Quadric::plane(DVec3::X, -3.0));
+        let s = pq.surface();
+        let (o, d) = (
+            Vec3::new(0.964_901_57, -0.191_183_48, -2.828_187_5),
+            Vec3::new(0.034_240_786, 0.085_781_8, 0.995_725_4),
+        );
+        let ray = Ray::new(o.as_dvec3(), d.as_dvec3());
+        let t64 = s.first_crossing(&ray, f64::NEG_INFINITY, 8.0).unwrap();
+        let t32 = s.first_crossing_f32(o, d, f32::NEG_INFINITY, 8.0).unwrap();
+        assert!((t64 + 1633.353).abs() < 1e-2, "{t64}");
+        assert!(
+            (f64::from(t32) - t64).abs() < 1e-4 * t64.abs(),
+            "{t32} vs {t64}"
+        );
     }
 
     #[test]

@@ -218,3 +218,16 @@ fn random_polynomials_match_their_known_first_crossing() {
     }
     assert!(f32_checked > 5_000, "{f32_checked}");
 }
+
+/// Scaling by a long piece keeps zero coefficients zero where h^k overflows f32 (a cubed
+/// linear q_i has none above degree 3); 0·∞ = NaN used to end the scan as a miss.
+#[test]
+fn scaling_keeps_zero_coefficients_where_the_power_overflows() {
+    let mut p = Poly::<f32>::quadratic([1.0, -2.0, 0.0]);
+    p.add_scaled_cube(1e-3, [2.0, 0.5, 0.0]);
+    let s = p.scaled(1e7);
+    assert!(s.coeffs()[..4].iter().all(|v| v.is_finite()), "{s:?}");
+    assert_eq!(&s.coeffs()[4..], &[0.0; 3]);
+    let b = s.to_bernstein();
+    assert!(b.coeffs().iter().all(|v| v.is_finite()), "{b:?}");
+}
