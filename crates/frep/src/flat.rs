@@ -109,6 +109,8 @@ pub enum Leaf {
         bounds: Aabb,
         /// Resolution along rays ([`crate::interval_trace::resolution`]).
         eps: f64,
+        /// Its occupancy grid in [`Flat::grids`] (empty: none).
+        grid: Span,
     },
 }
 
@@ -147,6 +149,8 @@ pub struct Flat {
     pub tapes: Vec<Node>,
     /// Register bytecode of the tapes ([`crate::bytecode::Bytecode::words`]).
     pub bytecode: Vec<u32>,
+    /// Expression leaves' occupancy grids ([`crate::occupancy`]), one bitset each.
+    pub grids: Vec<u64>,
 }
 
 impl Flat {
@@ -184,12 +188,15 @@ impl Flat {
         self.tapes.extend_from_slice(v.tape);
         let c0 = self.bytecode.len();
         self.bytecode.extend_from_slice(code.words());
+        let g0 = self.grids.len();
+        self.grids.extend_from_slice(v.grid);
         self.leaves.push(Leaf::Expr {
             tape: Span::since(t0, self.tapes.len()),
             code: Span::since(c0, self.bytecode.len()),
             registers: code.registers() as u32,
             bounds: v.bounds,
             eps: v.eps,
+            grid: Span::since(g0, self.grids.len()),
         });
         Ok(self.leaves.len() as u32 - 1)
     }
@@ -217,11 +224,16 @@ impl Flat {
                 bounds,
             }),
             Leaf::Expr {
-                tape, bounds, eps, ..
+                tape,
+                bounds,
+                eps,
+                grid,
+                ..
             } => LeafView::Expr(ExprView {
                 tape: &self.tapes[tape.range()],
                 bounds,
                 eps,
+                grid: &self.grids[grid.range()],
             }),
         }
     }

@@ -19,6 +19,7 @@
 use crate::dual::Dual;
 use crate::expr::{eval_choices_nodes, eval_nodes, simplify_into, Choice, Expr, Node};
 use crate::interval::Interval;
+use crate::occupancy;
 use crate::ray::{Aabb, Ray};
 use crate::surface::{outward, Surface};
 use glam::DVec3;
@@ -43,6 +44,7 @@ pub struct ExprSurface {
     expr: Arc<Expr>,
     bounds: Aabb,
     eps: f64,
+    grid: Arc<[u64]>,
 }
 
 /// An expression solid over a borrowed tape (root last): what [`ExprSurface`] and the
@@ -55,6 +57,9 @@ pub struct ExprView<'a> {
     pub bounds: Aabb,
     /// The resolution along rays ([`RESOLUTION`] × the bounds' diagonal).
     pub eps: f64,
+    /// The occupancy grid over the bounds grown by `eps` ([`crate::occupancy`]; empty:
+    /// none, every ray searches its whole segment).
+    pub grid: &'a [u64],
 }
 
 thread_local! {
@@ -92,10 +97,13 @@ struct Segment {
 impl ExprSurface {
     /// A solid whose every point with F ≥ 0 lies in `bounds` (see [`crate::bounds`]).
     pub fn new(expr: Expr, bounds: Aabb) -> Self {
+        let eps = resolution(&bounds);
+        let grid = occupancy::build(expr.nodes(), &grown(&bounds, eps)).into();
         Self {
             expr: Arc::new(expr),
             bounds,
-            eps: resolution(&bounds),
+            eps,
+            grid,
         }
     }
 
@@ -110,8 +118,15 @@ impl ExprSurface {
             tape: self.expr.nodes(),
             bounds: self.bounds,
             eps: self.eps,
+            grid: &self.grid,
         }
     }
+}
+
+/// The box rays search: the bounds grown by the resolution, so that a surface on a face
+/// is not clipped away.
+fn grown(bounds: &Aabb, eps: f64) -> Aabb {
+    Aabb::new(bounds.lo - eps, bounds.hi + eps)
 }
 
 /// The resolution along rays for a solid with these bounds.
@@ -212,7 +227,7 @@ impl ExprView<'_> {
     pub fn trace(&self, ray: &Ray, t_min: f64, t_max: f64, normal: bool) -> Option<(f64, DVec3)> {
         // Outside the bounds F < 0, so crossings lie inside them; widen a little so that
         // a surface on the box face is not clipped away.
-        let grown = Aabb::new(self.bounds.lo - self.eps, self.bounds.hi + self.eps);
+        let grown = grown(&self.bounds, self.eps);
         let (t0, t1) = grown.clip(ray, t_min, t_max)?;
         if t1 <= t0 || !t1.is_finite() || !t0.is_finite() {
             return None;
@@ -237,85 +252,133 @@ impl ExprView<'_> {
         if t0 > t_min && ia {
             return cap(t0);
         }
+        let search = Search {
+            root,
+            ray,
+            eps_t,
+            tol,
+            normal,
+        };
         let inner = TRACE.with_borrow_mut(|tr| {
-            let Trace {
-                stack,
-                arena,
-                choices,
-            } = tr;
-            stack.clear();
-            arena.clear();
-            stack.push(Segment {
-                a: t0,
-                b: t1,
-                ia,
-                ib,
-                tape: None,
-            });
             let mut visits = 0u32;
-            while let Some(Segment { a, b, ia, ib, tape }) = stack.pop() {
-                visits += 1;
-                arena.truncate(tape.map_or(0, |(_, e)| e as usize));
-                let nodes = match tape {
-                    None => root,
-                    Some((s, e)) => &arena[s as usize..e as usize],
-                };
-                let (v, slope) = segment(nodes, ray, a, b, choices);
-                if v.lo > 0.0 || v.hi < 0.0 {
-                    continue;
-                }
-                if slope.lo > 0.0 || slope.hi < 0.0 || b - a <= eps_t || visits > MAX_SEGMENTS {
-                    // Monotonic (at most one crossing), below resolution or past the
-                    // budget: decided by the signs at the ends.
-                    if ia != ib {
-                        let t = refine(nodes, ray, a, b, ia, tol);
-                        let n = match normal {
-                            true => outward(gradient_by(nodes, ray.at(t))),
-                            false => DVec3::Z,
-                        };
-                        return Some((t, n));
-                    }
-                    continue;
-                }
-                // The mean-value form F(m) + F'([a,b])·([a,b] − m) is far tighter than
-                // the plain interval on short segments (Moore 1966, §6).
-                let m = 0.5 * (a + b);
-                let fm = value_at(nodes, ray, m);
-                let mv = Interval::point(fm) + slope * Interval::new(a - m, b - m);
-                if ia == ib && (mv.lo > 0.0 || mv.hi < 0.0) {
-                    continue;
-                }
-                // Both halves lie in this segment, so its min/max choices hold there too.
-                let mut half = tape;
-                if nodes.len() >= SIMPLIFY_MIN_LEN {
-                    let start = arena.len();
-                    let range = tape.map(|(s, e)| s as usize..e as usize);
-                    if simplify_into(root, range, choices, arena) {
-                        half = Some((start as u32, arena.len() as u32));
-                    }
-                }
-                let im = fm >= 0.0;
-                stack.push(Segment {
-                    a: m,
-                    b,
-                    ia: im,
-                    ib,
-                    tape: half,
-                });
-                stack.push(Segment {
-                    a,
-                    b: m,
-                    ia,
-                    ib: im,
-                    tape: half,
-                });
+            if self.grid.len() != occupancy::GRID_WORDS {
+                return search.run(tr, (t0, t1), (ia, ib), &mut visits);
             }
-            None
+            // Only runs of occupied cells can hold a crossing; F keeps its sign between.
+            let mut found = None;
+            occupancy::runs(self.grid, &grown, ray, t0, t1, |a, b| {
+                let ia = if a == t0 { ia } else { inside_at(root, ray, a) };
+                let ib = if b == t1 { ib } else { inside_at(root, ray, b) };
+                found = search.run(tr, (a, b), (ia, ib), &mut visits);
+                found.is_some()
+            });
+            found
         });
         match inner {
             None if t1 < t_max && ib => cap(t1),
             found => found,
         }
+    }
+}
+
+/// One ray's search of a segment by subdivision (the loop of [`ExprView::trace`]).
+struct Search<'a> {
+    root: &'a [Node],
+    ray: &'a Ray,
+    eps_t: f64,
+    tol: f64,
+    normal: bool,
+}
+
+impl Search<'_> {
+    /// The first crossing in [a, b], whose ends are inside as (ia, ib); `visits`
+    /// counts segments against [`MAX_SEGMENTS`] over every call of one trace.
+    fn run(
+        &self,
+        tr: &mut Trace,
+        (a, b): (f64, f64),
+        (ia, ib): (bool, bool),
+        visits: &mut u32,
+    ) -> Option<(f64, DVec3)> {
+        let Self {
+            root,
+            ray,
+            eps_t,
+            tol,
+            normal,
+        } = *self;
+        let Trace {
+            stack,
+            arena,
+            choices,
+        } = tr;
+        stack.clear();
+        arena.clear();
+        stack.push(Segment {
+            a,
+            b,
+            ia,
+            ib,
+            tape: None,
+        });
+        while let Some(Segment { a, b, ia, ib, tape }) = stack.pop() {
+            *visits += 1;
+            arena.truncate(tape.map_or(0, |(_, e)| e as usize));
+            let nodes = match tape {
+                None => root,
+                Some((s, e)) => &arena[s as usize..e as usize],
+            };
+            let (v, slope) = segment(nodes, ray, a, b, choices);
+            if v.lo > 0.0 || v.hi < 0.0 {
+                continue;
+            }
+            if slope.lo > 0.0 || slope.hi < 0.0 || b - a <= eps_t || *visits > MAX_SEGMENTS {
+                // Monotonic (at most one crossing), below resolution or past the
+                // budget: decided by the signs at the ends.
+                if ia != ib {
+                    let t = refine(nodes, ray, a, b, ia, tol);
+                    let n = match normal {
+                        true => outward(gradient_by(nodes, ray.at(t))),
+                        false => DVec3::Z,
+                    };
+                    return Some((t, n));
+                }
+                continue;
+            }
+            // The mean-value form F(m) + F'([a,b])·([a,b] − m) is far tighter than
+            // the plain interval on short segments (Moore 1966, §6).
+            let m = 0.5 * (a + b);
+            let fm = value_at(nodes, ray, m);
+            let mv = Interval::point(fm) + slope * Interval::new(a - m, b - m);
+            if ia == ib && (mv.lo > 0.0 || mv.hi < 0.0) {
+                continue;
+            }
+            // Both halves lie in this segment, so its min/max choices hold there too.
+            let mut half = tape;
+            if nodes.len() >= SIMPLIFY_MIN_LEN {
+                let start = arena.len();
+                let range = tape.map(|(s, e)| s as usize..e as usize);
+                if simplify_into(root, range, choices, arena) {
+                    half = Some((start as u32, arena.len() as u32));
+                }
+            }
+            let im = fm >= 0.0;
+            stack.push(Segment {
+                a: m,
+                b,
+                ia: im,
+                ib,
+                tape: half,
+            });
+            stack.push(Segment {
+                a,
+                b: m,
+                ia,
+                ib: im,
+                tape: half,
+            });
+        }
+        None
     }
 }
 

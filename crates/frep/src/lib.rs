@@ -29,6 +29,7 @@ pub mod expr;
 pub mod flat;
 pub mod interval;
 pub mod interval_trace;
+pub mod occupancy;
 pub mod perturbed;
 pub mod poly;
 pub mod quadric;
