@@ -9,6 +9,8 @@ Conventions bridged here (frepray → Mitsuba):
 - light shapes get a black BSDF: in Mitsuba a shape with an emitter otherwise reflects
   with the default 50 % diffuse BSDF, in frepray lights do not reflect.
 - `fov` is vertical in frepray: `fov_axis = "y"`. Box pixel filter, independent sampler.
+- rough conductors: Mitsuba's GGX uses the separable G2 = G1(ωi)·G1(ωo), frepray the
+  height-correlated one (g2.py offers the latter to Mitsuba, as a diagnostic).
 - colours are plain RGB (`rgb` variants, no spectral upsampling); conductor η, k are
   given per channel as in the TOML.
 """
@@ -25,8 +27,13 @@ def _diffuse(rgb):
     return {"type": "diffuse", "reflectance": _rgb(rgb)}
 
 
+# The conductor plugin: "roughconductor", or g2.py's "roughconductor_g2corr" (frepray's
+# height-correlated G2) for compare.py --g2 correlated.
+CONDUCTOR = "roughconductor"
+
+
 def _conductor(eta, k, alpha):
-    return {"type": "roughconductor", "distribution": "ggx", "alpha": alpha,
+    return {"type": CONDUCTOR, "distribution": "ggx", "alpha": alpha,
             "eta": _rgb(eta), "k": _rgb(k)}
 
 
