@@ -236,6 +236,9 @@ def main():
         print("UNRESOLVED:", u)
     for f in fails:
         print("DISAGREE:", f)
+    if fails and args.g2 == "separable":
+        print("note: rough conductors differ by the Smith G2 form (Mitsuba separable, frepray "
+              "height-correlated); --g2 correlated aligns it (docs/benchmarks.md)")
     print("images agree" if not fails else f"{len(fails)} disagreement(s)")
     return 1 if fails else 0
 
