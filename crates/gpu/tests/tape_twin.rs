@@ -1,0 +1,394 @@
+//! The expression-tape kernels (GPU.md §6.2) against their CPU f32 twins, bit for bit on
+//! lavapipe (GPU.md §3.5), and the twins against frep: point values equal to
+//! `Bytecode::eval_f32`, intervals holding the point values, rays against frep's f64
+//! interval tracer; and the tracer's loop budget (GPU.md §3.1, §9).
+//!
+//! Models: shipped ones whose ops the interpreter has (tanglecube.vm, s2_csg.hf,
+//! s3_blend.hf, bumpy_ball.frep, machined_part.frep, table.frep: thin plates and legs).
+
+mod common;
+
+use frep::bytecode::Bytecode;
+use frep::read::read_file;
+use frep::{Aabb, Expr, ExprView, Ray};
+use glam::{DVec3, Vec3};
+use gpu::tape::GpuTape;
+use gpu::tape_trace::{TapeHit, TapeSolid, BUDGET};
+use gpu::{Gpu, GpuOptions, Kernel};
+use std::path::PathBuf;
+use std::time::Instant;
+
+/// A small deterministic generator (SplitMix64 to [0, 1)).
+struct Rng(u64);
+impl Rng {
+    fn next(&mut self) -> f64 {
+        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+    }
+    fn range(&mut self, a: f64, b: f64) -> f64 {
+        a + (b - a) * self.next()
+    }
+    fn unit(&mut self) -> DVec3 {
+        loop {
+            let v = DVec3::new(self.next(), self.next(), self.next()) * 2.0 - 1.0;
+            let l = v.length();
+            if l > 0.1 && l <= 1.0 {
+                return v / l;
+            }
+        }
+    }
+    fn in_box(&mut self, b: &Aabb) -> DVec3 {
+        DVec3::new(
+            self.range(b.lo.x, b.hi.x),
+            self.range(b.lo.y, b.hi.y),
+            self.range(b.lo.z, b.hi.z),
+        )
+    }
+}
+
+struct Model {
+    name: &'static str,
+    expr: Expr,
+    bounds: Aabb,
+}
+
+fn models() -> Vec<Model> {
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let files: [(&str, PathBuf, f64); 6] = [
+        (
+            "tanglecube",
+            root.join("../shared/models/fidget/tanglecube.vm"),
+            5.0,
+        ),
+        ("s2_csg", root.join("models/canonical/s2_csg.hf"), 1.6),
+        ("s3_blend", root.join("models/canonical/s3_blend.hf"), 1.6),
+        (
+            "bumpy_ball",
+            root.join("models/examples/bumpy_ball.frep"),
+            2.0,
+        ),
+        (
+            "machined_part",
+            root.join("models/examples/machined_part.frep"),
+            2.0,
+        ),
+        ("table", root.join("scenes/models/table.frep"), 2.0),
+    ];
+    files
+        .into_iter()
+        .map(|(name, path, r)| {
+            let m = read_file(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+            let expr = Expr::new(&m.shape.to_tree().expect("a regular shape"));
+            let domain = m
+                .domain
+                .unwrap_or(Aabb::new(DVec3::splat(-r), DVec3::splat(r)));
+            let bounds = frep::bounds::expr_bounds(&expr, domain);
+            assert!(!bounds.is_empty() && bounds.is_finite(), "{name}");
+            Model { name, expr, bounds }
+        })
+        .collect()
+}
+
+fn tape(m: &Model) -> GpuTape {
+    GpuTape::new(&Bytecode::compile(&m.expr).unwrap()).unwrap()
+}
+
+fn interp_source(t: &GpuTape) -> String {
+    format!(
+        "@group(0) @binding(0) var<storage, read> tape: array<u32>;
+@group(0) @binding(1) var<storage, read> input: array<f32>;
+@group(0) @binding(2) var<storage, read_write> out: array<u32>;
+{}
+@compute @workgroup_size(64)
+fn points(@builtin(global_invocation_id) id: vec3<u32>) {{
+    let i = id.x;
+    if (3u * i >= arrayLength(&input)) {{ return; }}
+    let f = eval_point(vec3<f32>(input[3u * i], input[3u * i + 1u], input[3u * i + 2u]));
+    out[i] = bitcast<u32>(f);
+}}
+@compute @workgroup_size(64)
+fn boxes(@builtin(global_invocation_id) id: vec3<u32>) {{
+    let i = id.x;
+    if (9u * i >= arrayLength(&input)) {{ return; }}
+    let r = 9u * i;
+    let x = vec4<f32>(input[r], input[r + 3u], input[r + 6u], input[r + 6u]);
+    let y = vec4<f32>(input[r + 1u], input[r + 4u], input[r + 7u], input[r + 7u]);
+    let z = vec4<f32>(input[r + 2u], input[r + 5u], input[r + 8u], input[r + 8u]);
+    let v = eval_interval(x, y, z);
+    for (var k = 0u; k < 4u; k++) {{ out[4u * i + k] = bitcast<u32>(v[k]); }}
+}}
+",
+        t.wgsl()
+    )
+}
+
+fn same(a: f32, b: f32) -> bool {
+    a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan())
+}
+
+/// Points and boxes: the kernel equals the twin bit for bit, the twin equals
+/// `Bytecode::eval_f32`, and every f32 point value (and f64 directional derivative) in a
+/// box lies in its interval.
+#[test]
+fn interpreter_matches_its_twin_and_is_sound() {
+    let Some(g) = common::gpu(GpuOptions::default()) else {
+        return;
+    };
+    let mut rng = Rng(7);
+    for m in models() {
+        let t = tape(&m);
+        let src = interp_source(&t);
+        let start = Instant::now();
+        // SAFETY: register numbers are below REG_COUNT (checked by Bytecode), the loop
+        // runs TAPE_LEN times, and the entry points stay within their arrays.
+        let kp = unsafe { Kernel::new_unchecked(&g, &src, "points", 2) }.unwrap();
+        let kb = unsafe { Kernel::new_unchecked(&g, &src, "boxes", 2) }.unwrap();
+        let compile = start.elapsed();
+        let code = Bytecode::compile(&m.expr).unwrap();
+        let n = 4096;
+        let pts: Vec<[f32; 3]> = (0..n)
+            .map(|_| rng.in_box(&m.bounds).as_vec3().into())
+            .collect();
+        let words: Vec<u32> = pts.iter().flatten().map(|f| f.to_bits()).collect();
+        let out = kp
+            .run(&g, &[t.words(), &words], n, [n.div_ceil(64) as u32, 1, 1])
+            .unwrap();
+        for (i, p) in pts.iter().enumerate() {
+            let (gpu, twin) = (f32::from_bits(out[i]), t.eval_point(*p));
+            assert!(
+                same(gpu, twin),
+                "{}: at {p:?} GPU {gpu}, twin {twin}",
+                m.name
+            );
+            let want = code.eval_f32(*p);
+            assert!(
+                same(twin, want),
+                "{}: at {p:?} twin {twin}, eval_f32 {want}",
+                m.name
+            );
+        }
+        // Boxes of several sizes with a direction for dF/dt.
+        let diag = m.bounds.extent().length();
+        let boxes: Vec<(Vec3, Vec3, Vec3)> = (0..n)
+            .map(|k| {
+                let half = diag * [0.3, 0.03, 1e-3, 1e-6][k % 4] * rng.next();
+                let c = rng.in_box(&m.bounds);
+                let h = DVec3::new(rng.next(), rng.next(), rng.next()) * half;
+                ((c - h).as_vec3(), (c + h).as_vec3(), rng.unit().as_vec3())
+            })
+            .collect();
+        let words: Vec<u32> = boxes
+            .iter()
+            .flat_map(|(lo, hi, d)| [lo.to_array(), hi.to_array(), d.to_array()])
+            .flatten()
+            .map(|f| f.to_bits())
+            .collect();
+        let out = kb
+            .run(
+                &g,
+                &[t.words(), &words],
+                4 * n,
+                [n.div_ceil(64) as u32, 1, 1],
+            )
+            .unwrap();
+        let (mut checked, mut derivs) = (0, 0);
+        for (i, &(lo, hi, d)) in boxes.iter().enumerate() {
+            let c = |k: usize| [lo[k], hi[k], d[k], d[k]];
+            let twin = t.eval_interval(c(0), c(1), c(2));
+            for k in 0..4 {
+                let gpu = f32::from_bits(out[4 * i + k]);
+                assert!(
+                    same(gpu, twin[k]),
+                    "{}: box {i} [{k}] GPU {gpu}, twin {}",
+                    m.name,
+                    twin[k]
+                );
+            }
+            for _ in 0..8 {
+                let p: [f32; 3] = [0, 1, 2].map(|k| rng.range(lo[k] as f64, hi[k] as f64) as f32);
+                let v = t.eval_point(p);
+                if !v.is_nan() && !twin[0].is_nan() {
+                    assert!(
+                        twin[0] <= v && v <= twin[1],
+                        "{}: {v} at {p:?} outside {twin:?}",
+                        m.name
+                    );
+                    checked += 1;
+                }
+                let (_, grad) = m.expr.gradient(p.map(f64::from));
+                let dv = grad[0] * d.x as f64 + grad[1] * d.y as f64 + grad[2] * d.z as f64;
+                if dv.is_finite() && !twin[2].is_nan() {
+                    assert!(
+                        twin[2] as f64 <= dv && dv <= twin[3] as f64,
+                        "{}: dF/dt {dv} at {p:?} outside {twin:?}",
+                        m.name
+                    );
+                    derivs += 1;
+                }
+            }
+        }
+        eprintln!(
+            "{}: {} ops, {} points and {n} boxes bit-identical; {checked} values and {derivs} derivatives inside; pipelines {compile:?}",
+            m.name,
+            t.len(),
+            n
+        );
+    }
+}
+
+fn trace_source(s: &TapeSolid) -> String {
+    format!(
+        "@group(0) @binding(0) var<storage, read> tape: array<u32>;
+@group(0) @binding(1) var<storage, read> rays: array<f32>;
+@group(0) @binding(2) var<storage, read_write> out: array<u32>;
+{}
+@compute @workgroup_size(64)
+fn trace(@builtin(global_invocation_id) id: vec3<u32>) {{
+    let i = id.x;
+    if (8u * i >= arrayLength(&rays)) {{ return; }}
+    let r = 8u * i;
+    loops = 0u;
+    let o = vec3<f32>(rays[r], rays[r + 1u], rays[r + 2u]);
+    let d = vec3<f32>(rays[r + 3u], rays[r + 4u], rays[r + 5u]);
+    let h = trace_tape(o, d, rays[r + 6u], rays[r + 7u]);
+    out[3u * i] = bitcast<u32>(h.t);
+    out[3u * i + 1u] = h.status;
+    out[3u * i + 2u] = loops;
+}}
+",
+        s.wgsl()
+    )
+}
+
+type TestRay = [f32; 8];
+
+/// Rays: a half random from outside (aimed into the bounds), a quarter grazing the
+/// surface (tangent at a point found by frep, nudged by up to 1e-4 × size), a quarter
+/// from inside the bounds.
+fn rays(m: &Model, rng: &mut Rng) -> Vec<TestRay> {
+    let view = ExprView {
+        tape: m.expr.nodes(),
+        bounds: m.bounds,
+        eps: frep::interval_trace::resolution(&m.bounds),
+    };
+    let c = m.bounds.center();
+    let size = m.bounds.extent().length();
+    let mut out = Vec::new();
+    let mk = |o: DVec3, d: DVec3, t0: f32, t1: f32| -> TestRay {
+        let (o, d) = (o.as_vec3(), d.as_vec3());
+        [o.x, o.y, o.z, d.x, d.y, d.z, t0, t1]
+    };
+    while out.len() < 2048 {
+        let o = c + size * rng.unit();
+        let d = (rng.in_box(&m.bounds) - o).normalize();
+        out.push(mk(o, d, 0.0, f32::INFINITY));
+    }
+    while out.len() < 3072 {
+        let o = c + size * rng.unit();
+        let d = (rng.in_box(&m.bounds) - o).normalize();
+        let Some((t, _)) = view.trace(&Ray::new(o, d), 0.0, f64::INFINITY, false) else {
+            continue;
+        };
+        let p = o + t * d;
+        let n = m.expr.gradient(p.to_array()).1;
+        let n = DVec3::from_array(n).normalize_or_zero();
+        if n == DVec3::ZERO {
+            continue;
+        }
+        let tangent = n.cross(rng.unit()).normalize_or_zero();
+        if tangent == DVec3::ZERO {
+            continue;
+        }
+        let p = p + n * size * 1e-4 * rng.range(-1.0, 1.0);
+        out.push(mk(p - size * tangent, tangent, 0.0, f32::INFINITY));
+    }
+    while out.len() < 4096 {
+        let o = rng.in_box(&m.bounds);
+        out.push(mk(o, rng.unit(), 0.0, (2.0 * size) as f32));
+    }
+    out
+}
+
+/// Per model, 4 096 rays through the kernel: bit-identical to the twin (outcome, t and
+/// loop count), the loop count below 30 000; the twin against frep's f64 tracer.
+#[test]
+fn rays_match_the_twin_and_frep() {
+    let Some(g) = common::gpu(GpuOptions::default()) else {
+        return;
+    };
+    let mut rng = Rng(21);
+    for m in models() {
+        let solid = TapeSolid::new(tape(&m), &m.bounds);
+        let rs = rays(&m, &mut rng);
+        let out = run_rays(&g, &solid, &rs, m.name);
+        let view = ExprView {
+            tape: m.expr.nodes(),
+            bounds: m.bounds,
+            eps: frep::interval_trace::resolution(&m.bounds),
+        };
+        let size = m.bounds.extent().length();
+        let (mut hits, mut undecided, mut flips, mut max_dt, mut max_loops) = (0, 0, 0, 0f64, 0);
+        for (i, r) in rs.iter().enumerate() {
+            let (o, d) = (Vec3::new(r[0], r[1], r[2]), Vec3::new(r[3], r[4], r[5]));
+            let (twin, loops) = solid.trace(o, d, r[6], r[7]);
+            let gpu = TapeHit::from_kernel(out[3 * i + 1], out[3 * i]);
+            assert_eq!(
+                (format!("{gpu:?}"), out[3 * i + 2]),
+                (format!("{twin:?}"), loops),
+                "{}: ray {i} {r:?}",
+                m.name
+            );
+            max_loops = max_loops.max(loops);
+            let ray = Ray::new(o.as_dvec3(), d.as_dvec3());
+            let want = view
+                .trace(&ray, r[6] as f64, r[7] as f64, false)
+                .map(|h| h.0);
+            match (twin, want) {
+                (TapeHit::Undecided, _) => undecided += 1,
+                (TapeHit::Hit(t), Some(w)) => {
+                    hits += 1;
+                    max_dt = max_dt.max((t as f64 - w).abs() / size.max(w.abs()));
+                }
+                (TapeHit::Miss, None) => {}
+                (got, want) => {
+                    flips += 1;
+                    eprintln!("{}: ray {i} {r:?}: twin {got:?}, frep {want:?}", m.name);
+                }
+            }
+        }
+        eprintln!(
+            "{}: {} rays bit-identical; {hits} hits, {flips} flips against f64, {undecided} undecided, max |Δt|/max(size, t) {max_dt:.2e}, max loops {max_loops}",
+            m.name,
+            rs.len()
+        );
+        assert!(max_loops < 30_000 && max_loops <= BUDGET + 1, "{max_loops}");
+        assert_eq!(undecided, 0, "{}", m.name);
+    }
+}
+
+fn run_rays(g: &Gpu, solid: &TapeSolid, rs: &[TestRay], name: &str) -> Vec<u32> {
+    let start = Instant::now();
+    // SAFETY: registers below REG_COUNT (checked by Bytecode), stack indices below STACK
+    // (checked before each push), every loop bounded by BUDGET.
+    let k = unsafe { Kernel::new_unchecked(g, &trace_source(solid), "trace", 2) }.unwrap();
+    let compile = start.elapsed();
+    let words: Vec<u32> = rs.iter().flatten().map(|f| f.to_bits()).collect();
+    let start = Instant::now();
+    let out = k
+        .run(
+            g,
+            &[solid.tape.words(), &words],
+            3 * rs.len(),
+            [(rs.len() as u32).div_ceil(64), 1, 1],
+        )
+        .unwrap();
+    eprintln!(
+        "{name}: pipeline {compile:?}, {} rays in {:?}",
+        rs.len(),
+        start.elapsed()
+    );
+    out
+}
