@@ -7,9 +7,12 @@
 //! where the F interval excludes 0; where dF/dt excludes 0 or the segment is shorter than
 //! ε/|d|, decided by the end signs and bisected on the sign down to adjacent f32; else the
 //! mean-value test, then halving. Differences from frep's f64 tracer: no per-segment tape
-//! simplification, bisection in place of Newton, and a budget: an evaluation that would
-//! take the invocation's loop count past [`BUDGET`] (GPU.md §3.1), or a full stack, ends
-//! the ray as [`TapeHit::Undecided`], never as a silent miss.
+//! simplification, bisection in place of Newton, and budgets in loop iterations (GPU.md
+//! §3.1) rather than segments: once an evaluation would pass the soft budget
+//! ([`BUDGET`] less a reserve for one bisection and the stack), the segments left are
+//! decided by their end signs, as frep does past its `MAX_SEGMENTS`, and the outcome is
+//! flagged [`Traced::late`]; an evaluation that would pass [`BUDGET`], or a full stack,
+//! ends the ray as [`TapeHit::Undecided`], never as a silent miss.
 
 use crate::tape::{down, i_add, i_mul, up, w1, GpuTape};
 use frep::Aabb;
@@ -43,15 +46,40 @@ pub enum TapeHit {
     Undecided,
 }
 
-impl TapeHit {
-    /// The kernel's status (0 miss, 1 hit, 2 undecided) and t bits.
-    pub fn from_kernel(status: u32, t_bits: u32) -> Self {
-        match status {
+/// A traced ray: the outcome, whether segments were decided by end signs past the soft
+/// budget, and the loop iterations taken.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Traced {
+    /// The outcome.
+    pub hit: TapeHit,
+    /// Whether the soft budget ran out (see the module docs).
+    pub late: bool,
+    /// Loop iterations of the invocation (GPU.md §3.1).
+    pub loops: u32,
+}
+
+impl Traced {
+    /// The kernel's `TraceResult` (status: 0 miss, 1 hit, 2 undecided, plus 4 when late;
+    /// t as bits) and its loop count.
+    pub fn from_kernel(status: u32, t_bits: u32, loops: u32) -> Self {
+        let hit = match status & 3 {
             0 => TapeHit::Miss,
             1 => TapeHit::Hit(f32::from_bits(t_bits)),
             _ => TapeHit::Undecided,
+        };
+        Self {
+            hit,
+            late: status & 4 != 0,
+            loops,
         }
     }
+}
+
+/// The soft budget of a tape of `len` instructions: [`BUDGET`] less one bisection's
+/// evaluations and a pass over the stack (0 when the tape is too long).
+pub fn soft_budget(len: u32) -> u32 {
+    let reserve = (MAX_BISECT + 2) * (len + 1) + STACK as u32;
+    BUDGET.saturating_sub(reserve)
 }
 
 /// An expression solid for the GPU tracer: its tape, bounds rounded outward to f32
@@ -89,31 +117,32 @@ impl TapeSolid {
     /// The interpreter and tracer WGSL with this solid's constants (`EPS`, `BLO`, `BHI`,
     /// and the tape's); the kernel declares `tape: array<u32>`.
     pub fn wgsl(&self) -> String {
-        let v = |a: [f32; 3]| {
-            format!(
-                "vec3<f32>(bitcast<f32>({}u), bitcast<f32>({}u), bitcast<f32>({}u))",
-                a[0].to_bits(),
-                a[1].to_bits(),
-                a[2].to_bits()
-            )
-        };
+        let v = |a: [f32; 3]| format!("vec3<f32>({}, {}, {})", hex(a[0]), hex(a[1]), hex(a[2]));
         format!(
-            "{}\nconst EPS: f32 = bitcast<f32>({}u);\nconst BLO = {};\nconst BHI = {};\n{TRACE_WGSL}",
+            "{}\nconst EPS: f32 = {};\nconst BLO = {};\nconst BHI = {};\n{TRACE_WGSL}",
             self.tape.wgsl(),
-            self.eps.to_bits(),
+            hex(self.eps),
             v(self.lo),
             v(self.hi)
         )
     }
 
-    /// The twin of the kernel's `trace_tape`: the outcome and the loop iterations taken.
-    pub fn trace(&self, o: Vec3, d: Vec3, t_min: f32, t_max: f32) -> (TapeHit, u32) {
-        let mut loops = 0u32;
-        let hit = self.trace_counted(o, d, t_min, t_max, &mut loops);
-        (hit, loops)
+    /// The twin of the kernel's `trace_tape`.
+    pub fn trace(&self, o: Vec3, d: Vec3, t_min: f32, t_max: f32) -> Traced {
+        let (mut loops, mut late) = (0u32, false);
+        let hit = self.trace_counted(o, d, t_min, t_max, &mut loops, &mut late);
+        Traced { hit, late, loops }
     }
 
-    fn trace_counted(&self, o: Vec3, d: Vec3, t_min: f32, t_max: f32, loops: &mut u32) -> TapeHit {
+    fn trace_counted(
+        &self,
+        o: Vec3,
+        d: Vec3,
+        t_min: f32,
+        t_max: f32,
+        loops: &mut u32,
+        late: &mut bool,
+    ) -> TapeHit {
         let len_tape = self.tape.len() as u32;
         let eps = Vec3::splat(self.eps);
         let glo = Vec3::from(self.lo) - eps;
@@ -142,6 +171,8 @@ impl TapeSolid {
         let mut slope = [0f32; 2];
         let mut steps = 0u32;
         let budget = |loops: u32| loops + len_tape > BUDGET;
+        let soft = soft_budget(len_tape);
+        let over_soft = |loops: u32| loops + len_tape > soft;
         loop {
             *loops += 1;
             if phase == 2 {
@@ -154,9 +185,16 @@ impl TapeSolid {
                 }
                 n -= 1;
                 (a, b, ia, ib) = st[n];
-                if budget(*loops) {
-                    return TapeHit::Undecided;
+                if *late || over_soft(*loops) {
+                    *late = true;
+                    if ia == ib {
+                        continue;
+                    }
+                    phase = 4;
+                    steps = 0;
                 }
+            }
+            if phase == 2 {
                 let c = |k: usize| {
                     let (ok, dk) = (o[k], d[k]);
                     let (pa_lo, pa_hi) = (ok + down(a * dk), ok + up(a * dk));
@@ -181,6 +219,18 @@ impl TapeSolid {
                     pt = m;
                     phase = 3;
                 }
+            }
+            if (phase == 3 || phase < 2) && over_soft(*loops) {
+                if phase < 2 {
+                    return TapeHit::Undecided;
+                }
+                *late = true;
+                if ia == ib {
+                    phase = 2;
+                    continue;
+                }
+                phase = 4;
+                steps = 0;
             }
             if phase == 4 {
                 let mid = a + (b - a) * 0.5;
@@ -234,5 +284,40 @@ impl TapeSolid {
                 }
             }
         }
+    }
+}
+
+/// A finite f32 as an exact WGSL hexadecimal literal (`bitcast` is no constant
+/// expression in naga 30).
+fn hex(x: f32) -> String {
+    assert!(x.is_finite(), "{x}");
+    if x == 0.0 {
+        return if x.is_sign_negative() {
+            "-0.0f"
+        } else {
+            "0.0f"
+        }
+        .into();
+    }
+    let b = x.to_bits();
+    let sign = if b >> 31 == 1 { "-" } else { "" };
+    let (e, m) = ((b >> 23) & 0xff, b & 0x7f_ffff);
+    if e == 0 {
+        // Subnormal: m × 2^-149.
+        return format!("{sign}0x{m:x}p-149f");
+    }
+    format!("{sign}0x1.{:06x}p{}f", m << 1, e as i32 - 127)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn hex_literals_are_exact() {
+        assert_eq!(hex(1.0), "0x1.000000p0f");
+        assert_eq!(hex(-0.75), "-0x1.800000p-1f");
+        assert_eq!(hex(f32::from_bits(1)), "0x1p-149f");
+        assert_eq!(hex(f32::MAX), "0x1.fffffep127f");
     }
 }

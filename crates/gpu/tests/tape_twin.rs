@@ -13,7 +13,7 @@ use frep::read::read_file;
 use frep::{Aabb, Expr, ExprView, Ray};
 use glam::{DVec3, Vec3};
 use gpu::tape::GpuTape;
-use gpu::tape_trace::{TapeHit, TapeSolid, BUDGET};
+use gpu::tape_trace::{TapeHit, TapeSolid, Traced, BUDGET};
 use gpu::{Gpu, GpuOptions, Kernel};
 use std::path::PathBuf;
 use std::time::Instant;
@@ -265,6 +265,11 @@ fn trace(@builtin(global_invocation_id) id: vec3<u32>) {{
 
 type TestRay = [f32; 8];
 
+/// |Δt| against frep's f64 tracer, relative to max(size, |t|): the f32 resolution
+/// (2e-6 × diagonal) decides at most a segment that long, and the surface's slope along
+/// grazing rays stretches that (measured up to 8.8e-5, table); GPU.md §9 asks ≤ 1e-3.
+const TOLERANCE: f64 = 1e-3;
+
 /// Rays: a half random from outside (aimed into the bounds), a quarter grazing the
 /// surface (tangent at a point found by frep, nudged by up to 1e-4 × size), a quarter
 /// from inside the bounds.
@@ -331,22 +336,25 @@ fn rays_match_the_twin_and_frep() {
         };
         let size = m.bounds.extent().length();
         let (mut hits, mut undecided, mut flips, mut max_dt, mut max_loops) = (0, 0, 0, 0f64, 0);
+        let (mut late, mut late_flips) = (0, 0);
         for (i, r) in rs.iter().enumerate() {
             let (o, d) = (Vec3::new(r[0], r[1], r[2]), Vec3::new(r[3], r[4], r[5]));
-            let (twin, loops) = solid.trace(o, d, r[6], r[7]);
-            let gpu = TapeHit::from_kernel(out[3 * i + 1], out[3 * i]);
+            let twin = solid.trace(o, d, r[6], r[7]);
+            let gpu = Traced::from_kernel(out[3 * i + 1], out[3 * i], out[3 * i + 2]);
+            // Debug strings compare t bit for bit (and NaN equal to NaN).
             assert_eq!(
-                (format!("{gpu:?}"), out[3 * i + 2]),
-                (format!("{twin:?}"), loops),
+                format!("{gpu:?}"),
+                format!("{twin:?}"),
                 "{}: ray {i} {r:?}",
                 m.name
             );
-            max_loops = max_loops.max(loops);
+            max_loops = max_loops.max(twin.loops);
+            late += twin.late as usize;
             let ray = Ray::new(o.as_dvec3(), d.as_dvec3());
             let want = view
                 .trace(&ray, r[6] as f64, r[7] as f64, false)
                 .map(|h| h.0);
-            match (twin, want) {
+            match (twin.hit, want) {
                 (TapeHit::Undecided, _) => undecided += 1,
                 (TapeHit::Hit(t), Some(w)) => {
                     hits += 1;
@@ -354,18 +362,25 @@ fn rays_match_the_twin_and_frep() {
                 }
                 (TapeHit::Miss, None) => {}
                 (got, want) => {
-                    flips += 1;
+                    match twin.late {
+                        true => late_flips += 1,
+                        false => flips += 1,
+                    }
                     eprintln!("{}: ray {i} {r:?}: twin {got:?}, frep {want:?}", m.name);
                 }
             }
         }
         eprintln!(
-            "{}: {} rays bit-identical; {hits} hits, {flips} flips against f64, {undecided} undecided, max |Δt|/max(size, t) {max_dt:.2e}, max loops {max_loops}",
+            "{}: {} rays bit-identical; {hits} hits, {flips} flips against f64, {late} late ({late_flips} of them flipped), {undecided} undecided, max |Δt|/max(size, t) {max_dt:.2e}, max loops {max_loops}",
             m.name,
             rs.len()
         );
         assert!(max_loops < 30_000 && max_loops <= BUDGET + 1, "{max_loops}");
+        // Rays decided within the budget agree with frep; late rays (segments decided by
+        // their end signs, as frep past its segment budget) may miss a thin crossing.
+        assert_eq!(flips, 0, "{}", m.name);
         assert_eq!(undecided, 0, "{}", m.name);
+        assert!(max_dt < TOLERANCE, "{}: {max_dt:e}", m.name);
     }
 }
 

@@ -6,8 +6,11 @@
 // decided by its end signs and bisected on the sign down to adjacent f32, else the
 // mean-value test, then halving. One state machine, so that `eval_point` and
 // `eval_interval` each have a single call site (llvmpipe inlines every call).
-// Every eval is charged TAPE_LEN to `loops`; an eval that would take `loops` past BUDGET,
-// or a full stack, ends the ray with status 2 (undecided), never a silent miss.
+// Every eval is charged TAPE_LEN to `loops`. Once an eval would pass SOFT = BUDGET minus
+// a reserve for one bisection and the stack, the segments left are decided by their end
+// signs (as frep past MAX_SEGMENTS) and status gets bit 2 (4: late); an eval that would
+// pass BUDGET, or a full stack, ends the ray with status 2 (undecided), never a silent
+// miss.
 // Needs tape.wgsl, EPS and the bounds BLO, BHI (per object, prepended by the kernel).
 
 const STACK: u32 = 32u;
@@ -15,6 +18,11 @@ const BUDGET: u32 = 24000u;
 const MAX_BISECT: u32 = 64u;
 
 struct TraceResult { status: u32, t: f32 }
+
+fn soft_budget() -> u32 {
+    let reserve = (MAX_BISECT + 2u) * (TAPE_LEN + 1u) + STACK;
+    return select(0u, BUDGET - reserve, BUDGET > reserve);
+}
 
 fn trace_tape(o: vec3<f32>, d: vec3<f32>, t_min: f32, t_max: f32) -> TraceResult {
     let glo = BLO - vec3<f32>(EPS);
@@ -44,19 +52,28 @@ fn trace_tape(o: vec3<f32>, d: vec3<f32>, t_min: f32, t_max: f32) -> TraceResult
     var m = 0.0;
     var slope = vec2<f32>(0.0, 0.0);
     var steps = 0u;
+    var late = 0u;
+    let soft = soft_budget();
     loop {
         loops++;
         if (phase == 2u) {
             if (n == 0u) {
-                if (t1 < t_max && ib0) { return TraceResult(1u, t1); }
-                return TraceResult(0u, 0.0);
+                if (t1 < t_max && ib0) { return TraceResult(1u | late, t1); }
+                return TraceResult(late, 0.0);
             }
             n--;
             a = st_a[n];
             b = st_b[n];
             ia = (st_s[n] & 1u) != 0u;
             ib = (st_s[n] & 2u) != 0u;
-            if (loops + TAPE_LEN > BUDGET) { return TraceResult(2u, 0.0); }
+            if (late != 0u || loops + TAPE_LEN > soft) {
+                late = 4u;
+                if (ia == ib) { continue; }
+                phase = 4u;
+                steps = 0u;
+            }
+        }
+        if (phase == 2u) {
             // o + t·d over [a, b], rounded outward: the product within an ulp, then the sum.
             let pa_lo = o + vec3<f32>(down(a * d.x), down(a * d.y), down(a * d.z));
             let pa_hi = o + vec3<f32>(up(a * d.x), up(a * d.y), up(a * d.z));
@@ -81,9 +98,19 @@ fn trace_tape(o: vec3<f32>, d: vec3<f32>, t_min: f32, t_max: f32) -> TraceResult
                 phase = 3u;
             }
         }
+        if ((phase == 3u || phase < 2u) && loops + TAPE_LEN > soft) {
+            if (phase < 2u) { return TraceResult(2u, 0.0); }
+            late = 4u;
+            if (ia == ib) {
+                phase = 2u;
+                continue;
+            }
+            phase = 4u;
+            steps = 0u;
+        }
         if (phase == 4u) {
             let mid = a + (b - a) * 0.5;
-            if (!(mid > a && mid < b) || steps >= MAX_BISECT) { return TraceResult(1u, b); }
+            if (!(mid > a && mid < b) || steps >= MAX_BISECT) { return TraceResult(1u | late, b); }
             steps++;
             pt = mid;
         }
