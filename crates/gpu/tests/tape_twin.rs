@@ -407,3 +407,70 @@ fn run_rays(g: &Gpu, solid: &TapeSolid, rs: &[TestRay], name: &str) -> Vec<u32> 
     );
     out
 }
+
+/// The unit sphere padded with `terms` negligible terms 1e-30·(x + k)², 4 ops each.
+fn padded_sphere(terms: usize) -> Expr {
+    use frep::Tree;
+    let (x, y, z) = (Tree::x(), Tree::y(), Tree::z());
+    let mut t = Tree::constant(1.0) - x.square() - y.square() - z.square();
+    for k in 1..=terms {
+        t = t + (x.clone() + k as f64).square() * 1e-30;
+    }
+    Expr::new(&t)
+}
+
+/// The loop budget (GPU.md §3.1): a tape too long for one bisection within the budget
+/// leaves every ray undecided (never a miss); a tape leaving a few evaluations before
+/// the soft budget decides rays by end signs, flagged late. GPU and twin agree, and no
+/// invocation passes [`BUDGET`].
+#[test]
+fn loop_budget_is_kept_and_reported() {
+    let Some(g) = common::gpu(GpuOptions::default()) else {
+        return;
+    };
+    let bounds = Aabb::new(DVec3::splat(-1.0), DVec3::splat(1.0));
+    let mut rng = Rng(5);
+    for (terms, want_late, want_undecided) in [(80, true, false), (120, false, true)] {
+        let e = padded_sphere(terms);
+        let solid = TapeSolid::new(
+            GpuTape::new(&Bytecode::compile(&e).unwrap()).unwrap(),
+            &bounds,
+        );
+        let rs: Vec<TestRay> = (0..512)
+            .map(|i| {
+                let d = rng.unit().as_vec3();
+                if i % 2 == 0 {
+                    // From the centre (inside): a crossing by end signs.
+                    [0.0, 0.0, 0.0, d.x, d.y, d.z, 0.0, 4.0]
+                } else {
+                    let o = (3.0 * rng.unit()).as_vec3();
+                    let d = (rng.in_box(&bounds).as_vec3() * 0.5 - o).normalize();
+                    [o.x, o.y, o.z, d.x, d.y, d.z, 0.0, f32::INFINITY]
+                }
+            })
+            .collect();
+        let out = run_rays(&g, &solid, &rs, "padded sphere");
+        let (mut late, mut undecided, mut max_loops) = (0, 0, 0);
+        for (i, r) in rs.iter().enumerate() {
+            let (o, d) = (Vec3::new(r[0], r[1], r[2]), Vec3::new(r[3], r[4], r[5]));
+            let twin = solid.trace(o, d, r[6], r[7]);
+            let gpu = Traced::from_kernel(out[3 * i + 1], out[3 * i], out[3 * i + 2]);
+            assert_eq!(format!("{gpu:?}"), format!("{twin:?}"), "ray {i} {r:?}");
+            assert!(twin.loops <= BUDGET, "{}", twin.loops);
+            max_loops = max_loops.max(twin.loops);
+            late += twin.late as usize;
+            undecided += (twin.hit == TapeHit::Undecided) as usize;
+            if i % 2 == 0 && twin.hit != TapeHit::Undecided {
+                // From inside, the end signs differ: always a hit.
+                assert!(matches!(twin.hit, TapeHit::Hit(_)), "ray {i}: {twin:?}");
+            }
+        }
+        eprintln!(
+            "{} ops: {late} late, {undecided} undecided of {}, max loops {max_loops}",
+            solid.tape.len(),
+            rs.len()
+        );
+        assert_eq!(late > 0, want_late);
+        assert_eq!(undecided == rs.len(), want_undecided);
+    }
+}
