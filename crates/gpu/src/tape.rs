@@ -96,9 +96,15 @@ impl GpuTape {
         &self.words
     }
 
-    /// Number of instructions: what one evaluation adds to the loop count.
+    /// Number of instructions.
     pub fn len(&self) -> usize {
         self.instrs.len()
+    }
+
+    /// Loop iterations of one evaluation in the kernel: four instructions per iteration
+    /// (GPU.md §6.2.2).
+    pub fn eval_loops(&self) -> u32 {
+        self.instrs.len().div_ceil(4) as u32
     }
 
     /// Whether the tape is empty (never, for a compiled expression).

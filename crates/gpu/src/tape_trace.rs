@@ -75,10 +75,10 @@ impl Traced {
     }
 }
 
-/// The soft budget of a tape of `len` instructions: [`BUDGET`] less one bisection's
-/// evaluations and a pass over the stack (0 when the tape is too long).
-pub fn soft_budget(len: u32) -> u32 {
-    let reserve = (MAX_BISECT + 2) * (len + 1) + STACK as u32;
+/// The soft budget for evaluations of `eval_loops` iterations ([`GpuTape::eval_loops`]):
+/// [`BUDGET`] less one bisection and a pass over the stack (0 when the tape is too long).
+pub fn soft_budget(eval_loops: u32) -> u32 {
+    let reserve = (MAX_BISECT + 2) * (eval_loops + 1) + STACK as u32;
     BUDGET.saturating_sub(reserve)
 }
 
@@ -143,7 +143,7 @@ impl TapeSolid {
         loops: &mut u32,
         late: &mut bool,
     ) -> TapeHit {
-        let len_tape = self.tape.len() as u32;
+        let len_tape = self.tape.eval_loops();
         let eps = Vec3::splat(self.eps);
         let glo = Vec3::from(self.lo) - eps;
         let ghi = Vec3::from(self.hi) + eps;

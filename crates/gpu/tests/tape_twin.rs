@@ -430,7 +430,7 @@ fn loop_budget_is_kept_and_reported() {
     };
     let bounds = Aabb::new(DVec3::splat(-1.0), DVec3::splat(1.0));
     let mut rng = Rng(5);
-    for (terms, want_late, want_undecided) in [(80, true, false), (120, false, true)] {
+    for (terms, want_late, want_undecided) in [(325, true, false), (400, false, true)] {
         let e = padded_sphere(terms);
         let solid = TapeSolid::new(
             GpuTape::new(&Bytecode::compile(&e).unwrap()).unwrap(),

@@ -6,9 +6,11 @@
 // gpu::tape. Supported ops: var, const, powi (0 ≤ n ≤ 15), neg, abs, sqrt, square, add,
 // sub, mul, div, min, max; gpu::tape::GpuTape refuses others.
 // The kernel prepends REG_COUNT and TAPE_LEN (per pipeline, §3.4) and binds `tape:
-// array<u32>`. Each interpreter step adds one to `loops` (§3.1).
+// array<u32>`. Each loop iteration runs four instructions and adds one to `loops` (§3.1):
+// an evaluation costs EVAL_LOOPS.
 
 var<private> loops: u32;
+const EVAL_LOOPS: u32 = (TAPE_LEN + 3u) / 4u;
 
 const MIN_POS: f32 = 0x1p-126f; // f32::MIN_POSITIVE
 const IMM: u32 = 255u;
@@ -108,11 +110,8 @@ fn hull(a: vec2<f32>, b: vec2<f32>) -> vec2<f32> {
 
 var<private> preg: array<f32, REG_COUNT>;
 
-// F at p: Bytecode::eval_f32 operation for operation.
-fn eval_point(p: vec3<f32>) -> f32 {
-    var out = 0u;
-    for (var k = 0u; k < TAPE_LEN; k++) {
-        loops++;
+// Instruction k at p (Bytecode::eval_f32's arm); returns its output register.
+fn point_op(k: u32, p: vec3<f32>) -> u32 {
         let w = tape[2u * k];
         let imm = bitcast<f32>(tape[2u * k + 1u]);
         let op = w & 0xffu;
@@ -141,7 +140,19 @@ fn eval_point(p: vec3<f32>) -> f32 {
             default: { v = nan(); }
         }
         preg[o] = v;
-        out = o;
+        return o;
+}
+
+// F at p: Bytecode::eval_f32 operation for operation, four ops per loop iteration
+// (§6.2.2), so an evaluation costs EVAL_LOOPS iterations.
+fn eval_point(p: vec3<f32>) -> f32 {
+    var out = 0u;
+    for (var k = 0u; k < TAPE_LEN; k += 4u) {
+        loops++;
+        out = point_op(k, p);
+        if (k + 1u < TAPE_LEN) { out = point_op(k + 1u, p); }
+        if (k + 2u < TAPE_LEN) { out = point_op(k + 2u, p); }
+        if (k + 3u < TAPE_LEN) { out = point_op(k + 3u, p); }
     }
     return preg[out];
 }
@@ -151,10 +162,7 @@ var<private> ireg: array<vec4<f32>, REG_COUNT>;
 // F and dF/dt over a box: x, y, z are (lo, hi, dlo, dhi) of each coordinate. Values
 // widened by 1 ulp after each op, 4 after `/` and sqrt, 16 after powi (§6.2.3);
 // derivatives by the same interval ops (frep's Dual<Interval, 1>).
-fn eval_interval(x: vec4<f32>, y: vec4<f32>, z: vec4<f32>) -> vec4<f32> {
-    var out = 0u;
-    for (var k = 0u; k < TAPE_LEN; k++) {
-        loops++;
+fn interval_op(k: u32, x: vec4<f32>, y: vec4<f32>, z: vec4<f32>) -> u32 {
         let w = tape[2u * k];
         let imm = bitcast<f32>(tape[2u * k + 1u]);
         let op = w & 0xffu;
@@ -204,7 +212,18 @@ fn eval_interval(x: vec4<f32>, y: vec4<f32>, z: vec4<f32>) -> vec4<f32> {
             default: { v = nan2(); d = nan2(); }
         }
         ireg[o] = vec4<f32>(v, d);
-        out = o;
+        return o;
+}
+
+// F and dF/dt over a box, four ops per loop iteration.
+fn eval_interval(x: vec4<f32>, y: vec4<f32>, z: vec4<f32>) -> vec4<f32> {
+    var out = 0u;
+    for (var k = 0u; k < TAPE_LEN; k += 4u) {
+        loops++;
+        out = interval_op(k, x, y, z);
+        if (k + 1u < TAPE_LEN) { out = interval_op(k + 1u, x, y, z); }
+        if (k + 2u < TAPE_LEN) { out = interval_op(k + 2u, x, y, z); }
+        if (k + 3u < TAPE_LEN) { out = interval_op(k + 3u, x, y, z); }
     }
     return ireg[out];
 }

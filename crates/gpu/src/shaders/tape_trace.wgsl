@@ -6,7 +6,7 @@
 // decided by its end signs and bisected on the sign down to adjacent f32, else the
 // mean-value test, then halving. One state machine, so that `eval_point` and
 // `eval_interval` each have a single call site (llvmpipe inlines every call).
-// Every eval is charged TAPE_LEN to `loops`. Once an eval would pass SOFT = BUDGET minus
+// Every eval adds EVAL_LOOPS to `loops`. Once an eval would pass SOFT = BUDGET minus
 // a reserve for one bisection and the stack, the segments left are decided by their end
 // signs (as frep past MAX_SEGMENTS) and status gets bit 2 (4: late); an eval that would
 // pass BUDGET, or a full stack, ends the ray with status 2 (undecided), never a silent
@@ -20,7 +20,7 @@ const MAX_BISECT: u32 = 64u;
 struct TraceResult { status: u32, t: f32 }
 
 fn soft_budget() -> u32 {
-    let reserve = (MAX_BISECT + 2u) * (TAPE_LEN + 1u) + STACK;
+    let reserve = (MAX_BISECT + 2u) * (EVAL_LOOPS + 1u) + STACK;
     return select(0u, BUDGET - reserve, BUDGET > reserve);
 }
 
@@ -66,7 +66,7 @@ fn trace_tape(o: vec3<f32>, d: vec3<f32>, t_min: f32, t_max: f32) -> TraceResult
             b = st_b[n];
             ia = (st_s[n] & 1u) != 0u;
             ib = (st_s[n] & 2u) != 0u;
-            if (late != 0u || loops + TAPE_LEN > soft) {
+            if (late != 0u || loops + EVAL_LOOPS > soft) {
                 late = 4u;
                 if (ia == ib) { continue; }
                 phase = 4u;
@@ -98,7 +98,7 @@ fn trace_tape(o: vec3<f32>, d: vec3<f32>, t_min: f32, t_max: f32) -> TraceResult
                 phase = 3u;
             }
         }
-        if ((phase == 3u || phase < 2u) && loops + TAPE_LEN > soft) {
+        if ((phase == 3u || phase < 2u) && loops + EVAL_LOOPS > soft) {
             if (phase < 2u) { return TraceResult(2u, 0.0); }
             late = 4u;
             if (ia == ib) {
@@ -114,7 +114,7 @@ fn trace_tape(o: vec3<f32>, d: vec3<f32>, t_min: f32, t_max: f32) -> TraceResult
             steps++;
             pt = mid;
         }
-        if (loops + TAPE_LEN > BUDGET) { return TraceResult(2u, 0.0); }
+        if (loops + EVAL_LOOPS > BUDGET) { return TraceResult(2u, 0.0); }
         let f = eval_point(o + pt * d);
         let inside = f >= 0.0;
         if (phase == 0u) {
