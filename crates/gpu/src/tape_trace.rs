@@ -158,7 +158,7 @@ impl TapeSolid {
             .min(ta.x.max(tb.x))
             .min(ta.y.max(tb.y))
             .min(ta.z.max(tb.z));
-        if !(t0 < t1) || !t0.is_finite() || !t1.is_finite() {
+        if !(t0.is_finite() && t1.is_finite()) || t0 >= t1 {
             return TapeHit::Miss;
         }
         let len = (d.x * d.x + d.y * d.y + d.z * d.z).sqrt();
