@@ -1,7 +1,7 @@
 // Rays against an expression solid (GPU.md §6.2.4), a port of frep's interval tracer
 // (crates/frep/src/interval_trace.rs) to f32 with fixed capacities; the CPU twin is
-// gpu::tape_trace::TapeSolid::trace. Clip to the bounds grown by the resolution EPS; the sign at both ends;
-// then segments from an explicit stack of STACK, left half first: a segment whose F
+// gpu::tape_trace::TapeSolid::trace. Clip to the bounds grown by the resolution EPS; the
+// sign at both ends; then segments from an explicit stack of STACK, left half first: a segment whose F
 // interval excludes 0 is dropped, one whose dF/dt excludes 0 (or shorter than EPS/|d|) is
 // decided by its end signs and bisected on the sign down to adjacent f32, else the
 // mean-value test, then halving. One state machine, so that `eval_point` and
