@@ -1,11 +1,11 @@
 // Rays against an expression solid (GPU.md §6.2.4), a port of frep's interval tracer
 // (crates/frep/src/interval_trace.rs) to f32 with fixed capacities; the CPU twin is
 // gpu::tape_trace::TapeSolid::trace. Clip to the bounds grown by the resolution EPS; the
-// sign at both ends; then segments from an explicit stack of STACK, left half first: a segment whose F
-// interval excludes 0 is dropped, one whose dF/dt excludes 0 (or shorter than EPS/|d|) is
-// decided by its end signs and bisected on the sign down to adjacent f32, else the
-// mean-value test, then halving. One state machine, so that `eval_point` and
-// `eval_interval` each have a single call site (llvmpipe inlines every call).
+// sign at both ends; then segments from an explicit stack of STACK, left half first: a
+// segment whose F interval excludes 0 is dropped, one whose dF/dt excludes 0 (or shorter
+// than EPS/|d|) is decided by its end signs and bisected on the sign down to adjacent
+// f32, else the mean-value test, then halving. One state machine, so that `eval_point`
+// and `eval_interval` each have a single call site (llvmpipe inlines every call).
 // Every eval adds EVAL_LOOPS to `loops`. Once an eval would pass SOFT = BUDGET minus
 // a reserve for one bisection and the stack, the segments left are decided by their end
 // signs (as frep past MAX_SEGMENTS) and status gets bit 2 (4: late); an eval that would
