@@ -21,7 +21,8 @@
 //! outward to f32, then widened by GPU.md §6.2's margin: 1 ulp, 4 after `/`, `sqrt`,
 //! `powi` and transcendentals. So it holds every f32 point value, whose transcendentals
 //! may be off by an ulp or two (a shader does the same operations in f32 with the same
-//! widening).
+//! widening). The shader's own algorithm, operation for operation in f32 with bit-step
+//! widening, and its twin are in the `gpu` crate (`gpu::tape`, GPU.md §6.2.3).
 
 use crate::expr::{Expr, Node};
 use crate::interval::Interval;

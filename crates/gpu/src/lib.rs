@@ -21,6 +21,9 @@
 //!   bit for bit on lavapipe (GPU.md §3.5);
 //! - [`perturbed`]: rays against perturbed quadrics in WGSL (frep's exact scan, GPU.md
 //!   §6.1), equal bit for bit on lavapipe to frep's f32 twin, with overflow reported;
+//! - [`tape`], [`tape_trace`]: expression tapes (frep's bytecode) in WGSL, at points and
+//!   as outward-rounded intervals with dF/dt, and rays against expression solids (GPU.md
+//!   §6.2), equal bit for bit on lavapipe to their CPU f32 twins;
 //! - [`sampler`]: the CPU's random numbers (Philox4x32-10, `render::sampler`) in WGSL with
 //!   32-bit operations only, equal bit for bit on every adapter.
 //!
@@ -40,6 +43,8 @@ pub mod layout;
 pub mod perturbed;
 pub mod quadric;
 pub mod sampler;
+pub mod tape;
+pub mod tape_trace;
 
 pub use adapter::{Gpu, GpuError, GpuInfo, GpuOptions};
 pub use kernel::Kernel;

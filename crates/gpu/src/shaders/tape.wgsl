@@ -1,0 +1,229 @@
+// Expression tapes (GPU.md §6.2): frep's register bytecode (frep::bytecode, two words per
+// op: opcode | out << 8 | a << 16 | b << 24, then an immediate; register 255 reads the
+// immediate) run by a loop over a switch, in two flavours: `eval_point` (F at a point in
+// f32, Bytecode::eval_f32's twin) and `eval_interval` (F and dF/dt as intervals, a vec4
+// (lo, hi, dlo, dhi), widened outward after every op, §6.2.3). The CPU twins are in
+// gpu::tape. Supported ops: var, const, powi (0 ≤ n ≤ 15), neg, abs, sqrt, square, add,
+// sub, mul, div, min, max; gpu::tape::GpuTape refuses others.
+// The kernel prepends REG_COUNT and TAPE_LEN (per pipeline, §3.4) and binds `tape:
+// array<u32>`. Each loop iteration runs four instructions and adds one to `loops` (§3.1):
+// an evaluation costs EVAL_LOOPS.
+
+var<private> loops: u32;
+const EVAL_LOOPS: u32 = (TAPE_LEN + 3u) / 4u;
+
+const MIN_POS: f32 = 0x1p-126f; // f32::MIN_POSITIVE
+const IMM: u32 = 255u;
+
+fn inf() -> f32 { return bitcast<f32>(0x7f800000u); }
+fn nan() -> f32 { return bitcast<f32>(0x7fc00000u); }
+fn is_nan(x: f32) -> bool { return (bitcast<u32>(x) & 0x7fffffffu) > 0x7f800000u; }
+fn is_finite(x: f32) -> bool { return (bitcast<u32>(x) & 0x7f800000u) != 0x7f800000u; }
+// Rust's f32::min / max: a NaN operand is ignored.
+fn rmin(a: f32, b: f32) -> f32 {
+    if (is_nan(a)) { return b; }
+    if (is_nan(b)) { return a; }
+    return min(a, b);
+}
+fn rmax(a: f32, b: f32) -> f32 {
+    if (is_nan(a)) { return b; }
+    if (is_nan(b)) { return a; }
+    return max(a, b);
+}
+// The next f32 above x, where zero and subnormals step to the smallest normal, so that a
+// GPU flushing subnormals still widens (§6.2.3). NaN and +∞ stay.
+fn up(x: f32) -> f32 {
+    if (is_nan(x) || x == inf()) { return x; }
+    if (x >= -MIN_POS && x < MIN_POS) { return MIN_POS; }
+    let b = bitcast<u32>(x);
+    return bitcast<f32>(select(b - 1u, b + 1u, x > 0.0));
+}
+fn down(x: f32) -> f32 { return -up(-x); }
+fn up4(x: f32) -> f32 { return up(up(up(up(x)))); }
+fn down4(x: f32) -> f32 { return down(down(down(down(x)))); }
+fn w1(lo: f32, hi: f32) -> vec2<f32> { return vec2<f32>(down(lo), up(hi)); }
+fn w4(lo: f32, hi: f32) -> vec2<f32> { return vec2<f32>(down4(lo), up4(hi)); }
+fn nan2() -> vec2<f32> { return vec2<f32>(nan(), nan()); }
+fn any_nan(a: vec2<f32>) -> bool { return is_nan(a.x) || is_nan(a.y); }
+
+// x^n, 0 ≤ n ≤ 15, by compiler-rt's __powisf2 (what Rust's f32::powi calls): square and
+// multiply from the lowest bit, written out for four bits.
+fn powi(x: f32, n: u32) -> f32 {
+    var a = x;
+    var r = 1.0;
+    if ((n & 1u) != 0u) { r = r * a; }
+    if (n < 2u) { return r; }
+    a = a * a;
+    if ((n & 2u) != 0u) { r = r * a; }
+    if (n < 4u) { return r; }
+    a = a * a;
+    if ((n & 4u) != 0u) { r = r * a; }
+    if (n < 8u) { return r; }
+    a = a * a;
+    if ((n & 8u) != 0u) { r = r * a; }
+    return r;
+}
+
+// Interval operations on (lo, hi), each containing every exact result (NaN: unknown).
+fn i_add(a: vec2<f32>, b: vec2<f32>) -> vec2<f32> { return w1(a.x + b.x, a.y + b.y); }
+fn i_sub(a: vec2<f32>, b: vec2<f32>) -> vec2<f32> { return w1(a.x - b.y, a.y - b.x); }
+fn i_neg(a: vec2<f32>) -> vec2<f32> { return vec2<f32>(-a.y, -a.x); }
+fn i_mul(a: vec2<f32>, b: vec2<f32>) -> vec2<f32> {
+    let p = vec4<f32>(a.x * b.x, a.x * b.y, a.y * b.x, a.y * b.y);
+    return w1(rmin(rmin(p.x, p.y), rmin(p.z, p.w)), rmax(rmax(p.x, p.y), rmax(p.z, p.w)));
+}
+fn i_div(a: vec2<f32>, b: vec2<f32>) -> vec2<f32> {
+    if (b.x <= 0.0 && b.y >= 0.0) { return vec2<f32>(-inf(), inf()); }
+    let p = vec4<f32>(a.x / b.x, a.x / b.y, a.y / b.x, a.y / b.y);
+    return w4(rmin(rmin(p.x, p.y), rmin(p.z, p.w)), rmax(rmax(p.x, p.y), rmax(p.z, p.w)));
+}
+fn i_abs(a: vec2<f32>) -> vec2<f32> {
+    if (a.x >= 0.0) { return a; }
+    if (a.y <= 0.0) { return i_neg(a); }
+    return vec2<f32>(0.0, rmax(-a.x, a.y));
+}
+fn i_square(a: vec2<f32>) -> vec2<f32> {
+    if (any_nan(a)) { return nan2(); }
+    let b = i_abs(a);
+    return w1(b.x * b.x, b.y * b.y);
+}
+fn i_sqrt(a: vec2<f32>) -> vec2<f32> {
+    if (any_nan(a) || a.y < 0.0) { return nan2(); }
+    return w4(sqrt(rmax(a.x, 0.0)), sqrt(a.y));
+}
+fn i_powi(a: vec2<f32>, n: u32) -> vec2<f32> {
+    if (any_nan(a)) { return nan2(); }
+    if (n == 0u) { return vec2<f32>(1.0, 1.0); }
+    var b = a;
+    if ((n & 1u) == 0u) { b = i_abs(a); }
+    // x^n by repeated products is monotone on b (rounding to nearest is), within n ulps.
+    let lo = powi(b.x, n);
+    let hi = powi(b.y, n);
+    return vec2<f32>(down4(down4(down4(down4(lo)))), up4(up4(up4(up4(hi)))));
+}
+fn i_min(a: vec2<f32>, b: vec2<f32>) -> vec2<f32> { return vec2<f32>(rmin(a.x, b.x), rmin(a.y, b.y)); }
+fn i_max(a: vec2<f32>, b: vec2<f32>) -> vec2<f32> { return vec2<f32>(rmax(a.x, b.x), rmax(a.y, b.y)); }
+fn hull(a: vec2<f32>, b: vec2<f32>) -> vec2<f32> {
+    if (any_nan(a) || any_nan(b)) { return nan2(); }
+    return vec2<f32>(min(a.x, b.x), max(a.y, b.y));
+}
+
+var<private> preg: array<f32, REG_COUNT>;
+
+// Instruction k at p (Bytecode::eval_f32's arm); returns its output register.
+fn point_op(k: u32, p: vec3<f32>) -> u32 {
+        let w = tape[2u * k];
+        let imm = bitcast<f32>(tape[2u * k + 1u]);
+        let op = w & 0xffu;
+        let o = (w >> 8u) & 0xffu;
+        let ia = (w >> 16u) & 0xffu;
+        let ib = w >> 24u;
+        var a = imm;
+        if (op != 0u && ia != IMM) { a = preg[ia]; }
+        var b = imm;
+        if (ib != IMM) { b = preg[ib]; }
+        var v = 0.0;
+        switch op {
+            case 0u: { v = p[ia]; }
+            case 1u: { v = imm; }
+            case 2u: { v = powi(a, tape[2u * k + 1u]); }
+            case 16u: { v = -a; }
+            case 17u: { v = abs(a); }
+            case 18u: { v = sqrt(a); }
+            case 19u: { v = a * a; }
+            case 48u: { v = a + b; }
+            case 49u: { v = a - b; }
+            case 50u: { v = a * b; }
+            case 51u: { v = a / b; }
+            case 52u: { v = rmin(a, b); }
+            case 53u: { v = rmax(a, b); }
+            default: { v = nan(); }
+        }
+        preg[o] = v;
+        return o;
+}
+
+// F at p: Bytecode::eval_f32 operation for operation, four ops per loop iteration
+// (§6.2.2), so an evaluation costs EVAL_LOOPS iterations.
+fn eval_point(p: vec3<f32>) -> f32 {
+    var out = 0u;
+    for (var k = 0u; k < TAPE_LEN; k += 4u) {
+        loops++;
+        out = point_op(k, p);
+        if (k + 1u < TAPE_LEN) { out = point_op(k + 1u, p); }
+        if (k + 2u < TAPE_LEN) { out = point_op(k + 2u, p); }
+        if (k + 3u < TAPE_LEN) { out = point_op(k + 3u, p); }
+    }
+    return preg[out];
+}
+
+var<private> ireg: array<vec4<f32>, REG_COUNT>;
+
+// F and dF/dt over a box: x, y, z are (lo, hi, dlo, dhi) of each coordinate. Values
+// widened by 1 ulp after each op, 4 after `/` and sqrt, 16 after powi (§6.2.3);
+// derivatives by the same interval ops (frep's Dual<Interval, 1>).
+fn interval_op(k: u32, x: vec4<f32>, y: vec4<f32>, z: vec4<f32>) -> u32 {
+        let w = tape[2u * k];
+        let imm = bitcast<f32>(tape[2u * k + 1u]);
+        let op = w & 0xffu;
+        let o = (w >> 8u) & 0xffu;
+        let ia = (w >> 16u) & 0xffu;
+        let ib = w >> 24u;
+        var a = vec4<f32>(imm, imm, 0.0, 0.0);
+        if (op != 0u && ia != IMM) { a = ireg[ia]; }
+        var b = vec4<f32>(imm, imm, 0.0, 0.0);
+        if (ib != IMM) { b = ireg[ib]; }
+        var v = vec2<f32>(0.0, 0.0);
+        var d = vec2<f32>(0.0, 0.0);
+        switch op {
+            case 0u: {
+                var c = x;
+                if (ia == 1u) { c = y; }
+                if (ia == 2u) { c = z; }
+                v = c.xy;
+                d = c.zw;
+            }
+            case 1u: { v = vec2<f32>(imm, imm); }
+            case 2u: {
+                let n = tape[2u * k + 1u];
+                v = i_powi(a.xy, n);
+                if (n > 0u) {
+                    let nf = f32(n);
+                    d = i_mul(i_mul(vec2<f32>(nf, nf), i_powi(a.xy, n - 1u)), a.zw);
+                }
+            }
+            case 16u: { v = i_neg(a.xy); d = i_neg(a.zw); }
+            case 17u: {
+                v = i_abs(a.xy);
+                if (a.x >= 0.0) { d = a.zw; } else if (a.y <= 0.0) { d = i_neg(a.zw); } else { d = hull(a.zw, i_neg(a.zw)); }
+            }
+            case 18u: { v = i_sqrt(a.xy); d = i_div(a.zw, 2.0 * v); }
+            case 19u: { v = i_square(a.xy); d = i_mul(2.0 * a.xy, a.zw); }
+            case 48u: { v = i_add(a.xy, b.xy); d = i_add(a.zw, b.zw); }
+            case 49u: { v = i_sub(a.xy, b.xy); d = i_sub(a.zw, b.zw); }
+            case 50u: { v = i_mul(a.xy, b.xy); d = i_add(i_mul(a.zw, b.xy), i_mul(a.xy, b.zw)); }
+            case 51u: { v = i_div(a.xy, b.xy); d = i_div(i_sub(a.zw, i_mul(v, b.zw)), b.xy); }
+            case 52u: {
+                if (a.y <= b.x) { v = a.xy; d = a.zw; } else if (b.y <= a.x) { v = b.xy; d = b.zw; } else { v = i_min(a.xy, b.xy); d = hull(a.zw, b.zw); }
+            }
+            case 53u: {
+                if (a.x >= b.y) { v = a.xy; d = a.zw; } else if (b.x >= a.y) { v = b.xy; d = b.zw; } else { v = i_max(a.xy, b.xy); d = hull(a.zw, b.zw); }
+            }
+            default: { v = nan2(); d = nan2(); }
+        }
+        ireg[o] = vec4<f32>(v, d);
+        return o;
+}
+
+// F and dF/dt over a box, four ops per loop iteration.
+fn eval_interval(x: vec4<f32>, y: vec4<f32>, z: vec4<f32>) -> vec4<f32> {
+    var out = 0u;
+    for (var k = 0u; k < TAPE_LEN; k += 4u) {
+        loops++;
+        out = interval_op(k, x, y, z);
+        if (k + 1u < TAPE_LEN) { out = interval_op(k + 1u, x, y, z); }
+        if (k + 2u < TAPE_LEN) { out = interval_op(k + 2u, x, y, z); }
+        if (k + 3u < TAPE_LEN) { out = interval_op(k + 3u, x, y, z); }
+    }
+    return ireg[out];
+}

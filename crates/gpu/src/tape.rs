@@ -1,0 +1,444 @@
+//! Expression tapes on the GPU (GPU.md §6.2): frep's register bytecode
+//! ([`frep::Bytecode`]) run by a WGSL interpreter in two flavours, F at a point and F with
+//! dF/dt as outward-rounded intervals, and their CPU f32 twins, equal bit for bit on
+//! lavapipe (GPU.md §3.5). The ray tracer built on them is [`crate::tape_trace`].
+//!
+//! **Outward rounding** (GPU.md §6.2.3). WGSL has no rounding modes, so each interval
+//! result is widened by whole ulps with bit steps: 1 ulp after `+ − ×` and `square`, 4 after
+//! `/` and `sqrt`, 16 after `powi`; `neg`, `abs`, `min`, `max` are exact. A step from zero
+//! or a subnormal goes to the smallest normal f32 (a GPU may flush subnormals). With
+//! round-to-nearest (lavapipe) half an ulp would do; the margin covers WGSL's looser
+//! `/` and `sqrt` on real GPUs (unverified there).
+//!
+//! **Ops.** Only those of the shipped polynomial and CSG models: var, const, `powi` with
+//! 0 ≤ n ≤ 15, neg, abs, sqrt, square, `+ − × /`, min, max. Transcendentals, rounding,
+//! `mod` and logic are refused by [`GpuTape::new`]: their f32 results on a GPU are not
+//! Rust's, so they need their own twin (not done).
+
+use frep::bytecode::{Bytecode, Instr, IMM};
+use frep::{BinaryOp, UnaryOp};
+use std::fmt;
+
+/// The interpreter's WGSL (`eval_point`, `eval_interval`, interval helpers); see
+/// [`GpuTape::wgsl`] for the constants it needs.
+pub const TAPE_WGSL: &str = include_str!("shaders/tape.wgsl");
+
+/// The largest `powi` exponent the interpreter unrolls (four bits).
+pub const MAX_POWI: i32 = 15;
+
+/// Why a bytecode cannot run on the GPU interpreter.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Unsupported {
+    /// Index of the instruction.
+    pub at: usize,
+    /// The instruction.
+    pub instr: Instr,
+}
+
+impl fmt::Display for Unsupported {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "instruction {} ({:?}) is not supported by the GPU tape",
+            self.at, self.instr
+        )
+    }
+}
+
+impl std::error::Error for Unsupported {}
+
+/// A bytecode the GPU interpreter runs: its words (GPU.md §5.2's `GpuTapeOp`s) and
+/// decoded instructions.
+#[derive(Clone, Debug)]
+pub struct GpuTape {
+    words: Vec<u32>,
+    registers: usize,
+    instrs: Vec<Instr>,
+}
+
+impl GpuTape {
+    /// The tape of `code`, or the first instruction the interpreter lacks.
+    pub fn new(code: &Bytecode) -> Result<Self, Unsupported> {
+        let instrs: Vec<Instr> = (0..code.len())
+            .map(|k| code.decode(k).expect("a checked program"))
+            .collect();
+        for (at, &instr) in instrs.iter().enumerate() {
+            let ok = match instr {
+                Instr::Var(..) | Instr::Const(..) => true,
+                Instr::PowI(_, _, n) => (0..=MAX_POWI).contains(&n),
+                Instr::Unary(_, op, _) => matches!(
+                    op,
+                    UnaryOp::Neg | UnaryOp::Abs | UnaryOp::Sqrt | UnaryOp::Square
+                ),
+                Instr::Binary(_, op, ..) => matches!(
+                    op,
+                    BinaryOp::Add
+                        | BinaryOp::Sub
+                        | BinaryOp::Mul
+                        | BinaryOp::Div
+                        | BinaryOp::Min
+                        | BinaryOp::Max
+                ),
+            };
+            if !ok {
+                return Err(Unsupported { at, instr });
+            }
+        }
+        Ok(Self {
+            words: code.words().to_vec(),
+            registers: code.registers(),
+            instrs,
+        })
+    }
+
+    /// The words, two per instruction (the kernel's `tape` binding).
+    pub fn words(&self) -> &[u32] {
+        &self.words
+    }
+
+    /// Number of instructions.
+    pub fn len(&self) -> usize {
+        self.instrs.len()
+    }
+
+    /// Loop iterations of one evaluation in the kernel: four instructions per iteration
+    /// (GPU.md §6.2.2).
+    pub fn eval_loops(&self) -> u32 {
+        self.instrs.len().div_ceil(4) as u32
+    }
+
+    /// Whether the tape is empty (never, for a compiled expression).
+    pub fn is_empty(&self) -> bool {
+        self.instrs.is_empty()
+    }
+
+    /// The interpreter's WGSL with this tape's per-pipeline constants `REG_COUNT` and
+    /// `TAPE_LEN` (GPU.md §3.4). The kernel declares `tape: array<u32>`.
+    pub fn wgsl(&self) -> String {
+        format!(
+            "const REG_COUNT: u32 = {}u;\nconst TAPE_LEN: u32 = {}u;\n{TAPE_WGSL}",
+            self.registers.max(1),
+            self.len()
+        )
+    }
+
+    /// F at p: the twin of the kernel's `eval_point`, equal to [`Bytecode::eval_f32`].
+    pub fn eval_point(&self, p: [f32; 3]) -> f32 {
+        let mut r = [0f32; 256];
+        let mut out = 0;
+        for &ins in &self.instrs {
+            let (o, v) = match ins {
+                Instr::Var(o, v) => (o, p[v as usize]),
+                Instr::Const(o, c) => (o, c),
+                Instr::PowI(o, a, n) => (o, powi(r[a as usize], n as u32)),
+                Instr::Unary(o, op, a) => {
+                    let a = r[a as usize];
+                    let v = match op {
+                        UnaryOp::Neg => -a,
+                        UnaryOp::Abs => a.abs(),
+                        UnaryOp::Sqrt => a.sqrt(),
+                        UnaryOp::Square => a * a,
+                        _ => f32::NAN,
+                    };
+                    (o, v)
+                }
+                Instr::Binary(o, op, a, b, imm) => {
+                    let get = |x: u8| if x == IMM { imm } else { r[x as usize] };
+                    let (a, b) = (get(a), get(b));
+                    let v = match op {
+                        BinaryOp::Add => a + b,
+                        BinaryOp::Sub => a - b,
+                        BinaryOp::Mul => a * b,
+                        BinaryOp::Div => a / b,
+                        BinaryOp::Min => a.min(b),
+                        BinaryOp::Max => a.max(b),
+                        _ => f32::NAN,
+                    };
+                    (o, v)
+                }
+            };
+            r[o as usize] = v;
+            out = o;
+        }
+        r[out as usize]
+    }
+
+    /// F and dF/dt over a box: the twin of the kernel's `eval_interval`. Each coordinate
+    /// and the result is `[lo, hi, dlo, dhi]`; NaN bounds mean unknown.
+    pub fn eval_interval(&self, x: [f32; 4], y: [f32; 4], z: [f32; 4]) -> [f32; 4] {
+        let mut r = [[0f32; 4]; 256];
+        let mut out = 0;
+        let v2 = |a: [f32; 4]| [a[0], a[1]];
+        let d2 = |a: [f32; 4]| [a[2], a[3]];
+        for &ins in &self.instrs {
+            let (o, v, d) = match ins {
+                Instr::Var(o, k) => {
+                    let c = [x, y, z][k as usize];
+                    (o, v2(c), d2(c))
+                }
+                Instr::Const(o, c) => (o, [c, c], [0.0, 0.0]),
+                Instr::PowI(o, a, n) => {
+                    let (a, n) = (r[a as usize], n as u32);
+                    let v = i_powi(v2(a), n);
+                    let d = if n > 0 {
+                        let nf = n as f32;
+                        i_mul(i_mul([nf, nf], i_powi(v2(a), n - 1)), d2(a))
+                    } else {
+                        [0.0, 0.0]
+                    };
+                    (o, v, d)
+                }
+                Instr::Unary(o, op, a) => {
+                    let a = r[a as usize];
+                    let (av, ad) = (v2(a), d2(a));
+                    let (v, d) = match op {
+                        UnaryOp::Neg => (i_neg(av), i_neg(ad)),
+                        UnaryOp::Abs => {
+                            let d = if a[0] >= 0.0 {
+                                ad
+                            } else if a[1] <= 0.0 {
+                                i_neg(ad)
+                            } else {
+                                hull(ad, i_neg(ad))
+                            };
+                            (i_abs(av), d)
+                        }
+                        UnaryOp::Sqrt => {
+                            let v = i_sqrt(av);
+                            (v, i_div(ad, [2.0 * v[0], 2.0 * v[1]]))
+                        }
+                        UnaryOp::Square => (i_square(av), i_mul([2.0 * a[0], 2.0 * a[1]], ad)),
+                        _ => (NAN2, NAN2),
+                    };
+                    (o, v, d)
+                }
+                Instr::Binary(o, op, a, b, imm) => {
+                    let get = |x: u8| {
+                        if x == IMM {
+                            [imm, imm, 0.0, 0.0]
+                        } else {
+                            r[x as usize]
+                        }
+                    };
+                    let (a, b) = (get(a), get(b));
+                    let (av, ad, bv, bd) = (v2(a), d2(a), v2(b), d2(b));
+                    let (v, d) = match op {
+                        BinaryOp::Add => (i_add(av, bv), i_add(ad, bd)),
+                        BinaryOp::Sub => (i_sub(av, bv), i_sub(ad, bd)),
+                        BinaryOp::Mul => (i_mul(av, bv), i_add(i_mul(ad, bv), i_mul(av, bd))),
+                        BinaryOp::Div => {
+                            let v = i_div(av, bv);
+                            (v, i_div(i_sub(ad, i_mul(v, bd)), bv))
+                        }
+                        BinaryOp::Min => {
+                            if a[1] <= b[0] {
+                                (av, ad)
+                            } else if b[1] <= a[0] {
+                                (bv, bd)
+                            } else {
+                                (i_min(av, bv), hull(ad, bd))
+                            }
+                        }
+                        BinaryOp::Max => {
+                            if a[0] >= b[1] {
+                                (av, ad)
+                            } else if b[0] >= a[1] {
+                                (bv, bd)
+                            } else {
+                                (i_max(av, bv), hull(ad, bd))
+                            }
+                        }
+                        _ => (NAN2, NAN2),
+                    };
+                    (o, v, d)
+                }
+            };
+            r[o as usize] = [v[0], v[1], d[0], d[1]];
+            out = o;
+        }
+        r[out as usize]
+    }
+
+    /// Bounds of F over the box `lo..hi` (the value part of [`GpuTape::eval_interval`]).
+    pub fn eval_box(&self, lo: [f32; 3], hi: [f32; 3]) -> (f32, f32) {
+        let c = |k: usize| [lo[k], hi[k], 0.0, 0.0];
+        let r = self.eval_interval(c(0), c(1), c(2));
+        (r[0], r[1])
+    }
+}
+
+type I2 = [f32; 2];
+const NAN2: I2 = [f32::NAN, f32::NAN];
+
+/// x^n as compiler-rt's `__powisf2` computes it (Rust's `f32::powi`), n ≤ 15.
+pub fn powi(x: f32, n: u32) -> f32 {
+    let (mut a, mut r) = (x, 1f32);
+    for bit in 0..4 {
+        if n & (1 << bit) != 0 {
+            r *= a;
+        }
+        if n < 2 << bit {
+            return r;
+        }
+        a *= a;
+    }
+    r
+}
+
+/// The next f32 above x; zero and subnormals step to the smallest normal (GPU.md §6.2.3).
+pub fn up(x: f32) -> f32 {
+    if x.is_nan() || x == f32::INFINITY {
+        return x;
+    }
+    if (-f32::MIN_POSITIVE..f32::MIN_POSITIVE).contains(&x) {
+        return f32::MIN_POSITIVE;
+    }
+    let b = x.to_bits();
+    f32::from_bits(if x > 0.0 { b + 1 } else { b - 1 })
+}
+
+/// The next f32 below x (`-up(-x)`).
+pub fn down(x: f32) -> f32 {
+    -up(-x)
+}
+
+fn up4(x: f32) -> f32 {
+    up(up(up(up(x))))
+}
+
+fn down4(x: f32) -> f32 {
+    down(down(down(down(x))))
+}
+
+/// WGSL's `min` after the NaN checks: Rust's `f32::min`.
+fn rmin(a: f32, b: f32) -> f32 {
+    a.min(b)
+}
+
+fn rmax(a: f32, b: f32) -> f32 {
+    a.max(b)
+}
+
+fn any_nan(a: I2) -> bool {
+    a[0].is_nan() || a[1].is_nan()
+}
+
+/// `[lo, hi]` widened by one ulp each way.
+pub fn w1(lo: f32, hi: f32) -> I2 {
+    [down(lo), up(hi)]
+}
+
+fn w4(lo: f32, hi: f32) -> I2 {
+    [down4(lo), up4(hi)]
+}
+
+/// Interval sum.
+pub fn i_add(a: I2, b: I2) -> I2 {
+    w1(a[0] + b[0], a[1] + b[1])
+}
+
+fn i_sub(a: I2, b: I2) -> I2 {
+    w1(a[0] - b[1], a[1] - b[0])
+}
+
+fn i_neg(a: I2) -> I2 {
+    [-a[1], -a[0]]
+}
+
+/// Interval product (a NaN product, 0·∞, is ignored).
+pub fn i_mul(a: I2, b: I2) -> I2 {
+    let p = [a[0] * b[0], a[0] * b[1], a[1] * b[0], a[1] * b[1]];
+    w1(
+        rmin(rmin(p[0], p[1]), rmin(p[2], p[3])),
+        rmax(rmax(p[0], p[1]), rmax(p[2], p[3])),
+    )
+}
+
+fn i_div(a: I2, b: I2) -> I2 {
+    if b[0] <= 0.0 && b[1] >= 0.0 {
+        return [f32::NEG_INFINITY, f32::INFINITY];
+    }
+    let p = [a[0] / b[0], a[0] / b[1], a[1] / b[0], a[1] / b[1]];
+    w4(
+        rmin(rmin(p[0], p[1]), rmin(p[2], p[3])),
+        rmax(rmax(p[0], p[1]), rmax(p[2], p[3])),
+    )
+}
+
+fn i_abs(a: I2) -> I2 {
+    if a[0] >= 0.0 {
+        a
+    } else if a[1] <= 0.0 {
+        i_neg(a)
+    } else {
+        [0.0, rmax(-a[0], a[1])]
+    }
+}
+
+fn i_square(a: I2) -> I2 {
+    if any_nan(a) {
+        return NAN2;
+    }
+    let b = i_abs(a);
+    w1(b[0] * b[0], b[1] * b[1])
+}
+
+fn i_sqrt(a: I2) -> I2 {
+    if any_nan(a) || a[1] < 0.0 {
+        return NAN2;
+    }
+    w4(rmax(a[0], 0.0).sqrt(), a[1].sqrt())
+}
+
+fn i_powi(a: I2, n: u32) -> I2 {
+    if any_nan(a) {
+        return NAN2;
+    }
+    if n == 0 {
+        return [1.0, 1.0];
+    }
+    let b = if n & 1 == 0 { i_abs(a) } else { a };
+    let (lo, hi) = (powi(b[0], n), powi(b[1], n));
+    [down4(down4(down4(down4(lo)))), up4(up4(up4(up4(hi))))]
+}
+
+fn i_min(a: I2, b: I2) -> I2 {
+    [rmin(a[0], b[0]), rmin(a[1], b[1])]
+}
+
+fn i_max(a: I2, b: I2) -> I2 {
+    [rmax(a[0], b[0]), rmax(a[1], b[1])]
+}
+
+fn hull(a: I2, b: I2) -> I2 {
+    if any_nan(a) || any_nan(b) {
+        return NAN2;
+    }
+    [a[0].min(b[0]), a[1].max(b[1])]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn steps_skip_subnormals() {
+        assert_eq!(up(0.0), f32::MIN_POSITIVE);
+        assert_eq!(up(-0.0), f32::MIN_POSITIVE);
+        assert_eq!(down(0.0), -f32::MIN_POSITIVE);
+        assert_eq!(up(1.0), 1.0f32.next_up());
+        assert_eq!(down(-1.0), (-1.0f32).next_down());
+        assert_eq!(up(f32::MAX), f32::INFINITY);
+        assert_eq!(up(f32::NEG_INFINITY), f32::MIN);
+        assert!(up(f32::NAN).is_nan());
+    }
+
+    #[test]
+    fn powi_is_rusts() {
+        for n in 0..=MAX_POWI {
+            for x in [0.3f32, -1.7, 3.1e7, 1.0e-5, -2.5] {
+                assert_eq!(powi(x, n as u32).to_bits(), x.powi(n).to_bits(), "{x}^{n}");
+            }
+        }
+    }
+}

@@ -1,0 +1,536 @@
+//! The expression-tape kernels (GPU.md §6.2) against their CPU f32 twins, bit for bit on
+//! lavapipe (GPU.md §3.5), and the twins against frep: point values equal to
+//! `Bytecode::eval_f32`, intervals holding the point values, rays against frep's f64
+//! interval tracer; and the tracer's loop budget (GPU.md §3.1, §9).
+//!
+//! Models: shipped ones whose ops the interpreter has (tanglecube.vm, s2_csg.hf,
+//! s3_blend.hf, bumpy_ball.frep, machined_part.frep, table.frep: thin plates and legs).
+
+mod common;
+
+use frep::bytecode::Bytecode;
+use frep::read::read_file;
+use frep::{Aabb, Expr, ExprView, Ray};
+use glam::{DVec3, Vec3};
+use gpu::tape::GpuTape;
+use gpu::tape_trace::{TapeHit, TapeSolid, Traced, BUDGET};
+use gpu::{Gpu, GpuOptions, Kernel};
+use std::path::PathBuf;
+use std::time::Instant;
+
+/// A small deterministic generator (SplitMix64 to [0, 1)).
+struct Rng(u64);
+impl Rng {
+    fn next(&mut self) -> f64 {
+        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+    }
+    fn range(&mut self, a: f64, b: f64) -> f64 {
+        a + (b - a) * self.next()
+    }
+    fn unit(&mut self) -> DVec3 {
+        loop {
+            let v = DVec3::new(self.next(), self.next(), self.next()) * 2.0 - 1.0;
+            let l = v.length();
+            if l > 0.1 && l <= 1.0 {
+                return v / l;
+            }
+        }
+    }
+    fn in_box(&mut self, b: &Aabb) -> DVec3 {
+        DVec3::new(
+            self.range(b.lo.x, b.hi.x),
+            self.range(b.lo.y, b.hi.y),
+            self.range(b.lo.z, b.hi.z),
+        )
+    }
+}
+
+struct Model {
+    name: &'static str,
+    expr: Expr,
+    bounds: Aabb,
+}
+
+fn models() -> Vec<Model> {
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let files: [(&str, PathBuf, f64); 6] = [
+        (
+            "tanglecube",
+            root.join("../shared/models/fidget/tanglecube.vm"),
+            5.0,
+        ),
+        ("s2_csg", root.join("models/canonical/s2_csg.hf"), 1.6),
+        ("s3_blend", root.join("models/canonical/s3_blend.hf"), 1.6),
+        (
+            "bumpy_ball",
+            root.join("models/examples/bumpy_ball.frep"),
+            2.0,
+        ),
+        (
+            "machined_part",
+            root.join("models/examples/machined_part.frep"),
+            2.0,
+        ),
+        ("table", root.join("scenes/models/table.frep"), 2.0),
+    ];
+    files
+        .into_iter()
+        .map(|(name, path, r)| {
+            let m = read_file(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+            let expr = Expr::new(&m.shape.to_tree().expect("a regular shape"));
+            let domain = m
+                .domain
+                .unwrap_or(Aabb::new(DVec3::splat(-r), DVec3::splat(r)));
+            let bounds = frep::bounds::expr_bounds(&expr, domain);
+            assert!(!bounds.is_empty() && bounds.is_finite(), "{name}");
+            Model { name, expr, bounds }
+        })
+        .collect()
+}
+
+fn tape(m: &Model) -> GpuTape {
+    GpuTape::new(&Bytecode::compile(&m.expr).unwrap()).unwrap()
+}
+
+fn interp_source(t: &GpuTape) -> String {
+    format!(
+        "@group(0) @binding(0) var<storage, read> tape: array<u32>;
+@group(0) @binding(1) var<storage, read> input: array<f32>;
+@group(0) @binding(2) var<storage, read_write> out: array<u32>;
+{}
+@compute @workgroup_size(64)
+fn points(@builtin(global_invocation_id) id: vec3<u32>) {{
+    let i = id.x;
+    if (3u * i >= arrayLength(&input)) {{ return; }}
+    let f = eval_point(vec3<f32>(input[3u * i], input[3u * i + 1u], input[3u * i + 2u]));
+    out[i] = bitcast<u32>(f);
+}}
+@compute @workgroup_size(64)
+fn boxes(@builtin(global_invocation_id) id: vec3<u32>) {{
+    let i = id.x;
+    if (9u * i >= arrayLength(&input)) {{ return; }}
+    let r = 9u * i;
+    let x = vec4<f32>(input[r], input[r + 3u], input[r + 6u], input[r + 6u]);
+    let y = vec4<f32>(input[r + 1u], input[r + 4u], input[r + 7u], input[r + 7u]);
+    let z = vec4<f32>(input[r + 2u], input[r + 5u], input[r + 8u], input[r + 8u]);
+    let v = eval_interval(x, y, z);
+    for (var k = 0u; k < 4u; k++) {{ out[4u * i + k] = bitcast<u32>(v[k]); }}
+}}
+",
+        t.wgsl()
+    )
+}
+
+fn same(a: f32, b: f32) -> bool {
+    a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan())
+}
+
+/// A box (lo, hi) with a direction d for dF/dt.
+type TestBox = (Vec3, Vec3, Vec3);
+
+/// Per model: 4 096 random points in the bounds and 4 096 boxes of four size classes
+/// (0.3 to 1e-6 of the diagonal) with random directions.
+fn samples(m: &Model, rng: &mut Rng) -> (Vec<[f32; 3]>, Vec<TestBox>) {
+    let n = 4096;
+    let pts = (0..n)
+        .map(|_| rng.in_box(&m.bounds).as_vec3().into())
+        .collect();
+    let diag = m.bounds.extent().length();
+    let boxes = (0..n)
+        .map(|k| {
+            let half = diag * [0.3, 0.03, 1e-3, 1e-6][k % 4] * rng.next();
+            let c = rng.in_box(&m.bounds);
+            let h = DVec3::new(rng.next(), rng.next(), rng.next()) * half;
+            ((c - h).as_vec3(), (c + h).as_vec3(), rng.unit().as_vec3())
+        })
+        .collect();
+    (pts, boxes)
+}
+
+fn box_interval(t: &GpuTape, &(lo, hi, d): &TestBox) -> [f32; 4] {
+    let c = |k: usize| [lo[k], hi[k], d[k], d[k]];
+    t.eval_interval(c(0), c(1), c(2))
+}
+
+/// The twins without a GPU: point values equal `Bytecode::eval_f32` bit for bit, and every
+/// f32 point value in a box (its 8 corners and 8 random points) lies in the box's
+/// interval, as does the f64 directional derivative dF/dt there.
+#[test]
+fn twin_equals_eval_f32_and_is_sound() {
+    let mut rng = Rng(7);
+    for m in models() {
+        let t = tape(&m);
+        let code = Bytecode::compile(&m.expr).unwrap();
+        let (pts, boxes) = samples(&m, &mut rng);
+        for p in &pts {
+            let (twin, want) = (t.eval_point(*p), code.eval_f32(*p));
+            assert!(
+                same(twin, want),
+                "{}: at {p:?} twin {twin}, eval_f32 {want}",
+                m.name
+            );
+        }
+        let (mut values, mut derivs) = (0, 0);
+        for b in &boxes {
+            let (lo, hi, d) = *b;
+            let iv = box_interval(&t, b);
+            for j in 0..16 {
+                let p: [f32; 3] = match j {
+                    0..8 => [0, 1, 2].map(|k| if j >> k & 1 == 0 { lo[k] } else { hi[k] }),
+                    _ => [0, 1, 2].map(|k| rng.range(lo[k] as f64, hi[k] as f64) as f32),
+                };
+                let v = t.eval_point(p);
+                if !v.is_nan() && !iv[0].is_nan() {
+                    assert!(
+                        iv[0] <= v && v <= iv[1],
+                        "{}: {v} at {p:?} outside {iv:?}",
+                        m.name
+                    );
+                    values += 1;
+                }
+                let (_, grad) = m.expr.gradient(p.map(f64::from));
+                let dv = grad[0] * d.x as f64 + grad[1] * d.y as f64 + grad[2] * d.z as f64;
+                if dv.is_finite() && !iv[2].is_nan() {
+                    assert!(
+                        iv[2] as f64 <= dv && dv <= iv[3] as f64,
+                        "{}: dF/dt {dv} at {p:?} outside {iv:?}",
+                        m.name
+                    );
+                    derivs += 1;
+                }
+            }
+        }
+        eprintln!(
+            "{}: {} ops; {} points equal eval_f32; {values} values and {derivs} derivatives inside their intervals",
+            m.name,
+            t.len(),
+            pts.len()
+        );
+    }
+}
+
+/// Points and boxes through the kernels: bit for bit the twin's (all four interval
+/// bounds).
+#[test]
+fn interpreter_matches_its_twin() {
+    let Some(g) = common::gpu(GpuOptions::default()) else {
+        return;
+    };
+    let mut rng = Rng(7);
+    for m in models() {
+        let t = tape(&m);
+        let src = interp_source(&t);
+        let start = Instant::now();
+        // SAFETY: register numbers are below REG_COUNT (checked by Bytecode), the loop
+        // runs TAPE_LEN times, and the entry points stay within their arrays.
+        let kp = unsafe { Kernel::new_unchecked(&g, &src, "points", 2) }.unwrap();
+        let kb = unsafe { Kernel::new_unchecked(&g, &src, "boxes", 2) }.unwrap();
+        let compile = start.elapsed();
+        let (pts, boxes) = samples(&m, &mut rng);
+        let n = pts.len();
+        let groups = [n.div_ceil(64) as u32, 1, 1];
+        let words: Vec<u32> = pts.iter().flatten().map(|f| f.to_bits()).collect();
+        let out = kp.run(&g, &[t.words(), &words], n, groups).unwrap();
+        for (i, p) in pts.iter().enumerate() {
+            let (gpu, twin) = (f32::from_bits(out[i]), t.eval_point(*p));
+            assert!(
+                same(gpu, twin),
+                "{}: at {p:?} GPU {gpu}, twin {twin}",
+                m.name
+            );
+        }
+        let words: Vec<u32> = boxes
+            .iter()
+            .flat_map(|(lo, hi, d)| [lo.to_array(), hi.to_array(), d.to_array()])
+            .flatten()
+            .map(|f| f.to_bits())
+            .collect();
+        let out = kb
+            .run(&g, &[t.words(), &words], 4 * boxes.len(), groups)
+            .unwrap();
+        for (i, b) in boxes.iter().enumerate() {
+            let twin = box_interval(&t, b);
+            for k in 0..4 {
+                let gpu = f32::from_bits(out[4 * i + k]);
+                assert!(
+                    same(gpu, twin[k]),
+                    "{}: box {i} [{k}] GPU {gpu}, twin {}",
+                    m.name,
+                    twin[k]
+                );
+            }
+        }
+        eprintln!(
+            "{}: {n} points and {} boxes bit-identical; both pipelines {compile:?}",
+            m.name,
+            boxes.len()
+        );
+    }
+}
+
+fn trace_source(s: &TapeSolid) -> String {
+    format!(
+        "@group(0) @binding(0) var<storage, read> tape: array<u32>;
+@group(0) @binding(1) var<storage, read> rays: array<f32>;
+@group(0) @binding(2) var<storage, read_write> out: array<u32>;
+{}
+@compute @workgroup_size(64)
+fn trace(@builtin(global_invocation_id) id: vec3<u32>) {{
+    let i = id.x;
+    if (8u * i >= arrayLength(&rays)) {{ return; }}
+    let r = 8u * i;
+    loops = 0u;
+    let o = vec3<f32>(rays[r], rays[r + 1u], rays[r + 2u]);
+    let d = vec3<f32>(rays[r + 3u], rays[r + 4u], rays[r + 5u]);
+    let h = trace_tape(o, d, rays[r + 6u], rays[r + 7u]);
+    out[3u * i] = bitcast<u32>(h.t);
+    out[3u * i + 1u] = h.status;
+    out[3u * i + 2u] = loops;
+}}
+",
+        s.wgsl()
+    )
+}
+
+type TestRay = [f32; 8];
+
+/// |Δt| against frep's f64 tracer, relative to max(size, |t|): the f32 resolution
+/// (2e-6 × diagonal) decides at most a segment that long, and the surface's slope along
+/// grazing rays stretches that (measured up to 8.8e-5, table); GPU.md §9 asks ≤ 1e-3.
+const TOLERANCE: f64 = 1e-3;
+
+/// Rays: a half random from outside (aimed into the bounds), a quarter grazing the
+/// surface (tangent at a point found by frep, nudged by up to 1e-4 × size), a quarter
+/// from inside the bounds.
+fn rays(m: &Model, rng: &mut Rng) -> Vec<TestRay> {
+    let view = ExprView {
+        tape: m.expr.nodes(),
+        bounds: m.bounds,
+        eps: frep::interval_trace::resolution(&m.bounds),
+    };
+    let c = m.bounds.center();
+    let size = m.bounds.extent().length();
+    let mut out = Vec::new();
+    let mk = |o: DVec3, d: DVec3, t0: f32, t1: f32| -> TestRay {
+        let (o, d) = (o.as_vec3(), d.as_vec3());
+        [o.x, o.y, o.z, d.x, d.y, d.z, t0, t1]
+    };
+    while out.len() < 2048 {
+        let o = c + size * rng.unit();
+        let d = (rng.in_box(&m.bounds) - o).normalize();
+        out.push(mk(o, d, 0.0, f32::INFINITY));
+    }
+    while out.len() < 3072 {
+        let o = c + size * rng.unit();
+        let d = (rng.in_box(&m.bounds) - o).normalize();
+        let Some((t, _)) = view.trace(&Ray::new(o, d), 0.0, f64::INFINITY, false) else {
+            continue;
+        };
+        let p = o + t * d;
+        let n = m.expr.gradient(p.to_array()).1;
+        let n = DVec3::from_array(n).normalize_or_zero();
+        if n == DVec3::ZERO {
+            continue;
+        }
+        let tangent = n.cross(rng.unit()).normalize_or_zero();
+        if tangent == DVec3::ZERO {
+            continue;
+        }
+        let p = p + n * size * 1e-4 * rng.range(-1.0, 1.0);
+        out.push(mk(p - size * tangent, tangent, 0.0, f32::INFINITY));
+    }
+    while out.len() < 4096 {
+        let o = rng.in_box(&m.bounds);
+        out.push(mk(o, rng.unit(), 0.0, (2.0 * size) as f32));
+    }
+    out
+}
+
+/// Per model, 4 096 rays through the twin against frep's f64 tracer (same bounds and
+/// f64 resolution): the same hit or miss on every ray the twin decides within its soft
+/// budget, none undecided, |Δt| within [`TOLERANCE`], loop counts below 30 000.
+#[test]
+fn twin_traces_like_frep() {
+    let mut rng = Rng(21);
+    for m in models() {
+        let solid = TapeSolid::new(tape(&m), &m.bounds);
+        let rs = rays(&m, &mut rng);
+        let view = ExprView {
+            tape: m.expr.nodes(),
+            bounds: m.bounds,
+            eps: frep::interval_trace::resolution(&m.bounds),
+        };
+        let size = m.bounds.extent().length();
+        let (mut hits, mut undecided, mut flips, mut max_dt, mut max_loops) = (0, 0, 0, 0f64, 0);
+        let (mut late, mut late_flips) = (0, 0);
+        for (i, r) in rs.iter().enumerate() {
+            let (o, d) = (Vec3::new(r[0], r[1], r[2]), Vec3::new(r[3], r[4], r[5]));
+            let twin = solid.trace(o, d, r[6], r[7]);
+            max_loops = max_loops.max(twin.loops);
+            late += twin.late as usize;
+            let ray = Ray::new(o.as_dvec3(), d.as_dvec3());
+            let want = view
+                .trace(&ray, r[6] as f64, r[7] as f64, false)
+                .map(|h| h.0);
+            match (twin.hit, want) {
+                (TapeHit::Undecided, _) => undecided += 1,
+                (TapeHit::Hit(t), Some(w)) => {
+                    hits += 1;
+                    max_dt = max_dt.max((t as f64 - w).abs() / size.max(w.abs()));
+                }
+                (TapeHit::Miss, None) => {}
+                (got, want) => {
+                    match twin.late {
+                        true => late_flips += 1,
+                        false => flips += 1,
+                    }
+                    eprintln!("{}: ray {i} {r:?}: twin {got:?}, frep {want:?}", m.name);
+                }
+            }
+        }
+        eprintln!(
+            "{}: {} rays, {hits} hits, {flips} flips against f64, {late} late ({late_flips} of them flipped), {undecided} undecided, max |Δt|/max(size, t) {max_dt:.2e}, max loops {max_loops}",
+            m.name,
+            rs.len()
+        );
+        assert!(max_loops < 30_000, "{max_loops}");
+        // Rays decided within the budget agree with frep; late rays (segments decided by
+        // their end signs, as frep past its segment budget) may miss a thin crossing.
+        assert_eq!(flips, 0, "{}", m.name);
+        assert_eq!(undecided, 0, "{}", m.name);
+        assert!(max_dt < TOLERANCE, "{}: {max_dt:e}", m.name);
+    }
+}
+
+/// The same rays through the kernel: outcome, t, late flag and loop count bit for bit
+/// the twin's.
+#[test]
+fn tracer_matches_its_twin() {
+    let Some(g) = common::gpu(GpuOptions::default()) else {
+        return;
+    };
+    let mut rng = Rng(21);
+    for m in models() {
+        let solid = TapeSolid::new(tape(&m), &m.bounds);
+        let rs = rays(&m, &mut rng);
+        let out = run_rays(&g, &solid, &rs, m.name);
+        for (i, r) in rs.iter().enumerate() {
+            let (o, d) = (Vec3::new(r[0], r[1], r[2]), Vec3::new(r[3], r[4], r[5]));
+            let twin = solid.trace(o, d, r[6], r[7]);
+            let gpu = Traced::from_kernel(out[3 * i + 1], out[3 * i], out[3 * i + 2]);
+            assert!(
+                same_trace(&gpu, &twin),
+                "{}: ray {i} {r:?}: GPU {gpu:?}, twin {twin:?}",
+                m.name
+            );
+        }
+        eprintln!("{}: {} rays bit-identical", m.name, rs.len());
+    }
+}
+
+/// Equal outcomes, t bit for bit, equal flags and loop counts.
+fn same_trace(a: &Traced, b: &Traced) -> bool {
+    let hit = match (a.hit, b.hit) {
+        (TapeHit::Hit(x), TapeHit::Hit(y)) => x.to_bits() == y.to_bits(),
+        (x, y) => x == y,
+    };
+    hit && a.late == b.late && a.loops == b.loops
+}
+
+fn run_rays(g: &Gpu, solid: &TapeSolid, rs: &[TestRay], name: &str) -> Vec<u32> {
+    let start = Instant::now();
+    // SAFETY: registers below REG_COUNT (checked by Bytecode), stack indices below STACK
+    // (checked before each push), every loop bounded by BUDGET.
+    let k = unsafe { Kernel::new_unchecked(g, &trace_source(solid), "trace", 2) }.unwrap();
+    let compile = start.elapsed();
+    let words: Vec<u32> = rs.iter().flatten().map(|f| f.to_bits()).collect();
+    let start = Instant::now();
+    let out = k
+        .run(
+            g,
+            &[solid.tape.words(), &words],
+            3 * rs.len(),
+            [(rs.len() as u32).div_ceil(64), 1, 1],
+        )
+        .unwrap();
+    eprintln!(
+        "{name}: pipeline {compile:?}, {} rays in {:?}",
+        rs.len(),
+        start.elapsed()
+    );
+    out
+}
+
+/// The unit sphere padded with `terms` negligible terms 1e-30·(x + k)², 4 ops each.
+fn padded_sphere(terms: usize) -> Expr {
+    use frep::Tree;
+    let (x, y, z) = (Tree::x(), Tree::y(), Tree::z());
+    let mut t = Tree::constant(1.0) - x.square() - y.square() - z.square();
+    for k in 1..=terms {
+        t = t + (x.clone() + k as f64).square() * 1e-30;
+    }
+    Expr::new(&t)
+}
+
+/// The loop budget (GPU.md §3.1): a tape too long for one bisection within the budget
+/// leaves every ray undecided (never a miss); a tape leaving a few evaluations before
+/// the soft budget decides rays by end signs, flagged late. GPU and twin agree, and no
+/// invocation passes [`BUDGET`].
+#[test]
+fn loop_budget_is_kept_and_reported() {
+    let Some(g) = common::gpu(GpuOptions::default()) else {
+        return;
+    };
+    let bounds = Aabb::new(DVec3::splat(-1.0), DVec3::splat(1.0));
+    let mut rng = Rng(5);
+    for (terms, want_late, want_undecided) in [(325, true, false), (400, false, true)] {
+        let e = padded_sphere(terms);
+        let solid = TapeSolid::new(
+            GpuTape::new(&Bytecode::compile(&e).unwrap()).unwrap(),
+            &bounds,
+        );
+        let rs: Vec<TestRay> = (0..512)
+            .map(|i| {
+                let d = rng.unit().as_vec3();
+                if i % 2 == 0 {
+                    // From the centre (inside): a crossing by end signs.
+                    [0.0, 0.0, 0.0, d.x, d.y, d.z, 0.0, 4.0]
+                } else {
+                    let o = (3.0 * rng.unit()).as_vec3();
+                    let d = (rng.in_box(&bounds).as_vec3() * 0.5 - o).normalize();
+                    [o.x, o.y, o.z, d.x, d.y, d.z, 0.0, f32::INFINITY]
+                }
+            })
+            .collect();
+        let out = run_rays(&g, &solid, &rs, "padded sphere");
+        let (mut late, mut undecided, mut max_loops) = (0, 0, 0);
+        for (i, r) in rs.iter().enumerate() {
+            let (o, d) = (Vec3::new(r[0], r[1], r[2]), Vec3::new(r[3], r[4], r[5]));
+            let twin = solid.trace(o, d, r[6], r[7]);
+            let gpu = Traced::from_kernel(out[3 * i + 1], out[3 * i], out[3 * i + 2]);
+            assert!(
+                same_trace(&gpu, &twin),
+                "ray {i} {r:?}: GPU {gpu:?}, twin {twin:?}"
+            );
+            assert!(twin.loops <= BUDGET, "{}", twin.loops);
+            max_loops = max_loops.max(twin.loops);
+            late += twin.late as usize;
+            undecided += (twin.hit == TapeHit::Undecided) as usize;
+            if i % 2 == 0 && twin.hit != TapeHit::Undecided {
+                // From inside, the end signs differ: always a hit.
+                assert!(matches!(twin.hit, TapeHit::Hit(_)), "ray {i}: {twin:?}");
+            }
+        }
+        eprintln!(
+            "{} ops: {late} late, {undecided} undecided of {}, max loops {max_loops}",
+            solid.tape.len(),
+            rs.len()
+        );
+        assert_eq!(late > 0, want_late);
+        assert_eq!(undecided == rs.len(), want_undecided);
+    }
+}
