@@ -10,7 +10,7 @@ mod common;
 
 use frep::bytecode::Bytecode;
 use frep::read::read_file;
-use frep::{Aabb, Expr, ExprView, Ray};
+use frep::{Aabb, Expr, ExprSurface, Ray};
 use glam::{DVec3, Vec3};
 use gpu::tape::GpuTape;
 use gpu::tape_trace::{TapeHit, TapeSolid, Traced, BUDGET};
@@ -307,11 +307,8 @@ const TOLERANCE: f64 = 1e-3;
 /// surface (tangent at a point found by frep, nudged by up to 1e-4 × size), a quarter
 /// from inside the bounds.
 fn rays(m: &Model, rng: &mut Rng) -> Vec<TestRay> {
-    let view = ExprView {
-        tape: m.expr.nodes(),
-        bounds: m.bounds,
-        eps: frep::interval_trace::resolution(&m.bounds),
-    };
+    let surface = ExprSurface::new(m.expr.clone(), m.bounds);
+    let view = surface.view();
     let c = m.bounds.center();
     let size = m.bounds.extent().length();
     let mut out = Vec::new();
@@ -359,11 +356,9 @@ fn twin_traces_like_frep() {
     for m in models() {
         let solid = TapeSolid::new(tape(&m), &m.bounds);
         let rs = rays(&m, &mut rng);
-        let view = ExprView {
-            tape: m.expr.nodes(),
-            bounds: m.bounds,
-            eps: frep::interval_trace::resolution(&m.bounds),
-        };
+        // frep's tracer as solids use it (occupancy grid included).
+        let surface = ExprSurface::new(m.expr.clone(), m.bounds);
+        let view = surface.view();
         let size = m.bounds.extent().length();
         let (mut hits, mut undecided, mut flips, mut max_dt, mut max_loops) = (0, 0, 0, 0f64, 0);
         let (mut late, mut late_flips) = (0, 0);
