@@ -13,7 +13,7 @@ use crate::bounds::{expr_bounds, DEFAULT_DOMAIN};
 use crate::expr::Expr;
 use crate::flat::{CsgNode, CsgOp, Flat, LeafView, Span, MAX_DEPTH, MAX_PARTS};
 use crate::interval_trace::ExprSurface;
-use crate::perturbed::along::{positive_set, q_local};
+use crate::perturbed::along::{positive_set, q_local_f64};
 use crate::ray::{Aabb, Ray};
 use crate::shape::Shape;
 use crate::surface::{outward, Surface};
@@ -278,7 +278,7 @@ impl Solid {
             if !view.perturbations.is_empty() {
                 return None;
             }
-            let (pos, m) = positive_set(q_local(&view.base.c, o, d));
+            let (pos, m) = positive_set(q_local_f64(&view.base.c, o, d));
             let cut = |(a, b, ka, kb): (f64, f64, u8, u8), (c, e): (f64, f64)| {
                 let (lo, klo) = if c > a { (c, k as u8) } else { (a, ka) };
                 let (hi, khi) = if e < b { (e, k as u8) } else { (b, kb) };

@@ -5,7 +5,7 @@
 //! are not bounded ellipsoids are tested by every query. The crossing itself is the
 //! exact piecewise-polynomial scan of [`super::scan`].
 
-use super::along::{positive_set, q_local};
+use super::along::{positive_set, q_local_f64};
 use super::scan::{self, Coeffs};
 use super::{Perturbation, PerturbedQuadric};
 use crate::bvh::{Bvh, BvhRef};
@@ -229,7 +229,7 @@ impl PerturbedView<'_> {
 /// quadratic is expanded about the ray's origin whatever t_min is, so that a walk from
 /// one root to the next (t_min = the last root) never finds the same root again.
 fn quadric_first_crossing(c: &Coeffs<f64>, ray: &Ray, t_min: f64, t_max: f64) -> Option<f64> {
-    let (set, n) = positive_set(q_local(c, ray.o.to_array(), ray.d.to_array()));
+    let (set, n) = positive_set(q_local_f64(c, ray.o.to_array(), ray.d.to_array()));
     set[..n]
         .iter()
         .flat_map(|&(a, b)| [a, b])
