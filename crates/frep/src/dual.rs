@@ -119,6 +119,16 @@ impl<S: Scalar, const N: usize> Div for Dual<S, N> {
 }
 
 impl<S: Scalar, const N: usize> Scalar for Dual<S, N> {
+    const R_BOUND: bool = S::R_BOUND;
+
+    /// The value narrowed as `S` narrows it; the derivatives as computed.
+    fn r_bound(v: Self, a: Self, b: Self, union: bool) -> Self {
+        Self {
+            v: S::r_bound(v.v, a.v, b.v, union),
+            d: v.d,
+        }
+    }
+
     #[inline]
     fn constant(v: f64) -> Self {
         Self {

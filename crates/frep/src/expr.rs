@@ -188,6 +188,44 @@ fn eval_node<S: Scalar>(n: Node, scratch: &[S], x: S, y: S, z: S) -> S {
     }
 }
 
+/// The operands (a, b) and form (true: union) when node `n` computes the R-function
+/// a + b ± √(a² + b²) from the nodes before it, as [`crate::csg`] builds it (operands of
+/// each sum in either order).
+#[inline]
+fn r_pattern(nodes: &[Node], n: Node) -> Option<(u32, u32, bool)> {
+    let Node::Binary(op @ (BinaryOp::Add | BinaryOp::Sub), s, r) = n else {
+        return None;
+    };
+    let get = |i: u32| nodes.get(i as usize).copied();
+    let (Some(Node::Binary(BinaryOp::Add, a, b)), Some(Node::Unary(UnaryOp::Sqrt, q))) =
+        (get(s), get(r))
+    else {
+        return None;
+    };
+    let Some(Node::Binary(BinaryOp::Add, p, q)) = get(q) else {
+        return None;
+    };
+    let (Some(Node::Unary(UnaryOp::Square, pa)), Some(Node::Unary(UnaryOp::Square, qa))) =
+        (get(p), get(q))
+    else {
+        return None;
+    };
+    ((pa, qa) == (a, b) || (pa, qa) == (b, a)).then_some((a, b, op == BinaryOp::Add))
+}
+
+/// `v`, node `n`'s value, narrowed where `n` is an R-function ([`Scalar::r_bound`]);
+/// for point types this is `v` and the test compiles away.
+#[inline(always)]
+fn r_narrowed<S: Scalar>(nodes: &[Node], n: Node, v: S, scratch: &[S]) -> S {
+    if !S::R_BOUND {
+        return v;
+    }
+    match r_pattern(nodes, n) {
+        Some((a, b, union)) => S::r_bound(v, scratch[a as usize], scratch[b as usize], union),
+        None => v,
+    }
+}
+
 #[inline(always)]
 fn apply_unary<S: Scalar>(op: UnaryOp, a: S) -> S {
     match op {
@@ -372,7 +410,7 @@ impl Expr {
 pub fn eval_nodes<S: Scalar>(nodes: &[Node], x: S, y: S, z: S, scratch: &mut Vec<S>) -> S {
     scratch.clear();
     for n in nodes {
-        let v = eval_node(*n, scratch, x, y, z);
+        let v = r_narrowed(nodes, *n, eval_node(*n, scratch, x, y, z), scratch);
         scratch.push(v);
     }
     *scratch.last().expect("an expression has a root")
@@ -407,7 +445,7 @@ pub fn eval_choices_nodes<S: Scalar>(
                     Choice::Both => apply_binary(op, u, w),
                 }
             }
-            node => eval_node(node, scratch, x, y, z),
+            node => r_narrowed(nodes, node, eval_node(node, scratch, x, y, z), scratch),
         };
         scratch.push(v);
         choices.push(choice);

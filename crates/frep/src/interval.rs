@@ -156,6 +156,32 @@ impl Div for Interval {
 }
 
 impl Scalar for Interval {
+    const R_BOUND: bool = true;
+
+    fn r_bound(v: Self, a: Self, b: Self, union: bool) -> Self {
+        let ends = [a.lo, a.hi, b.lo, b.hi];
+        if !ends.iter().all(|e| e.is_finite()) || v.is_nan() {
+            return v;
+        }
+        // The R-function at a corner, in outward-rounded interval arithmetic.
+        let at = |x: f64, y: f64| {
+            let (x, y) = (Self::point(x), Self::point(y));
+            let root = (x.square() + y.square()).sqrt();
+            if union {
+                x + y + root
+            } else {
+                x + y - root
+            }
+        };
+        let lo = v.lo.max(at(a.lo, b.lo).lo);
+        let hi = v.hi.min(at(a.hi, b.hi).hi);
+        if lo <= hi {
+            Self::new(lo, hi)
+        } else {
+            v
+        }
+    }
+
     #[inline]
     fn constant(v: f64) -> Self {
         Self::point(v)

@@ -79,6 +79,20 @@ pub trait Scalar:
     /// or is undecided.
     fn less(self, b: Self) -> Option<bool>;
 
+    /// Whether [`Scalar::r_bound`] narrows anything: true for intervals, so that point
+    /// evaluators skip the R-function pattern test at compile time.
+    const R_BOUND: bool = false;
+
+    /// `v`, the value of the R-function a + b ± √(a² + b²) (Rvachev; α = 0, as HyperFun's
+    /// `|` and `&`) evaluated op by op, narrowed by its monotonicity: both forms are
+    /// non-decreasing in a and in b (∂/∂a = 1 ± a/√(a² + b²) ≥ 0), so over intervals they
+    /// lie between their values at the operands' lower ends and at their upper ends.
+    /// Interval arithmetic alone loses this (a and b each appear twice) and bounds an
+    /// R-function CSG model so loosely that ray tracing subdivides to its resolution.
+    fn r_bound(v: Self, _a: Self, _b: Self, _union: bool) -> Self {
+        v
+    }
+
     /// 1 if a is zero, else 0.
     fn not(self) -> Self {
         match self.zero() {
