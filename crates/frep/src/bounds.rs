@@ -273,7 +273,10 @@ mod tests {
             solid.lo.cmple(want.lo + 0.05).all() && solid.hi.cmpge(want.hi - 0.05).all(),
             "{solid:?}"
         );
-        assert!((solid.extent() - want.extent()).max_element() < 0.2, "{solid:?}");
+        assert!(
+            (solid.extent() - want.extent()).max_element() < 0.2,
+            "{solid:?}"
+        );
         let b = surface_bounds(&e, d);
         assert!(
             b.lo.cmple(want.lo + 0.05).all() && b.hi.cmpge(want.hi - 0.05).all(),
