@@ -213,7 +213,7 @@ pub fn crossings(l: &GpuAreaLight, o: V3, d: V3) -> Crossings {
                 let l2 = dot(nn, nn);
                 let a = dot(cross(q, ev), nn) / l2;
                 let b = dot(cross(eu, q), nn) / l2;
-                let inside = |x: f32| x >= -EDGE && x <= 1.0 + EDGE;
+                let inside = |x: f32| (-EDGE..=1.0 + EDGE).contains(&x);
                 if t > 0.0 && inside(a) && inside(b) {
                     out.count = 1;
                     out.t[0] = t;

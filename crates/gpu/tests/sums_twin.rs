@@ -40,9 +40,9 @@ fn terms(pixel: usize, rng: &mut Rng) -> Vec<f32> {
         .map(|j| match pixel % 4 {
             0 if j == 0 => 1.0,
             0 => ((1 + (j + pixel) % 7) as f32) * (2f32).powi(-30),
-            1 if j % 2 == 0 => {
+            1 if j.is_multiple_of(2) => {
                 let big = (1 + p % 3) as f32 * 16_777_216.0;
-                if j % 4 == 0 {
+                if j.is_multiple_of(4) {
                     big
                 } else {
                     -big
@@ -53,7 +53,11 @@ fn terms(pixel: usize, rng: &mut Rng) -> Vec<f32> {
             _ => {
                 let m = (rng.bits() % 4096) as f32;
                 let e = (rng.bits() % 41) as i32 - 28;
-                let s = if rng.bits() % 2 == 0 { 1.0 } else { -1.0 };
+                let s = if rng.bits().is_multiple_of(2) {
+                    1.0
+                } else {
+                    -1.0
+                };
                 s * m * (2f32).powi(e)
             }
         })
