@@ -417,7 +417,7 @@ pub fn table(d: &scene::Distribution1D) -> Vec<f32> {
 }
 
 /// The light picked with uc ∈ [0, 1) and its probability: for a table the i with
-/// cdf[i] ≤ uc < cdf[i+1] by binary search (as `partition_point(c ≤ u)`); for uniform
+/// `cdf[i] ≤ uc < cdf[i + 1]` by binary search (as `partition_point(c ≤ u)`); for uniform
 /// ⌊uc n⌋ (at most n − 1) with 1/n. `n` is the number of lights.
 pub fn select(buf: &[f32], how: Select, n: u32, uc: f32) -> (u32, f32) {
     match how {
