@@ -15,7 +15,9 @@
 
 use bytemuck::{Pod, Zeroable};
 
-/// The WGSL of the light functions (needs nothing else; mirrors this module).
+/// The WGSL of the light functions, mirroring this module; needs [`GPU_AREA_LIGHT_WGSL`]
+/// and, for `light_select`, a storage array `sel_buf: array<f32>` holding the
+/// [`table`]s.
 pub const LIGHT_WGSL: &str = include_str!("shaders/light.wgsl");
 
 /// `GpuAreaLight::shape` of a sphere (`p0` = centre, radius).
@@ -497,5 +499,33 @@ impl GpuAreaLight {
         Self::new(
             DISK, two_sided, radiance, area, center, radius, normal, [0.0; 3],
         )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every f32 constant appears in the WGSL as the same bit pattern, and the
+    /// polynomial's coefficients are 1/k! rounded once.
+    #[test]
+    fn wgsl_constants_are_the_rust_ones() {
+        let bits = |x: f32| format!("0x{:08x}u", x.to_bits());
+        for x in [TWO_PI, FRAC_PI_4, EDGE, RIM, f32::MAX] {
+            assert!(LIGHT_WGSL.contains(&bits(x)), "{x} = {}", bits(x));
+        }
+        let fact = |k: u32| (1..=k).map(f64::from).product::<f64>();
+        for (k, b) in [
+            (3, 0x3e2a_aaab),
+            (5, 0x3c08_8889),
+            (7, 0x3950_0d01),
+            (9, 0x3638_ef1d),
+            (4, 0x3d2a_aaab),
+            (6, 0x3ab6_0b61),
+            (8, 0x37d0_0d01),
+        ] {
+            assert_eq!((1.0 / fact(k)) as f32, f32::from_bits(b), "1/{k}!");
+            assert!(LIGHT_WGSL.contains(&format!("0x{b:08x}u")), "1/{k}!");
+        }
     }
 }

@@ -266,8 +266,9 @@ fn light_pdf_li(l: GpuAreaLight, p: vec3<f32>, wi: vec3<f32>) -> f32 {
     return 0.0;
 }
 
-// The light picked with uc and its probability: from the table at `off` of `buf`
-// (n, cdf[n + 1], pmf[n]) when table, else uniform over n.
+// The light picked with uc and its probability (index bits, pmf): from the table at
+// `off` of `sel_buf` (n, cdf[n + 1], pmf[n]) when table, else uniform over n. The
+// including shader declares `sel_buf: array<f32>`.
 fn light_select(off: u32, table: bool, n: u32, uc: f32) -> vec2<f32> {
     if (!table) {
         return vec2<f32>(bitcast<f32>(min(u32(uc * f32(n)), n - 1u)), 1.0 / f32(n));
