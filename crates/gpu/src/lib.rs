@@ -25,7 +25,12 @@
 //!   as outward-rounded intervals with dF/dt, and rays against expression solids (GPU.md
 //!   §6.2), equal bit for bit on lavapipe to their CPU f32 twins;
 //! - [`sampler`]: the CPU's random numbers (Philox4x32-10, `render::sampler`) in WGSL with
-//!   32-bit operations only, equal bit for bit on every adapter.
+//!   32-bit operations only, equal bit for bit on every adapter;
+//! - [`light`]: area lights (sphere, rect, disk) in WGSL: crossings, area and cone
+//!   sampling with their pdfs, and light selection, equal bit for bit on lavapipe to
+//!   their CPU f32 twins;
+//! - [`sums`]: per-pixel MIS sums in f64 where the device has `SHADER_F64`, else in
+//!   laundered double-float (GPU.md §3.2, §8), exact on the compensated-sum check.
 //!
 //! On machines without a GPU, tests run on Mesa's lavapipe (`mesa-vulkan-drivers`). They
 //! skip, saying so, where no adapter exists, unless `FREPRAY_REQUIRE_GPU=1` (set by
@@ -40,9 +45,11 @@
 mod adapter;
 mod kernel;
 pub mod layout;
+pub mod light;
 pub mod perturbed;
 pub mod quadric;
 pub mod sampler;
+pub mod sums;
 pub mod tape;
 pub mod tape_trace;
 
