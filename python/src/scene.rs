@@ -185,7 +185,9 @@ fn technique_text(t: &Bound<'_, PyAny>) -> PyResult<String> {
 /// `scene` into a `RenderState`. Keyword options override the scene's settings:
 /// `spp`, `seed`, `estimator` (balance, power, maximum, cutoff, optimal-direct, …),
 /// `techniques` ("light:1,bsdf:1", a dict or a list), `integrator`, `width`, `height`,
-/// `max_depth`, `aovs`, `hide_emitters`, `beta`, `cutoff`, `ridge`; `threads` (0: all
+/// `max_depth`, `aovs`, `hide_emitters`, `beta`, `cutoff`, `ridge`, `per_light` (one MIS
+/// estimator per light, as `--per-light`), `pixel_center` (camera rays through pixel
+/// centres, as `--pixel-center`); `threads` (0: all
 /// cores); `backend` "cpu" (this build has no GPU back end). The GIL is released while
 /// rendering; Ctrl-C stops the render and raises KeyboardInterrupt with the partial
 /// state as its `state` attribute.
@@ -193,7 +195,7 @@ fn technique_text(t: &Bound<'_, PyAny>) -> PyResult<String> {
 #[pyo3(signature = (scene, spp = None, seed = None, samples = None, estimator = None,
     techniques = None, integrator = None, threads = 0, backend = "cpu", width = None,
     height = None, max_depth = None, aovs = None, hide_emitters = false, beta = None,
-    cutoff = None, ridge = None))]
+    cutoff = None, ridge = None, per_light = false, pixel_center = false))]
 #[allow(clippy::too_many_arguments)]
 pub fn render(
     py: Python<'_>,
@@ -214,6 +216,8 @@ pub fn render(
     beta: Option<f64>,
     cutoff: Option<f64>,
     ridge: Option<f64>,
+    per_light: bool,
+    pixel_center: bool,
 ) -> PyResult<RenderState> {
     match backend {
         "cpu" => {}
@@ -248,7 +252,7 @@ pub fn render(
         beta,
         cutoff,
         ridge,
-        per_light: false,
+        per_light,
     };
     let reresolve = o.estimator.is_some()
         || o.techniques.is_some()
@@ -260,7 +264,8 @@ pub fn render(
         || o.hide_emitters
         || o.beta.is_some()
         || o.cutoff.is_some()
-        || o.ridge.is_some();
+        || o.ridge.is_some()
+        || o.per_light;
     let resolved = if reresolve {
         Arc::new(scene.resolve(py, &o)?)
     } else {
@@ -274,6 +279,7 @@ pub fn render(
         options.seed = s;
     }
     options.threads = threads;
+    options.pixel_center = pixel_center;
     options.validate().map_err(render_err)?;
     let range = match samples {
         Some((a, b)) if a < b => a..b,

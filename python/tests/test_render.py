@@ -69,6 +69,21 @@ def test_numpy_equals_the_cli_exr(many_lights, cli, tmp_path):
     assert np.array_equal(frepray.read_exr(tmp_path / "py.exr")[0], img)
 
 
+@pytest.mark.parametrize("flags", [["--per-light"], ["--pixel-center"],
+                                   ["--per-light", "--pixel-center"]])
+def test_per_light_and_pixel_center_equal_the_cli(many_lights, cli, tmp_path, flags):
+    exr = tmp_path / "cli.exr"
+    run_cli(cli, "render", many_lights.source()[1], "-o", exr, "--spp", "2", "--seed", "5",
+            "--mis", "optimal-direct", "--width", "24", "--height", "16", "--quiet", *flags)
+    st = frepray.render(many_lights, spp=2, seed=5, estimator="optimal-direct",
+                        per_light="--per-light" in flags,
+                        pixel_center="--pixel-center" in flags, **SMALL)
+    assert np.array_equal(frepray.read_exr(exr)[0], st.image())
+    # Each option changes the optimal estimator's image (so the keyword is not ignored).
+    plain = frepray.render(many_lights, spp=2, seed=5, estimator="optimal-direct", **SMALL)
+    assert not np.array_equal(plain.image(), st.image())
+
+
 def test_python_states_merge_with_the_cli(many_lights, cli, tmp_path):
     opts = dict(SMALL, seed=4)
     a = frepray.render(many_lights, samples=(0, 2), **opts)
