@@ -418,7 +418,6 @@ fn twin_matches_the_f64_bsdfs() {
                 }
             }
         }
-        drop(check);
         assert!(skipped < N / 100, "{name}: {skipped} near a lobe threshold");
         report.push(format!(
             "{name}: max rel {max_good:.1e} where s < 1e-5 ({n_good} values), \
