@@ -12,6 +12,11 @@
 //! polynomial [`sincos`]; and a non-delta sample takes f and pdf from [`eval`] at the drawn
 //! direction (the CPU's conductor and dielectric use the sampled microfacet normal), so a
 //! sample's pdf equals `eval(wo, wi).pdf` exactly.
+//!
+//! Bit equality needs one more guard: Mesa's NIR rewrites inexact float expressions
+//! (measured on lavapipe: `(a·b)·c` with c constant became `(a·c)·b`, and a sum of two
+//! complex norms in the conductor Fresnel term changed), so the kernel passes those values
+//! through an XOR with [`GpuBsdf::zero`], a zero the compiler cannot see (GPU.md §3.2).
 
 use bytemuck::{Pod, Zeroable};
 use glam::{Vec2, Vec3};

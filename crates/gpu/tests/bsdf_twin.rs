@@ -555,3 +555,56 @@ fn fill() {{
     };
     assert_eq!(got, &[want, want]);
 }
+
+/// `GpuBsdf::from_material` reads each scene material with its textures evaluated at the
+/// hit (here texture i is the colour (i, i + 1, i + 2)/10) into the constructors' structs.
+#[test]
+fn bsdf_from_scene_materials() {
+    use scene::{MaterialData, TextureId};
+    let rgb = |t: TextureId| [0.0, 1.0, 2.0].map(|k| (f64::from(t.0) + k) / 10.0);
+    let cases = [
+        (
+            MaterialData::Diffuse {
+                reflectance: TextureId(1),
+            },
+            GpuBsdf::diffuse([0.1, 0.2, 0.3]),
+        ),
+        (
+            MaterialData::Conductor {
+                eta: TextureId(2),
+                k: TextureId(3),
+                roughness: 0.2,
+            },
+            GpuBsdf::conductor([0.2, 0.3, 0.4], [0.3, 0.4, 0.5], 0.2),
+        ),
+        (
+            MaterialData::Dielectric {
+                eta: 1.5,
+                roughness: 0.0,
+            },
+            GpuBsdf::dielectric(1.5, 0.0),
+        ),
+        (
+            MaterialData::Plastic {
+                diffuse: TextureId(9),
+                eta: 1.4,
+                roughness: 0.1,
+            },
+            GpuBsdf::plastic([0.9, 1.0, 1.1], 1.4, 0.1, 0.6, 65),
+        ),
+    ];
+    for (m, want) in cases {
+        assert_eq!(GpuBsdf::from_material(&m, rgb, (0.6, 65)), want, "{m:?}");
+    }
+    let p = GpuBsdf::plastic([0.9, 1.0, 1.1], 1.4, 0.1, 0.6, 65);
+    assert_eq!(
+        (p.rgb[2], p.delta, p.table),
+        (1.0, 0, 65),
+        "ρ clamped, rough coat"
+    );
+    assert_eq!(
+        GpuBsdf::dielectric(1.0, 0.3).delta,
+        1,
+        "η = 1 is a delta lobe"
+    );
+}
