@@ -24,6 +24,9 @@
 //! - [`tape`], [`tape_trace`]: expression tapes (frep's bytecode) in WGSL, at points and
 //!   as outward-rounded intervals with dF/dt, and rays against expression solids (GPU.md
 //!   §6.2), equal bit for bit on lavapipe to their CPU f32 twins;
+//! - [`bsdf`]: BSDF evaluation and sampling of every material kind (diffuse, conductor,
+//!   dielectric, plastic; rough and smooth) in WGSL, equal bit for bit on lavapipe to
+//!   their CPU f32 twin;
 //! - [`sampler`]: the CPU's random numbers (Philox4x32-10, `render::sampler`) in WGSL with
 //!   32-bit operations only, equal bit for bit on every adapter;
 //! - [`light`]: area lights (sphere, rect, disk) in WGSL: crossings, area and cone
@@ -43,6 +46,7 @@
 #![warn(missing_docs)]
 
 mod adapter;
+pub mod bsdf;
 mod kernel;
 pub mod layout;
 pub mod light;
