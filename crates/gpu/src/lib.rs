@@ -4,7 +4,8 @@
 //! resolved scene (`scene::SceneData`) and returning the same per-pixel sums
 //! (`render::RenderState`), so that a GPU sample range merges with a CPU one
 //! (../shared/GPU.md; DESIGN.md §2–§3). This crate is being built in the order of
-//! GPU.md §12; today it holds the first step:
+//! GPU.md §12; today it holds steps 1 and 2 (the kernel twins; docs/gpu.md says what
+//! they measured and where they depart from GPU.md). There is no integrator yet:
 //!
 //! - [`Gpu`]: adapter choice with the features frepray uses (f64, int64, subgroups,
 //!   timestamps), each of which can be forced off ([`GpuOptions`], or the environment
