@@ -79,6 +79,9 @@ def experiment(
     integrator: Optional[str] = None,
     width: Optional[int] = None,
     height: Optional[int] = None,
+    per_light: bool = False,
+    pixel_center: bool = False,
+    decompose: bool = False,
     pandas: Optional[bool] = None,
 ):
     """The estimator comparison of ``frepray experiment``: a reference (rendered with
@@ -89,7 +92,9 @@ def experiment(
     noise), ``cpu_s`` and, against ``baseline``, ``improvement`` (with
     ``improvement_ci``, ``improvement_trimmed``, ``median_pixel_ratio``), ``speed_up``
     (``speed_up_ci``), ``overhead`` (DESIGN.md §4) -- a pandas DataFrame when pandas is installed (or ``pandas=True``),
-    else a list of dicts.  ``out`` receives results.json/csv, summary.md, plots and
+    else a list of dicts.  ``per_light``, ``pixel_center`` and ``decompose`` are the CLI's
+    ``--per-light``, ``--pixel-center`` and ``--decompose`` (the last adds
+    ``variance_jittered``, ``variance_centered`` and ``direction_share``).  ``out`` receives results.json/csv, summary.md, plots and
     images (a temporary folder when not given); a rerun into the same ``out`` resumes."""
     import tempfile
 
@@ -100,7 +105,8 @@ def experiment(
             reference=None if reference is None else os.fspath(reference),
             reference_estimator=reference_estimator, baseline=baseline, seed=seed,
             repeats=repeats, techniques=techniques, integrator=integrator,
-            width=width, height=height)
+            width=width, height=height, per_light=per_light, pixel_center=pixel_center,
+            decompose=decompose)
 
     if out is None:
         with tempfile.TemporaryDirectory(prefix="frepray-experiment-") as folder:

@@ -22,19 +22,9 @@ struct SceneRenderer<'a> {
     stop: &'a AtomicBool,
 }
 
-impl Renderer for SceneRenderer<'_> {
-    fn render(
-        &mut self,
-        estimator: &str,
-        spp: u32,
-        seed: u64,
-    ) -> Result<Option<(Image, f64)>, String> {
-        let o = RenderOptions {
-            method: mis::Method::from_str(estimator).map_err(|e| e.to_string())?,
-            spp,
-            seed,
-            ..self.base.clone()
-        };
+impl SceneRenderer<'_> {
+    fn run(&mut self, o: RenderOptions) -> Result<Option<(Image, f64)>, String> {
+        let spp = o.spp;
         let (state, stats) = self
             .scene
             .render_with(&o, 0..spp, self.stop, &|_, _| {})
@@ -43,6 +33,40 @@ impl Renderer for SceneRenderer<'_> {
             return Ok(None);
         }
         Ok(Some((to_image(&state.image()), stats.wall.as_secs_f64())))
+    }
+
+    fn options(&self, estimator: &str, spp: u32, seed: u64) -> Result<RenderOptions, String> {
+        Ok(RenderOptions {
+            method: mis::Method::from_str(estimator).map_err(|e| e.to_string())?,
+            spp,
+            seed,
+            ..self.base.clone()
+        })
+    }
+}
+
+impl Renderer for SceneRenderer<'_> {
+    fn render(
+        &mut self,
+        estimator: &str,
+        spp: u32,
+        seed: u64,
+    ) -> Result<Option<(Image, f64)>, String> {
+        let o = self.options(estimator, spp, seed)?;
+        self.run(o)
+    }
+
+    fn render_pixel_centers(
+        &mut self,
+        estimator: &str,
+        spp: u32,
+        seed: u64,
+    ) -> Result<Option<(Image, f64)>, String> {
+        let o = RenderOptions {
+            pixel_center: true,
+            ..self.options(estimator, spp, seed)?
+        };
+        self.run(o)
     }
 }
 
@@ -100,11 +124,14 @@ pub fn measure<'py>(
 /// summary.md, plots, images; a rerun resumes). Returns one dict per (estimator, spp):
 /// estimator, spp, time_s, mse, rmse, relmse, mse_ci, rmse_ci, trimmed_mse, net_mse,
 /// cpu_s, improvement, improvement_ci, improvement_trimmed, median_pixel_ratio,
-/// speed_up, speed_up_ci, overhead (intervals as [lo, hi] or None with one seed).
+/// speed_up, speed_up_ci, overhead (intervals as [lo, hi] or None with one seed), and
+/// with `decompose` variance_jittered, variance_centered, direction_share. `per_light`, `pixel_center` and `decompose` are the CLI's `--per-light`,
+/// `--pixel-center` and `--decompose`.
 #[pyfunction]
 #[pyo3(signature = (scene, out, estimators, spp, reference_spp = 256, reference = None,
     reference_estimator = None, baseline = "balance", seed = 0, repeats = exp::DEFAULT_REPEATS,
-    techniques = None, integrator = None, width = None, height = None))]
+    techniques = None, integrator = None, width = None, height = None, per_light = false,
+    pixel_center = false, decompose = false))]
 #[allow(clippy::too_many_arguments)]
 pub fn experiment<'py>(
     py: Python<'py>,
@@ -122,6 +149,9 @@ pub fn experiment<'py>(
     integrator: Option<String>,
     width: Option<u32>,
     height: Option<u32>,
+    per_light: bool,
+    pixel_center: bool,
+    decompose: bool,
 ) -> PyResult<Bound<'py, PyList>> {
     let canon = |s: &str| {
         mis::Method::from_str(s)
@@ -137,10 +167,12 @@ pub fn experiment<'py>(
         integrator,
         width,
         height,
+        per_light,
         ..Default::default()
     };
     let s = resolved(py, scene, &o)?;
-    let base = s.options().map_err(|e| to_py(py, e))?;
+    let mut base = s.options().map_err(|e| to_py(py, e))?;
+    base.pixel_center = pixel_center;
     let mut cfg = ExperimentConfig::new(scene_path(scene), out);
     cfg.command_line = "frepray.experiment (Python)".into();
     cfg.renderer_settings = format!(
@@ -153,6 +185,13 @@ pub fn experiment<'py>(
         base.params,
         s.hash()
     );
+    // As the CLI writes them, so that a rerun with other settings renders anew.
+    if base.pixel_center {
+        cfg.renderer_settings += " pixel-centres";
+    }
+    if base.per_light > 0 {
+        cfg.renderer_settings += &format!(" per-light {}", base.per_light);
+    }
     cfg.estimators = estimators
         .iter()
         .map(|e| canon(e))
@@ -164,6 +203,7 @@ pub fn experiment<'py>(
     cfg.baseline = canon(baseline)?;
     cfg.seed = seed;
     cfg.repeats = repeats;
+    cfg.decompose = decompose;
     let (result, interrupted) = interrupt::run(py, |stop| {
         let mut r = SceneRenderer {
             scene: s.clone(),
@@ -190,6 +230,11 @@ pub fn experiment<'py>(
         d.set_item("trimmed_mse", row.trimmed_mse)?;
         d.set_item("net_mse", row.net_mse)?;
         d.set_item("cpu_s", row.cpu_s)?;
+        // With `decompose`: the variance with jittered and centred rays, and the share
+        // MIS weights act on.
+        d.set_item("variance_jittered", row.variance.map(|v| v.jittered))?;
+        d.set_item("variance_centered", row.variance.map(|v| v.centered))?;
+        d.set_item("direction_share", row.variance.map(|v| v.direction_share))?;
         let c = summary
             .comparisons
             .iter()
