@@ -510,15 +510,23 @@ mod tests {
         Model::new(&read_str(text, Format::HyperFun, "test.hf").unwrap().shape).unwrap()
     }
 
-    /// Two balls and a third joined by HyperFun's R-union `|` (f1 + f2 + √(f1² + f2²)),
-    /// nested: intervals prove no cell of the search domain empty, so the solid's box is
-    /// ±100 (a dot in the picture); the view frames the surface.
+    /// Six balls joined by HyperFun's R-union `|` (f1 + f2 + √(f1² + f2²)), nested, and
+    /// the same with `alpha = 0.5`, where intervals prove no cell of the search domain
+    /// empty, so the solid's box is ±100 (a dot in the picture): the view frames the
+    /// surface.
     #[test]
     fn r_function_csg_is_framed_by_its_surface() {
-        let m = hf(R_UNION);
-        // Intervals prove no cell of the domain empty: the solid's box is the domain.
-        let plain = Solid::build(&read_str(R_UNION, Format::HyperFun, "t.hf").unwrap().shape);
-        assert!(view_bounds(&plain.unwrap()).extent().min_element() > 100.0);
+        let solid = |text: &str| {
+            Solid::build(&read_str(text, Format::HyperFun, "t.hf").unwrap().shape).unwrap()
+        };
+        // Narrowed by the α = 0 R-functions' monotonicity (frep's `Scalar::r_bound`),
+        // intervals bound this union tightly themselves.
+        assert!(view_bounds(&solid(R_UNION)).extent().max_element() < 3.6);
+        // With α = 0.5 (not narrowed; the same zero set) intervals prove no cell of the
+        // domain empty: the solid's box is the domain, and framing needs the surface.
+        let r_union = R_UNION.replace("m = (", "alpha = 0.5;\n            m = (");
+        assert!(view_bounds(&solid(&r_union)).extent().min_element() > 100.0);
+        let m = hf(&r_union);
         // The model is rebuilt inside its surface's box (plus 5 %).
         assert!(
             m.solid.bounds().extent().max_element() < 3.6,
