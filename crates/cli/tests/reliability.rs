@@ -186,7 +186,7 @@ fn interrupted_experiment_keeps_the_reference() {
                 "--estimators",
                 "balance",
                 "--reference-spp",
-                "64000",
+                "640000",
                 "--out",
             ])
             .arg(&exp);
@@ -211,8 +211,13 @@ fn interrupted_experiment_keeps_the_reference() {
         s
     };
     assert_eq!(code, Some(130), "{err}");
-    let checkpoint = exp.join("reference.partial.state");
-    assert!(checkpoint.is_file(), "{err}");
+    // The reference renders in two halves (their difference estimates its noise); the
+    // interrupt lands in the first or, on a fast machine, the second.
+    let kept = [
+        exp.join("reference.partial.state"),
+        exp.join("reference-2.partial.state"),
+    ];
+    assert!(kept.iter().any(|k| k.is_file()), "{err}");
     assert!(err.contains("samples kept in"), "{err}");
     // The rerun continues from the kept samples (then it is interrupted again: the
     // whole reference would take too long for a test).
