@@ -12,6 +12,7 @@
 //!   weight is f·|cos θi|/pdf, exactly.
 
 mod common;
+use common::Rng;
 
 use glam::{DVec2, DVec3, Vec2, Vec3};
 use gpu::bsdf::{
@@ -27,16 +28,7 @@ use render::bsdf::{
 /// Triples per material.
 const N: usize = 4096;
 
-/// A small deterministic generator (SplitMix64 to [0, 1)).
-struct Rng(u64);
 impl Rng {
-    fn next(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
-    }
     /// A unit f32 direction, uniform on the sphere.
     fn dir(&mut self) -> Vec3 {
         let z = 1.0 - 2.0 * self.next();

@@ -11,6 +11,7 @@
 //! rays from t = −∞ and to ∞, which the scan cuts into Cauchy-bounded sub-pieces.
 
 mod common;
+use common::Rng;
 
 use frep::{PerturbedQuadric, PerturbedSurface, Quadric, Ray};
 use glam::{DVec3, Vec3};
@@ -19,19 +20,7 @@ use gpu::perturbed::{first_crossing, Crossing, PerturbedPack, PERTURBED_WGSL};
 use gpu::{GpuOptions, Kernel};
 use std::sync::OnceLock;
 
-/// A small deterministic generator for test rays (SplitMix64 to [0, 1)).
-struct Rng(u64);
 impl Rng {
-    fn next(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
-    }
-    fn range(&mut self, a: f64, b: f64) -> f64 {
-        a + (b - a) * self.next()
-    }
     fn unit(&mut self) -> DVec3 {
         loop {
             let v = DVec3::new(self.next(), self.next(), self.next()) * 2.0 - 1.0;

@@ -2,6 +2,7 @@
 //! the twin finds the f64 crossings of frep's quadrics to f32 accuracy.
 
 mod common;
+use common::Rng;
 
 use frep::Quadric;
 use glam::DVec3;
@@ -9,16 +10,7 @@ use gpu::layout::{GpuQuadric, LAYOUT_WGSL};
 use gpu::quadric::{first_crossing, QUADRIC_WGSL};
 use gpu::{GpuOptions, Kernel};
 
-/// A small deterministic generator for test rays (SplitMix64 to [0, 1)).
-struct Rng(u64);
 impl Rng {
-    fn next(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
-    }
     fn vec(&mut self, s: f64) -> DVec3 {
         DVec3::new(self.next() - 0.5, self.next() - 0.5, self.next() - 0.5) * (2.0 * s)
     }

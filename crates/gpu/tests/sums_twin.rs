@@ -3,6 +3,7 @@
 //! double-float kernel against its CPU twin bit for bit (GPU.md §3.5).
 
 mod common;
+use common::Rng;
 
 use gpu::sums::{df_add, df_value, Accumulate, Sums};
 use gpu::{Gpu, GpuOptions};
@@ -11,21 +12,6 @@ use gpu::{Gpu, GpuOptions};
 const TERMS: usize = 16_384;
 /// Pixels of the check (one invocation each).
 const PIXELS: usize = 64;
-
-/// SplitMix64.
-struct Rng(u64);
-impl Rng {
-    fn bits(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
-    }
-    fn next(&mut self) -> f64 {
-        (self.bits() >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
 
 /// The terms of one pixel, by design (pixel % 4), all multiples of 2⁻⁴⁰ below 2²⁶ in
 /// magnitude, so that the exact sum is an i128 count of 2⁻⁴⁰:

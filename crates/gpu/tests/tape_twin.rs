@@ -7,6 +7,7 @@
 //! s3_blend.hf, bumpy_ball.frep, machined_part.frep, table.frep: thin plates and legs).
 
 mod common;
+use common::Rng;
 
 use frep::bytecode::Bytecode;
 use frep::read::read_file;
@@ -18,19 +19,7 @@ use gpu::{Gpu, GpuOptions, Kernel};
 use std::path::PathBuf;
 use std::time::Instant;
 
-/// A small deterministic generator (SplitMix64 to [0, 1)).
-struct Rng(u64);
 impl Rng {
-    fn next(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
-    }
-    fn range(&mut self, a: f64, b: f64) -> f64 {
-        a + (b - a) * self.next()
-    }
     fn unit(&mut self) -> DVec3 {
         loop {
             let v = DVec3::new(self.next(), self.next(), self.next()) * 2.0 - 1.0;

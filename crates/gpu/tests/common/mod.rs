@@ -1,4 +1,6 @@
-//! Opening the test GPU: lavapipe on machines without one.
+//! Opening the test GPU (lavapipe on machines without one), and the tests' random
+//! inputs.
+#![allow(dead_code)] // each test binary uses its own part
 
 use gpu::{Gpu, GpuOptions};
 
@@ -17,5 +19,28 @@ pub fn gpu(options: GpuOptions) -> Option<Gpu> {
             eprintln!("skipped: {e}");
             None
         }
+    }
+}
+
+/// A small deterministic generator for test inputs (SplitMix64, Steele et al. 2014);
+/// each test adds the shapes of input it needs in an `impl Rng` of its own.
+pub struct Rng(pub u64);
+
+impl Rng {
+    /// The next 64 random bits.
+    pub fn bits(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        z ^ (z >> 31)
+    }
+    /// Uniform in [0, 1), 53 bits.
+    pub fn next(&mut self) -> f64 {
+        (self.bits() >> 11) as f64 / (1u64 << 53) as f64
+    }
+    /// Uniform in [a, b).
+    pub fn range(&mut self, a: f64, b: f64) -> f64 {
+        a + (b - a) * self.next()
     }
 }
