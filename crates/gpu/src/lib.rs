@@ -59,4 +59,9 @@ pub mod tape;
 pub mod tape_trace;
 
 pub use adapter::{Gpu, GpuError, GpuInfo, GpuOptions};
+
+/// WGSL float helpers the kernels share (`inf`, `nan`, `is_nan`, `is_finite`, and `rmin`,
+/// `rmax` as Rust's f32 `min`/`max`): prepend once to a kernel that uses
+/// [`perturbed::PERTURBED_WGSL`] or a tape ([`tape::GpuTape::wgsl`] includes it).
+pub const FLOAT_WGSL: &str = include_str!("shaders/float.wgsl");
 pub use kernel::Kernel;

@@ -22,7 +22,7 @@ use frep::PerturbedView;
 use glam::Vec3;
 
 /// The WGSL of `perturbed_first_crossing(object, o, d, t_min, t_max) -> ScanResult` and
-/// its helpers. Needs `layout::LAYOUT_WGSL` and storage bindings named `objects`,
+/// its helpers. Needs `layout::LAYOUT_WGSL`, [`crate::FLOAT_WGSL`] and storage bindings named `objects`,
 /// `quadrics`, `perturbations`, `nodes` and `items`; the private `loops` counts the
 /// invocation's loop iterations.
 pub const PERTURBED_WGSL: &str = include_str!("shaders/perturbed.wgsl");

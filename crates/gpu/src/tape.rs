@@ -116,9 +116,10 @@ impl GpuTape {
     /// `TAPE_LEN` (GPU.md §3.4). The kernel declares `tape: array<u32>`.
     pub fn wgsl(&self) -> String {
         format!(
-            "const REG_COUNT: u32 = {}u;\nconst TAPE_LEN: u32 = {}u;\n{TAPE_WGSL}",
+            "const REG_COUNT: u32 = {}u;\nconst TAPE_LEN: u32 = {}u;\n{}{TAPE_WGSL}",
             self.registers.max(1),
-            self.len()
+            self.len(),
+            crate::FLOAT_WGSL
         )
     }
 

@@ -17,6 +17,7 @@ use frep::{PerturbedQuadric, PerturbedSurface, Quadric, Ray};
 use glam::{DVec3, Vec3};
 use gpu::layout::LAYOUT_WGSL;
 use gpu::perturbed::{first_crossing, Crossing, PerturbedPack, PERTURBED_WGSL};
+use gpu::FLOAT_WGSL;
 use gpu::{GpuOptions, Kernel};
 use std::sync::OnceLock;
 
@@ -277,6 +278,7 @@ fn kernel_source() -> String {
 @group(0) @binding(4) var<storage, read> items: array<GpuItemBox>;
 @group(0) @binding(5) var<storage, read> rays: array<f32>;
 @group(0) @binding(6) var<storage, read_write> out: array<u32>;
+{FLOAT_WGSL}
 {PERTURBED_WGSL}
 @compute @workgroup_size(64)
 fn trace(@builtin(global_invocation_id) id: vec3<u32>) {{

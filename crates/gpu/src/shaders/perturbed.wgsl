@@ -109,20 +109,6 @@ var<private> st_u0: array<f32, 49>;
 var<private> st_u1: array<f32, 49>;
 var<private> st_d: array<u32, 49>;
 
-fn inf() -> f32 { return bitcast<f32>(0x7f800000u); }
-fn is_nan(x: f32) -> bool { return (bitcast<u32>(x) & 0x7fffffffu) > 0x7f800000u; }
-fn is_finite(x: f32) -> bool { return (bitcast<u32>(x) & 0x7f800000u) != 0x7f800000u; }
-// Rust's f32::min / max: a NaN operand is ignored.
-fn rmin(a: f32, b: f32) -> f32 {
-    if (is_nan(a)) { return b; }
-    if (is_nan(b)) { return a; }
-    return min(a, b);
-}
-fn rmax(a: f32, b: f32) -> f32 {
-    if (is_nan(a)) { return b; }
-    if (is_nan(b)) { return a; }
-    return max(a, b);
-}
 // Rust's f32::signum: ±1 by the sign bit (so ±0 → ±1), NaN stays.
 fn signum(x: f32) -> f32 {
     if (is_nan(x)) { return x; }

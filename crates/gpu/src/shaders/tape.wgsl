@@ -15,21 +15,6 @@ const EVAL_LOOPS: u32 = (TAPE_LEN + 3u) / 4u;
 const MIN_POS: f32 = 0x1p-126f; // f32::MIN_POSITIVE
 const IMM: u32 = 255u;
 
-fn inf() -> f32 { return bitcast<f32>(0x7f800000u); }
-fn nan() -> f32 { return bitcast<f32>(0x7fc00000u); }
-fn is_nan(x: f32) -> bool { return (bitcast<u32>(x) & 0x7fffffffu) > 0x7f800000u; }
-fn is_finite(x: f32) -> bool { return (bitcast<u32>(x) & 0x7f800000u) != 0x7f800000u; }
-// Rust's f32::min / max: a NaN operand is ignored.
-fn rmin(a: f32, b: f32) -> f32 {
-    if (is_nan(a)) { return b; }
-    if (is_nan(b)) { return a; }
-    return min(a, b);
-}
-fn rmax(a: f32, b: f32) -> f32 {
-    if (is_nan(a)) { return b; }
-    if (is_nan(b)) { return a; }
-    return max(a, b);
-}
 // The next f32 above x, where zero and subnormals step to the smallest normal, so that a
 // GPU flushing subnormals still widens (§6.2.3). NaN and +∞ stay.
 fn up(x: f32) -> f32 {
