@@ -69,6 +69,10 @@ pub enum GpuError {
     /// A shader or pipeline failed validation, or a readback failed.
     #[error("GPU: {0}")]
     Run(String),
+    /// The scene or the options use something the GPU back end does not implement
+    /// yet (say what; the CPU back end renders it).
+    #[error("not available on the GPU back end yet: {0} (use --backend cpu)")]
+    Unsupported(String),
 }
 
 /// What the opened device is and offers.
@@ -115,6 +119,8 @@ pub struct Gpu {
     pub(crate) device: wgpu::Device,
     pub(crate) queue: wgpu::Queue,
     info: GpuInfo,
+    /// The `direct` kernels, compiled on first use (seconds to minutes on llvmpipe).
+    pub(crate) direct: std::sync::OnceLock<crate::direct::Pipelines>,
 }
 
 impl Gpu {
@@ -170,6 +176,7 @@ impl Gpu {
             device,
             queue,
             info,
+            direct: std::sync::OnceLock::new(),
         })
     }
 

@@ -48,6 +48,7 @@
 
 mod adapter;
 pub mod bsdf;
+pub mod direct;
 mod kernel;
 pub mod layout;
 pub mod light;

@@ -51,6 +51,7 @@
 //! unbiased where the method is, and the optimal α is then the one for the paths that
 //! exist (adding failures instead would shrink α towards 0).
 
+mod accumulate;
 mod aov;
 mod dims;
 mod path;
@@ -58,6 +59,7 @@ mod state;
 mod train;
 mod vertex;
 
+pub use accumulate::{Accumulator, ShadedDraw};
 pub use aov::Aov;
 pub(crate) use dims::Dims;
 pub(crate) use state::Pixel;

@@ -1,0 +1,846 @@
+//! The `direct` integrator on the GPU: the resolved scene packed into buffers, three
+//! wavefront kernels (shaders/direct.wgsl: camera rays with their nearest hits, the
+//! techniques' draws with every pdf, shadow rays), and the CPU's per-pixel records
+//! filled from them (GPU.md §7–§8, first version).
+//!
+//! **Waves.** A wave is m sample indices of every pixel (m × pixels slots, at most
+//! [`WAVE_DRAWS`] draws). Its three passes run in one submission without a CPU wait;
+//! the hits and draws are then read back and added, pixel by pixel in sample order,
+//! through [`render::integrator::Accumulator`], the CPU integrator's own bookkeeping.
+//! The per-pixel MIS sums and the optimal estimators' solves therefore stay on the CPU
+//! in f64 (GPU.md §8's "v1"), and a GPU sample range merges with a CPU one.
+//!
+//! **Same numbers, not the same image.** The kernels draw the CPU's random numbers
+//! (`render::sampler`, truncated to 24 bits) in the CPU's dimension layout, so a GPU
+//! render follows the CPU's paths closely, but in f32: images agree statistically
+//! (GPU.md §9), tested by `tests/direct_image.rs`.
+//!
+//! **Overflow.** A ray whose perturbed-quadric scan runs past its fixed capacity
+//! (K = 32 active perturbations after 4 halvings) is never taken as a miss: the CPU
+//! renders that whole sample instead, and the statistics count it.
+//!
+//! **Scope.** Objects that are one perturbed or plain quadric, or an intersection of
+//! plain quadrics (boxes, slabs); diffuse, conductor, dielectric and plastic materials
+//! that are rough (no delta lobes), with constant or point-space checker colours; sphere,
+//! rectangle and disk lights; the techniques `bsdf`, `light`, `light-uniform`,
+//! `light-area` and `light#k`; every MIS method. Anything else is a
+//! [`GpuError::Unsupported`] naming it, before any work.
+
+use crate::bsdf::{GpuBsdf, BSDF_STRUCT_WGSL, BSDF_WGSL, COAT_TABLE_LEN};
+use crate::layout::{outward, GpuObject, GpuPerturbation, GpuQuadric, LAYOUT_WGSL};
+use crate::layout::{GpuBvhNode, GpuItemBox};
+use crate::light::{self, GpuAreaLight, GPU_AREA_LIGHT_WGSL, LIGHT_WGSL};
+use crate::perturbed::{PerturbedPack, PERTURBED_WGSL};
+use crate::quadric::QUADRIC_WGSL;
+use crate::sampler::PHILOX_WGSL;
+use crate::{Gpu, GpuError, FLOAT_WGSL};
+use bytemuck::{Pod, Zeroable};
+use frep::flat::CsgOp;
+use frep::LeafView;
+use render::bsdf::CoatTable;
+use render::integrator::{Accumulator, RayCounts, RenderOptions, ShadedDraw};
+use render::scene::Scene;
+use render::{RenderState, RenderStats, StateHeader, Technique};
+use scene::{CameraKind, LightKind, MaterialData, SceneData, TextureData, TextureSpace};
+use std::ops::Range;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::{Duration, Instant};
+use wgpu::util::DeviceExt;
+
+/// The WGSL of the three kernels (without the helpers they include).
+pub const DIRECT_WGSL: &str = include_str!("shaders/direct.wgsl");
+
+/// At most this many draws (slots × draws per slot) per wave: 40 MiB of draw records.
+pub const WAVE_DRAWS: u32 = 1 << 19;
+
+/// Techniques the kernels can hold.
+pub const MAX_GPU_TECHNIQUES: usize = 8;
+
+const HIT_WORDS: usize = 16;
+const DRAW_WORDS: usize = 20;
+
+/// One object: a leaf or an intersection of plain-quadric leaves (the WGSL `GpuShape`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuShape {
+    /// 0: one leaf; 1: an intersection of `count` plain-quadric leaves.
+    pub kind: u32,
+    /// The first leaf (`GpuObject`).
+    pub first: u32,
+    /// Leaves.
+    pub count: u32,
+    /// The material.
+    pub material: u32,
+    /// Bounds minimum, rounded down (w unused).
+    pub lo: [f32; 4],
+    /// Bounds maximum, rounded up (w unused).
+    pub hi: [f32; 4],
+}
+
+/// A material: its BSDF with constant colours, and a point-space checker in place of
+/// `bsdf.rgb` where `tex_kind` is 1 (`a.xyz`, `b.xyz`, the scale in `a.w`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuMaterial {
+    /// The BSDF.
+    pub bsdf: GpuBsdf,
+    /// 0 constant, 1 point checker.
+    pub tex_kind: u32,
+    /// Padding.
+    pub pad: [u32; 3],
+    /// Even cells' colour and the scale.
+    pub a: [f32; 4],
+    /// Odd cells' colour.
+    pub b: [f32; 4],
+}
+
+/// The kernels' uniform block (the WGSL `Frame`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+struct Frame {
+    width: u32,
+    height: u32,
+    pixels: u32,
+    slots: u32,
+    sample: u32,
+    n_shapes: u32,
+    seed_lo: u32,
+    seed_hi: u32,
+    n_tech: u32,
+    n_draws: u32,
+    n_lights: u32,
+    power_off: u32,
+    area_off: u32,
+    flags: u32,
+    mode: u32,
+    zero: u32,
+    eye: [f32; 4],
+    right: [f32; 4],
+    up: [f32; 4],
+    forward: [f32; 4],
+    tech: [[u32; 4]; 2],
+    count: [[u32; 4]; 2],
+}
+
+const _: () = assert!(size_of::<GpuShape>() == 48);
+const _: () = assert!(size_of::<GpuMaterial>() == 112);
+const _: () = assert!(size_of::<Frame>() == 192);
+
+/// The scene and options as the kernels read them.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct DirectScene {
+    /// Objects.
+    pub shapes: Vec<GpuShape>,
+    /// Leaves (perturbed or plain quadrics), as the perturbed scan reads them.
+    pub leaves: Vec<GpuObject>,
+    /// Base quadrics.
+    pub quadrics: Vec<GpuQuadric>,
+    /// Perturbations.
+    pub perturbations: Vec<GpuPerturbation>,
+    /// Support BVH nodes (escape layout).
+    pub nodes: Vec<GpuBvhNode>,
+    /// Support item boxes.
+    pub items: Vec<GpuItemBox>,
+    /// Materials.
+    pub materials: Vec<GpuMaterial>,
+    /// Area lights.
+    pub lights: Vec<GpuAreaLight>,
+    /// Light-selection tables (by power at 0, by area at `frame.area_off`) and plastic
+    /// coat tables.
+    pub tables: Vec<f32>,
+    frame: Frame,
+}
+
+fn unsupported(what: impl Into<String>) -> GpuError {
+    GpuError::Unsupported(what.into())
+}
+
+fn f4(v: [f64; 3], w: f64) -> [f32; 4] {
+    [v[0] as f32, v[1] as f32, v[2] as f32, w as f32]
+}
+
+fn f3(v: [f64; 3]) -> [f32; 3] {
+    [v[0] as f32, v[1] as f32, v[2] as f32]
+}
+
+impl DirectScene {
+    /// Packs `data` for a `direct` render with `o`, or says what the GPU cannot do.
+    pub fn new(data: &SceneData, o: &RenderOptions) -> Result<Self, GpuError> {
+        let mut s = DirectScene::default();
+        s.pack_lights(data)?;
+        s.pack_materials(data)?;
+        for obj in &data.objects {
+            s.pack_object(data, obj)?;
+        }
+        s.pack_frame(data, o)?;
+        Ok(s)
+    }
+
+    fn pack_leaf(&mut self, view: &frep::PerturbedView, material: u32) -> u32 {
+        let p = PerturbedPack::new(view);
+        let mut ob = p.object;
+        ob.kind = u32::from(!view.perturbations.is_empty());
+        ob.material = material;
+        ob.first_node = self.nodes.len() as u32;
+        ob.first_item = self.items.len() as u32;
+        ob.first_op = self.quadrics.len() as u32;
+        ob.op_count = self.perturbations.len() as u32;
+        self.quadrics.extend(p.quadrics);
+        self.perturbations.extend(p.perturbations);
+        self.nodes.extend(p.nodes);
+        self.items.extend(p.items);
+        self.leaves.push(ob);
+        self.leaves.len() as u32 - 1
+    }
+
+    fn pack_object(&mut self, data: &SceneData, obj: &scene::ObjectData) -> Result<(), GpuError> {
+        let flat = data.solids.solid(obj.solid).flat();
+        let root = flat.nodes.len() - 1;
+        let node = &flat.nodes[root];
+        let material = obj.material.0;
+        let first = self.leaves.len() as u32;
+        let plain = |k: u32| -> Option<frep::PerturbedView> {
+            let n = &flat.nodes[k as usize];
+            match (n.op, flat.leaf(n.operands.first as usize)) {
+                (CsgOp::Leaf, LeafView::Perturbed(v)) if v.perturbations.is_empty() => Some(v),
+                _ => None,
+            }
+        };
+        let (kind, count) = match node.op {
+            CsgOp::Leaf => match flat.leaf(node.operands.first as usize) {
+                LeafView::Perturbed(v) => {
+                    self.pack_leaf(&v, material);
+                    (0, 1)
+                }
+                LeafView::Expr(_) => {
+                    return Err(unsupported(format!(
+                        "object '{}' is an expression solid (only perturbed and plain quadrics)",
+                        obj.name
+                    )))
+                }
+            },
+            CsgOp::Intersection if flat.parts(root).iter().all(|&k| plain(k).is_some()) => {
+                for &k in flat.parts(root) {
+                    let v = plain(k).expect("checked");
+                    self.pack_leaf(&v, material);
+                }
+                (1, flat.parts(root).len() as u32)
+            }
+            op => {
+                return Err(unsupported(format!(
+                    "object '{}' is a CSG {op:?} (only a single quadric, perturbed or not, \
+                     or an intersection of plain quadrics)",
+                    obj.name
+                )))
+            }
+        };
+        let (lo, hi) = outward(&node.bounds);
+        self.shapes.push(GpuShape {
+            kind,
+            first,
+            count,
+            material,
+            lo: [lo[0], lo[1], lo[2], 0.0],
+            hi: [hi[0], hi[1], hi[2], 0.0],
+        });
+        Ok(())
+    }
+
+    fn pack_materials(&mut self, data: &SceneData) -> Result<(), GpuError> {
+        for (m, name) in data.materials.iter().zip(&data.material_names) {
+            let constant = |id: scene::TextureId| -> Result<[f64; 3], GpuError> {
+                match &data.textures[id.index()] {
+                    TextureData::Constant { rgb } => Ok(*rgb),
+                    _ => Err(unsupported(format!(
+                        "material '{name}' has a textured parameter other than its colour"
+                    ))),
+                }
+            };
+            // The colour slot may be a point-space checker.
+            let (colour, clamp) = match m {
+                MaterialData::Diffuse { reflectance } => (Some(*reflectance), false),
+                MaterialData::Plastic { diffuse, .. } => (Some(*diffuse), true),
+                _ => (None, false),
+            };
+            let mut tex = (0, [0.0; 4], [0.0; 4]);
+            if let Some(id) = colour {
+                match &data.textures[id.index()] {
+                    TextureData::Constant { .. } => {}
+                    TextureData::Checker {
+                        a,
+                        b,
+                        scale,
+                        space: TextureSpace::Point,
+                    } => {
+                        let c = |v: [f64; 3]| {
+                            if clamp {
+                                v.map(|x| x.clamp(0.0, 1.0))
+                            } else {
+                                v
+                            }
+                        };
+                        tex = (1, f4(c(*a), *scale), f4(c(*b), 0.0));
+                    }
+                    TextureData::Checker { .. } => {
+                        return Err(unsupported(format!(
+                            "material '{name}' has a uv-space checker"
+                        )))
+                    }
+                }
+            }
+            let rgb = |id: scene::TextureId| match &data.textures[id.index()] {
+                TextureData::Constant { rgb } => *rgb,
+                // The checker's colours are written per hit; any value serves here.
+                TextureData::Checker { a, .. } => *a,
+            };
+            let bsdf = match *m {
+                MaterialData::Diffuse { reflectance } => GpuBsdf::diffuse(rgb(reflectance)),
+                MaterialData::Conductor { eta, k, roughness } => {
+                    GpuBsdf::conductor(constant(eta)?, constant(k)?, roughness)
+                }
+                MaterialData::Dielectric { eta, roughness } => GpuBsdf::dielectric(eta, roughness),
+                MaterialData::Plastic {
+                    diffuse,
+                    eta,
+                    roughness,
+                } => {
+                    let coat = CoatTable::new(eta, roughness);
+                    let at = self.tables.len() as u32;
+                    self.tables.extend(
+                        (0..COAT_TABLE_LEN).map(|j| coat.albedo((j as f64 / 64.0).powi(2)) as f32),
+                    );
+                    GpuBsdf::plastic(rgb(diffuse), eta, roughness, coat.r_int, at)
+                }
+            };
+            if bsdf.delta != 0 {
+                return Err(unsupported(format!(
+                    "material '{name}' is smooth (delta lobes; roughness ≥ 0.001 is needed)"
+                )));
+            }
+            self.materials.push(GpuMaterial {
+                bsdf,
+                tex_kind: tex.0,
+                pad: [0; 3],
+                a: tex.1,
+                b: tex.2,
+            });
+        }
+        Ok(())
+    }
+
+    fn pack_lights(&mut self, data: &SceneData) -> Result<(), GpuError> {
+        if !data.lights.delta.is_empty() {
+            return Err(unsupported("point and spot lights"));
+        }
+        if data.environment.is_some() {
+            return Err(unsupported("an environment light"));
+        }
+        for l in &data.lights.area {
+            let (rad, area) = (f3(l.emission), l.area as f32);
+            self.lights.push(match l.kind {
+                LightKind::Sphere => GpuAreaLight::sphere(f3(l.p0), l.radius as f32, rad, area),
+                LightKind::Rect => {
+                    GpuAreaLight::rect(f3(l.p0), f3(l.e1), f3(l.e2), l.two_sided, rad, area)
+                }
+                LightKind::Disk => {
+                    GpuAreaLight::disk(f3(l.p0), f3(l.e1), l.radius as f32, l.two_sided, rad, area)
+                }
+                LightKind::Point | LightKind::Spot => unreachable!("area lights only"),
+            });
+        }
+        Ok(())
+    }
+
+    fn pack_frame(&mut self, data: &SceneData, o: &RenderOptions) -> Result<(), GpuError> {
+        let f = &mut self.frame;
+        f.power_off = self.tables.len() as u32;
+        if let Some(d) = &data.lights.by_power {
+            self.tables.extend(light::table(d));
+        }
+        f.area_off = self.tables.len() as u32;
+        if let Some(d) = &data.lights.by_area {
+            self.tables.extend(light::table(d));
+        }
+        if self.tables.is_empty() {
+            self.tables.push(0.0);
+        }
+        f.n_lights = self.lights.len() as u32;
+        f.n_shapes = self.shapes.len() as u32;
+        let c = &data.camera;
+        let (w, h) = (c.width, c.height);
+        (f.width, f.height, f.pixels) = (w, h, w * h);
+        f.seed_lo = o.seed as u32;
+        f.seed_hi = (o.seed >> 32) as u32;
+        // render::camera::Camera::look_at / orthographic, in f64, then rounded.
+        let v = |a: [f64; 3]| glam::DVec3::from_array(a);
+        let (eye, target, up) = (v(c.eye), v(c.target), v(c.up));
+        let forward = (target - eye).normalize();
+        let right = forward.cross(up).normalize();
+        let up = right.cross(forward);
+        let scale = match c.kind {
+            CameraKind::Perspective => (c.fov.to_radians() / 2.0).tan(),
+            CameraKind::Orthographic => 0.5 * c.scale.unwrap_or(1.0),
+        };
+        f.eye = f4(eye.to_array(), scale);
+        f.right = f4(right.to_array(), f64::from(w) / f64::from(h));
+        f.up = f4(up.to_array(), 0.0);
+        f.forward = f4(forward.to_array(), 0.0);
+        f.flags = u32::from(o.hide_emitters)
+            | (u32::from(o.pixel_center) << 1)
+            | (u32::from(c.kind == CameraKind::Orthographic) << 2);
+        if o.techniques.len() > MAX_GPU_TECHNIQUES {
+            return Err(unsupported(format!(
+                "{} techniques (at most {MAX_GPU_TECHNIQUES})",
+                o.techniques.len()
+            )));
+        }
+        f.n_tech = o.techniques.len() as u32;
+        for (k, &(t, n)) in o.techniques.iter().enumerate() {
+            let code = match t {
+                Technique::Bsdf => 0,
+                Technique::LightPower => 1,
+                Technique::LightUniform => 2,
+                Technique::LightArea => 3,
+                Technique::Light(l) if l < self.lights.len() => 4 | (l as u32) << 8,
+                t => return Err(unsupported(format!("technique {}", t.name()))),
+            };
+            f.tech[k / 4][k % 4] = code;
+            f.count[k / 4][k % 4] = n;
+            f.n_draws += n;
+        }
+        Ok(())
+    }
+}
+
+/// Times of a GPU render's stages, summed over its waves.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct StageTimes {
+    /// Camera rays: generation and nearest hit (GPU timestamps; zero without them).
+    pub camera: Duration,
+    /// The techniques' draws and pdfs (GPU).
+    pub shade: Duration,
+    /// Shadow rays (GPU).
+    pub shadow: Duration,
+    /// Waiting for the GPU and copying its results back (wall).
+    pub readback: Duration,
+    /// Adding the draws into the per-pixel records on the CPU, CPU fallbacks included.
+    pub accumulate: Duration,
+    /// Pipeline creation (shader compilation), before the first wave.
+    pub setup: Duration,
+}
+
+/// What a GPU render did, beyond [`RenderStats`].
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct GpuStats {
+    /// Stage times.
+    pub stages: StageTimes,
+    /// Waves.
+    pub waves: u32,
+    /// Samples the CPU rendered because a ray overflowed a fixed capacity.
+    pub cpu_fallbacks: u64,
+    /// The most loop iterations one invocation ran, per kernel: camera trace, shadow
+    /// trace, shade (GPU.md §3.1: llvmpipe cuts an invocation's loops at 65 535).
+    pub max_loops: [u32; 3],
+}
+
+/// The compiled kernels, kept by [`Gpu`] for every later render.
+pub(crate) struct Pipelines {
+    trace: wgpu::ComputePipeline,
+    shade: wgpu::ComputePipeline,
+    layout: wgpu::BindGroupLayout,
+}
+
+fn pipelines(gpu: &Gpu) -> Result<Pipelines, GpuError> {
+    let d = &gpu.device;
+    let need = 12u32;
+    let have = d.limits().max_storage_buffers_per_shader_stage;
+    if have < need {
+        return Err(GpuError::Limit {
+            limit: "max_storage_buffers_per_shader_stage",
+            have: u64::from(have),
+            need: u64::from(need),
+        });
+    }
+    let source = [
+        FLOAT_WGSL,
+        LAYOUT_WGSL,
+        PERTURBED_WGSL,
+        QUADRIC_WGSL,
+        PHILOX_WGSL,
+        BSDF_STRUCT_WGSL,
+        BSDF_WGSL,
+        GPU_AREA_LIGHT_WGSL,
+        LIGHT_WGSL,
+        DIRECT_WGSL,
+    ]
+    .join("\n");
+    let scope = d.push_error_scope(wgpu::ErrorFilter::Validation);
+    let entry = |binding: u32, ty: wgpu::BufferBindingType| wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer {
+            ty,
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    };
+    let mut entries = vec![entry(0, wgpu::BufferBindingType::Uniform)];
+    for b in 1..=9 {
+        entries.push(entry(
+            b,
+            wgpu::BufferBindingType::Storage { read_only: true },
+        ));
+    }
+    for b in 10..=12 {
+        entries.push(entry(
+            b,
+            wgpu::BufferBindingType::Storage { read_only: false },
+        ));
+    }
+    let layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("direct"),
+        entries: &entries,
+    });
+    let pl = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: Some("direct"),
+        bind_group_layouts: &[Some(&layout)],
+        immediate_size: 0,
+    });
+    // SAFETY: every index of the kernels is bounded by construction (fixed arrays with
+    // guarded counters, buffers sized from the packed scene and the wave) and every loop
+    // is bounded; GPU.md §3.4 measured naga's checks at up to 20× on lavapipe.
+    let module = unsafe {
+        d.create_shader_module_trusted(
+            wgpu::ShaderModuleDescriptor {
+                label: Some("direct"),
+                source: wgpu::ShaderSource::Wgsl(source.into()),
+            },
+            wgpu::ShaderRuntimeChecks::unchecked(),
+        )
+    };
+    let make = |entry: &str| {
+        d.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some(entry),
+            layout: Some(&pl),
+            module: &module,
+            entry_point: Some(entry),
+            compilation_options: Default::default(),
+            cache: None,
+        })
+    };
+    let (trace, shade) = (make("trace"), make("shade"));
+    if let Some(e) = pollster::block_on(scope.pop()) {
+        return Err(GpuError::Run(format!("direct kernels: {e}")));
+    }
+    Ok(Pipelines {
+        trace,
+        shade,
+        layout,
+    })
+}
+
+fn storage(gpu: &Gpu, label: &str, bytes: &[u8]) -> Result<wgpu::Buffer, GpuError> {
+    gpu.check_binding(bytes.len() as u64)?;
+    // Empty bindings are invalid: give an empty pool one zeroed 16-byte element.
+    let data: &[u8] = if bytes.is_empty() { &[0; 128] } else { bytes };
+    Ok(gpu
+        .device
+        .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some(label),
+            contents: data,
+            usage: wgpu::BufferUsages::STORAGE,
+        }))
+}
+
+fn read_back(gpu: &Gpu, buffer: &wgpu::Buffer, bytes: u64) -> Result<Vec<u8>, GpuError> {
+    let run = |e: &dyn std::fmt::Display| GpuError::Run(e.to_string());
+    let slice = buffer.slice(..bytes);
+    let (tx, rx) = std::sync::mpsc::channel();
+    slice.map_async(wgpu::MapMode::Read, move |r| {
+        let _ = tx.send(r);
+    });
+    gpu.device
+        .poll(wgpu::PollType::wait_indefinitely())
+        .map_err(|e| run(&e))?;
+    rx.recv().map_err(|e| run(&e))?.map_err(|e| run(&e))?;
+    let out = slice.get_mapped_range().map_err(|e| run(&e))?.to_vec();
+    buffer.unmap();
+    Ok(out)
+}
+
+/// Renders samples `samples` of every pixel of `scene` (resolved as `data`) with the
+/// `direct` integrator on `gpu`, into a [`RenderState`] that merges with CPU ones.
+/// `progress(done, total)` is called after each wave; `stop` is read between waves (a
+/// stopped render keeps its whole waves and is marked partial). Errors, before any
+/// work, on what the GPU back end does not implement ([`GpuError::Unsupported`]).
+pub fn render_range(
+    gpu: &Gpu,
+    data: &SceneData,
+    scene: &Scene,
+    options: &RenderOptions,
+    samples: Range<u32>,
+    stop: &AtomicBool,
+    progress: &dyn Fn(u64, u64),
+) -> Result<(RenderState, RenderStats, GpuStats), GpuError> {
+    let o = RenderOptions {
+        spp: samples.end.saturating_sub(samples.start),
+        ..options.clone()
+    };
+    let acc = Accumulator::new(scene, &o).map_err(GpuError::Unsupported)?;
+    let mut pack = DirectScene::new(data, &o)?;
+    let started = Instant::now();
+    if gpu.direct.get().is_none() {
+        let _ = gpu.direct.set(pipelines(gpu)?);
+    }
+    let p = gpu.direct.get().expect("set above");
+    let mut stats = GpuStats::default();
+    let (w, h) = (data.camera.width, data.camera.height);
+    let header = StateHeader::new(w, h, &o);
+    let mut state = RenderState::new(header, samples.clone())
+        .map_err(|e| GpuError::Unsupported(e.to_string()))?;
+    let pixels = w * h;
+    let n_draws = pack.frame.n_draws.max(1);
+    let per_wave = (WAVE_DRAWS / (pixels * n_draws)).max(1);
+    let max_slots = (per_wave * pixels) as u64;
+    let d = &gpu.device;
+    let buffers = [
+        storage(gpu, "shapes", bytemuck::cast_slice(&pack.shapes))?,
+        storage(gpu, "objects", bytemuck::cast_slice(&pack.leaves))?,
+        storage(gpu, "quadrics", bytemuck::cast_slice(&pack.quadrics))?,
+        storage(
+            gpu,
+            "perturbations",
+            bytemuck::cast_slice(&pack.perturbations),
+        )?,
+        storage(gpu, "nodes", bytemuck::cast_slice(&pack.nodes))?,
+        storage(gpu, "items", bytemuck::cast_slice(&pack.items))?,
+        storage(gpu, "materials", bytemuck::cast_slice(&pack.materials))?,
+        storage(gpu, "lights", bytemuck::cast_slice(&pack.lights))?,
+        storage(gpu, "tables", bytemuck::cast_slice(&pack.tables))?,
+    ];
+    let hit_bytes = max_slots * HIT_WORDS as u64 * 4;
+    let draw_bytes = max_slots * u64::from(n_draws) * DRAW_WORDS as u64 * 4;
+    gpu.check_binding(draw_bytes)?;
+    let rw = |label, size| {
+        d.create_buffer(&wgpu::BufferDescriptor {
+            label: Some(label),
+            size,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        })
+    };
+    let read = |label, size| {
+        d.create_buffer(&wgpu::BufferDescriptor {
+            label: Some(label),
+            size,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        })
+    };
+    let (hits, draws) = (rw("hits", hit_bytes), rw("draws", draw_bytes));
+    let loops = rw("stats", 16);
+    let (hits_r, draws_r, loops_r) = (
+        read("hits readback", hit_bytes),
+        read("draws readback", draw_bytes),
+        read("stats readback", 16),
+    );
+    let uniform = |label| {
+        d.create_buffer(&wgpu::BufferDescriptor {
+            label: Some(label),
+            size: size_of::<Frame>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        })
+    };
+    let frames = [uniform("frame camera"), uniform("frame shadow")];
+    let groups: Vec<wgpu::BindGroup> = frames
+        .iter()
+        .map(|f| {
+            let mut entries = vec![wgpu::BindGroupEntry {
+                binding: 0,
+                resource: f.as_entire_binding(),
+            }];
+            for (k, b) in buffers.iter().chain([&hits, &draws, &loops]).enumerate() {
+                entries.push(wgpu::BindGroupEntry {
+                    binding: k as u32 + 1,
+                    resource: b.as_entire_binding(),
+                });
+            }
+            d.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("direct"),
+                layout: &p.layout,
+                entries: &entries,
+            })
+        })
+        .collect();
+    let timestamps = gpu.info().timestamps.then(|| {
+        d.create_query_set(&wgpu::QuerySetDescriptor {
+            label: Some("stages"),
+            ty: wgpu::QueryType::Timestamp,
+            count: 6,
+        })
+    });
+    let ts_buf = d.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("timestamps"),
+        size: 48,
+        usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+        mapped_at_creation: false,
+    });
+    let ts_read = read("timestamps readback", 48);
+    let period = f64::from(gpu.queue.get_timestamp_period());
+    stats.stages.setup = started.elapsed();
+
+    let stride = acc.stride();
+    let t_count = acc.techniques().len();
+    let total = u64::from(pixels) * u64::from(o.spp);
+    let mut done = 0u64;
+    let mut rays = RayCounts::default();
+    let mut pdfs = vec![0.0f64; n_draws as usize * t_count];
+    let mut start = samples.start;
+    while start < samples.end && !stop.load(Ordering::Relaxed) {
+        let m = per_wave.min(samples.end - start);
+        let slots = m * pixels;
+        pack.frame.sample = start;
+        pack.frame.slots = slots;
+        pack.frame.mode = 0;
+        gpu.queue
+            .write_buffer(&frames[0], 0, bytemuck::bytes_of(&pack.frame));
+        pack.frame.mode = 1;
+        gpu.queue
+            .write_buffer(&frames[1], 0, bytemuck::bytes_of(&pack.frame));
+        let mut enc = d.create_command_encoder(&Default::default());
+        let groups_for = |n: u32| {
+            let g = n.div_ceil(64);
+            if g <= 65_535 {
+                (g, 1)
+            } else {
+                (65_535, g.div_ceil(65_535))
+            }
+        };
+        let passes: [(&wgpu::ComputePipeline, &wgpu::BindGroup, u32); 3] = [
+            (&p.trace, &groups[0], slots),
+            (&p.shade, &groups[0], slots * n_draws),
+            (&p.trace, &groups[1], slots * n_draws),
+        ];
+        for (k, (pipe, group, n)) in passes.into_iter().enumerate() {
+            let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: None,
+                timestamp_writes: timestamps
+                    .as_ref()
+                    .map(|q| wgpu::ComputePassTimestampWrites {
+                        query_set: q,
+                        beginning_of_pass_write_index: Some(2 * k as u32),
+                        end_of_pass_write_index: Some(2 * k as u32 + 1),
+                    }),
+            });
+            pass.set_pipeline(pipe);
+            pass.set_bind_group(0, group, &[]);
+            let (gx, gy) = groups_for(n);
+            pass.dispatch_workgroups(gx, gy, 1);
+        }
+        if let Some(q) = &timestamps {
+            enc.resolve_query_set(q, 0..6, &ts_buf, 0);
+            enc.copy_buffer_to_buffer(&ts_buf, 0, &ts_read, 0, 48);
+        }
+        let hb = u64::from(slots) * HIT_WORDS as u64 * 4;
+        let db = u64::from(slots) * u64::from(n_draws) * DRAW_WORDS as u64 * 4;
+        enc.copy_buffer_to_buffer(&hits, 0, &hits_r, 0, hb);
+        enc.copy_buffer_to_buffer(&draws, 0, &draws_r, 0, db);
+        let t0 = Instant::now();
+        gpu.queue.submit([enc.finish()]);
+        let hit_data = read_back(gpu, &hits_r, hb)?;
+        let draw_data = read_back(gpu, &draws_r, db)?;
+        if timestamps.is_some() {
+            let ts = read_back(gpu, &ts_read, 48)?;
+            let t: &[u64] = bytemuck::cast_slice(&ts);
+            let span = |k: usize| {
+                let ns = t[2 * k + 1].saturating_sub(t[2 * k]) as f64 * period;
+                Duration::from_nanos(ns as u64)
+            };
+            stats.stages.camera += span(0);
+            stats.stages.shade += span(1);
+            stats.stages.shadow += span(2);
+        }
+        stats.stages.readback += t0.elapsed();
+        let t1 = Instant::now();
+        let hv: &[f32] = bytemuck::cast_slice(&hit_data);
+        let dv: &[f32] = bytemuck::cast_slice(&draw_data);
+        let data_words = state.data_mut();
+        for slot in 0..slots as usize {
+            let pix = slot % pixels as usize;
+            let index = start + (slot / pixels as usize) as u32;
+            let (x, y) = (pix as u32 % w, pix as u32 / w);
+            let rec = &mut data_words[pix * stride..(pix + 1) * stride];
+            let hw = &hv[slot * HIT_WORDS..(slot + 1) * HIT_WORDS];
+            let dw = &dv[slot * n_draws as usize * DRAW_WORDS..][..n_draws as usize * DRAW_WORDS];
+            let status = hw[3];
+            let overflow = status == 2.0
+                || (status == 1.0 && dw.chunks_exact(DRAW_WORDS).any(|d| d[7] == 12.0));
+            rays.camera += 1;
+            if overflow {
+                // The CPU renders the whole sample (its camera ray counted there).
+                rays.camera -= 1;
+                stats.cpu_fallbacks += 1;
+                acc.cpu_sample(scene, x, y, index, rec, &mut rays);
+                continue;
+            }
+            let outside = [hw[12], hw[13], hw[14]].map(f64::from);
+            if status != 1.0 {
+                acc.add(rec, index, outside, None);
+                continue;
+            }
+            for (j, d) in dw.chunks_exact(DRAW_WORDS).enumerate() {
+                let ps = &mut pdfs[j * t_count..(j + 1) * t_count];
+                for (k, p) in ps.iter_mut().enumerate() {
+                    *p = f64::from(d[12 + k]);
+                }
+            }
+            let mut shaded: Vec<ShadedDraw> = Vec::with_capacity(n_draws as usize);
+            for (j, d) in dw.chunks_exact(DRAW_WORDS).enumerate() {
+                let traced = d[7] == 4.0 || d[7] == 5.0;
+                if traced {
+                    rays.shadow += 1;
+                }
+                let f = if d[7] == 4.0 {
+                    [d[8], d[9], d[10]].map(f64::from)
+                } else {
+                    [0.0; 3]
+                };
+                shaded.push(if d[7] == 1.0 {
+                    ShadedDraw::Failed
+                } else {
+                    ShadedDraw::Sample {
+                        f,
+                        pdfs: &pdfs[j * t_count..(j + 1) * t_count],
+                    }
+                });
+            }
+            acc.add(rec, index, outside, Some(&shaded));
+        }
+        stats.stages.accumulate += t1.elapsed();
+        stats.waves += 1;
+        done += u64::from(slots);
+        progress(done, total);
+        start += m;
+    }
+    let mut enc = d.create_command_encoder(&Default::default());
+    enc.copy_buffer_to_buffer(&loops, 0, &loops_r, 0, 16);
+    gpu.queue.submit([enc.finish()]);
+    let l = read_back(gpu, &loops_r, 16)?;
+    let l: &[u32] = bytemuck::cast_slice(&l);
+    stats.max_loops = [l[0], l[1], l[2]];
+    if done < total {
+        state.set_partial();
+    }
+    let render_stats = RenderStats {
+        integrator: o.integrator,
+        wall: started.elapsed(),
+        samples: done,
+        samples_requested: total,
+        rays,
+        stopped: done < total,
+        threads: 0,
+    };
+    Ok((state, render_stats, stats))
+}

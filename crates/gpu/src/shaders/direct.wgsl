@@ -1,0 +1,474 @@
+// The wavefront `direct` integrator (GPU.md §7, first version): three kernels over one
+// wave of slots, a slot being one pixel at one sample index.
+//
+//   trace (mode 0)  camera ray → nearest object or area light → hit point, outward normal,
+//                   material; the emitter seen directly goes to the outside-MIS sum.
+//   shade           one invocation per (slot, draw): the draw of its technique at the hit
+//                   (dimensions of render::integrator::dims), every technique's pdf in its
+//                   direction, f_s·|cos| and the nearest light's emission along it; a
+//                   shadow ray where both are non-zero.
+//   trace (mode 1)  one invocation per (slot, draw): the shadow ray's any-hit query.
+//
+// The CPU adds the wave's draws to its per-pixel records (render::integrator::Accumulator).
+// Trace is one entry point for both modes so that the costly intersectors compile once.
+// Every loop iteration counts against `loops` (GPU.md §3.1); the maximum per invocation
+// and kernel goes to stats[mode].
+//
+// Needs FLOAT_WGSL, LAYOUT_WGSL, PERTURBED_WGSL, QUADRIC_WGSL, PHILOX_WGSL,
+// BSDF_STRUCT_WGSL, BSDF_WGSL, GPU_AREA_LIGHT_WGSL, LIGHT_WGSL before it.
+
+struct Frame {
+    width: u32, height: u32, pixels: u32, slots: u32,
+    sample: u32, n_shapes: u32, seed_lo: u32, seed_hi: u32,
+    n_tech: u32, n_draws: u32, n_lights: u32, power_off: u32,
+    area_off: u32, flags: u32, mode: u32, zero: u32,
+    eye: vec4<f32>,
+    right: vec4<f32>,
+    up: vec4<f32>,
+    forward: vec4<f32>,
+    tech: array<vec4<u32>, 2>,
+    count: array<vec4<u32>, 2>,
+}
+
+// One scene object: a single leaf (kind 0) or an intersection of plain-quadric leaves
+// (kind 1), over `count` leaves (GpuObject) from `first`.
+struct GpuShape { kind: u32, first: u32, count: u32, material: u32, lo: vec4<f32>, hi: vec4<f32> }
+
+// A material: its BSDF with constant colours, and a point-space checker replacing
+// bsdf.rgb where tex_kind is 1 (a.xyz, b.xyz, scale in a.w).
+struct GpuMaterial { bsdf: GpuBsdf, tex_kind: u32, pad0: u32, pad1: u32, pad2: u32, a: vec4<f32>, b: vec4<f32> }
+
+@group(0) @binding(0) var<uniform> frame: Frame;
+@group(0) @binding(1) var<storage, read> shapes: array<GpuShape>;
+@group(0) @binding(2) var<storage, read> objects: array<GpuObject>;
+@group(0) @binding(3) var<storage, read> quadrics: array<GpuQuadric>;
+@group(0) @binding(4) var<storage, read> perturbations: array<GpuPerturbation>;
+@group(0) @binding(5) var<storage, read> nodes: array<GpuBvhNode>;
+@group(0) @binding(6) var<storage, read> items: array<GpuItemBox>;
+@group(0) @binding(7) var<storage, read> materials: array<GpuMaterial>;
+@group(0) @binding(8) var<storage, read> lights: array<GpuAreaLight>;
+@group(0) @binding(9) var<storage, read> sel_buf: array<f32>;
+@group(0) @binding(10) var<storage, read_write> hits: array<vec4<f32>>;
+@group(0) @binding(11) var<storage, read_write> draws: array<vec4<f32>>;
+@group(0) @binding(12) var<storage, read_write> stats: array<atomic<u32>>;
+
+const HIT_WORDS: u32 = 4u;    // vec4s per slot in `hits`
+const DRAW_WORDS: u32 = 5u;   // vec4s per draw in `draws`
+const FLAG_HIDE: u32 = 1u;
+const FLAG_CENTER: u32 = 2u;
+const FLAG_ORTHO: u32 = 4u;
+// Slot status (hits[·].w of word 0) and draw status (draws[·].w of word 1).
+const S_NONE: f32 = 0.0;      // escaped or met a light: outside sum only
+const S_SURFACE: f32 = 1.0;   // a shading point
+const S_OVERFLOW: f32 = 2.0;  // a ray past a fixed capacity: the CPU redoes the sample
+const D_FAILED: f32 = 1.0;    // no direction
+const D_ZERO: f32 = 2.0;      // a direction whose integrand is 0 without a shadow ray
+const D_SHADOW: f32 = 3.0;    // a direction with a shadow ray to trace
+const D_VISIBLE: f32 = 4.0;   // traced: unoccluded
+const D_OCCLUDED: f32 = 5.0;  // traced: occluded
+
+const T_BSDF: u32 = 0u;
+const T_POWER: u32 = 1u;
+const T_UNIFORM: u32 = 2u;
+const T_AREA: u32 = 3u;
+const T_ONE: u32 = 4u;
+
+fn bsdf_table(i: u32) -> f32 { return sel_buf[i]; }
+
+// --- random numbers: render::sampler, truncated to 24 bits ---------------------------
+
+fn rnd(px: u32, py: u32, index: u32, dim: u32) -> f32 {
+    let b = philox4x32_10(vec4<u32>(px, py, index, dim / 4u), vec2<u32>(frame.seed_lo, frame.seed_hi));
+    return philox_unit(b[dim % 4u]);
+}
+
+// --- frames (render::frame::Frame::from_z, Duff et al. 2017) -------------------------
+
+struct Basis { s: vec3<f32>, t: vec3<f32>, n: vec3<f32> }
+
+fn basis(n: vec3<f32>) -> Basis {
+    let sign = select(-1.0, 1.0, n.z >= 0.0);
+    let a = -1.0 / (sign + n.z);
+    let b = n.x * n.y * a;
+    let s = vec3<f32>(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x);
+    let t = vec3<f32>(b, sign + n.y * n.y * a, -n.y);
+    return Basis(s, t, n);
+}
+
+fn to_local(f: Basis, v: vec3<f32>) -> vec3<f32> {
+    return vec3<f32>(dot(v, f.s), dot(v, f.t), dot(v, f.n));
+}
+
+fn from_local(f: Basis, v: vec3<f32>) -> vec3<f32> {
+    return f.s * v.x + f.t * v.y + f.n * v.z;
+}
+
+// --- objects ---------------------------------------------------------------------------
+
+// (t_near, t_far) of the box along the ray, clipped to (t0, t1); x > y when missed.
+fn clip_box(lo: vec3<f32>, hi: vec3<f32>, o: vec3<f32>, inv: vec3<f32>, t0: f32, t1: f32) -> vec2<f32> {
+    let a = (lo - o) * inv;
+    let b = (hi - o) * inv;
+    let near = min(a, b);
+    let far = max(a, b);
+    // NaN (0·∞ on an axis the ray runs along inside a face) keeps the other axes' bounds.
+    var tn = t0;
+    var tf = t1;
+    for (var k = 0u; k < 3u; k++) {
+        if (!is_nan(near[k])) { tn = max(tn, near[k]); }
+        if (!is_nan(far[k])) { tf = min(tf, far[k]); }
+    }
+    return vec2<f32>(tn, tf);
+}
+
+// frep's Solid::plain_intersection in f32: the inside set along the ray is the
+// intersection of the parts' positive sets; its first end in (t_min, t_max), with the
+// leaf that makes it. (t, leaf bits, 1) or (0, 0, 0).
+fn plain_intersection(sh: GpuShape, o: vec3<f32>, d: vec3<f32>, t_min: f32, t_max: f32) -> vec3<f32> {
+    var a: array<f32, 10>;
+    var b: array<f32, 10>;
+    var ka: array<u32, 10>;
+    var kb: array<u32, 10>;
+    a[0] = -inf();
+    b[0] = inf();
+    ka[0] = sh.first;
+    kb[0] = sh.first;
+    var n = 1u;
+    for (var k = 0u; k < sh.count; k++) {
+        loops++;
+        let leaf = sh.first + k;
+        let ps = positive_set(q_local(quadrics[objects[leaf].first_op].c, o, d));
+        var na: array<f32, 10>;
+        var nb: array<f32, 10>;
+        var nka: array<u32, 10>;
+        var nkb: array<u32, 10>;
+        var m = 0u;
+        for (var j = 0u; j < n; j++) {
+            for (var w = 0u; w < ps.n; w++) {
+                loops++;
+                let c = ps.s[2u * w];
+                let e = ps.s[2u * w + 1u];
+                var lo = a[j];
+                var klo = ka[j];
+                if (c > lo) { lo = c; klo = leaf; }
+                var hi = b[j];
+                var khi = kb[j];
+                if (e < hi) { hi = e; khi = leaf; }
+                if (lo < hi && m < 10u) {
+                    na[m] = lo; nb[m] = hi; nka[m] = klo; nkb[m] = khi;
+                    m++;
+                }
+            }
+        }
+        if (m == 0u) { return vec3<f32>(0.0); }
+        a = na; b = nb; ka = nka; kb = nkb;
+        n = m;
+    }
+    var best = inf();
+    var which = 0u;
+    for (var j = 0u; j < n; j++) {
+        loops++;
+        if (a[j] > t_min && a[j] < t_max && is_finite(a[j]) && a[j] < best) { best = a[j]; which = ka[j]; }
+        if (b[j] > t_min && b[j] < t_max && is_finite(b[j]) && b[j] < best) { best = b[j]; which = kb[j]; }
+    }
+    if (best == inf()) { return vec3<f32>(0.0); }
+    return vec3<f32>(best, bitcast<f32>(which), 1.0);
+}
+
+// Nearest (or, with `any`, some) object crossing in (0, t_max): (status, t, leaf) with
+// status 0 none, 1 hit, 2 overflow.
+struct SceneHit { status: u32, t: f32, leaf: u32 }
+
+fn scene_trace(o: vec3<f32>, d: vec3<f32>, t_max: f32, any_hit: bool) -> SceneHit {
+    let inv = vec3<f32>(1.0 / d.x, 1.0 / d.y, 1.0 / d.z);
+    var res = SceneHit(0u, t_max, 0u);
+    for (var s = 0u; s < frame.n_shapes; s++) {
+        loops++;
+        let sh = shapes[s];
+        let c = clip_box(sh.lo.xyz, sh.hi.xyz, o, inv, 0.0, res.t);
+        if (!(c.x <= c.y)) { continue; }
+        var found = false;
+        var t = 0.0;
+        var leaf = sh.first;
+        if (sh.kind == 1u) {
+            let r = plain_intersection(sh, o, d, 0.0, res.t);
+            found = r.z == 1.0;
+            t = r.x;
+            leaf = bitcast<u32>(r.y);
+        } else if (objects[leaf].kind == 0u) {
+            let r = quadric_first_crossing(quadrics[objects[leaf].first_op], o, d, 0.0, res.t);
+            found = r.y == 1.0;
+            t = r.x;
+        } else {
+            let r = perturbed_first_crossing(leaf, o, d, 0.0, res.t);
+            if (r.status == 2u) { return SceneHit(2u, 0.0, 0u); }
+            found = r.status == 1u;
+            t = r.t;
+        }
+        if (found && t < res.t) {
+            res = SceneHit(1u, t, leaf);
+            if (any_hit) { return res; }
+        }
+    }
+    return res;
+}
+
+fn q_grad(c: array<f32, 10>, p: vec3<f32>) -> vec3<f32> {
+    return vec3<f32>(
+        2.0 * c[0] * p.x + c[3] * p.y + c[5] * p.z + c[6],
+        2.0 * c[1] * p.y + c[3] * p.x + c[4] * p.z + c[7],
+        2.0 * c[2] * p.z + c[4] * p.y + c[5] * p.x + c[8]);
+}
+
+// The outward unit normal of leaf `leaf` at p: −∇F'/|∇F'| (frep::outward), with
+// ∇F' = ∇q + Σ 3 f_i q_i² ∇q_i over the perturbations positive at p.
+fn leaf_normal(leaf: u32, p: vec3<f32>) -> vec3<f32> {
+    let ob = objects[leaf];
+    var g = q_grad(quadrics[ob.first_op].c, p);
+    if (ob.kind == 1u) {
+        let n = ob.item_count + ob.unbounded;
+        for (var k = 0u; k < n; k++) {
+            loops++;
+            let pert = perturbations[ob.op_count + items[ob.first_item + k].item];
+            let q = q_eval(pert.q, p);
+            if (q > 0.0) { g += (3.0 * pert.f * q * q) * q_grad(pert.q, p); }
+        }
+    }
+    let l = length(g);
+    if (l > 0.0 && is_finite(l)) { return -g / l; }
+    return vec3<f32>(0.0, 0.0, 1.0);
+}
+
+// --- lights ------------------------------------------------------------------------
+
+// The nearest area light along the ray: (t, index bits) with the radiance it sends back
+// along −d (0 from a non-emitting side); t = ∞ when none.
+struct LightHit { t: f32, index: u32, le: vec3<f32> }
+
+fn nearest_light(o: vec3<f32>, d: vec3<f32>, t_max: f32) -> LightHit {
+    var h = LightHit(inf(), 0u, vec3<f32>(0.0));
+    var best = t_max;
+    for (var i = 0u; i < frame.n_lights; i++) {
+        loops++;
+        let l = lights[i];
+        let c = light_intersect(l, o, d, 0.0, best);
+        if (c.x > 0.0) {
+            best = c.x;
+            var le = vec3<f32>(0.0);
+            if (light_emits(l, c.yzw, -d)) { le = l.radiance.xyz; }
+            h = LightHit(c.x, i, le);
+        }
+    }
+    return h;
+}
+
+fn pmf_at(off: u32, i: u32) -> f32 {
+    let n = bitcast<u32>(sel_buf[off]);
+    return sel_buf[off + 1u + (n + 1u) + i];
+}
+
+// The solid-angle pdf of technique `code` (light index `one` for T_ONE) at wi, the
+// BSDF's being `bsdf_pdf` (render::technique::Technique::pdf).
+fn tech_pdf(code: u32, one: u32, p: vec3<f32>, wi: vec3<f32>, bsdf_pdf: f32) -> f32 {
+    if (code == T_BSDF) { return bsdf_pdf; }
+    if (code == T_ONE) { return light_pdf_li(lights[one], p, wi); }
+    var sum = 0.0;
+    for (var i = 0u; i < frame.n_lights; i++) {
+        loops++;
+        if (code == T_AREA) {
+            let pm = pmf_at(frame.area_off, i);
+            if (pm > 0.0) { sum += pm * light_pdf_area(lights[i], p, wi); }
+        } else {
+            var pm = 1.0 / f32(frame.n_lights);
+            if (code == T_POWER) { pm = pmf_at(frame.power_off, i); }
+            if (pm > 0.0) { sum += pm * light_pdf_li(lights[i], p, wi); }
+        }
+    }
+    return sum;
+}
+
+fn tech_code(k: u32) -> u32 { return frame.tech[k / 4u][k % 4u] & 0xffu; }
+fn tech_light(k: u32) -> u32 { return frame.tech[k / 4u][k % 4u] >> 8u; }
+
+// --- kernels -------------------------------------------------------------------------
+
+fn slot_pixel(slot: u32) -> vec3<u32> {
+    let pix = slot % frame.pixels;
+    return vec3<u32>(pix % frame.width, pix / frame.width, frame.sample + slot / frame.pixels);
+}
+
+fn camera_ray(px: vec3<u32>) -> array<vec3<f32>, 2> {
+    var ox = rnd(px.x, px.y, px.z, 0u);
+    var oy = rnd(px.x, px.y, px.z, 1u);
+    if ((frame.flags & FLAG_CENTER) != 0u) { ox = 0.5; oy = 0.5; }
+    let scale = frame.eye.w;
+    let aspect = frame.right.w;
+    let sx = (2.0 * (f32(px.x) + ox) / f32(frame.width) - 1.0) * scale * aspect;
+    let sy = (1.0 - 2.0 * (f32(px.y) + oy) / f32(frame.height)) * scale;
+    if ((frame.flags & FLAG_ORTHO) != 0u) {
+        return array<vec3<f32>, 2>(frame.eye.xyz + sx * frame.right.xyz + sy * frame.up.xyz, frame.forward.xyz);
+    }
+    return array<vec3<f32>, 2>(frame.eye.xyz, normalize(frame.forward.xyz + sx * frame.right.xyz + sy * frame.up.xyz));
+}
+
+fn trace_camera(slot: u32) {
+    let px = slot_pixel(slot);
+    let ray = camera_ray(px);
+    let o = ray[0];
+    let d = ray[1];
+    let h = scene_trace(o, d, inf(), false);
+    let at = slot * HIT_WORDS;
+    if (h.status == 2u) {
+        hits[at] = vec4<f32>(0.0, 0.0, 0.0, S_OVERFLOW);
+        return;
+    }
+    let lh = nearest_light(o, d, h.t);
+    if (lh.t < inf()) {
+        var le = lh.le;
+        if ((frame.flags & FLAG_HIDE) != 0u) { le = vec3<f32>(0.0); }
+        hits[at] = vec4<f32>(0.0, 0.0, 0.0, S_NONE);
+        hits[at + 3u] = vec4<f32>(le, 0.0);
+        return;
+    }
+    if (h.status == 0u) {
+        hits[at] = vec4<f32>(0.0, 0.0, 0.0, S_NONE);
+        hits[at + 3u] = vec4<f32>(0.0);
+        return;
+    }
+    let p = o + h.t * d;
+    let n = leaf_normal(h.leaf, p);
+    hits[at] = vec4<f32>(p, S_SURFACE);
+    hits[at + 1u] = vec4<f32>(n, bitcast<f32>(objects[h.leaf].material));
+    hits[at + 2u] = vec4<f32>(-d, 0.0);
+    hits[at + 3u] = vec4<f32>(0.0);
+}
+
+fn trace_shadow(i: u32) {
+    let at = i * DRAW_WORDS;
+    if (draws[at + 1u].w != D_SHADOW) { return; }
+    let h = scene_trace(draws[at].xyz, draws[at + 1u].xyz, draws[at].w, true);
+    if (h.status == 2u) {
+        draws[at + 1u].w = S_OVERFLOW + 10.0;
+    } else if (h.status == 1u) {
+        draws[at + 1u].w = D_OCCLUDED;
+    } else {
+        draws[at + 1u].w = D_VISIBLE;
+    }
+}
+
+@compute @workgroup_size(64)
+fn trace(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nw: vec3<u32>) {
+    let i = gid.x + gid.y * nw.x * 64u;
+    loops = 0u;
+    if (frame.mode == 0u) {
+        if (i >= frame.slots) { return; }
+        trace_camera(i);
+    } else {
+        if (i >= frame.slots * frame.n_draws) { return; }
+        trace_shadow(i);
+    }
+    atomicMax(&stats[frame.mode], loops);
+}
+
+// The draw `j`-th of the slot's Σ n_k: technique k, its direction and the pdfs.
+@compute @workgroup_size(64)
+fn shade(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nw: vec3<u32>) {
+    let i = gid.x + gid.y * nw.x * 64u;
+    if (i >= frame.slots * frame.n_draws) { return; }
+    loops = 0u;
+    let slot = i / frame.n_draws;
+    let j = i % frame.n_draws;
+    let at = i * DRAW_WORDS;
+    let hp = hits[slot * HIT_WORDS];
+    if (hp.w != S_SURFACE) {
+        draws[at + 1u] = vec4<f32>(0.0, 0.0, 0.0, 0.0);
+        return;
+    }
+    let px = slot_pixel(slot);
+    let p = hp.xyz;
+    let hn = hits[slot * HIT_WORDS + 1u];
+    let n = hn.xyz;
+    let wo = hits[slot * HIT_WORDS + 2u].xyz;
+    let mat = materials[bitcast<u32>(hn.w)];
+    var m = mat.bsdf;
+    m.zero = frame.zero;
+    if (mat.tex_kind == 1u) {
+        // render::texture: cells of p·scale − n·10⁻³, a where their index sum is even.
+        let q = floor(p * mat.a.w - n * 1e-3);
+        let cells = q.x + q.y + q.z;
+        let r = cells - 2.0 * floor(cells * 0.5);
+        m.rgb = select(mat.b, mat.a, r < 0.5);
+        m.rgb.w = 0.0;
+    }
+    // Technique k of draw j.
+    var k = 0u;
+    var first = 0u;
+    for (var t = 0u; t < frame.n_tech; t++) {
+        loops++;
+        let c = frame.count[t / 4u][t % 4u];
+        if (j < first + c) { k = t; break; }
+        first += c;
+    }
+    let dim = 8u + 3u * j;
+    let uc = rnd(px.x, px.y, px.z, dim);
+    let u = vec2<f32>(rnd(px.x, px.y, px.z, dim + 1u), rnd(px.x, px.y, px.z, dim + 2u));
+    let f = basis(n);
+    let wo_l = to_local(f, wo);
+    let code = tech_code(k);
+    var wi = vec3<f32>(0.0);
+    var ok = false;
+    if (code == T_BSDF) {
+        let s = bsdf_sample_f(m, wo_l, uc, u);
+        ok = (s.flags & 1u) != 0u;
+        wi = from_local(f, s.wi);
+    } else if (frame.n_lights == 0u) {
+        ok = false;
+    } else if (code == T_AREA) {
+        let sel = light_select(frame.area_off, true, frame.n_lights, uc);
+        let ls = light_sample_area(lights[bitcast<u32>(sel.x)], p, u);
+        ok = ls.ok != 0u;
+        wi = ls.wi;
+    } else {
+        var li = tech_light(k);
+        if (code != T_ONE) {
+            let sel = light_select(frame.power_off, code == T_POWER, frame.n_lights, uc);
+            li = bitcast<u32>(sel.x);
+        }
+        let ls = light_sample_li(lights[li], p, u);
+        ok = ls.ok != 0u;
+        wi = ls.wi;
+    }
+    var pdfs: array<f32, 8>;
+    var fc = vec3<f32>(0.0);
+    if (ok) {
+        let wi_l = to_local(f, wi);
+        let ev = bsdf_eval(m, wo_l, wi_l);
+        fc = ev.xyz * abs(dot(wi, n));
+        for (var t = 0u; t < frame.n_tech; t++) {
+            pdfs[t] = tech_pdf(tech_code(t), tech_light(t), p, wi, ev.w);
+        }
+        // A light draw's own density is the mixture's, and it fails where that is not
+        // positive (Lights::sample_selected, sample_by_area).
+        let own = pdfs[k];
+        if (code != T_BSDF) { ok = own > 0.0 && is_finite(own); }
+    }
+    if (!ok) {
+        draws[at + 1u] = vec4<f32>(0.0, 0.0, 0.0, D_FAILED);
+        atomicMax(&stats[2], loops);
+        return;
+    }
+    // render::integrator::vertex::spawn and incident.
+    var side = n;
+    if (dot(wi, n) < 0.0) { side = -n; }
+    let o = p + side * (1e-7 * (1.0 + max(abs(p.x), max(abs(p.y), abs(p.z)))));
+    let lh = nearest_light(o, wi, inf());
+    let g = fc * lh.le;
+    var status = D_SHADOW;
+    if (all(fc == vec3<f32>(0.0)) || all(lh.le == vec3<f32>(0.0))) { status = D_ZERO; }
+    draws[at] = vec4<f32>(o, lh.t);
+    draws[at + 1u] = vec4<f32>(wi, status);
+    draws[at + 2u] = vec4<f32>(g, 0.0);
+    draws[at + 3u] = vec4<f32>(pdfs[0], pdfs[1], pdfs[2], pdfs[3]);
+    draws[at + 4u] = vec4<f32>(pdfs[4], pdfs[5], pdfs[6], pdfs[7]);
+    atomicMax(&stats[2], loops);
+}

@@ -1,0 +1,341 @@
+//! The GPU's `direct` images against the CPU's (GPU.md §9): the same estimators, the same
+//! random numbers, f32 instead of f64. Small images (48 × 36) and few samples, on
+//! lavapipe in CI.
+//!
+//! - Same seed: per pixel, |mean_gpu − mean_cpu| / σ > 4 on < 0.1 % of pixels, σ from
+//!   the spread of 16 sub-renders of each (disjoint sample ranges, so independent).
+//! - Independent seeds: the same z-test, and each channel's image mean within 4σ.
+//! - Determinism: the same GPU render twice is bit-identical.
+//! - Merging: GPU [0, N) merged with CPU [N, 2N) is, pixel for pixel, the z-test above
+//!   away from CPU [0, 2N), and its record sums are the two renders' sums.
+//! - Every kernel's loop count per invocation stays below 30 000 (GPU.md §3.1).
+
+mod common;
+
+use gpu::direct::render_range;
+use gpu::GpuOptions;
+use render::integrator::RenderOptions;
+use render::scene::Scene;
+use render::RenderState;
+use scene::{SceneData, SceneFormat};
+use std::ops::Range;
+use std::path::Path;
+use std::sync::atomic::AtomicBool;
+use std::sync::OnceLock;
+
+/// Every feature the GPU integrator covers: a box floor with a point checker, a
+/// perturbed sphere, a plain sphere and a perturbed ellipsoid; diffuse, rough plastic,
+/// rough conductor and rough glass; sphere, disk and rect lights of different powers.
+const SCENE: &str = r#"
+[camera]
+eye = [0.0, -6.0, 2.6]
+target = [0.0, 0.3, 0.6]
+up = [0, 0, 1]
+fov = 40
+resolution = [48, 36]
+
+[render]
+integrator = "direct"
+spp = 16
+estimator = "balance"
+techniques = [
+    { technique = "bsdf", samples = 1 },
+    { technique = "light", samples = 1 },
+    { technique = "light-area", samples = 1 },
+]
+seed = 3
+
+[materials.floor]
+type = "diffuse"
+reflectance = { checker = { a = [0.6, 0.6, 0.6], b = [0.3, 0.3, 0.35], scale = 1.0 } }
+
+[materials.clay]
+type = "diffuse"
+reflectance = [0.75, 0.35, 0.25]
+
+[materials.glossy]
+type = "plastic"
+diffuse = [0.15, 0.3, 0.7]
+eta = 1.5
+roughness = 0.1
+
+[materials.copper]
+type = "conductor"
+metal = "copper"
+roughness = 0.2
+
+[materials.glass]
+type = "dielectric"
+eta = 1.5
+roughness = 0.2
+
+[[objects]]
+solid = "box(center = [0, 0, -0.05], size = [10, 10, 0.1])"
+material = "floor"
+
+[[objects]]
+solid = "perturb(sphere([0, 0, 0], 0.7), 0.6 * sphere([0.4, -0.4, 0.4], 0.4)^3, -0.5 * sphere([-0.5, -0.3, 0.2], 0.4)^3)"
+transform = { translate = [-1.5, 0.3, 0.7] }
+material = "clay"
+
+[[objects]]
+solid = "perturb(ellipsoid([0, 0, 0], [0.5, 0.5, 0.9]), 0.5 * sphere([0.5, 0, 0], 0.3)^3)"
+transform = { translate = [0.1, 0.8, 0.9] }
+material = "glossy"
+
+[[objects]]
+solid = "sphere([1.5, 0.0, 0.6], 0.6)"
+material = "copper"
+
+[[objects]]
+solid = "sphere([0.4, -1.2, 0.35], 0.35)"
+material = "glass"
+
+[[lights]]
+type = "sphere"
+center = [-1.8, -1.0, 2.4]
+radius = 0.15
+color = [1.0, 0.6, 0.3]
+power = 150
+
+[[lights]]
+type = "disk"
+center = [1.0, 1.5, 3.0]
+radius = 0.3
+normal = [0, 0, -1]
+color = [0.5, 0.8, 1.0]
+power = 200
+
+[[lights]]
+type = "rect"
+corner = [-0.5, 2.5, 0.5]
+edge_u = [1.0, 0.0, 0.0]
+edge_v = [0.0, 0.0, 1.5]
+color = [1.0, 1.0, 0.9]
+power = 120
+two_sided = true
+"#;
+
+fn load(text: &str) -> (SceneData, Scene, RenderOptions) {
+    let (data, settings) = scene::parse(text, SceneFormat::Toml, Path::new("gpu-test.toml"))
+        .unwrap_or_else(|e| panic!("{e}"));
+    let scene = Scene::from_data(&data);
+    let o = RenderOptions::from_settings(&settings).unwrap();
+    (data, scene, o)
+}
+
+const W: u32 = 48;
+const H: u32 = 36;
+/// Sub-renders per side, and samples per sub-render.
+const SUBS: u32 = 16;
+const SUB_SPP: u32 = 2;
+
+/// One device for every test of this binary, so that the kernels compile once.
+fn device() -> Option<&'static gpu::Gpu> {
+    static GPU: OnceLock<Option<gpu::Gpu>> = OnceLock::new();
+    GPU.get_or_init(|| common::gpu(GpuOptions::default()))
+        .as_ref()
+}
+
+fn gpu_render(g: &gpu::Gpu, s: &(SceneData, Scene, RenderOptions), r: Range<u32>) -> RenderState {
+    let stop = AtomicBool::new(false);
+    let (state, stats, gs) = render_range(g, &s.0, &s.1, &s.2, r, &stop, &|_, _| {}).unwrap();
+    assert!(!state.is_partial() && stats.samples == stats.samples_requested);
+    for (k, &n) in gs.max_loops.iter().enumerate() {
+        assert!(
+            n < 30_000,
+            "kernel {k}: {n} loop iterations in one invocation"
+        );
+    }
+    assert_eq!(gs.cpu_fallbacks, 0, "no ray of these scenes overflows");
+    state
+}
+
+fn cpu_render(s: &(SceneData, Scene, RenderOptions), r: Range<u32>) -> RenderState {
+    let stop = AtomicBool::new(false);
+    render::render_range(&s.1, &s.2, r, &stop, &|_, _| {})
+        .unwrap()
+        .0
+}
+
+/// Per pixel and channel, the mean and variance of the mean over sub-renders.
+fn spread(subs: &[RenderState]) -> Vec<(f64, f64)> {
+    let n = subs.len() as f64;
+    let mut out = Vec::new();
+    for y in 0..H {
+        for x in 0..W {
+            let v: Vec<[f64; 3]> = subs.iter().map(|s| s.rgb(x, y).to_array()).collect();
+            for c in 0..3 {
+                let m = v.iter().map(|p| p[c]).sum::<f64>() / n;
+                let var = v.iter().map(|p| (p[c] - m).powi(2)).sum::<f64>() / (n - 1.0);
+                out.push((m, var / n));
+            }
+        }
+    }
+    out
+}
+
+/// The variance floor of a value the GPU computed in f32: (2⁻²⁰ of it)², a few ulps of
+/// rounding (a light seen directly has no sampling variance at all, but the GPU holds
+/// its radiance in f32).
+fn f32_floor(a: f64, b: f64) -> f64 {
+    (a.abs().max(b.abs()) / f64::from(1u32 << 20)).powi(2)
+}
+
+/// Channel-pixels whose difference exceeds 4σ, and each channel's image-mean z-score.
+fn compare(a: &[(f64, f64)], b: &[(f64, f64)]) -> (usize, [f64; 3]) {
+    let mut over = 0;
+    let mut sums = [(0.0, 0.0); 3];
+    for (k, (x, y)) in a.iter().zip(b).enumerate() {
+        let var = x.1 + y.1 + f32_floor(x.0, y.0);
+        let d = x.0 - y.0;
+        let far = d.abs() > 4.0 * var.sqrt();
+        over += usize::from(far);
+        sums[k % 3].0 += d;
+        sums[k % 3].1 += var;
+    }
+    (
+        over,
+        sums.map(|(d, v)| if v > 0.0 { d / v.sqrt() } else { 0.0 }),
+    )
+}
+
+fn subs(f: impl Fn(Range<u32>) -> RenderState) -> Vec<RenderState> {
+    (0..SUBS)
+        .map(|i| f(i * SUB_SPP..(i + 1) * SUB_SPP))
+        .collect()
+}
+
+fn merged(states: &[RenderState]) -> RenderState {
+    let mut m = states[0].clone();
+    for s in &states[1..] {
+        m.merge(s).unwrap();
+    }
+    m
+}
+
+/// Same seed, same sample ranges: every pixel within 4σ (< 0.1 % of channel-pixels
+/// beyond), every channel's mean within 3σ; and GPU [0, 16) merged with CPU [16, 32)
+/// holds exactly the sums of both and agrees with CPU [0, 32) in the same way.
+#[test]
+fn same_seed_images_agree_and_merge_with_the_cpu() {
+    let Some(g) = device() else { return };
+    let s = load(SCENE);
+    let gpu_subs = subs(|r| gpu_render(g, &s, r));
+    let cpu_subs = subs(|r| cpu_render(&s, r));
+    let (over, z) = compare(&spread(&gpu_subs), &spread(&cpu_subs));
+    let cells = (W * H * 3) as usize;
+    eprintln!("same seed: {over} of {cells} beyond 4σ; image-mean z {z:?}");
+    assert!(
+        over * 1000 < cells,
+        "{over} of {cells} channel-pixels beyond 4σ"
+    );
+    assert!(z.iter().all(|z| z.abs() < 3.0), "image means: z = {z:?}");
+
+    let half = (SUBS / 2) as usize;
+    let g_first = merged(&gpu_subs[..half]);
+    let c_second = merged(&cpu_subs[half..]);
+    let mut mixed = g_first.clone();
+    mixed.merge(&c_second).unwrap();
+    for ((m, a), b) in mixed.data().iter().zip(g_first.data()).zip(c_second.data()) {
+        assert!(
+            (m - (a + b)).abs() <= 1e-12 * (a.abs() + b.abs()),
+            "{m} vs {a} + {b}"
+        );
+    }
+    let all_cpu = merged(&cpu_subs);
+    let sp = spread(&cpu_subs);
+    let mut over = 0;
+    for y in 0..H {
+        for x in 0..W {
+            let (a, b) = (mixed.rgb(x, y).to_array(), all_cpu.rgb(x, y).to_array());
+            for c in 0..3 {
+                let var = 2.0 * sp[((y * W + x) * 3) as usize + c].1 + f32_floor(a[c], b[c]);
+                let d = (a[c] - b[c]).abs();
+                over += usize::from(d > 4.0 * var.sqrt());
+            }
+        }
+    }
+    assert!(
+        over * 1000 < cells,
+        "merged: {over} of {cells} channel-pixels beyond 4σ"
+    );
+}
+
+/// Independent seeds: the same z-tests (each channel's mean within 4σ).
+#[test]
+fn independent_seed_images_agree() {
+    let Some(g) = device() else { return };
+    let mut s = load(SCENE);
+    s.2.seed = 11;
+    let gpu_subs = subs(|r| gpu_render(g, &s, r));
+    s.2.seed = 12;
+    let cpu_subs = subs(|r| cpu_render(&s, r));
+    let (over, z) = compare(&spread(&gpu_subs), &spread(&cpu_subs));
+    let cells = (W * H * 3) as usize;
+    eprintln!("independent seeds: {over} of {cells} beyond 4σ; image-mean z {z:?}");
+    assert!(
+        over * 1000 < cells,
+        "{over} of {cells} channel-pixels beyond 4σ"
+    );
+    assert!(z.iter().all(|z| z.abs() < 4.0), "image means: z = {z:?}");
+}
+
+/// The optimal estimators take the GPU's draws as they take the CPU's: optimal-direct
+/// on the GPU against the CPU, same seed, per-pixel z-test.
+#[test]
+fn optimal_direct_agrees() {
+    let Some(g) = device() else { return };
+    let mut s = load(SCENE);
+    s.2.method = mis::Method::OptimalDirect;
+    let gpu_subs = subs(|r| gpu_render(g, &s, r));
+    let cpu_subs = subs(|r| cpu_render(&s, r));
+    let (over, z) = compare(&spread(&gpu_subs), &spread(&cpu_subs));
+    let cells = (W * H * 3) as usize;
+    eprintln!("optimal-direct: {over} of {cells} beyond 4σ; image-mean z {z:?}");
+    assert!(
+        over * 1000 < cells,
+        "{over} of {cells} channel-pixels beyond 4σ"
+    );
+    assert!(z.iter().all(|z| z.abs() < 3.0), "image means: z = {z:?}");
+}
+
+/// The same GPU render twice gives the same sums bit for bit.
+#[test]
+fn gpu_render_is_deterministic() {
+    let Some(g) = device() else { return };
+    let s = load(SCENE);
+    let a = gpu_render(g, &s, 0..4);
+    let b = gpu_render(g, &s, 0..4);
+    assert!(a
+        .data()
+        .iter()
+        .zip(b.data())
+        .all(|(x, y)| x.to_bits() == y.to_bits()));
+}
+
+/// What the GPU integrator does not cover is an error naming it, before any work.
+#[test]
+fn unsupported_scenes_are_refused_by_name() {
+    let Some(g) = device() else { return };
+    let stop = AtomicBool::new(false);
+    let err = |text: &str| {
+        let s = load(text);
+        match render_range(g, &s.0, &s.1, &s.2, 0..1, &stop, &|_, _| {}) {
+            Err(e) => e.to_string(),
+            Ok(_) => panic!("rendered"),
+        }
+    };
+    let e = err(&SCENE.replace(
+        "sphere([1.5, 0.0, 0.6], 0.6)",
+        "union(sphere([1.5, 0, 0.6], 0.6), sphere([1.5, 0, 1.2], 0.3))",
+    ));
+    assert!(e.contains("CSG") && e.contains("--backend cpu"), "{e}");
+    let e = err(&SCENE.replace(
+        "roughness = 0.2\n\n[materials.glass]",
+        "roughness = 0.0\n\n[materials.glass]",
+    ));
+    assert!(e.contains("'copper'") && e.contains("smooth"), "{e}");
+    let e = err(&SCENE.replace("integrator = \"direct\"", "integrator = \"path\""));
+    assert!(e.contains("path"), "{e}");
+}

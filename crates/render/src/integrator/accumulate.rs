@@ -1,0 +1,121 @@
+//! Samples shaded by another back end (the GPU's wavefront kernels), added into the
+//! CPU's per-pixel records by the CPU's own code, so that the two back ends share one
+//! [`crate::RenderState`] and its estimators (GPU.md §8: the sums and the solve stay on
+//! the CPU in this first version).
+//!
+//! A back end hands over, per pixel sample, what the CPU integrator would have added:
+//! the outside-MIS radiance (an emitter seen by the camera) and, when the camera ray met
+//! a surface, every technique's draws at that vertex in list order (technique k, then
+//! draw j), each a failed draw or `(f, pdfs)`. [`Accumulator::add`] replays them through
+//! the same calls as `integrator/vertex.rs` (`add_draw`, `add_failed`, `end_vertex`,
+//! `end_sample`), so a GPU sample range and a CPU one merge like two CPU ranges.
+
+use super::{Integrator, IntegratorKind, Pixel, RayCounts, RenderOptions, MAX_TECHNIQUES};
+use crate::color::Rgb;
+use crate::scene::Scene;
+use crate::technique::Technique;
+
+/// One technique draw at the first vertex, as shaded elsewhere.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum ShadedDraw<'a> {
+    /// The technique produced no direction (counted as a failed draw for MIS).
+    Failed,
+    /// A direction with integrand `f` (RGB, visibility included) and every technique's
+    /// pdf there, in the technique list's order.
+    Sample {
+        /// `f_s · |cos| · Li`.
+        f: [f64; 3],
+        /// The techniques' solid-angle pdfs.
+        pdfs: &'a [f64],
+    },
+}
+
+/// The `direct` integrator's bookkeeping for samples shaded elsewhere.
+#[derive(Clone, Debug)]
+pub struct Accumulator {
+    it: Integrator,
+}
+
+impl Accumulator {
+    /// The accumulator of a `direct` render of `scene` with `options` (the options are
+    /// validated and checked against the scene as a CPU render would). Other
+    /// integrators, per-light mode and AOVs are refused: the external back ends do not
+    /// produce them yet.
+    pub fn new(scene: &Scene, options: &RenderOptions) -> Result<Self, String> {
+        if options.integrator != IntegratorKind::Direct {
+            return Err(format!(
+                "integrator {} is not available here (only direct)",
+                options.integrator
+            ));
+        }
+        if options.per_light > 0 {
+            return Err("per-light mode is not available here".into());
+        }
+        if !options.aovs.is_empty() {
+            return Err("AOVs are not available here".into());
+        }
+        let mut it = Integrator::new(options)?;
+        it.prepare(scene)?;
+        Ok(Self { it })
+    }
+
+    /// Words of one pixel's record.
+    pub fn stride(&self) -> usize {
+        self.it.record.stride()
+    }
+
+    /// The techniques, in the order draws are handed over.
+    pub fn techniques(&self) -> &[Technique] {
+        &self.it.techniques
+    }
+
+    /// Draws per technique per vertex.
+    pub fn counts(&self) -> &[u32] {
+        &self.it.counts
+    }
+
+    /// Adds sample `index` of a pixel to its record `rec`: `outside` outside MIS, and
+    /// the first vertex's draws (None when the camera ray met no surface), technique by
+    /// technique in list order. Panics if the number of draws is not Σ n_k.
+    pub fn add(&self, rec: &mut [f64], index: u32, outside: [f64; 3], draws: Option<&[ShadedDraw]>) {
+        let mut px = Pixel {
+            rec,
+            key: u64::from(index),
+        };
+        px.add(Rgb::from_array(outside));
+        if let Some(draws) = draws {
+            let total: u32 = self.it.counts.iter().sum();
+            assert_eq!(draws.len(), total as usize, "one entry per draw");
+            let t = self.it.techniques.len();
+            let mut at = 0;
+            for (k, &n) in self.it.counts.iter().enumerate() {
+                for _ in 0..n {
+                    match draws[at] {
+                        ShadedDraw::Failed => px.add_failed(&self.it, 0, k),
+                        ShadedDraw::Sample { f, pdfs } => {
+                            debug_assert!(pdfs.len() == t && t <= MAX_TECHNIQUES);
+                            px.add_draw(&self.it, 0, k, Rgb::from_array(f), pdfs, None);
+                        }
+                    }
+                    at += 1;
+                }
+            }
+            px.end_vertex(&self.it, 0);
+        }
+        px.end_sample();
+    }
+
+    /// Renders sample `index` of pixel (x, y) on the CPU into `rec`, for the samples an
+    /// external back end could not finish (a ray past a fixed capacity).
+    pub fn cpu_sample(
+        &self,
+        scene: &Scene,
+        x: u32,
+        y: u32,
+        index: u32,
+        rec: &mut [f64],
+        rays: &mut RayCounts,
+    ) {
+        self.it.sample(scene, x, y, index, rec, rays);
+    }
+}
