@@ -149,6 +149,11 @@ struct RenderArgs {
     /// on it.
     #[arg(long, default_value_t = 0)]
     threads: usize,
+    /// Where to render (scenes): cpu; gpu (wgpu: the `direct` integrator on scenes of
+    /// perturbed and plain quadrics, area lights and rough materials; docs/gpu.md); or
+    /// auto (the GPU where it can, else the CPU).
+    #[arg(long, value_enum, default_value_t = scene_render::Backend::Cpu)]
+    backend: scene_render::Backend,
     /// The memory the render may take, e.g. `512M`, `8G` [default: what the system has
     /// available]; a larger render is refused before it starts, with its estimate.
     #[arg(long, value_name = "SIZE", value_parser = render::limits::parse_bytes)]
@@ -240,6 +245,10 @@ struct BenchArgs {
     /// Worker threads (0: one per core).
     #[arg(long, default_value_t = 0)]
     threads: usize,
+    /// Back ends to measure, comma-separated: cpu (direct and path), gpu (direct; its
+    /// kernels are compiled by an untimed 1-spp render first).
+    #[arg(long, value_enum, value_delimiter = ',', default_value = "cpu")]
+    backend: Vec<scene_render::Backend>,
     /// The memory each render may take, as for `render` (`512M`, `8G`) [default: what
     /// the system has available]; a larger one is refused before anything runs.
     #[arg(long, value_name = "SIZE", value_parser = render::limits::parse_bytes)]
@@ -330,6 +339,7 @@ fn render(args: RenderArgs) -> Result<(), String> {
             cutoff: args.cutoff,
             ridge: args.ridge,
             per_light: args.per_light,
+            backend: args.backend,
         };
         let samples = args
             .samples
@@ -487,5 +497,5 @@ fn bench(args: BenchArgs) -> Result<(), String> {
         height: args.height,
         ..Default::default()
     };
-    scene_render::bench(&args.scene, &o, args.max_memory.unwrap_or(0))
+    scene_render::bench(&args.scene, &o, args.max_memory.unwrap_or(0), &args.backend)
 }

@@ -8,6 +8,78 @@ use render::scene::{RenderSettings, Scene, SceneData};
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 
+/// Where a scene is rendered.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum Backend {
+    /// The CPU (every integrator and scene).
+    #[default]
+    Cpu,
+    /// The GPU (wgpu; `direct` on quadric scenes for now: docs/gpu.md).
+    Gpu,
+    /// The GPU where there is one and it can render the scene, else the CPU.
+    Auto,
+}
+
+/// A render's result on either back end, with the GPU's own statistics.
+type Rendered = (
+    render::RenderState,
+    render::RenderStats,
+    Option<gpu::direct::GpuStats>,
+);
+
+/// Renders `samples` on `backend`; `auto` falls back to the CPU, saying why, where the
+/// GPU is missing or cannot render the scene.
+fn render_on(
+    backend: Backend,
+    data: &SceneData,
+    scene: &Scene,
+    opts: &RenderOptions,
+    samples: Range<u32>,
+    stop: &std::sync::atomic::AtomicBool,
+    progress: &(dyn Fn(u64, u64) + Sync),
+) -> Result<Rendered, String> {
+    if backend != Backend::Cpu {
+        let tried = gpu::Gpu::new(&gpu::GpuOptions::from_env()).and_then(|g| {
+            if backend == Backend::Gpu {
+                eprintln!("GPU: {}", g.info());
+            }
+            gpu::direct::render_range(&g, data, scene, opts, samples.clone(), stop, progress)
+        });
+        match tried {
+            Ok((state, stats, g)) => return Ok((state, stats, Some(g))),
+            Err(e) if backend == Backend::Gpu => return Err(e.to_string()),
+            Err(e @ (gpu::GpuError::NoAdapter(_) | gpu::GpuError::Unsupported(_))) => {
+                eprintln!("note: --backend auto renders on the CPU: {e}");
+            }
+            Err(e) => return Err(e.to_string()),
+        }
+    }
+    let (state, stats) = render_loop::render_range(scene, opts, samples, stop, progress)
+        .map_err(|e| e.to_string())?;
+    Ok((state, stats, None))
+}
+
+/// The GPU's stage times and counters, one line.
+fn gpu_line(g: &gpu::direct::GpuStats) -> String {
+    let s = &g.stages;
+    let ms = |d: std::time::Duration| d.as_secs_f64() * 1e3;
+    format!(
+        "GPU stages: camera rays {:.1} ms, shade {:.1} ms, shadow rays {:.1} ms (GPU \
+         timestamps); readback {:.1} ms, accumulate on the CPU {:.1} ms; setup {:.1} ms; \
+         {} waves; {} samples rendered on the CPU after an overflow; most loop iterations \
+         per invocation {:?}",
+        ms(s.camera),
+        ms(s.shade),
+        ms(s.shadow),
+        ms(s.readback),
+        ms(s.accumulate),
+        ms(s.setup),
+        g.waves,
+        g.cpu_fallbacks,
+        g.max_loops
+    )
+}
+
 /// Command-line overrides of a scene's render settings, as given (see
 /// [`Overrides::to_scene`]).
 #[derive(Clone, Debug, Default)]
@@ -44,6 +116,8 @@ pub struct Overrides {
     pub ridge: Option<f64>,
     /// One MIS estimator per light.
     pub per_light: bool,
+    /// Where to render.
+    pub backend: Backend,
 }
 
 impl Overrides {
@@ -200,13 +274,24 @@ pub fn run(
 
     let stop = crate::stop_on_ctrl_c();
     let bar = crate::progress_bar(quiet, "samples");
-    let result = render_loop::render_range(&scene, &opts, samples, &stop, &|done, total| {
-        bar.set_length(total);
-        bar.set_position(done);
-    });
+    let result = render_on(
+        o.backend,
+        &data,
+        &scene,
+        &opts,
+        samples,
+        &stop,
+        &|done, total| {
+            bar.set_length(total);
+            bar.set_position(done);
+        },
+    );
     bar.finish_and_clear();
-    let (state, stats) = result.map_err(|e| e.to_string())?;
+    let (state, stats, g) = result?;
     eprintln!("{stats}");
+    if let Some(g) = &g {
+        eprintln!("{}", gpu_line(g));
+    }
     let outs: Vec<PathBuf> = if stats.stopped {
         outs.iter()
             .map(|p| output::partial_path(p, overwrite_partial))
@@ -281,7 +366,13 @@ fn warn_unused(o: &Overrides, opts: &RenderOptions) {
 
 /// Runs `direct` and `path` with the scene's settings and prints throughput; both are
 /// checked against the memory limit (`max_memory`, 0: the available memory) first.
-pub fn bench(input: &Path, o: &Overrides, max_memory: u64) -> Result<(), String> {
+pub fn bench(
+    input: &Path,
+    o: &Overrides,
+    max_memory: u64,
+    backends: &[Backend],
+) -> Result<(), String> {
+    let (data, _) = resolve(input, o)?;
     let (scene, mut opts) = load(input, o)?;
     opts.max_memory = max_memory;
     for integrator in [IntegratorKind::Direct, IntegratorKind::Path] {
@@ -293,15 +384,38 @@ pub fn bench(input: &Path, o: &Overrides, max_memory: u64) -> Result<(), String>
             .map_err(|e| e.to_string())?;
     }
     let stop = crate::stop_on_ctrl_c();
-    let stats = render_loop::bench(&scene, &opts, &stop).map_err(|e| e.to_string())?;
+    let mut rows: Vec<(&str, render::RenderStats)> = Vec::new();
+    let mut stages = Vec::new();
+    for &b in backends {
+        if b == Backend::Cpu {
+            let stats = render_loop::bench(&scene, &opts, &stop).map_err(|e| e.to_string())?;
+            rows.extend(stats.into_iter().map(|s| ("cpu", s)));
+            continue;
+        }
+        let g = gpu::Gpu::new(&gpu::GpuOptions::from_env()).map_err(|e| e.to_string())?;
+        eprintln!("GPU: {}", g.info());
+        let o = RenderOptions {
+            integrator: IntegratorKind::Direct,
+            ..opts.clone()
+        };
+        // A first 1-spp render compiles the kernels: not timed (GPU.md §10).
+        gpu::direct::render_range(&g, &data, &scene, &o, 0..1, &stop, &|_, _| {})
+            .map_err(|e| e.to_string())?;
+        let (_, s, gs) =
+            gpu::direct::render_range(&g, &data, &scene, &o, 0..o.spp, &stop, &|_, _| {})
+                .map_err(|e| e.to_string())?;
+        rows.push(("gpu", s));
+        stages.push(gs);
+        eprintln!("gpu path: not available on the GPU back end yet (docs/gpu.md)");
+    }
     out!(
-        "| scene | integrator | MIS | resolution | spp | time (s) | MSamples/s | MRays/s | camera | secondary | shadow |"
+        "| scene | backend | integrator | MIS | resolution | spp | time (s) | MSamples/s | MRays/s | camera | secondary | shadow |"
     );
-    out!("| --- | --- | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |");
-    for s in &stats {
+    out!("| --- | --- | --- | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |");
+    for (backend, s) in &rows {
         let (c, sec, sh) = s.mrays_per_s_by_kind();
         out!(
-            "| {} | {} | {} | {}×{} | {} | {:.2} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} |",
+            "| {} | {backend} | {} | {} | {}×{} | {} | {:.2} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} |",
             input.file_name().unwrap_or_default().to_string_lossy(),
             s.integrator,
             opts.method.name(),
@@ -314,6 +428,34 @@ pub fn bench(input: &Path, o: &Overrides, max_memory: u64) -> Result<(), String>
             c,
             sec,
             sh
+        );
+    }
+    for g in &stages {
+        let st = &g.stages;
+        let parts = [
+            ("camera rays (GPU)", st.camera),
+            ("shade (GPU)", st.shade),
+            ("shadow rays (GPU)", st.shadow),
+            ("readback (wall)", st.readback),
+            ("accumulate (CPU)", st.accumulate),
+        ];
+        let total: f64 = parts.iter().map(|p| p.1.as_secs_f64()).sum();
+        out!("");
+        out!("| GPU stage (direct) | ms | % |");
+        out!("| --- | ---: | ---: |");
+        for (name, d) in parts {
+            let ms = d.as_secs_f64() * 1e3;
+            out!(
+                "| {name} | {ms:.1} | {:.1} |",
+                100.0 * d.as_secs_f64() / total.max(1e-12)
+            );
+        }
+        out!("");
+        out!(
+            "kernel setup {:.1} ms (excluded); {} waves; most loop iterations per invocation (camera, shadow, shade) {:?}",
+            st.setup.as_secs_f64() * 1e3,
+            g.waves,
+            g.max_loops
         );
     }
     Ok(())
