@@ -145,6 +145,8 @@ pub struct DirectScene {
     pub materials: Vec<GpuMaterial>,
     /// Area lights.
     pub lights: Vec<GpuAreaLight>,
+    /// CSG nodes of kind-2 shapes, post-order: (op, leaf or part count, 0, 0).
+    pub csg: Vec<[u32; 4]>,
     /// Light-selection tables (by power at 0, by area at `frame.area_off`) and plastic
     /// coat tables.
     pub tables: Vec<f32>,
@@ -226,12 +228,59 @@ impl DirectScene {
                 }
                 (1, flat.parts(root).len() as u32)
             }
-            op => {
-                return Err(unsupported(format!(
-                    "object '{}' is a CSG {op:?} (only a single quadric, perturbed or not, \
-                     or an intersection of plain quadrics)",
-                    obj.name
-                )))
+            _ => {
+                // Any CSG tree of plain quadrics: its post-order nodes, each op's parts
+                // being the last lists on the kernel's stack (checked here).
+                let first_node = self.csg.len() as u32;
+                let mut stack: Vec<u32> = Vec::new();
+                for (i, n) in flat.nodes.iter().enumerate() {
+                    let refuse = || {
+                        unsupported(format!(
+                            "object '{}' is a CSG tree with a perturbed or expression part \
+                             (only plain quadrics combine on the GPU)",
+                            obj.name
+                        ))
+                    };
+                    if n.op == CsgOp::Leaf {
+                        let v = plain(i as u32).ok_or_else(refuse)?;
+                        let leaf = self.pack_leaf(&v, material);
+                        self.csg.push([0, leaf, 0, 0]);
+                        stack.push(i as u32);
+                        continue;
+                    }
+                    let parts = flat.parts(i);
+                    if parts.len() > stack.len() || stack[stack.len() - parts.len()..] != *parts {
+                        return Err(unsupported(format!(
+                            "object '{}': a CSG node whose parts are shared",
+                            obj.name
+                        )));
+                    }
+                    stack.truncate(stack.len() - parts.len());
+                    stack.push(i as u32);
+                    let op = match n.op {
+                        CsgOp::Union => 1,
+                        CsgOp::Intersection => 2,
+                        _ => 3,
+                    };
+                    self.csg.push([op, parts.len() as u32, 0, 0]);
+                }
+                let count = self.csg.len() as u32 - first_node;
+                if count > 256 {
+                    return Err(unsupported(format!(
+                        "object '{}' has {count} CSG nodes (at most 256)",
+                        obj.name
+                    )));
+                }
+                let (lo, hi) = outward(&node.bounds);
+                self.shapes.push(GpuShape {
+                    kind: 2,
+                    first: first_node,
+                    count,
+                    material,
+                    lo: [lo[0], lo[1], lo[2], 0.0],
+                    hi: [hi[0], hi[1], hi[2], 0.0],
+                });
+                return Ok(());
             }
         };
         let (lo, hi) = outward(&node.bounds);
@@ -452,7 +501,7 @@ pub(crate) struct Pipelines {
 
 fn pipelines(gpu: &Gpu) -> Result<Pipelines, GpuError> {
     let d = &gpu.device;
-    let need = 12u32;
+    let need = 13u32;
     let have = d.limits().max_storage_buffers_per_shader_stage;
     if have < need {
         return Err(GpuError::Limit {
@@ -498,6 +547,10 @@ fn pipelines(gpu: &Gpu) -> Result<Pipelines, GpuError> {
             wgpu::BufferBindingType::Storage { read_only: false },
         ));
     }
+    entries.push(entry(
+        13,
+        wgpu::BufferBindingType::Storage { read_only: true },
+    ));
     let layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
         label: Some("direct"),
         entries: &entries,
@@ -619,6 +672,7 @@ pub fn render_range(
         storage(gpu, "lights", bytemuck::cast_slice(&pack.lights))?,
         storage(gpu, "tables", bytemuck::cast_slice(&pack.tables))?,
     ];
+    let csg = storage(gpu, "csg", bytemuck::cast_slice(&pack.csg))?;
     let hit_bytes = max_slots * HIT_WORDS as u64 * 4;
     let draw_bytes = max_slots * u64::from(n_draws) * DRAW_WORDS as u64 * 4;
     gpu.check_binding(draw_bytes)?;
@@ -661,7 +715,11 @@ pub fn render_range(
                 binding: 0,
                 resource: f.as_entire_binding(),
             }];
-            for (k, b) in buffers.iter().chain([&hits, &draws, &loops]).enumerate() {
+            for (k, b) in buffers
+                .iter()
+                .chain([&hits, &draws, &loops, &csg])
+                .enumerate()
+            {
                 entries.push(wgpu::BindGroupEntry {
                     binding: k as u32 + 1,
                     resource: b.as_entire_binding(),

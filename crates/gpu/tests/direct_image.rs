@@ -24,7 +24,8 @@ use std::sync::atomic::AtomicBool;
 use std::sync::OnceLock;
 
 /// Every feature the GPU integrator covers: a box floor with a point checker, a
-/// perturbed sphere, a plain sphere and a perturbed ellipsoid; diffuse, rough plastic,
+/// perturbed sphere, a plain sphere, a perturbed ellipsoid and a CSG tree of plain
+/// quadrics (union, difference, intersection); diffuse, rough plastic,
 /// rough conductor and rough glass; sphere, disk and rect lights of different powers.
 const SCENE: &str = r#"
 [camera]
@@ -90,6 +91,16 @@ material = "copper"
 [[objects]]
 solid = "sphere([0.4, -1.2, 0.35], 0.35)"
 material = "glass"
+
+[[objects]]
+# CSG of plain quadrics (inside spans on the GPU): a box with a ball cut out, joined to
+# a capped post.
+solid = """
+union(difference(box(center = [-0.6, -1.3, 0.25], size = [0.6, 0.5, 0.5]),
+                 sphere([-0.6, -1.5, 0.5], 0.3)),
+      intersection(cylinder(z, 0.08, center = [-1.1, -1.6, 0]), plane(z, 1.1), plane([0, 0, -1], 0)))
+"""
+material = "copper"
 
 [[lights]]
 type = "sphere"
@@ -328,7 +339,7 @@ fn unsupported_scenes_are_refused_by_name() {
     };
     let e = err(&SCENE.replace(
         "sphere([1.5, 0.0, 0.6], 0.6)",
-        "union(sphere([1.5, 0, 0.6], 0.6), sphere([1.5, 0, 1.2], 0.3))",
+        "union(sphere([1.5, 0, 0.6], 0.6), perturb(sphere([1.5, 0, 1.2], 0.3), 0.2 * sphere([1.5, 0, 1.5], 0.1)^3))",
     ));
     assert!(e.contains("CSG") && e.contains("--backend cpu"), "{e}");
     let e = err(&SCENE.replace(

@@ -51,6 +51,9 @@ struct GpuMaterial { bsdf: GpuBsdf, tex_kind: u32, pad0: u32, pad1: u32, pad2: u
 @group(0) @binding(10) var<storage, read_write> hits: array<vec4<f32>>;
 @group(0) @binding(11) var<storage, read_write> draws: array<vec4<f32>>;
 @group(0) @binding(12) var<storage, read_write> stats: array<atomic<u32>>;
+// CSG nodes of kind-2 shapes in post-order: (op, leaf or part count, 0, 0), op 0 leaf,
+// 1 union, 2 intersection, 3 difference.
+@group(0) @binding(13) var<storage, read> csg: array<vec4<u32>>;
 
 const HIT_WORDS: u32 = 4u;    // vec4s per slot in `hits`
 const DRAW_WORDS: u32 = 5u;   // vec4s per draw in `draws`
@@ -175,6 +178,112 @@ fn plain_intersection(sh: GpuShape, o: vec3<f32>, d: vec3<f32>, t_min: f32, t_ma
     return vec3<f32>(best, bitcast<f32>(which), 1.0);
 }
 
+// --- CSG of plain quadrics by inside spans ----------------------------------------------
+//
+// Each leaf's inside set along the whole ray line is ≤ 2 intervals (positive_set); a
+// node's is the boolean combination of its parts' (a sweep over their sorted ends), so
+// the post-order node list runs on a stack of span lists in a fixed pool. An end keeps
+// the leaf whose root it is, and a flip bit (bit 31) where a difference turns that
+// leaf's outside in (its normal then points the other way, as frep's combine). The
+// crossing is the first end in (t_min, t_max). A pool or stack overflow is reported
+// (status 2), never a miss.
+
+const SPAN_POOL: u32 = 64u;
+const SPAN_LISTS: u32 = 16u;
+var<private> sp_t: array<f32, SPAN_POOL>;
+var<private> sp_k: array<u32, SPAN_POOL>;
+var<private> tmp_t: array<f32, SPAN_POOL>;
+var<private> tmp_k: array<u32, SPAN_POOL>;
+var<private> ls_at: array<u32, SPAN_LISTS>;
+
+fn csg_inside(op: u32, first: bool, inside: u32, count: u32) -> bool {
+    if (op == 1u) { return inside > 0u; }
+    if (op == 2u) { return inside == count; }
+    // Difference: inside the first part, outside every other.
+    return first && inside == 1u;
+}
+
+// (t, leaf | flip << 31 bits, status) with status 0 miss, 1 hit, 2 overflow.
+fn csg_spans(sh: GpuShape, o: vec3<f32>, d: vec3<f32>, t_min: f32, t_max: f32) -> vec3<f32> {
+    var top = 0u;   // pool entries used
+    var nl = 0u;    // lists on the stack
+    for (var i = 0u; i < sh.count; i++) {
+        loops++;
+        let node = csg[sh.first + i];
+        if (node.x == 0u) {
+            if (nl == SPAN_LISTS || top + 4u > SPAN_POOL) { return vec3<f32>(0.0, 0.0, 2.0); }
+            let ps = positive_set(q_local(quadrics[objects[node.y].first_op].c, o, d));
+            ls_at[nl] = top;
+            nl++;
+            for (var w = 0u; w < 2u * ps.n; w++) {
+                loops++;
+                sp_t[top] = ps.s[w];
+                sp_k[top] = node.y;
+                top++;
+            }
+            continue;
+        }
+        // Combine the last `node.y` lists: repeated selection of the least head.
+        let k = node.y;
+        let base = ls_at[nl - k];
+        var head: array<u32, 8>;
+        var end: array<u32, 8>;
+        var inside_j: array<bool, 8>;
+        for (var j = 0u; j < k; j++) {
+            loops++;
+            head[j] = ls_at[nl - k + j];
+            end[j] = top;
+            if (j + 1u < k) { end[j] = ls_at[nl - k + j + 1u]; }
+            inside_j[j] = false;
+        }
+        var inside = 0u;
+        var state = false;
+        var n = 0u;
+        loop {
+            loops += 1u + k;
+            var best = 8u;
+            var bt = 0.0;
+            for (var j = 0u; j < k; j++) {
+                if (head[j] < end[j] && (best == 8u || sp_t[head[j]] < bt)) {
+                    best = j;
+                    bt = sp_t[head[j]];
+                }
+            }
+            if (best == 8u) { break; }
+            let e = head[best];
+            head[best]++;
+            inside_j[best] = !inside_j[best];
+            if (inside_j[best]) { inside++; } else { inside--; }
+            let now = csg_inside(node.x, inside_j[0], inside, k);
+            if (now != state) {
+                state = now;
+                if (n == SPAN_POOL) { return vec3<f32>(0.0, 0.0, 2.0); }
+                var key = sp_k[e];
+                if (node.x == 3u && best > 0u) { key = key ^ 0x80000000u; }
+                tmp_t[n] = sp_t[e];
+                tmp_k[n] = key;
+                n++;
+            }
+        }
+        if (base + n > SPAN_POOL) { return vec3<f32>(0.0, 0.0, 2.0); }
+        for (var j = 0u; j < n; j++) {
+            loops++;
+            sp_t[base + j] = tmp_t[j];
+            sp_k[base + j] = tmp_k[j];
+        }
+        top = base + n;
+        nl = nl - k + 1u;
+    }
+    for (var j = 0u; j < top; j++) {
+        loops++;
+        let t = sp_t[j];
+        if (t > t_min && t < t_max && is_finite(t)) {
+            return vec3<f32>(t, bitcast<f32>(sp_k[j]), 1.0);
+        }
+    }
+    return vec3<f32>(0.0);
+}
+
 // Nearest (or, with `any`, some) object crossing in (0, t_max): (status, t, leaf) with
 // status 0 none, 1 hit, 2 overflow.
 struct SceneHit { status: u32, t: f32, leaf: u32 }
@@ -192,6 +301,12 @@ fn scene_trace(o: vec3<f32>, d: vec3<f32>, t_max: f32, any_hit: bool) -> SceneHi
         var leaf = sh.first;
         if (sh.kind == 1u) {
             let r = plain_intersection(sh, o, d, 0.0, res.t);
+            found = r.z == 1.0;
+            t = r.x;
+            leaf = bitcast<u32>(r.y);
+        } else if (sh.kind == 2u) {
+            let r = csg_spans(sh, o, d, 0.0, res.t);
+            if (r.z == 2.0) { return SceneHit(2u, 0.0, 0u); }
             found = r.z == 1.0;
             t = r.x;
             leaf = bitcast<u32>(r.y);
@@ -222,7 +337,9 @@ fn q_grad(c: array<f32, 10>, p: vec3<f32>) -> vec3<f32> {
 
 // The outward unit normal of leaf `leaf` at p: −∇F'/|∇F'| (frep::outward), with
 // ∇F' = ∇q + Σ 3 f_i q_i² ∇q_i over the perturbations positive at p.
-fn leaf_normal(leaf: u32, p: vec3<f32>) -> vec3<f32> {
+fn leaf_normal(key: u32, p: vec3<f32>) -> vec3<f32> {
+    let leaf = key & 0x7fffffffu;
+    let sign = select(-1.0, 1.0, (key & 0x80000000u) != 0u);
     let ob = objects[leaf];
     var g = q_grad(quadrics[ob.first_op].c, p);
     if (ob.kind == 1u) {
@@ -235,7 +352,7 @@ fn leaf_normal(leaf: u32, p: vec3<f32>) -> vec3<f32> {
         }
     }
     let l = length(g);
-    if (l > 0.0 && is_finite(l)) { return -g / l; }
+    if (l > 0.0 && is_finite(l)) { return sign * g / l; }
     return vec3<f32>(0.0, 0.0, 1.0);
 }
 
@@ -338,7 +455,7 @@ fn trace_camera(slot: u32) {
     let p = o + h.t * d;
     let n = leaf_normal(h.leaf, p);
     hits[at] = vec4<f32>(p, S_SURFACE);
-    hits[at + 1u] = vec4<f32>(n, bitcast<f32>(objects[h.leaf].material));
+    hits[at + 1u] = vec4<f32>(n, bitcast<f32>(objects[h.leaf & 0x7fffffffu].material));
     hits[at + 2u] = vec4<f32>(-d, 0.0);
     hits[at + 3u] = vec4<f32>(0.0);
 }
