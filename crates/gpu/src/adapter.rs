@@ -119,8 +119,9 @@ pub struct Gpu {
     pub(crate) device: wgpu::Device,
     pub(crate) queue: wgpu::Queue,
     info: GpuInfo,
-    /// The `direct` kernels, compiled on first use (seconds to minutes on llvmpipe).
-    pub(crate) direct: std::sync::OnceLock<crate::direct::Pipelines>,
+    /// The `direct` kernels by the scene part of their source (its expression tape),
+    /// compiled on first use (seconds to minutes on llvmpipe).
+    pub(crate) direct: crate::direct::PipelineCache,
 }
 
 impl Gpu {
@@ -176,7 +177,7 @@ impl Gpu {
             device,
             queue,
             info,
-            direct: std::sync::OnceLock::new(),
+            direct: Default::default(),
         })
     }
 

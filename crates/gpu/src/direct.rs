@@ -19,8 +19,10 @@
 //! (K = 32 active perturbations after 4 halvings) is never taken as a miss: the CPU
 //! renders that whole sample instead, and the statistics count it.
 //!
-//! **Scope.** Objects that are one perturbed or plain quadric, or an intersection of
-//! plain quadrics (boxes, slabs); diffuse, conductor, dielectric and plastic materials
+//! **Scope.** Objects that are one perturbed or plain quadric, a CSG tree of plain
+//! quadrics (boxes, capped cylinders, unions, differences: by inside spans along the
+//! ray), or an expression solid (at most one per scene: its tape is compiled into the
+//! kernels, GPU.md §6.2); diffuse, conductor, dielectric and plastic materials
 //! that are rough (no delta lobes), with constant or point-space checker colours; sphere,
 //! rectangle and disk lights; the techniques `bsdf`, `light`, `light-uniform`,
 //! `light-area` and `light#k`; every MIS method. Anything else is a
@@ -33,6 +35,8 @@ use crate::light::{self, GpuAreaLight, GPU_AREA_LIGHT_WGSL, LIGHT_WGSL};
 use crate::perturbed::{PerturbedPack, PERTURBED_WGSL};
 use crate::quadric::QUADRIC_WGSL;
 use crate::sampler::PHILOX_WGSL;
+use crate::tape::GpuTape;
+use crate::tape_trace::TapeSolid;
 use crate::{Gpu, GpuError, FLOAT_WGSL};
 use bytemuck::{Pod, Zeroable};
 use frep::flat::CsgOp;
@@ -127,7 +131,7 @@ const _: () = assert!(size_of::<GpuMaterial>() == 112);
 const _: () = assert!(size_of::<Frame>() == 192);
 
 /// The scene and options as the kernels read them.
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default)]
 pub struct DirectScene {
     /// Objects.
     pub shapes: Vec<GpuShape>,
@@ -145,6 +149,9 @@ pub struct DirectScene {
     pub materials: Vec<GpuMaterial>,
     /// Area lights.
     pub lights: Vec<GpuAreaLight>,
+    /// The scene's expression solid, if any (at most one: its tape is compiled into
+    /// the kernels).
+    pub tape: Option<TapeSolid>,
     /// CSG nodes of kind-2 shapes, post-order: (op, leaf or part count, 0, 0).
     pub csg: Vec<[u32; 4]>,
     /// Light-selection tables (by power at 0, by area at `frame.area_off`) and plastic
@@ -195,6 +202,98 @@ impl DirectScene {
         self.leaves.len() as u32 - 1
     }
 
+    fn pack_expr(
+        &mut self,
+        flat: &frep::Flat,
+        leaf: usize,
+        view: &frep::ExprView,
+        name: &str,
+        material: u32,
+    ) -> Result<(), GpuError> {
+        if self.tape.is_some() {
+            return Err(unsupported(format!(
+                "object '{name}' is a second expression solid (one per scene)"
+            )));
+        }
+        let frep::Leaf::Expr {
+            code, registers, ..
+        } = flat.leaves[leaf]
+        else {
+            unreachable!("an expression leaf");
+        };
+        let words = flat.bytecode[code.range()].to_vec();
+        let bytecode = frep::Bytecode::from_words(words, registers as usize)
+            .map_err(|e| unsupported(format!("object '{name}': {e}")))?;
+        let tape =
+            GpuTape::new(&bytecode).map_err(|e| unsupported(format!("object '{name}': {e}")))?;
+        if !view.bounds.is_finite() {
+            return Err(unsupported(format!(
+                "object '{name}' is an unbounded expression"
+            )));
+        }
+        let solid = TapeSolid::new(tape, &view.bounds);
+        let (lo, hi) = (solid.lo, solid.hi);
+        self.tape = Some(solid);
+        self.leaves.push(GpuObject {
+            kind: 2,
+            material,
+            lo,
+            hi,
+            ..GpuObject::default()
+        });
+        Ok(())
+    }
+
+    /// The WGSL that defines `trace_tape` and `tape_normal`: the tape tracer with this
+    /// scene's tape, or stubs. The tracer's helpers share names with the perturbed scan's:
+    /// the duplicates go, and its ε becomes `TAPE_EPS`.
+    fn tape_wgsl(&self) -> String {
+        let Some(t) = &self.tape else {
+            return "struct TraceResult { status: u32, t: f32 }
+fn trace_tape(o: vec3<f32>, d: vec3<f32>, t_min: f32, t_max: f32) -> TraceResult { return TraceResult(0u, 0.0); }
+fn tape_normal(p: vec3<f32>) -> vec3<f32> { return vec3<f32>(0.0, 0.0, 1.0); }
+"
+            .into();
+        };
+        let src = t
+            .wgsl()
+            .replacen(FLOAT_WGSL, "", 1)
+            .replacen("var<private> loops: u32;", "", 1)
+            .replacen(
+                "const MIN_POS: f32 = 0x1p-126f; // f32::MIN_POSITIVE",
+                "",
+                1,
+            );
+        let word = |c: Option<char>| c.is_some_and(|c| c.is_alphanumeric() || c == '_');
+        let mut out = String::with_capacity(src.len());
+        let mut rest = src.as_str();
+        while let Some(i) = rest.find("EPS") {
+            let whole = !word(rest[..i].chars().next_back()) && !word(rest[i + 3..].chars().next());
+            out.push_str(&rest[..i]);
+            out.push_str(if whole { "TAPE_EPS" } else { "EPS" });
+            rest = &rest[i + 3..];
+        }
+        out.push_str(rest);
+        out + "
+// The outward normal −∇F/|∇F| by central differences of 10³ ε (the tape has no
+// derivative code at points; F is smooth where a ray meets it).
+fn tape_normal(p: vec3<f32>) -> vec3<f32> {
+    let h = 500.0 * TAPE_EPS;
+    var v: array<f32, 6>;
+    for (var k = 0u; k < 6u; k++) {
+        loops++;
+        var q = p;
+        q[k / 2u] += select(-h, h, (k & 1u) == 0u);
+        v[k] = eval_point(q);
+    }
+    let g = vec3<f32>(v[0] - v[1], v[2] - v[3], v[4] - v[5]);
+    let l = length(g);
+    if (l > 0.0 && is_finite(l)) { return -g / l; }
+    return vec3<f32>(0.0, 0.0, 1.0);
+}
+"
+    }
+
     fn pack_object(&mut self, data: &SceneData, obj: &scene::ObjectData) -> Result<(), GpuError> {
         let flat = data.solids.solid(obj.solid).flat();
         let root = flat.nodes.len() - 1;
@@ -214,11 +313,9 @@ impl DirectScene {
                     self.pack_leaf(&v, material);
                     (0, 1)
                 }
-                LeafView::Expr(_) => {
-                    return Err(unsupported(format!(
-                        "object '{}' is an expression solid (only perturbed and plain quadrics)",
-                        obj.name
-                    )))
+                LeafView::Expr(v) => {
+                    self.pack_expr(flat, node.operands.first as usize, &v, &obj.name, material)?;
+                    (0, 1)
                 }
             },
             CsgOp::Intersection if flat.parts(root).iter().all(|&k| plain(k).is_some()) => {
@@ -492,6 +589,9 @@ pub struct GpuStats {
     pub max_loops: [u32; 3],
 }
 
+/// Compiled kernels by the tape part of their source, kept by [`Gpu`].
+pub(crate) type PipelineCache = std::sync::Mutex<Vec<(String, std::sync::Arc<Pipelines>)>>;
+
 /// The compiled kernels, kept by [`Gpu`] for every later render.
 pub(crate) struct Pipelines {
     trace: wgpu::ComputePipeline,
@@ -499,9 +599,9 @@ pub(crate) struct Pipelines {
     layout: wgpu::BindGroupLayout,
 }
 
-fn pipelines(gpu: &Gpu) -> Result<Pipelines, GpuError> {
+fn pipelines(gpu: &Gpu, tape_wgsl: &str) -> Result<Pipelines, GpuError> {
     let d = &gpu.device;
-    let need = 13u32;
+    let need = 14u32;
     let have = d.limits().max_storage_buffers_per_shader_stage;
     if have < need {
         return Err(GpuError::Limit {
@@ -520,6 +620,7 @@ fn pipelines(gpu: &Gpu) -> Result<Pipelines, GpuError> {
         BSDF_WGSL,
         GPU_AREA_LIGHT_WGSL,
         LIGHT_WGSL,
+        tape_wgsl,
         DIRECT_WGSL,
     ]
     .join("\n");
@@ -547,10 +648,12 @@ fn pipelines(gpu: &Gpu) -> Result<Pipelines, GpuError> {
             wgpu::BufferBindingType::Storage { read_only: false },
         ));
     }
-    entries.push(entry(
-        13,
-        wgpu::BufferBindingType::Storage { read_only: true },
-    ));
+    for b in 13..=14 {
+        entries.push(entry(
+            b,
+            wgpu::BufferBindingType::Storage { read_only: true },
+        ));
+    }
     let layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
         label: Some("direct"),
         entries: &entries,
@@ -643,10 +746,21 @@ pub fn render_range(
     let acc = Accumulator::new(scene, &o).map_err(GpuError::Unsupported)?;
     let mut pack = DirectScene::new(data, &o)?;
     let started = Instant::now();
-    if gpu.direct.get().is_none() {
-        let _ = gpu.direct.set(pipelines(gpu)?);
-    }
-    let p = gpu.direct.get().expect("set above");
+    let tape_wgsl = pack.tape_wgsl();
+    let p = {
+        let mut cache = gpu
+            .direct
+            .lock()
+            .map_err(|e| GpuError::Run(e.to_string()))?;
+        match cache.iter().find(|(src, _)| *src == tape_wgsl) {
+            Some((_, p)) => p.clone(),
+            None => {
+                let p = std::sync::Arc::new(pipelines(gpu, &tape_wgsl)?);
+                cache.push((tape_wgsl, p.clone()));
+                p
+            }
+        }
+    };
     let mut stats = GpuStats::default();
     let (w, h) = (data.camera.width, data.camera.height);
     let header = StateHeader::new(w, h, &o);
@@ -673,6 +787,8 @@ pub fn render_range(
         storage(gpu, "tables", bytemuck::cast_slice(&pack.tables))?,
     ];
     let csg = storage(gpu, "csg", bytemuck::cast_slice(&pack.csg))?;
+    let tape_words: &[u32] = pack.tape.as_ref().map_or(&[], |t| t.tape.words());
+    let tape = storage(gpu, "tape", bytemuck::cast_slice(tape_words))?;
     let hit_bytes = max_slots * HIT_WORDS as u64 * 4;
     let draw_bytes = max_slots * u64::from(n_draws) * DRAW_WORDS as u64 * 4;
     gpu.check_binding(draw_bytes)?;
@@ -717,7 +833,7 @@ pub fn render_range(
             }];
             for (k, b) in buffers
                 .iter()
-                .chain([&hits, &draws, &loops, &csg])
+                .chain([&hits, &draws, &loops, &csg, &tape])
                 .enumerate()
             {
                 entries.push(wgpu::BindGroupEntry {

@@ -24,8 +24,8 @@ use std::sync::atomic::AtomicBool;
 use std::sync::OnceLock;
 
 /// Every feature the GPU integrator covers: a box floor with a point checker, a
-/// perturbed sphere, a plain sphere, a perturbed ellipsoid and a CSG tree of plain
-/// quadrics (union, difference, intersection); diffuse, rough plastic,
+/// perturbed sphere, a plain sphere, a perturbed ellipsoid, a CSG tree of plain
+/// quadrics (union, difference, intersection) and an expression solid (a blend); diffuse, rough plastic,
 /// rough conductor and rough glass; sphere, disk and rect lights of different powers.
 const SCENE: &str = r#"
 [camera]
@@ -101,6 +101,18 @@ union(difference(box(center = [-0.6, -1.3, 0.25], size = [0.6, 0.5, 0.5]),
       intersection(cylinder(z, 0.08, center = [-1.1, -1.6, 0]), plane(z, 1.1), plane([0, 0, -1], 0)))
 """
 material = "copper"
+
+[[objects]]
+# An expression solid (the interval tape tracer): three balls blended.
+solid = """
+let a = sphere([0, 0, 0], 0.22)
+let b = sphere([0.3, 0.1, 0.05], 0.18)
+let c = sphere([0.1, 0.3, 0.12], 0.15)
+bounds([-0.4, -0.4, -0.4], [0.7, 0.7, 0.5])
+output blend_union(blend_union(a, b, 0.4, 0.5, 0.5), c, 0.4, 0.5, 0.5)
+"""
+transform = { translate = [0.9, -0.6, 0.25] }
+material = "glossy"
 
 [[lights]]
 type = "sphere"
@@ -349,4 +361,14 @@ fn unsupported_scenes_are_refused_by_name() {
     assert!(e.contains("'copper'") && e.contains("smooth"), "{e}");
     let e = err(&SCENE.replace("integrator = \"direct\"", "integrator = \"path\""));
     assert!(e.contains("path"), "{e}");
+    let e = err(&SCENE.replace(
+        "sphere([0, 0, 0], 0.22)",
+        "sphere([0, 0, 0], 0.22) + 0.01 * sin(x)",
+    ));
+    assert!(e.contains("objects[6]") && e.contains("Sin"), "{e}");
+    let e = err(&SCENE.replace(
+        "sphere([0.4, -1.2, 0.35], 0.35)",
+        "sphere([0.4, -1.2, 0.35], 0.35) + 0.0 * x",
+    ));
+    assert!(e.contains("second expression"), "{e}");
 }

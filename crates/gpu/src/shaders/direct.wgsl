@@ -54,6 +54,9 @@ struct GpuMaterial { bsdf: GpuBsdf, tex_kind: u32, pad0: u32, pad1: u32, pad2: u
 // CSG nodes of kind-2 shapes in post-order: (op, leaf or part count, 0, 0), op 0 leaf,
 // 1 union, 2 intersection, 3 difference.
 @group(0) @binding(13) var<storage, read> csg: array<vec4<u32>>;
+// The scene's expression tape (at most one; GpuObject kind 2), run by `trace_tape` and
+// `tape_normal`, which the kernel's source defines per scene (stubs without a tape).
+@group(0) @binding(14) var<storage, read> tape: array<u32>;
 
 const HIT_WORDS: u32 = 4u;    // vec4s per slot in `hits`
 const DRAW_WORDS: u32 = 5u;   // vec4s per draw in `draws`
@@ -310,6 +313,11 @@ fn scene_trace(o: vec3<f32>, d: vec3<f32>, t_max: f32, any_hit: bool) -> SceneHi
             found = r.z == 1.0;
             t = r.x;
             leaf = bitcast<u32>(r.y);
+        } else if (objects[leaf].kind == 2u) {
+            let r = trace_tape(o, d, 0.0, res.t);
+            if ((r.status & 3u) == 2u) { return SceneHit(2u, 0.0, 0u); }
+            found = (r.status & 3u) == 1u;
+            t = r.t;
         } else if (objects[leaf].kind == 0u) {
             let r = quadric_first_crossing(quadrics[objects[leaf].first_op], o, d, 0.0, res.t);
             found = r.y == 1.0;
@@ -341,6 +349,7 @@ fn leaf_normal(key: u32, p: vec3<f32>) -> vec3<f32> {
     let leaf = key & 0x7fffffffu;
     let sign = select(-1.0, 1.0, (key & 0x80000000u) != 0u);
     let ob = objects[leaf];
+    if (ob.kind == 2u) { return tape_normal(p); }
     var g = q_grad(quadrics[ob.first_op].c, p);
     if (ob.kind == 1u) {
         let n = ob.item_count + ob.unbounded;
