@@ -149,9 +149,9 @@ struct RenderArgs {
     /// on it.
     #[arg(long, default_value_t = 0)]
     threads: usize,
-    /// Where to render (scenes): cpu; gpu (wgpu: the `direct` integrator on scenes of
-    /// perturbed and plain quadrics, area lights and rough materials; docs/gpu.md); or
-    /// auto (the GPU where it can, else the CPU).
+    /// Where to render (scenes): cpu; gpu (wgpu: `direct` and `path` on scenes of
+    /// quadrics, CSG of plain quadrics and one expression, area lights and rough
+    /// materials; docs/gpu.md); or auto (the GPU where it can, else the CPU).
     #[arg(long, value_enum, default_value_t = scene_render::Backend::Cpu)]
     backend: scene_render::Backend,
     /// The memory the render may take, e.g. `512M`, `8G` [default: what the system has
@@ -245,7 +245,7 @@ struct BenchArgs {
     /// Worker threads (0: one per core).
     #[arg(long, default_value_t = 0)]
     threads: usize,
-    /// Back ends to measure, comma-separated: cpu (direct and path), gpu (direct; its
+    /// Back ends to measure, comma-separated: cpu, gpu (direct and path on each; the GPU's
     /// kernels are compiled by an untimed 1-spp render first).
     #[arg(long, value_enum, value_delimiter = ',', default_value = "cpu")]
     backend: Vec<scene_render::Backend>,

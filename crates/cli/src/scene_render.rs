@@ -14,7 +14,7 @@ pub enum Backend {
     /// The CPU (every integrator and scene).
     #[default]
     Cpu,
-    /// The GPU (wgpu; `direct` on quadric scenes for now: docs/gpu.md).
+    /// The GPU (wgpu; `direct` and `path`, with the limits docs/gpu.md lists).
     Gpu,
     /// The GPU where there is one and it can render the scene, else the CPU.
     Auto,
@@ -64,13 +64,14 @@ fn gpu_line(g: &gpu::direct::GpuStats) -> String {
     let s = &g.stages;
     let ms = |d: std::time::Duration| d.as_secs_f64() * 1e3;
     format!(
-        "GPU stages: camera rays {:.1} ms, shade {:.1} ms, shadow rays {:.1} ms (GPU \
-         timestamps); readback {:.1} ms, accumulate on the CPU {:.1} ms; setup {:.1} ms; \
+        "GPU stages: camera rays {:.1} ms, shade {:.1} ms, shadow rays {:.1} ms, \
+         continuation rays {:.1} ms (GPU timestamps); readback {:.1} ms, accumulate on the CPU {:.1} ms; setup {:.1} ms; \
          {} waves; {} samples rendered on the CPU after an overflow; most loop iterations \
          per invocation {:?}",
         ms(s.camera),
         ms(s.shade),
         ms(s.shadow),
+        ms(s.secondary),
         ms(s.readback),
         ms(s.accumulate),
         ms(s.setup),
@@ -394,19 +395,20 @@ pub fn bench(
         }
         let g = gpu::Gpu::new(&gpu::GpuOptions::from_env()).map_err(|e| e.to_string())?;
         eprintln!("GPU: {}", g.info());
-        let o = RenderOptions {
-            integrator: IntegratorKind::Direct,
-            ..opts.clone()
-        };
-        // A first 1-spp render compiles the kernels: not timed (GPU.md §10).
-        gpu::direct::render_range(&g, &data, &scene, &o, 0..1, &stop, &|_, _| {})
-            .map_err(|e| e.to_string())?;
-        let (_, s, gs) =
-            gpu::direct::render_range(&g, &data, &scene, &o, 0..o.spp, &stop, &|_, _| {})
+        for integrator in [IntegratorKind::Direct, IntegratorKind::Path] {
+            let o = RenderOptions {
+                integrator,
+                ..opts.clone()
+            };
+            // A first 1-spp render compiles the kernels: not timed (GPU.md §10).
+            gpu::direct::render_range(&g, &data, &scene, &o, 0..1, &stop, &|_, _| {})
                 .map_err(|e| e.to_string())?;
-        rows.push(("gpu", s));
-        stages.push(gs);
-        eprintln!("gpu path: not available on the GPU back end yet (docs/gpu.md)");
+            let (_, s, gs) =
+                gpu::direct::render_range(&g, &data, &scene, &o, 0..o.spp, &stop, &|_, _| {})
+                    .map_err(|e| e.to_string())?;
+            rows.push(("gpu", s));
+            stages.push((integrator, gs));
+        }
     }
     out!(
         "| scene | backend | integrator | MIS | resolution | spp | time (s) | MSamples/s | MRays/s | camera | secondary | shadow |"
@@ -430,18 +432,19 @@ pub fn bench(
             sh
         );
     }
-    for g in &stages {
+    for (integrator, g) in &stages {
         let st = &g.stages;
         let parts = [
             ("camera rays (GPU)", st.camera),
             ("shade (GPU)", st.shade),
             ("shadow rays (GPU)", st.shadow),
+            ("continuation rays (GPU)", st.secondary),
             ("readback (wall)", st.readback),
             ("accumulate (CPU)", st.accumulate),
         ];
         let total: f64 = parts.iter().map(|p| p.1.as_secs_f64()).sum();
         out!("");
-        out!("| GPU stage (direct) | ms | % |");
+        out!("| GPU stage ({integrator}) | ms | % |");
         out!("| --- | ---: | ---: |");
         for (name, d) in parts {
             let ms = d.as_secs_f64() * 1e3;

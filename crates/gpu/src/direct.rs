@@ -1,23 +1,26 @@
-//! The `direct` integrator on the GPU: the resolved scene packed into buffers, three
-//! wavefront kernels (shaders/direct.wgsl: camera rays with their nearest hits, the
-//! techniques' draws with every pdf, shadow rays), and the CPU's per-pixel records
-//! filled from them (GPU.md §7–§8, first version).
+//! The `direct` and `path` integrators on the GPU: the resolved scene packed into
+//! buffers, wavefront kernels (shaders/direct.wgsl: camera rays with their nearest hits,
+//! the techniques' draws with every pdf, shadow rays, the paths' continuation rays), and
+//! the CPU's per-pixel records filled from them (GPU.md §7–§8, first version).
 //!
 //! **Waves.** A wave is m sample indices of every pixel (m × pixels slots, at most
-//! [`WAVE_DRAWS`] draws). Its three passes run in one submission without a CPU wait;
-//! the hits and draws are then read back and added, pixel by pixel in sample order,
-//! through [`render::integrator::Accumulator`], the CPU integrator's own bookkeeping.
-//! The per-pixel MIS sums and the optimal estimators' solves therefore stay on the CPU
-//! in f64 (GPU.md §8's "v1"), and a GPU sample range merges with a CPU one.
+//! [`WAVE_DRAWS`] draws over all depths). Its passes (the camera trace, then per depth
+//! shade, shadow rays and, but at the last depth, the continuation trace) run in one
+//! submission without a CPU wait; the hits and draws are then read back and added,
+//! pixel by pixel in sample order, through [`render::integrator::Accumulator`], the CPU
+//! integrator's own bookkeeping. The per-pixel MIS sums and the optimal estimators'
+//! solves therefore stay on the CPU in f64 (GPU.md §8's "v1"), and a GPU sample range
+//! merges with a CPU one.
 //!
 //! **Same numbers, not the same image.** The kernels draw the CPU's random numbers
-//! (`render::sampler`, truncated to 24 bits) in the CPU's dimension layout, so a GPU
-//! render follows the CPU's paths closely, but in f32: images agree statistically
-//! (GPU.md §9), tested by `tests/direct_image.rs`.
+//! (`render::sampler`, truncated to 24 bits) in the CPU's dimension layout, Russian
+//! roulette included, so a GPU render follows the CPU's paths closely, but in f32:
+//! images agree statistically (GPU.md §9), tested by `tests/direct_image.rs`.
 //!
 //! **Overflow.** A ray whose perturbed-quadric scan runs past its fixed capacity
-//! (K = 32 active perturbations after 4 halvings) is never taken as a miss: the CPU
-//! renders that whole sample instead, and the statistics count it.
+//! (K = 32 active perturbations after 4 halvings), whose tape trace stays undecided, or
+//! whose CSG spans overflow, is never taken as a miss: the CPU renders that whole sample
+//! instead, and the statistics count it.
 //!
 //! **Scope.** Objects that are one perturbed or plain quadric, a CSG tree of plain
 //! quadrics (boxes, capped cylinders, unions, differences: by inside spans along the
@@ -25,7 +28,8 @@
 //! kernels, GPU.md §6.2); diffuse, conductor, dielectric and plastic materials
 //! that are rough (no delta lobes), with constant or point-space checker colours; sphere,
 //! rectangle and disk lights; the techniques `bsdf`, `light`, `light-uniform`,
-//! `light-area` and `light#k`; every MIS method. Anything else is a
+//! `light-area` and `light#k`; every MIS method; `path` up to depth
+//! [`MAX_GPU_DEPTH`]. Anything else is a
 //! [`GpuError::Unsupported`] naming it, before any work.
 
 use crate::bsdf::{GpuBsdf, BSDF_STRUCT_WGSL, BSDF_WGSL, COAT_TABLE_LEN};
@@ -42,7 +46,7 @@ use bytemuck::{Pod, Zeroable};
 use frep::flat::CsgOp;
 use frep::LeafView;
 use render::bsdf::CoatTable;
-use render::integrator::{Accumulator, RayCounts, RenderOptions, ShadedDraw};
+use render::integrator::{Accumulator, IntegratorKind, RayCounts, RenderOptions, ShadedDraw};
 use render::scene::Scene;
 use render::{RenderState, RenderStats, StateHeader, Technique};
 use scene::{CameraKind, LightKind, MaterialData, SceneData, TextureData, TextureSpace};
@@ -60,7 +64,10 @@ pub const WAVE_DRAWS: u32 = 1 << 19;
 /// Techniques the kernels can hold.
 pub const MAX_GPU_TECHNIQUES: usize = 8;
 
-const HIT_WORDS: usize = 16;
+/// The deepest `path` the GPU renders (a uniform block per depth and pass).
+pub const MAX_GPU_DEPTH: u32 = 16;
+
+const HIT_WORDS: usize = 32;
 const DRAW_WORDS: usize = 20;
 
 /// One object: a leaf or an intersection of plain-quadric leaves (the WGSL `GpuShape`).
@@ -118,6 +125,12 @@ struct Frame {
     flags: u32,
     mode: u32,
     zero: u32,
+    depth: u32,
+    max_depth: u32,
+    rr_depth: u32,
+    stride: u32,
+    carry: u32,
+    pad: [u32; 3],
     eye: [f32; 4],
     right: [f32; 4],
     up: [f32; 4],
@@ -128,7 +141,7 @@ struct Frame {
 
 const _: () = assert!(size_of::<GpuShape>() == 48);
 const _: () = assert!(size_of::<GpuMaterial>() == 112);
-const _: () = assert!(size_of::<Frame>() == 192);
+const _: () = assert!(size_of::<Frame>() == 224);
 
 /// The scene and options as the kernels read them.
 #[derive(Clone, Debug, Default)]
@@ -540,6 +553,17 @@ fn tape_normal(p: vec3<f32>) -> vec3<f32> {
                 o.techniques.len()
             )));
         }
+        f.max_depth = match o.integrator {
+            IntegratorKind::Path => o.max_depth,
+            _ => 1,
+        };
+        if f.max_depth > MAX_GPU_DEPTH {
+            return Err(unsupported(format!(
+                "max depth {} (at most {MAX_GPU_DEPTH})",
+                f.max_depth
+            )));
+        }
+        f.rr_depth = o.rr_depth;
         f.n_tech = o.techniques.len() as u32;
         for (k, &(t, n)) in o.techniques.iter().enumerate() {
             let code = match t {
@@ -554,6 +578,17 @@ fn tape_normal(p: vec3<f32>) -> vec3<f32> {
             f.count[k / 4][k % 4] = n;
             f.n_draws += n;
         }
+        // render::integrator::dims: the vertex stride, and the draw that extends a path
+        // (the BSDF technique's first, else the extra draw).
+        f.stride = (3 * (f.n_draws + 1) + 1).div_ceil(4) * 4;
+        f.carry = f.n_draws;
+        let mut slot = 0;
+        for &(t, n) in &o.techniques {
+            if t == Technique::Bsdf {
+                f.carry = slot;
+            }
+            slot += n;
+        }
         Ok(())
     }
 }
@@ -567,6 +602,8 @@ pub struct StageTimes {
     pub shade: Duration,
     /// Shadow rays (GPU).
     pub shadow: Duration,
+    /// Continuation rays of `path` (GPU).
+    pub secondary: Duration,
     /// Waiting for the GPU and copying its results back (wall).
     pub readback: Duration,
     /// Adding the draws into the per-pixel records on the CPU, CPU fallbacks included.
@@ -584,8 +621,8 @@ pub struct GpuStats {
     pub waves: u32,
     /// Samples the CPU rendered because a ray overflowed a fixed capacity.
     pub cpu_fallbacks: u64,
-    /// The most loop iterations one invocation ran, per kernel: camera trace, shadow
-    /// trace, shade (GPU.md §3.1: llvmpipe cuts an invocation's loops at 65 535).
+    /// The most loop iterations one invocation ran, per kernel: camera and
+    /// continuation trace, shadow trace, shade (GPU.md §3.1: llvmpipe cuts an invocation's loops at 65 535).
     pub max_loops: [u32; 3],
 }
 
@@ -767,9 +804,12 @@ pub fn render_range(
     let mut state = RenderState::new(header, samples.clone())
         .map_err(|e| GpuError::Unsupported(e.to_string()))?;
     let pixels = w * h;
-    let n_draws = pack.frame.n_draws.max(1);
-    let per_wave = (WAVE_DRAWS / (pixels * n_draws)).max(1);
-    let max_slots = (per_wave * pixels) as u64;
+    let n_draws = pack.frame.n_draws;
+    let nd1 = n_draws + 1;
+    let depths = pack.frame.max_depth;
+    let per_slot_draws = nd1 * depths.max(1);
+    let per_wave = (WAVE_DRAWS / (pixels * per_slot_draws)).max(1);
+    let max_slots = u64::from(per_wave * pixels);
     let d = &gpu.device;
     let buffers = [
         storage(gpu, "shapes", bytemuck::cast_slice(&pack.shapes))?,
@@ -790,7 +830,7 @@ pub fn render_range(
     let tape_words: &[u32] = pack.tape.as_ref().map_or(&[], |t| t.tape.words());
     let tape = storage(gpu, "tape", bytemuck::cast_slice(tape_words))?;
     let hit_bytes = max_slots * HIT_WORDS as u64 * 4;
-    let draw_bytes = max_slots * u64::from(n_draws) * DRAW_WORDS as u64 * 4;
+    let draw_bytes = max_slots * u64::from(per_slot_draws) * DRAW_WORDS as u64 * 4;
     gpu.check_binding(draw_bytes)?;
     let rw = |label, size| {
         d.create_buffer(&wgpu::BufferDescriptor {
@@ -815,15 +855,19 @@ pub fn render_range(
         read("draws readback", draw_bytes),
         read("stats readback", 16),
     );
-    let uniform = |label| {
-        d.create_buffer(&wgpu::BufferDescriptor {
-            label: Some(label),
-            size: size_of::<Frame>() as u64,
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
+    // One uniform block and bind group per (depth, pass mode): 0 camera, 1 shadow,
+    // 2 continuation.
+    let n_frames = 3 * depths.max(1) as usize;
+    let frames: Vec<wgpu::Buffer> = (0..n_frames)
+        .map(|_| {
+            d.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("frame"),
+                size: size_of::<Frame>() as u64,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            })
         })
-    };
-    let frames = [uniform("frame camera"), uniform("frame shadow")];
+        .collect();
     let groups: Vec<wgpu::BindGroup> = frames
         .iter()
         .map(|f| {
@@ -848,20 +892,32 @@ pub fn render_range(
             })
         })
         .collect();
+    // Passes per wave: the camera trace, then per depth shade, shadow and (but the last)
+    // the continuation. Stage k of each: 0 camera, 1 shade, 2 shadow, 3 continuation.
+    let mut passes: Vec<(usize, u32, u32)> = vec![(0, 0, 0)];
+    for depth in 0..depths {
+        passes.push((1, depth, 0));
+        passes.push((2, depth, 1));
+        if depth + 1 < depths {
+            passes.push((3, depth, 2));
+        }
+    }
+    let n_queries = 2 * passes.len() as u32;
     let timestamps = gpu.info().timestamps.then(|| {
         d.create_query_set(&wgpu::QuerySetDescriptor {
             label: Some("stages"),
             ty: wgpu::QueryType::Timestamp,
-            count: 6,
+            count: n_queries,
         })
     });
+    let ts_bytes = 8 * u64::from(n_queries);
     let ts_buf = d.create_buffer(&wgpu::BufferDescriptor {
         label: Some("timestamps"),
-        size: 48,
+        size: ts_bytes,
         usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
         mapped_at_creation: false,
     });
-    let ts_read = read("timestamps readback", 48);
+    let ts_read = read("timestamps readback", ts_bytes);
     let period = f64::from(gpu.queue.get_timestamp_period());
     stats.stages.setup = started.elapsed();
 
@@ -870,127 +926,152 @@ pub fn render_range(
     let total = u64::from(pixels) * u64::from(o.spp);
     let mut done = 0u64;
     let mut rays = RayCounts::default();
-    let mut pdfs = vec![0.0f64; n_draws as usize * t_count];
     let mut start = samples.start;
+    let groups_for = |n: u32| {
+        let g = n.div_ceil(64);
+        if g <= 65_535 {
+            (g, 1)
+        } else {
+            (65_535, g.div_ceil(65_535))
+        }
+    };
     while start < samples.end && !stop.load(Ordering::Relaxed) {
         let m = per_wave.min(samples.end - start);
         let slots = m * pixels;
         pack.frame.sample = start;
         pack.frame.slots = slots;
-        pack.frame.mode = 0;
-        gpu.queue
-            .write_buffer(&frames[0], 0, bytemuck::bytes_of(&pack.frame));
-        pack.frame.mode = 1;
-        gpu.queue
-            .write_buffer(&frames[1], 0, bytemuck::bytes_of(&pack.frame));
+        for (k, f) in frames.iter().enumerate() {
+            pack.frame.depth = (k / 3) as u32;
+            pack.frame.mode = (k % 3) as u32;
+            gpu.queue
+                .write_buffer(f, 0, bytemuck::bytes_of(&pack.frame));
+        }
         let mut enc = d.create_command_encoder(&Default::default());
-        let groups_for = |n: u32| {
-            let g = n.div_ceil(64);
-            if g <= 65_535 {
-                (g, 1)
-            } else {
-                (65_535, g.div_ceil(65_535))
-            }
-        };
-        let passes: [(&wgpu::ComputePipeline, &wgpu::BindGroup, u32); 3] = [
-            (&p.trace, &groups[0], slots),
-            (&p.shade, &groups[0], slots * n_draws),
-            (&p.trace, &groups[1], slots * n_draws),
-        ];
-        for (k, (pipe, group, n)) in passes.into_iter().enumerate() {
+        for (q, &(stage, depth, mode)) in passes.iter().enumerate() {
+            let (pipe, n) = match stage {
+                1 => (&p.shade, slots * nd1),
+                2 => (&p.trace, slots * nd1),
+                _ => (&p.trace, slots),
+            };
             let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: None,
                 timestamp_writes: timestamps
                     .as_ref()
-                    .map(|q| wgpu::ComputePassTimestampWrites {
-                        query_set: q,
-                        beginning_of_pass_write_index: Some(2 * k as u32),
-                        end_of_pass_write_index: Some(2 * k as u32 + 1),
+                    .map(|qs| wgpu::ComputePassTimestampWrites {
+                        query_set: qs,
+                        beginning_of_pass_write_index: Some(2 * q as u32),
+                        end_of_pass_write_index: Some(2 * q as u32 + 1),
                     }),
             });
             pass.set_pipeline(pipe);
-            pass.set_bind_group(0, group, &[]);
+            pass.set_bind_group(0, &groups[3 * depth as usize + mode as usize], &[]);
             let (gx, gy) = groups_for(n);
             pass.dispatch_workgroups(gx, gy, 1);
         }
-        if let Some(q) = &timestamps {
-            enc.resolve_query_set(q, 0..6, &ts_buf, 0);
-            enc.copy_buffer_to_buffer(&ts_buf, 0, &ts_read, 0, 48);
+        if let Some(qs) = &timestamps {
+            enc.resolve_query_set(qs, 0..n_queries, &ts_buf, 0);
+            enc.copy_buffer_to_buffer(&ts_buf, 0, &ts_read, 0, ts_bytes);
         }
         let hb = u64::from(slots) * HIT_WORDS as u64 * 4;
-        let db = u64::from(slots) * u64::from(n_draws) * DRAW_WORDS as u64 * 4;
+        let db = u64::from(slots) * u64::from(per_slot_draws) * DRAW_WORDS as u64 * 4;
         enc.copy_buffer_to_buffer(&hits, 0, &hits_r, 0, hb);
-        enc.copy_buffer_to_buffer(&draws, 0, &draws_r, 0, db);
+        if depths > 0 {
+            enc.copy_buffer_to_buffer(&draws, 0, &draws_r, 0, db);
+        }
         let t0 = Instant::now();
         gpu.queue.submit([enc.finish()]);
         let hit_data = read_back(gpu, &hits_r, hb)?;
-        let draw_data = read_back(gpu, &draws_r, db)?;
+        let draw_data = if depths > 0 {
+            read_back(gpu, &draws_r, db)?
+        } else {
+            Vec::new()
+        };
         if timestamps.is_some() {
-            let ts = read_back(gpu, &ts_read, 48)?;
+            let ts = read_back(gpu, &ts_read, ts_bytes)?;
             let t: &[u64] = bytemuck::cast_slice(&ts);
-            let span = |k: usize| {
-                let ns = t[2 * k + 1].saturating_sub(t[2 * k]) as f64 * period;
-                Duration::from_nanos(ns as u64)
-            };
-            stats.stages.camera += span(0);
-            stats.stages.shade += span(1);
-            stats.stages.shadow += span(2);
+            for (q, &(stage, _, _)) in passes.iter().enumerate() {
+                let ns = t[2 * q + 1].saturating_sub(t[2 * q]) as f64 * period;
+                let span = Duration::from_nanos(ns as u64);
+                match stage {
+                    0 => stats.stages.camera += span,
+                    1 => stats.stages.shade += span,
+                    2 => stats.stages.shadow += span,
+                    _ => stats.stages.secondary += span,
+                }
+            }
         }
         stats.stages.readback += t0.elapsed();
         let t1 = Instant::now();
         let hv: &[f32] = bytemuck::cast_slice(&hit_data);
         let dv: &[f32] = bytemuck::cast_slice(&draw_data);
         let data_words = state.data_mut();
+        let mut pdfs = vec![0.0f64; (depths * n_draws) as usize * t_count];
         for slot in 0..slots as usize {
             let pix = slot % pixels as usize;
             let index = start + (slot / pixels as usize) as u32;
             let (x, y) = (pix as u32 % w, pix as u32 / w);
             let rec = &mut data_words[pix * stride..(pix + 1) * stride];
             let hw = &hv[slot * HIT_WORDS..(slot + 1) * HIT_WORDS];
-            let dw = &dv[slot * n_draws as usize * DRAW_WORDS..][..n_draws as usize * DRAW_WORDS];
-            let status = hw[3];
-            let overflow = status == 2.0
-                || (status == 1.0 && dw.chunks_exact(DRAW_WORDS).any(|d| d[7] == 12.0));
-            rays.camera += 1;
+            // The draws of vertex `depth`, the extra draw last.
+            let vertex = |depth: u32| {
+                let at = ((depth * slots) as usize + slot) * nd1 as usize * DRAW_WORDS;
+                &dv[at..at + nd1 as usize * DRAW_WORDS]
+            };
+            let overflow = hw[3] == 2.0
+                || (0..depths).any(|k| vertex(k).chunks_exact(DRAW_WORDS).any(|d| d[7] == 12.0));
             if overflow {
-                // The CPU renders the whole sample (its camera ray counted there).
-                rays.camera -= 1;
+                // The CPU renders the whole sample (its rays counted there).
                 stats.cpu_fallbacks += 1;
                 acc.cpu_sample(scene, x, y, index, rec, &mut rays);
                 continue;
             }
+            rays.camera += 1;
             let outside = [hw[12], hw[13], hw[14]].map(f64::from);
-            if status != 1.0 {
-                acc.add(rec, index, outside, None);
-                continue;
-            }
-            for (j, d) in dw.chunks_exact(DRAW_WORDS).enumerate() {
-                let ps = &mut pdfs[j * t_count..(j + 1) * t_count];
-                for (k, p) in ps.iter_mut().enumerate() {
-                    *p = f64::from(d[12 + k]);
-                }
-            }
-            let mut shaded: Vec<ShadedDraw> = Vec::with_capacity(n_draws as usize);
-            for (j, d) in dw.chunks_exact(DRAW_WORDS).enumerate() {
-                let traced = d[7] == 4.0 || d[7] == 5.0;
-                if traced {
-                    rays.shadow += 1;
-                }
-                let f = if d[7] == 4.0 {
-                    [d[8], d[9], d[10]].map(f64::from)
-                } else {
-                    [0.0; 3]
-                };
-                shaded.push(if d[7] == 1.0 {
-                    ShadedDraw::Failed
-                } else {
-                    ShadedDraw::Sample {
-                        f,
-                        pdfs: &pdfs[j * t_count..(j + 1) * t_count],
+            // Vertices shaded: draw 0 of each has a status until the path ended.
+            let shaded = (0..depths)
+                .take_while(|&k| n_draws > 0 && vertex(k)[7] != 0.0)
+                .count();
+            for k in 0..shaded {
+                for (j, d) in vertex(k as u32).chunks_exact(DRAW_WORDS).enumerate() {
+                    match d[7] {
+                        4.0 | 5.0 => rays.shadow += 1,
+                        6.0 => rays.secondary += 1,
+                        _ => {}
                     }
-                });
+                    if j < n_draws as usize {
+                        let at = (k * n_draws as usize + j) * t_count;
+                        for (t, p) in pdfs[at..at + t_count].iter_mut().enumerate() {
+                            *p = f64::from(d[12 + t]);
+                        }
+                    }
+                }
             }
-            acc.add(rec, index, outside, Some(&shaded));
+            let mut vertices: Vec<Vec<ShadedDraw>> = Vec::with_capacity(shaded);
+            for k in 0..shaded {
+                let draws = vertex(k as u32)
+                    .chunks_exact(DRAW_WORDS)
+                    .take(n_draws as usize)
+                    .enumerate()
+                    .map(|(j, d)| {
+                        if d[7] == 1.0 {
+                            return ShadedDraw::Failed;
+                        }
+                        let f = if d[7] == 4.0 || d[7] == 6.0 {
+                            [d[8], d[9], d[10]].map(f64::from)
+                        } else {
+                            [0.0; 3]
+                        };
+                        let at = (k * n_draws as usize + j) * t_count;
+                        ShadedDraw::Sample {
+                            f,
+                            pdfs: &pdfs[at..at + t_count],
+                        }
+                    })
+                    .collect();
+                vertices.push(draws);
+            }
+            let refs: Vec<&[ShadedDraw]> = vertices.iter().map(Vec::as_slice).collect();
+            acc.add(rec, index, outside, &refs);
         }
         stats.stages.accumulate += t1.elapsed();
         stats.waves += 1;

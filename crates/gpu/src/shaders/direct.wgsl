@@ -1,13 +1,18 @@
-// The wavefront `direct` integrator (GPU.md §7, first version): three kernels over one
-// wave of slots, a slot being one pixel at one sample index.
+// The wavefront `direct` and `path` integrators (GPU.md §7, first version): kernels over
+// one wave of slots, a slot being one pixel at one sample index, per vertex depth d.
 //
 //   trace (mode 0)  camera ray → nearest object or area light → hit point, outward normal,
 //                   material; the emitter seen directly goes to the outside-MIS sum.
-//   shade           one invocation per (slot, draw): the draw of its technique at the hit
-//                   (dimensions of render::integrator::dims), every technique's pdf in its
-//                   direction, f_s·|cos| and the nearest light's emission along it; a
-//                   shadow ray where both are non-zero.
+//   shade           one invocation per (slot, draw j ≤ Σ n_k): the draw of its technique
+//                   at the vertex (dimensions of render::integrator::dims), every
+//                   technique's pdf in its direction, β·f_s·|cos| and the nearest light's
+//                   emission along it, a shadow ray where both are non-zero. The draw
+//                   that extends the path (the BSDF technique's first, or the extra draw
+//                   j = Σ n_k without one) writes the continuation ray, β after it and
+//                   Russian roulette (render::integrator::path).
 //   trace (mode 1)  one invocation per (slot, draw): the shadow ray's any-hit query.
+//   trace (mode 2)  one invocation per slot: the continuation's nearest hit, which gives
+//                   the extending draw its Li and the path its next vertex.
 //
 // The CPU adds the wave's draws to its per-pixel records (render::integrator::Accumulator).
 // Trace is one entry point for both modes so that the costly intersectors compile once.
@@ -22,6 +27,8 @@ struct Frame {
     sample: u32, n_shapes: u32, seed_lo: u32, seed_hi: u32,
     n_tech: u32, n_draws: u32, n_lights: u32, power_off: u32,
     area_off: u32, flags: u32, mode: u32, zero: u32,
+    depth: u32, max_depth: u32, rr_depth: u32, stride: u32,
+    carry: u32, pad0: u32, pad1: u32, pad2: u32,
     eye: vec4<f32>,
     right: vec4<f32>,
     up: vec4<f32>,
@@ -58,7 +65,10 @@ struct GpuMaterial { bsdf: GpuBsdf, tex_kind: u32, pad0: u32, pad1: u32, pad2: u
 // `tape_normal`, which the kernel's source defines per scene (stubs without a tape).
 @group(0) @binding(14) var<storage, read> tape: array<u32>;
 
-const HIT_WORDS: u32 = 4u;    // vec4s per slot in `hits`
+// vec4s per slot in `hits`: [p, status], [n, material], [wo, ·], [outside-MIS rgb, ·],
+// [β, ·], then the continuation the shade pass chose: [o, traced], [wi, survives],
+// [β after it and roulette, ·].
+const HIT_WORDS: u32 = 8u;
 const DRAW_WORDS: u32 = 5u;   // vec4s per draw in `draws`
 const FLAG_HIDE: u32 = 1u;
 const FLAG_CENTER: u32 = 2u;
@@ -72,6 +82,7 @@ const D_ZERO: f32 = 2.0;      // a direction whose integrand is 0 without a shad
 const D_SHADOW: f32 = 3.0;    // a direction with a shadow ray to trace
 const D_VISIBLE: f32 = 4.0;   // traced: unoccluded
 const D_OCCLUDED: f32 = 5.0;  // traced: occluded
+const D_CARRIED: f32 = 6.0;   // the draw that extends the path: traced as its next ray
 
 const T_BSDF: u32 = 0u;
 const T_POWER: u32 = 1u;
@@ -437,6 +448,17 @@ fn camera_ray(px: vec3<u32>) -> array<vec3<f32>, 2> {
     return array<vec3<f32>, 2>(frame.eye.xyz, normalize(frame.forward.xyz + sx * frame.right.xyz + sy * frame.up.xyz));
 }
 
+fn draw_at(slot: u32, j: u32) -> u32 {
+    return ((frame.depth * frame.slots + slot) * (frame.n_draws + 1u) + j) * DRAW_WORDS;
+}
+
+fn write_vertex(at: u32, p: vec3<f32>, leaf: u32, wo: vec3<f32>, beta: vec3<f32>) {
+    hits[at] = vec4<f32>(p, S_SURFACE);
+    hits[at + 1u] = vec4<f32>(leaf_normal(leaf, p), bitcast<f32>(objects[leaf & 0x7fffffffu].material));
+    hits[at + 2u] = vec4<f32>(wo, 0.0);
+    hits[at + 4u] = vec4<f32>(beta, 0.0);
+}
+
 fn trace_camera(slot: u32) {
     let px = slot_pixel(slot);
     let ray = camera_ray(px);
@@ -444,6 +466,7 @@ fn trace_camera(slot: u32) {
     let d = ray[1];
     let h = scene_trace(o, d, inf(), false);
     let at = slot * HIT_WORDS;
+    hits[at + 3u] = vec4<f32>(0.0);
     if (h.status == 2u) {
         hits[at] = vec4<f32>(0.0, 0.0, 0.0, S_OVERFLOW);
         return;
@@ -458,19 +481,45 @@ fn trace_camera(slot: u32) {
     }
     if (h.status == 0u) {
         hits[at] = vec4<f32>(0.0, 0.0, 0.0, S_NONE);
-        hits[at + 3u] = vec4<f32>(0.0);
         return;
     }
-    let p = o + h.t * d;
-    let n = leaf_normal(h.leaf, p);
-    hits[at] = vec4<f32>(p, S_SURFACE);
-    hits[at + 1u] = vec4<f32>(n, bitcast<f32>(objects[h.leaf & 0x7fffffffu].material));
-    hits[at + 2u] = vec4<f32>(-d, 0.0);
-    hits[at + 3u] = vec4<f32>(0.0);
+    write_vertex(at, o + h.t * d, h.leaf, -d, vec3<f32>(1.0));
+}
+
+// The continuation of a slot's path from vertex `depth`: its nearest hit is the extending
+// draw's Li (a light) and the next vertex (an object), if roulette kept the path.
+fn trace_continuation(slot: u32) {
+    let at = slot * HIT_WORDS;
+    let c = hits[at + 5u];
+    if (hits[at].w != S_SURFACE) { return; }
+    if (c.w != 1.0) {
+        hits[at].w = S_NONE;
+        return;
+    }
+    let o = c.xyz;
+    let cd = hits[at + 6u];
+    let d = cd.xyz;
+    let h = scene_trace(o, d, inf(), false);
+    if (h.status == 2u) {
+        hits[at].w = S_OVERFLOW;
+        return;
+    }
+    let lh = nearest_light(o, d, h.t);
+    if (frame.carry < frame.n_draws) {
+        let r = draw_at(slot, frame.carry);
+        var g = vec3<f32>(0.0);
+        if (lh.t < inf()) { g = draws[r + 2u].xyz * lh.le; }
+        draws[r + 2u] = vec4<f32>(g, 0.0);
+    }
+    if (lh.t < inf() || h.status == 0u || cd.w != 1.0) {
+        hits[at].w = S_NONE;
+        return;
+    }
+    write_vertex(at, o + h.t * d, h.leaf, -d, hits[at + 7u].xyz);
 }
 
 fn trace_shadow(i: u32) {
-    let at = i * DRAW_WORDS;
+    let at = (frame.depth * frame.slots * (frame.n_draws + 1u) + i) * DRAW_WORDS;
     if (draws[at + 1u].w != D_SHADOW) { return; }
     let h = scene_trace(draws[at].xyz, draws[at + 1u].xyz, draws[at].w, true);
     if (h.status == 2u) {
@@ -486,35 +535,45 @@ fn trace_shadow(i: u32) {
 fn trace(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nw: vec3<u32>) {
     let i = gid.x + gid.y * nw.x * 64u;
     loops = 0u;
-    if (frame.mode == 0u) {
-        if (i >= frame.slots) { return; }
-        trace_camera(i);
-    } else {
-        if (i >= frame.slots * frame.n_draws) { return; }
+    if (frame.mode == 1u) {
+        if (i >= frame.slots * (frame.n_draws + 1u)) { return; }
         trace_shadow(i);
+    } else {
+        if (i >= frame.slots) { return; }
+        if (frame.mode == 0u) { trace_camera(i); } else { trace_continuation(i); }
     }
-    atomicMax(&stats[frame.mode], loops);
+    atomicMax(&stats[select(0u, 1u, frame.mode == 1u)], loops);
 }
 
-// The draw `j`-th of the slot's Σ n_k: technique k, its direction and the pdfs.
+// Draw j of the slot's vertex at this depth: technique k's (j < Σ n_k), or the extra
+// BSDF draw that only extends the path (j = Σ n_k).
 @compute @workgroup_size(64)
 fn shade(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nw: vec3<u32>) {
     let i = gid.x + gid.y * nw.x * 64u;
-    if (i >= frame.slots * frame.n_draws) { return; }
+    let nd = frame.n_draws + 1u;
+    if (i >= frame.slots * nd) { return; }
     loops = 0u;
-    let slot = i / frame.n_draws;
-    let j = i % frame.n_draws;
-    let at = i * DRAW_WORDS;
-    let hp = hits[slot * HIT_WORDS];
+    let slot = i / nd;
+    let j = i % nd;
+    let at = draw_at(slot, j);
+    let ha = slot * HIT_WORDS;
+    let hp = hits[ha];
     if (hp.w != S_SURFACE) {
+        draws[at + 1u] = vec4<f32>(0.0, 0.0, 0.0, 0.0);
+        return;
+    }
+    let extend = frame.depth + 1u < frame.max_depth;
+    let carries = extend && j == frame.carry;
+    if (j == frame.n_draws && !carries) {
         draws[at + 1u] = vec4<f32>(0.0, 0.0, 0.0, 0.0);
         return;
     }
     let px = slot_pixel(slot);
     let p = hp.xyz;
-    let hn = hits[slot * HIT_WORDS + 1u];
+    let hn = hits[ha + 1u];
     let n = hn.xyz;
-    let wo = hits[slot * HIT_WORDS + 2u].xyz;
+    let wo = hits[ha + 2u].xyz;
+    let beta = hits[ha + 4u].xyz;
     let mat = materials[bitcast<u32>(hn.w)];
     var m = mat.bsdf;
     m.zero = frame.zero;
@@ -526,27 +585,33 @@ fn shade(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
         m.rgb = select(mat.b, mat.a, r < 0.5);
         m.rgb.w = 0.0;
     }
-    // Technique k of draw j.
+    // Technique k of draw j (the extra draw samples the BSDF).
     var k = 0u;
     var first = 0u;
-    for (var t = 0u; t < frame.n_tech; t++) {
-        loops++;
-        let c = frame.count[t / 4u][t % 4u];
-        if (j < first + c) { k = t; break; }
-        first += c;
+    var code = T_BSDF;
+    if (j < frame.n_draws) {
+        for (var t = 0u; t < frame.n_tech; t++) {
+            loops++;
+            let c = frame.count[t / 4u][t % 4u];
+            if (j < first + c) { k = t; break; }
+            first += c;
+        }
+        code = tech_code(k);
     }
-    let dim = 8u + 3u * j;
+    let base = 8u + frame.depth * frame.stride;
+    let dim = base + 3u * j;
     let uc = rnd(px.x, px.y, px.z, dim);
     let u = vec2<f32>(rnd(px.x, px.y, px.z, dim + 1u), rnd(px.x, px.y, px.z, dim + 2u));
     let f = basis(n);
     let wo_l = to_local(f, wo);
-    let code = tech_code(k);
     var wi = vec3<f32>(0.0);
     var ok = false;
+    var weight = vec3<f32>(0.0);
     if (code == T_BSDF) {
         let s = bsdf_sample_f(m, wo_l, uc, u);
         ok = (s.flags & 1u) != 0u;
         wi = from_local(f, s.wi);
+        weight = s.weight;
     } else if (frame.n_lights == 0u) {
         ok = false;
     } else if (code == T_AREA) {
@@ -564,6 +629,33 @@ fn shade(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
         ok = ls.ok != 0u;
         wi = ls.wi;
     }
+    // render::integrator::vertex::spawn, with an offset for f32: the CPU's 10⁻⁷ (for
+    // f64) left 2.7 % of a test image's pixels darker by over 30 % (shadow rays finding
+    // the surface they leave); 10⁻⁵ left none (docs/gpu.md).
+    var side = n;
+    if (dot(wi, n) < 0.0) { side = -n; }
+    let o = p + side * (1e-5 * (1.0 + max(abs(p.x), max(abs(p.y), abs(p.z)))));
+    if (carries) {
+        // The path's next ray, β after it, and roulette (render::integrator::path).
+        var next = beta * weight;
+        var survives = ok && all(next == next) && any(next != vec3<f32>(0.0)) && is_finite(max(next.x, max(next.y, next.z)));
+        if (survives && frame.depth + 1u >= frame.rr_depth) {
+            let q = max(0.05, 1.0 - max(next.x, max(next.y, next.z)));
+            if (rnd(px.x, px.y, px.z, base + 3u * (frame.n_draws + 1u)) < q) {
+                survives = false;
+            } else {
+                next = next / (1.0 - q);
+            }
+        }
+        hits[ha + 5u] = vec4<f32>(o, select(0.0, 1.0, ok));
+        hits[ha + 6u] = vec4<f32>(wi, select(0.0, 1.0, survives));
+        hits[ha + 7u] = vec4<f32>(next, 0.0);
+        if (j == frame.n_draws) {
+            draws[at + 1u] = vec4<f32>(wi, select(0.0, D_CARRIED, ok));
+            atomicMax(&stats[2], loops);
+            return;
+        }
+    }
     var pdfs: array<f32, 8>;
     var fc = vec3<f32>(0.0);
     if (ok) {
@@ -571,6 +663,7 @@ fn shade(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
         let ev = bsdf_eval(m, wo_l, wi_l);
         fc = ev.xyz * abs(dot(wi, n));
         for (var t = 0u; t < frame.n_tech; t++) {
+            loops++;
             pdfs[t] = tech_pdf(tech_code(t), tech_light(t), p, wi, ev.w);
         }
         // A light draw's own density is the mixture's, and it fails where that is not
@@ -583,18 +676,22 @@ fn shade(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
         atomicMax(&stats[2], loops);
         return;
     }
-    // render::integrator::vertex::spawn and incident.
-    var side = n;
-    if (dot(wi, n) < 0.0) { side = -n; }
-    let o = p + side * (1e-7 * (1.0 + max(abs(p.x), max(abs(p.y), abs(p.z)))));
+    draws[at + 3u] = vec4<f32>(pdfs[0], pdfs[1], pdfs[2], pdfs[3]);
+    draws[at + 4u] = vec4<f32>(pdfs[4], pdfs[5], pdfs[6], pdfs[7]);
+    if (carries) {
+        // Li comes from the continuation's trace (mode 2), which multiplies it in.
+        draws[at] = vec4<f32>(o, 0.0);
+        draws[at + 1u] = vec4<f32>(wi, D_CARRIED);
+        draws[at + 2u] = vec4<f32>(beta * fc, 0.0);
+        atomicMax(&stats[2], loops);
+        return;
+    }
+    // render::integrator::vertex::incident.
     let lh = nearest_light(o, wi, inf());
-    let g = fc * lh.le;
     var status = D_SHADOW;
     if (all(fc == vec3<f32>(0.0)) || all(lh.le == vec3<f32>(0.0))) { status = D_ZERO; }
     draws[at] = vec4<f32>(o, lh.t);
     draws[at + 1u] = vec4<f32>(wi, status);
-    draws[at + 2u] = vec4<f32>(g, 0.0);
-    draws[at + 3u] = vec4<f32>(pdfs[0], pdfs[1], pdfs[2], pdfs[3]);
-    draws[at + 4u] = vec4<f32>(pdfs[4], pdfs[5], pdfs[6], pdfs[7]);
+    draws[at + 2u] = vec4<f32>(beta * fc * lh.le, 0.0);
     atomicMax(&stats[2], loops);
 }

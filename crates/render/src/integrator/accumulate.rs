@@ -4,9 +4,9 @@
 //! the CPU in this first version).
 //!
 //! A back end hands over, per pixel sample, what the CPU integrator would have added:
-//! the outside-MIS radiance (an emitter seen by the camera) and, when the camera ray met
-//! a surface, every technique's draws at that vertex in list order (technique k, then
-//! draw j), each a failed draw or `(f, pdfs)`. [`Accumulator::add`] replays them through
+//! the outside-MIS radiance (an emitter seen by the camera) and, for each vertex the
+//! path shaded, every technique's draws there in list order (technique k, then draw j),
+//! each a failed draw or `(f, pdfs)` with the path throughput in f. [`Accumulator::add`] replays them through
 //! the same calls as `integrator/vertex.rs` (`add_draw`, `add_failed`, `end_vertex`,
 //! `end_sample`), so a GPU sample range and a CPU one merge like two CPU ranges.
 
@@ -30,21 +30,24 @@ pub enum ShadedDraw<'a> {
     },
 }
 
-/// The `direct` integrator's bookkeeping for samples shaded elsewhere.
+/// The `direct` and `path` integrators' bookkeeping for samples shaded elsewhere.
 #[derive(Clone, Debug)]
 pub struct Accumulator {
     it: Integrator,
 }
 
 impl Accumulator {
-    /// The accumulator of a `direct` render of `scene` with `options` (the options are
-    /// validated and checked against the scene as a CPU render would). Other
-    /// integrators, per-light mode and AOVs are refused: the external back ends do not
-    /// produce them yet.
+    /// The accumulator of a `direct` or `path` render of `scene` with `options` (the
+    /// options are validated and checked against the scene as a CPU render would).
+    /// The AOV integrators, per-light mode and AOVs are refused: the external back ends
+    /// do not produce them yet.
     pub fn new(scene: &Scene, options: &RenderOptions) -> Result<Self, String> {
-        if options.integrator != IntegratorKind::Direct {
+        if !matches!(
+            options.integrator,
+            IntegratorKind::Direct | IntegratorKind::Path
+        ) {
             return Err(format!(
-                "integrator {} is not available here (only direct)",
+                "integrator {} is not available here (only direct and path)",
                 options.integrator
             ));
         }
@@ -75,32 +78,33 @@ impl Accumulator {
     }
 
     /// Adds sample `index` of a pixel to its record `rec`: `outside` outside MIS, and
-    /// the first vertex's draws (None when the camera ray met no surface), technique by
-    /// technique in list order. Panics if the number of draws is not Σ n_k.
-    pub fn add(&self, rec: &mut [f64], index: u32, outside: [f64; 3], draws: Option<&[ShadedDraw]>) {
+    /// the draws of each vertex the path shaded (vertex d at `vertices[d]`; none when
+    /// the camera ray met no surface), technique by technique in list order, with the
+    /// path throughput in `f`. Panics if a vertex does not have Σ n_k draws.
+    pub fn add(&self, rec: &mut [f64], index: u32, outside: [f64; 3], vertices: &[&[ShadedDraw]]) {
         let mut px = Pixel {
             rec,
             key: u64::from(index),
         };
         px.add(Rgb::from_array(outside));
-        if let Some(draws) = draws {
-            let total: u32 = self.it.counts.iter().sum();
+        let total: u32 = self.it.counts.iter().sum();
+        let t = self.it.techniques.len();
+        for (depth, draws) in vertices.iter().enumerate() {
             assert_eq!(draws.len(), total as usize, "one entry per draw");
-            let t = self.it.techniques.len();
             let mut at = 0;
             for (k, &n) in self.it.counts.iter().enumerate() {
                 for _ in 0..n {
                     match draws[at] {
-                        ShadedDraw::Failed => px.add_failed(&self.it, 0, k),
+                        ShadedDraw::Failed => px.add_failed(&self.it, depth, k),
                         ShadedDraw::Sample { f, pdfs } => {
                             debug_assert!(pdfs.len() == t && t <= MAX_TECHNIQUES);
-                            px.add_draw(&self.it, 0, k, Rgb::from_array(f), pdfs, None);
+                            px.add_draw(&self.it, depth, k, Rgb::from_array(f), pdfs, None);
                         }
                     }
                     at += 1;
                 }
             }
-            px.end_vertex(&self.it, 0);
+            px.end_vertex(&self.it, depth);
         }
         px.end_sample();
     }
