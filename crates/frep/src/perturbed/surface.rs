@@ -6,6 +6,7 @@
 //! exact piecewise-polynomial scan of [`super::scan`].
 
 use super::along::{positive_set, q_local_f64};
+use super::ordered;
 use super::scan::{self, Coeffs};
 use super::{Perturbation, PerturbedQuadric};
 use crate::bvh::{Bvh, BvhRef};
@@ -204,12 +205,25 @@ impl PerturbedView<'_> {
     /// [`Self::first_crossing`] by the scan, whatever the perturbations.
     fn scan_first_crossing(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<f64> {
         let (lo, hi, sign) = self.clip(ray, t_min, t_max)?;
+        let base: &Coeffs<f64> = &self.base.c;
+        let range = (lo, hi);
+        if let Some(t) = ordered::first_crossing(
+            base,
+            self.perturbations,
+            self.bvh,
+            ray,
+            range,
+            t_min,
+            t_max,
+            sign,
+        ) {
+            return t;
+        }
         let src = Supports {
             perturbations: self.perturbations,
             bvh: self.bvh,
             ray,
         };
-        let base: &Coeffs<f64> = &self.base.c;
         scan::first_crossing(
             base,
             &src,

@@ -1,0 +1,183 @@
+//! The f64 scan in ray order (issue 10): the support BVH hands out perturbations by the
+//! parameter where the ray enters their box ([`EntryOrder`]), and each piece is scanned
+//! as soon as every support that can start before its end is known, so that the walk
+//! stops at the first crossing and never opens the boxes behind it.
+//!
+//! It visits the same pieces as [`super::scan::first_crossing`] (the breakpoints are the
+//! same interval ends; a support whose box the ray enters after a piece's end cannot be
+//! positive on it) and expands each the same way; only the order in which a piece sums
+//! its perturbations differs (entry order, not the BVH's), so the answers agree to
+//! rounding. Perturbations whose last interval ends before the current piece leave the
+//! active set, which so holds only the supports overlapping the ray near the scan
+//! front. Where the front still overlaps more than [`MAX_ACTIVE`], the heap of pending
+//! boxes fills, or the range is unbounded, it defers to [`super::scan::first_crossing`].
+//!
+//! **Pieces of certain sign.** Before a piece is expanded, a few flops per perturbation
+//! bound it: F' lies between F's least value on the piece plus Σ f_i·q_i³ at each
+//! term's least, and the same at the greatest (each quadratic's range over the piece,
+//! from its expansion about the ray's origin; f·q³ is monotonic in q ≥ 0). Where that
+//! range excludes 0 by a wide margin, the piece holds no crossing and its Bernstein form
+//! need not be built. The margin (`MARGIN` times first-order bounds on the terms' magnitudes) is
+//! some 10⁶ times the rounding bound the full expansion itself works with, so a skipped
+//! piece is one whose full expansion would have certainly kept its sign.
+
+use super::along::q_local_mag;
+use super::scan::{Active, Actives, Coeffs, Fixed, Scan, MAX_ACTIVE};
+use super::Perturbation;
+use crate::bvh::{BvhRef, EntryOrder};
+use crate::ray::Ray;
+
+/// How far past a piece's end (relative to |t| + 1) a box entry still counts as before
+/// it: a margin for the rounding of the slab test, so that a support is never missed.
+const SLACK: f64 = 1e-9;
+
+/// The relative margin of the certain-sign test, on the magnitudes of the terms summed.
+const MARGIN: f64 = 1e-6;
+
+/// A support met by the ray, with what the certain-sign test reads: q along the ray
+/// about its origin, and the sum of the magnitudes of that expansion's terms.
+#[derive(Clone, Copy)]
+struct Known {
+    active: Active<f64>,
+    along: [f64; 3],
+    mag: f64,
+}
+
+impl Actives<f64> for [Known] {
+    #[inline]
+    fn each(&self, mut visit: impl FnMut(&Active<f64>)) {
+        self.iter().for_each(|k| visit(&k.active));
+    }
+}
+
+/// The least and greatest value of the quadratic a0 + a1·t + a2·t² on [ta, tb]: at the
+/// ends or at the vertex.
+#[inline]
+fn range_on([a0, a1, a2]: [f64; 3], ta: f64, tb: f64) -> (f64, f64) {
+    let at = |t: f64| a0 + t * (a1 + t * a2);
+    let (va, vb) = (at(ta), at(tb));
+    let (mut lo, mut hi) = (va.min(vb), va.max(vb));
+    if a2 != 0.0 {
+        let tv = -a1 / (2.0 * a2);
+        if tv > ta && tv < tb {
+            let v = at(tv);
+            lo = lo.min(v);
+            hi = hi.max(v);
+        }
+    }
+    (lo, hi)
+}
+
+/// The base along the ray (about its origin) and the sum of its terms' magnitudes.
+struct Base {
+    along: [f64; 3],
+    mag: f64,
+}
+
+impl Base {
+    /// ±1 when F' certainly has that sign all over [ta, tb] (see the module docs), else 0.
+    fn certain_sign(&self, known: &[Known], ta: f64, tb: f64) -> f64 {
+        // Terms at |t| ≤ T are at most (1 + T)² times their magnitudes at t = 0.
+        let grow = (1.0 + ta.abs().max(tb.abs())).powi(2);
+        // F' ∈ [lo, hi] on the piece, up to `slack`: F's range plus each term's, f·q³
+        // being monotonic in q ≥ 0.
+        let (mut lo, mut hi) = range_on(self.along, ta, tb);
+        let mut slack = MARGIN * self.mag * grow;
+        let mid = 0.5 * (ta + tb);
+        for k in known {
+            if k.active.holds(mid) {
+                let pad = MARGIN * k.mag * grow;
+                let (q0, q1) = range_on(k.along, ta, tb);
+                let (q0, q1) = ((q0 - pad).max(0.0), q1 + pad);
+                let f = k.active.f;
+                let (c0, c1) = (f * q0 * q0 * q0, f * q1 * q1 * q1);
+                lo += c0.min(c1);
+                hi += c0.max(c1);
+                // The rounding of q's local expansion (magnitudes ≤ mag·grow) through the
+                // cube, and of the cube's coefficients (each ≤ 16·max q).
+                slack += MARGIN * f.abs() * q1 * q1 * (k.mag * grow + 4096.0 * q1);
+            }
+        }
+        if lo > slack {
+            1.0
+        } else if hi < -slack {
+            -1.0
+        } else {
+            0.0
+        }
+    }
+}
+
+/// The first t in (t_min, t_max) where F' changes sign, scanning [lo, hi] ⊂ [t_min,
+/// t_max] in ray order; `sign` as in [`super::scan::first_crossing`]. None when it must
+/// defer (see the module docs), else the answer.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn first_crossing(
+    base: &Coeffs<f64>,
+    perturbations: &[Perturbation],
+    bvh: BvhRef<'_>,
+    ray: &Ray,
+    (lo, hi): (f64, f64),
+    t_min: f64,
+    t_max: f64,
+    sign: f64,
+) -> Option<Option<f64>> {
+    if !(lo.is_finite() && hi.is_finite() && lo < hi) {
+        return None;
+    }
+    let (o, d) = (ray.o.to_array(), ray.d.to_array());
+    let sum = |m: [f64; 3]| m[0] + m[1] + m[2];
+    let f = Base {
+        along: super::along::q_local(base, o, d),
+        mag: sum(q_local_mag(base, o, d)),
+    };
+    let mut walk = EntryOrder::new(bvh, ray, lo, hi);
+    let mut known = Fixed::<Known, MAX_ACTIVE>::new();
+    let (mut ta, mut s) = (lo, sign);
+    loop {
+        // The piece's end: the least interval end above ta among the known supports,
+        // lowered by any support whose box the ray enters before it.
+        let mut tb = hi;
+        for k in known.as_slice() {
+            k.active.breaks(ta, hi, |e| tb = tb.min(e));
+        }
+        while let Some(i) = walk.next_before(tb + SLACK * (tb.abs() + 1.0)) {
+            let p = &perturbations[i];
+            if let Some((active, along)) = Active::on_along(p.f, &p.q.c, o, d, lo, hi) {
+                let mag = sum(q_local_mag(&p.q.c, o, d));
+                if !known.push(Known { active, along, mag }) {
+                    return None;
+                }
+                active.breaks(ta, hi, |e| tb = tb.min(e));
+            }
+        }
+        if walk.overflowed() {
+            return None;
+        }
+        let certain = f.certain_sign(known.as_slice(), ta, tb);
+        if certain != 0.0 && (s == 0.0 || s == certain) {
+            s = certain;
+        } else {
+            let mut scan = Scan {
+                base,
+                active: known.as_slice(),
+                o,
+                d,
+                s,
+                t_min,
+                t_max,
+            };
+            if let Some(found) = scan.piece(ta, tb) {
+                return Some(found);
+            }
+            s = scan.s;
+        }
+        if tb >= hi {
+            return Some(None);
+        }
+        ta = tb;
+        if known.as_slice().iter().any(|k| !k.active.reaches_past(ta)) {
+            known.retain(|k| k.active.reaches_past(ta));
+        }
+    }
+}
