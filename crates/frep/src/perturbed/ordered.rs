@@ -26,6 +26,7 @@ use super::scan::{Active, Actives, Coeffs, Fixed, Scan, MAX_ACTIVE};
 use super::Perturbation;
 use crate::bvh::{BvhRef, EntryOrder};
 use crate::ray::Ray;
+use std::mem::MaybeUninit;
 
 /// How far past a piece's end (relative to |t| + 1) a box entry still counts as before
 /// it: a margin for the rounding of the slab test, so that a support is never missed.
@@ -133,22 +134,32 @@ pub(super) fn first_crossing(
     };
     let mut walk = EntryOrder::new(bvh, ray, lo, hi);
     let mut known = Fixed::<Known, MAX_ACTIVE>::new();
+    let mut ends = Ends::new();
     let (mut ta, mut s) = (lo, sign);
     loop {
         // The piece's end: the least interval end above ta among the known supports,
         // lowered by any support whose box the ray enters before it.
-        let mut tb = hi;
-        for k in known.as_slice() {
-            k.active.breaks(ta, hi, |e| tb = tb.min(e));
-        }
+        let mut tb = ends.least_above(ta).unwrap_or(hi);
         while let Some(i) = walk.next_before(tb + SLACK * (tb.abs() + 1.0)) {
             let p = &perturbations[i];
             if let Some((active, along)) = Active::on_along(p.f, &p.q.c, o, d, lo, hi) {
                 let mag = sum(q_local_mag(&p.q.c, o, d));
-                if !known.push(Known { active, along, mag }) {
+                let k = Known { active, along, mag };
+                if !known.push(k) {
+                    // Full: drop the supports left behind, then try again.
+                    known.retain(|k| k.active.reaches_past(ta));
+                    if !known.push(k) {
+                        return None;
+                    }
+                }
+                let mut room = true;
+                active.breaks(ta, hi, |e| {
+                    room &= ends.insert(e);
+                    tb = tb.min(e);
+                });
+                if !room {
                     return None;
                 }
-                active.breaks(ta, hi, |e| tb = tb.min(e));
             }
         }
         if walk.overflowed() {
@@ -176,9 +187,63 @@ pub(super) fn first_crossing(
             return Some(None);
         }
         ta = tb;
-        if known.as_slice().iter().any(|k| !k.active.reaches_past(ta)) {
-            known.retain(|k| k.active.reaches_past(ta));
+    }
+}
+
+/// The breakpoints still ahead of the scan, ascending, in `v[head..len]` (slots beyond
+/// `len` never written, as in [`Fixed`]): supports come in entry order, so most of their
+/// ends land at the back.
+struct Ends {
+    v: [MaybeUninit<f64>; ENDS],
+    head: usize,
+    len: usize,
+}
+
+/// Room for the ends of a full active set (at most two finite ends each).
+const ENDS: usize = 2 * MAX_ACTIVE;
+
+impl Ends {
+    fn new() -> Self {
+        Self {
+            v: [const { MaybeUninit::uninit() }; ENDS],
+            head: 0,
+            len: 0,
         }
+    }
+
+    #[inline]
+    fn at(&self, k: usize) -> f64 {
+        debug_assert!(k < self.len);
+        // SAFETY: slots below `len` were written by `insert`.
+        unsafe { self.v[k].assume_init() }
+    }
+
+    /// Inserts e in order; false when there is no room.
+    fn insert(&mut self, e: f64) -> bool {
+        if self.len == ENDS {
+            self.v.copy_within(self.head..self.len, 0);
+            self.len -= self.head;
+            self.head = 0;
+            if self.len == ENDS {
+                return false;
+            }
+        }
+        let mut k = self.len;
+        while k > self.head && self.at(k - 1) > e {
+            self.v[k] = self.v[k - 1];
+            k -= 1;
+        }
+        self.v[k] = MaybeUninit::new(e);
+        self.len += 1;
+        true
+    }
+
+    /// The least end above t, dropping those at or below it.
+    fn least_above(&mut self, t: f64) -> Option<f64> {
+        while self.head < self.len && self.at(self.head) <= t {
+            self.head += 1;
+        }
+        (self.head < self.len).then(|| self.at(self.head))
     }
 }
 
