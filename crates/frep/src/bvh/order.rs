@@ -12,19 +12,23 @@ use std::mem::MaybeUninit;
 /// and the caller falls back to an unordered query. 256 × 16 bytes of stack.
 const HEAP: usize = 256;
 
+/// The storage of an [`EntryOrder`]'s heap, which the caller keeps ([`EntryOrder::heap`]):
+/// held by value, 4 KiB would be copied whenever the walk moves.
+pub type Heap = [MaybeUninit<(f64, u32)>; HEAP];
+
 /// Tags of heap entries: an item's leaf position with this bit set, else a node index.
 const ITEM: u32 = 1 << 31;
 
 /// The items whose box the segment o + t·d, t ∈ [lo, hi], meets, handed out on demand
 /// by [`next_before`](Self::next_before) up to a limit on the entry parameter (unbounded
 /// items first, entering at lo).
-pub struct EntryOrder<'a> {
+pub struct EntryOrder<'a, 'h> {
     bvh: BvhRef<'a>,
     slab: Slab,
     lo: f64,
     hi: f64,
     unbounded: usize,
-    heap: [MaybeUninit<(f64, u32)>; HEAP],
+    heap: &'h mut Heap,
     len: usize,
     overflowed: bool,
     /// Whether every component of 1/d is finite (the fast slab test applies).
@@ -33,10 +37,14 @@ pub struct EntryOrder<'a> {
     neg: [bool; 3],
 }
 
-impl<'a> EntryOrder<'a> {
-    /// The walk of `bvh` along `ray` over [lo, hi]; nothing is visited yet.
-    #[inline]
-    pub fn new(bvh: BvhRef<'a>, ray: &Ray, lo: f64, hi: f64) -> Self {
+impl<'a, 'h> EntryOrder<'a, 'h> {
+    /// Empty storage for [`new`](Self::new) (never written before the walk uses it).
+    pub const fn heap() -> Heap {
+        [const { MaybeUninit::uninit() }; HEAP]
+    }
+
+    /// The walk of `bvh` along `ray` over [lo, hi], keeping its heap in `heap`.
+    pub fn new(bvh: BvhRef<'a>, ray: &Ray, lo: f64, hi: f64, heap: &'h mut Heap) -> Self {
         let slab = Slab::new(ray);
         let mut walk = Self {
             bvh,
@@ -46,7 +54,7 @@ impl<'a> EntryOrder<'a> {
             lo,
             hi,
             unbounded: 0,
-            heap: [const { MaybeUninit::uninit() }; HEAP],
+            heap,
             len: 0,
             overflowed: false,
         };
@@ -243,7 +251,8 @@ mod tests {
             let mut want = Vec::new();
             bvh.for_each_hit(&ray, lo, hi, |i| want.push(i));
             let limit = 0.6;
-            let mut walk = EntryOrder::new(bvh.as_ref(), &ray, lo, hi);
+            let mut heap = EntryOrder::heap();
+            let mut walk = EntryOrder::new(bvh.as_ref(), &ray, lo, hi, &mut heap);
             let mut got = Vec::new();
             while let Some(i) = walk.next_before(limit) {
                 got.push(i);

@@ -132,7 +132,8 @@ pub(super) fn first_crossing(
         along: super::along::q_local(base, o, d),
         mag: sum(q_local_mag(base, o, d)),
     };
-    let mut walk = EntryOrder::new(bvh, ray, lo, hi);
+    let mut heap = EntryOrder::heap();
+    let mut walk = EntryOrder::new(bvh, ray, lo, hi, &mut heap);
     let mut known = Fixed::<Known, MAX_ACTIVE>::new();
     let mut ends = Ends::new();
     let (mut ta, mut s) = (lo, sign);
