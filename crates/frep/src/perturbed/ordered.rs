@@ -17,9 +17,10 @@
 //! term's least, and the same at the greatest (each quadratic's range over the piece,
 //! from its expansion about the ray's origin; f·q³ is monotonic in q ≥ 0). Where that
 //! range excludes 0 by a wide margin, the piece holds no crossing and its Bernstein form
-//! need not be built. The margin (`MARGIN` times first-order bounds on the terms' magnitudes) is
-//! some 10⁶ times the rounding bound the full expansion itself works with, so a skipped
-//! piece is one whose full expansion would have certainly kept its sign.
+//! need not be built. The margin (`MARGIN` times first-order bounds on the terms'
+//! magnitudes) is some 10⁵ times the rounding bound the full expansion itself works
+//! with, so a skipped piece is one whose full expansion would have certainly kept its
+//! sign: skipping changes no answer.
 
 use super::along::q_local_mag;
 use super::scan::{Active, Actives, Coeffs, Fixed, Scan, MAX_ACTIVE};
@@ -32,8 +33,9 @@ use std::mem::MaybeUninit;
 /// it: a margin for the rounding of the slab test, so that a support is never missed.
 const SLACK: f64 = 1e-9;
 
-/// The relative margin of the certain-sign test, on the magnitudes of the terms summed.
-const MARGIN: f64 = 1e-6;
+/// The relative margin of the certain-sign test, on the magnitudes of the terms summed:
+/// some 10⁵ times the bound 32·ε the full expansion puts on its own rounding.
+const MARGIN: f64 = 1e-9;
 
 /// A support met by the ray, with what the certain-sign test reads: q along the ray
 /// about its origin, and the sum of the magnitudes of that expansion's terms.
@@ -78,8 +80,9 @@ struct Base {
 impl Base {
     /// ±1 when F' certainly has that sign all over [ta, tb] (see the module docs), else 0.
     fn certain_sign(&self, known: &[Known], ta: f64, tb: f64) -> f64 {
-        // Terms at |t| ≤ T are at most (1 + T)² times their magnitudes at t = 0.
-        let grow = (1.0 + ta.abs().max(tb.abs())).powi(2);
+        // Terms expanded about a point |t| ≤ |ta| and scaled to a width h = tb − ta are
+        // at most ((1 + |ta|)·(1 + h))² times their magnitudes at t = 0.
+        let grow = ((1.0 + ta.abs()) * (1.0 + (tb - ta))).powi(2);
         // F' ∈ [lo, hi] on the piece, up to `slack`: F's range plus each term's, f·q³
         // being monotonic in q ≥ 0.
         let (mut lo, mut hi) = range_on(self.along, ta, tb);
