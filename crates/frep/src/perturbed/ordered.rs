@@ -191,8 +191,15 @@ pub(super) fn first_crossing(
             return Some(None);
         }
         ta = tb;
+        if known.len() >= RETIRE {
+            known.retain(|k| k.active.reaches_past(ta));
+        }
     }
 }
+
+/// How many known supports the scan lets pile up before it drops those left behind:
+/// dropping moves the rest, keeping makes every piece test them.
+const RETIRE: usize = 32;
 
 /// The breakpoints still ahead of the scan, ascending, in `v[head..len]` (slots beyond
 /// `len` never written, as in [`Fixed`]): supports come in entry order, so most of their

@@ -88,6 +88,10 @@ impl<T: Copy, const N: usize> Fixed<T, N> {
         unsafe { std::slice::from_raw_parts_mut(self.items.as_mut_ptr().cast::<T>(), self.len) }
     }
     #[inline]
+    pub(super) fn len(&self) -> usize {
+        self.len
+    }
+    #[inline]
     pub(super) fn as_slice(&self) -> &[T] {
         // SAFETY: as in `as_mut_slice`.
         unsafe { std::slice::from_raw_parts(self.items.as_ptr().cast::<T>(), self.len) }
