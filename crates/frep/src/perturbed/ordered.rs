@@ -8,9 +8,10 @@
 //! positive on it) and expands each the same way; only the order in which a piece sums
 //! its perturbations differs (entry order, not the BVH's), so the answers agree to
 //! rounding. Perturbations whose last interval ends before the current piece leave the
-//! active set, which so holds only the supports overlapping the ray near the scan
-//! front. Where the front still overlaps more than [`MAX_ACTIVE`], the heap of pending
-//! boxes fills, or the range is unbounded, it defers to [`super::scan::first_crossing`].
+//! active set (once [`RETIRE`] have piled up, or when it is full), which so holds only
+//! the supports near the scan front. Where the front still overlaps more than
+//! [`MAX_ACTIVE`], the heap of pending boxes fills, or the range is unbounded, it defers
+//! to [`super::scan::first_crossing`].
 //!
 //! **Pieces of certain sign.** Before a piece is expanded, a few flops per perturbation
 //! bound it: F' lies between F's least value on the piece plus Σ f_i·q_i³ at each
