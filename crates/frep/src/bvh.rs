@@ -12,6 +12,9 @@
 use crate::ray::{slab_f32, Aabb, Ray};
 use glam::DVec3;
 
+mod order;
+pub use order::{EntryOrder, Heap};
+
 /// The most items a leaf holds.
 const MAX_LEAF: usize = 4;
 /// SAH bins per axis.

@@ -6,6 +6,7 @@
 //! [`PerturbedSurface`] intersects rays with such a solid exactly.
 
 pub(crate) mod along;
+mod ordered;
 mod scan;
 mod surface;
 

@@ -58,14 +58,14 @@ const MAX_BREAKS: usize = 2 * MAX_ACTIVE;
 
 /// A fixed-capacity list on the stack whose unused slots are never written (filling
 /// 4 KiB of placeholders per ray costs more than a one-perturbation scan).
-struct Fixed<T: Copy, const N: usize> {
+pub(super) struct Fixed<T: Copy, const N: usize> {
     items: [MaybeUninit<T>; N],
     len: usize,
 }
 
 impl<T: Copy, const N: usize> Fixed<T, N> {
     #[inline]
-    fn new() -> Self {
+    pub(super) fn new() -> Self {
         Self {
             items: [const { MaybeUninit::uninit() }; N],
             len: 0,
@@ -73,7 +73,7 @@ impl<T: Copy, const N: usize> Fixed<T, N> {
     }
     /// Appends `v`; false (and nothing written) when full.
     #[inline]
-    fn push(&mut self, v: T) -> bool {
+    pub(super) fn push(&mut self, v: T) -> bool {
         if self.len == N {
             return false;
         }
@@ -82,10 +82,33 @@ impl<T: Copy, const N: usize> Fixed<T, N> {
         true
     }
     #[inline]
-    fn as_mut_slice(&mut self) -> &mut [T] {
+    pub(super) fn as_mut_slice(&mut self) -> &mut [T] {
         // SAFETY: the first `len` slots were written by `push`, and MaybeUninit<T> has
         // the layout of T.
         unsafe { std::slice::from_raw_parts_mut(self.items.as_mut_ptr().cast::<T>(), self.len) }
+    }
+    #[inline]
+    pub(super) fn len(&self) -> usize {
+        self.len
+    }
+    #[inline]
+    pub(super) fn as_slice(&self) -> &[T] {
+        // SAFETY: as in `as_mut_slice`.
+        unsafe { std::slice::from_raw_parts(self.items.as_ptr().cast::<T>(), self.len) }
+    }
+    /// Keeps the items for which `keep` holds, in their order.
+    #[inline]
+    pub(super) fn retain(&mut self, mut keep: impl FnMut(&T) -> bool) {
+        let mut k = 0;
+        for j in 0..self.len {
+            // SAFETY: slots below `len` were written by `push` (or moved down here).
+            let v = unsafe { self.items[j].assume_init() };
+            if keep(&v) {
+                self.items[k] = MaybeUninit::new(v);
+                k += 1;
+            }
+        }
+        self.len = k;
     }
 }
 
@@ -99,8 +122,8 @@ pub(crate) trait Source<T> {
 
 /// One perturbation that is positive somewhere on the scanned range.
 #[derive(Clone, Copy)]
-struct Active<T> {
-    f: T,
+pub(super) struct Active<T> {
+    pub(super) f: T,
     q: Coeffs<T>,
     set: [(T, T); 2],
     n: usize,
@@ -109,11 +132,26 @@ struct Active<T> {
 impl<T: Float> Active<T> {
     /// The perturbation (f, q) restricted to where it is positive on (lo, hi), if anywhere.
     #[inline]
-    fn on(f: T, q: &Coeffs<T>, o: [T; 3], d: [T; 3], lo: T, hi: T) -> Option<Self> {
+    pub(super) fn on(f: T, q: &Coeffs<T>, o: [T; 3], d: [T; 3], lo: T, hi: T) -> Option<Self> {
+        Self::on_along(f, q, o, d, lo, hi).map(|(a, _)| a)
+    }
+
+    /// [`on`](Self::on), and q along the ray about its origin (t = 0) as a quadratic
+    /// in t, which [`on`](Self::on) computes anyway.
+    #[inline]
+    pub(super) fn on_along(
+        f: T,
+        q: &Coeffs<T>,
+        o: [T; 3],
+        d: [T; 3],
+        lo: T,
+        hi: T,
+    ) -> Option<(Self, [T; 3])> {
         if f == T::zero() {
             return None;
         }
-        let (mut set, n) = positive_set(q_local(q, o, d));
+        let along = q_local(q, o, d);
+        let (mut set, n) = positive_set(along);
         let mut k = 0;
         for j in 0..n {
             let (a, b) = set[j];
@@ -122,17 +160,20 @@ impl<T: Float> Active<T> {
                 k += 1;
             }
         }
-        (k > 0).then_some(Self {
-            f,
-            q: *q,
-            set,
-            n: k,
-        })
+        (k > 0).then_some((
+            Self {
+                f,
+                q: *q,
+                set,
+                n: k,
+            },
+            along,
+        ))
     }
 
     /// The interval ends strictly inside (lo, hi): the piece breakpoints it makes.
     #[inline]
-    fn breaks(&self, lo: T, hi: T, mut visit: impl FnMut(T)) {
+    pub(super) fn breaks(&self, lo: T, hi: T, mut visit: impl FnMut(T)) {
         for &(a, b) in &self.set[..self.n] {
             for e in [a, b] {
                 if e > lo && e < hi {
@@ -143,13 +184,19 @@ impl<T: Float> Active<T> {
     }
 
     #[inline]
-    fn holds(&self, t: T) -> bool {
+    pub(super) fn holds(&self, t: T) -> bool {
         self.set[..self.n].iter().any(|&(a, b)| a < t && t < b)
+    }
+
+    /// Whether it is positive somewhere after t (an interval of its set ends above t).
+    #[inline]
+    pub(super) fn reaches_past(&self, t: T) -> bool {
+        self.set[..self.n].iter().any(|&(_, b)| b > t)
     }
 }
 
 /// The active perturbations of a scan, visited in the source's order.
-trait Actives<T> {
+pub(super) trait Actives<T> {
     fn each(&self, visit: impl FnMut(&Active<T>));
 }
 
@@ -371,14 +418,14 @@ impl<T: Float, S: Source<T>> Along<'_, T, S> {
 }
 
 /// The state of one scan: the sign of F' before the current piece (0 while unknown).
-struct Scan<'a, T, A: ?Sized> {
-    base: &'a Coeffs<T>,
-    active: &'a A,
-    o: [T; 3],
-    d: [T; 3],
-    s: T,
-    t_min: T,
-    t_max: T,
+pub(super) struct Scan<'a, T, A: ?Sized> {
+    pub(super) base: &'a Coeffs<T>,
+    pub(super) active: &'a A,
+    pub(super) o: [T; 3],
+    pub(super) d: [T; 3],
+    pub(super) s: T,
+    pub(super) t_min: T,
+    pub(super) t_max: T,
 }
 
 /// How far past a finite anchor an unbounded piece's first sub-piece reaches, and the
@@ -427,7 +474,7 @@ impl<T: Float, A: Actives<T> + ?Sized> Scan<'_, T, A> {
     }
 
     /// Scans the finite piece [ta, tb]: Some(answer) when the scan is decided.
-    fn piece(&mut self, ta: T, tb: T) -> Option<Option<T>> {
+    pub(super) fn piece(&mut self, ta: T, tb: T) -> Option<Option<T>> {
         let (b, e) = Piece::new(self.base, self.active, self.o, self.d, ta, tb, None).bernstein();
         if !b.coeffs().iter().all(|v| v.is_finite()) {
             // Beyond the range of T (only far along an unbounded piece): give up there.

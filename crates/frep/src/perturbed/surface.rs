@@ -6,6 +6,7 @@
 //! exact piecewise-polynomial scan of [`super::scan`].
 
 use super::along::{positive_set, q_local_f64};
+use super::ordered;
 use super::scan::{self, Coeffs};
 use super::{Perturbation, PerturbedQuadric};
 use crate::bvh::{Bvh, BvhRef};
@@ -201,17 +202,33 @@ impl PerturbedView<'_> {
         self.scan_first_crossing(ray, t_min, t_max)
     }
 
-    /// [`Self::first_crossing`] by the scan, whatever the perturbations.
+    /// [`Self::first_crossing`] by the scan, whatever the perturbations: in ray order
+    /// ([`ordered`]), or where that defers, over the unordered BVH query.
     fn scan_first_crossing(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<f64> {
+        let (lo, hi, sign) = self.clip(ray, t_min, t_max)?;
+        let base: &Coeffs<f64> = &self.base.c;
+        let (perturbations, bvh) = (self.perturbations, self.bvh);
+        let range = (lo, hi);
+        ordered::first_crossing(base, perturbations, bvh, ray, range, t_min, t_max, sign)
+            .unwrap_or_else(|| self.unordered_first_crossing(ray, t_min, t_max))
+    }
+
+    /// The scan over every support the ray meets in [lo, hi], collected up front: the
+    /// ray-order scan's fallback, and its reference in the tests.
+    pub(super) fn unordered_first_crossing(
+        &self,
+        ray: &Ray,
+        t_min: f64,
+        t_max: f64,
+    ) -> Option<f64> {
         let (lo, hi, sign) = self.clip(ray, t_min, t_max)?;
         let src = Supports {
             perturbations: self.perturbations,
             bvh: self.bvh,
             ray,
         };
-        let base: &Coeffs<f64> = &self.base.c;
         scan::first_crossing(
-            base,
+            &self.base.c,
             &src,
             ray.o.to_array(),
             ray.d.to_array(),
