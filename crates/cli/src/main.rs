@@ -21,6 +21,7 @@ mod interrupt;
 mod merge_cmd;
 mod output;
 mod scene_render;
+mod stage_plot;
 
 use clap::{Parser, Subcommand, ValueEnum};
 use frepray::preview;
@@ -253,6 +254,10 @@ struct BenchArgs {
     /// the system has available]; a larger one is refused before anything runs.
     #[arg(long, value_name = "SIZE", value_parser = render::limits::parse_bytes)]
     max_memory: Option<u64>,
+    /// Also draw the GPU's stage times as stacked bars (the paper's Fig. 4–5) into
+    /// this SVG file.
+    #[arg(long, value_name = "FILE.svg")]
+    plot: Option<PathBuf>,
 }
 
 fn main() -> ExitCode {
@@ -497,5 +502,11 @@ fn bench(args: BenchArgs) -> Result<(), String> {
         height: args.height,
         ..Default::default()
     };
-    scene_render::bench(&args.scene, &o, args.max_memory.unwrap_or(0), &args.backend)
+    scene_render::bench(
+        &args.scene,
+        &o,
+        args.max_memory.unwrap_or(0),
+        &args.backend,
+        args.plot.as_deref(),
+    )
 }

@@ -372,7 +372,11 @@ pub fn bench(
     o: &Overrides,
     max_memory: u64,
     backends: &[Backend],
+    plot: Option<&Path>,
 ) -> Result<(), String> {
+    if let Some(p) = plot {
+        output::check_writable(p)?;
+    }
     let (data, _) = resolve(input, o)?;
     let (scene, mut opts) = load(input, o)?;
     opts.max_memory = max_memory;
@@ -432,6 +436,7 @@ pub fn bench(
             sh
         );
     }
+    let mut bars = Vec::new();
     for (integrator, g) in &stages {
         let st = &g.stages;
         let parts = [
@@ -439,7 +444,7 @@ pub fn bench(
             ("shade (GPU)", st.shade),
             ("shadow rays (GPU)", st.shadow),
             ("continuation rays (GPU)", st.secondary),
-            ("readback (wall)", st.readback),
+            ("submit and read back (wall − passes)", st.readback),
             ("accumulate (CPU)", st.accumulate),
         ];
         let total: f64 = parts.iter().map(|p| p.1.as_secs_f64()).sum();
@@ -460,6 +465,16 @@ pub fn bench(
             g.waves,
             g.max_loops
         );
+        bars.push((format!("GPU {integrator}"), parts.to_vec()));
+    }
+    if let Some(p) = plot {
+        use std::io::Write;
+        let name = input.file_name().unwrap_or_default().to_string_lossy();
+        let title = format!("GPU stage times, {name} ({} spp)", opts.spp);
+        let svg = crate::stage_plot::svg(&title, &bars);
+        render::output::write_atomically(p, |w| w.write_all(svg.as_bytes()))
+            .map_err(|e| format!("{}: {e}", p.display()))?;
+        eprintln!("{} written", p.display());
     }
     Ok(())
 }

@@ -604,7 +604,8 @@ pub struct StageTimes {
     pub shadow: Duration,
     /// Continuation rays of `path` (GPU).
     pub secondary: Duration,
-    /// Waiting for the GPU and copying its results back (wall).
+    /// Submission and read-back: the wall time from submitting a wave to having its
+    /// results on the CPU, less the passes' GPU time (all of it without timestamps).
     pub readback: Duration,
     /// Adding the draws into the per-pixel records on the CPU, CPU fallbacks included.
     pub accumulate: Duration,
@@ -986,12 +987,14 @@ pub fn render_range(
         } else {
             Vec::new()
         };
+        let mut passes_time = Duration::ZERO;
         if timestamps.is_some() {
             let ts = read_back(gpu, &ts_read, ts_bytes)?;
             let t: &[u64] = bytemuck::cast_slice(&ts);
             for (q, &(stage, _, _)) in passes.iter().enumerate() {
                 let ns = t[2 * q + 1].saturating_sub(t[2 * q]) as f64 * period;
                 let span = Duration::from_nanos(ns as u64);
+                passes_time += span;
                 match stage {
                     0 => stats.stages.camera += span,
                     1 => stats.stages.shade += span,
@@ -1000,7 +1003,7 @@ pub fn render_range(
                 }
             }
         }
-        stats.stages.readback += t0.elapsed();
+        stats.stages.readback += t0.elapsed().saturating_sub(passes_time);
         let t1 = Instant::now();
         let hv: &[f32] = bytemuck::cast_slice(&hit_data);
         let dv: &[f32] = bytemuck::cast_slice(&draw_data);
