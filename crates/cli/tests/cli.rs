@@ -499,3 +499,36 @@ fn exposure_and_tone_mapping_shape_the_png_only() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert_eq!(std::fs::read(dir.join("film.png")).unwrap(), dark);
 }
+
+/// `--backend gpu` refuses, before any work and naming the feature, a scene the GPU back
+/// end does not cover (point and spot lights), exiting non-zero; `--backend auto`
+/// renders it on the CPU and says why; without any adapter both say what to install.
+#[test]
+fn gpu_backend_refuses_by_name_and_auto_falls_back() {
+    let d = out_dir("gpu-backend");
+    let scene = root().join("scenes/point-lights.toml");
+    let small = ["--width", "16", "--height", "12", "--spp", "1", "--quiet"];
+    let gpu = frepray()
+        .args(["render", scene.to_str().unwrap(), "--backend", "gpu", "-o"])
+        .arg(d.join("g.exr"))
+        .args(small)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&gpu.stderr);
+    assert!(!gpu.status.success());
+    assert!(
+        err.contains("point and spot lights") || err.contains("no GPU adapter"),
+        "{err}"
+    );
+    assert!(!d.join("g.exr").exists());
+    let auto = frepray()
+        .args(["render", scene.to_str().unwrap(), "--backend", "auto", "-o"])
+        .arg(d.join("a.exr"))
+        .args(small)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&auto.stderr);
+    assert!(auto.status.success(), "{err}");
+    assert!(err.contains("--backend auto renders on the CPU"), "{err}");
+    assert!(d.join("a.exr").exists());
+}
