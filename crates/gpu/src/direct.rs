@@ -734,6 +734,160 @@ fn pipelines(gpu: &Gpu, tape_wgsl: &str) -> Result<Pipelines, GpuError> {
     })
 }
 
+/// The kernels for `pack`'s tape, compiled on first use and kept by `gpu`.
+fn kernels(gpu: &Gpu, pack: &DirectScene) -> Result<std::sync::Arc<Pipelines>, GpuError> {
+    let tape_wgsl = pack.tape_wgsl();
+    let mut cache = gpu
+        .direct
+        .lock()
+        .map_err(|e| GpuError::Run(e.to_string()))?;
+    if let Some((_, p)) = cache.iter().find(|(src, _)| *src == tape_wgsl) {
+        return Ok(p.clone());
+    }
+    let p = std::sync::Arc::new(pipelines(gpu, &tape_wgsl)?);
+    cache.push((tape_wgsl, p.clone()));
+    Ok(p)
+}
+
+/// The scene's read-only buffers in binding order (1–9, then 14–15: CSG and tape).
+fn scene_buffers(gpu: &Gpu, pack: &DirectScene) -> Result<Vec<wgpu::Buffer>, GpuError> {
+    let tape_words: &[u32] = pack.tape.as_ref().map_or(&[], |t| t.tape.words());
+    Ok(vec![
+        storage(gpu, "shapes", bytemuck::cast_slice(&pack.shapes))?,
+        storage(gpu, "objects", bytemuck::cast_slice(&pack.leaves))?,
+        storage(gpu, "quadrics", bytemuck::cast_slice(&pack.quadrics))?,
+        storage(
+            gpu,
+            "perturbations",
+            bytemuck::cast_slice(&pack.perturbations),
+        )?,
+        storage(gpu, "nodes", bytemuck::cast_slice(&pack.nodes))?,
+        storage(gpu, "items", bytemuck::cast_slice(&pack.items))?,
+        storage(gpu, "materials", bytemuck::cast_slice(&pack.materials))?,
+        storage(gpu, "lights", bytemuck::cast_slice(&pack.lights))?,
+        storage(gpu, "tables", bytemuck::cast_slice(&pack.tables))?,
+        storage(gpu, "csg", bytemuck::cast_slice(&pack.csg))?,
+        storage(gpu, "tape", bytemuck::cast_slice(tape_words))?,
+    ])
+}
+
+/// The bind group of one pass: its frame block, the scene, and the wave's hits, draws
+/// and loop counters.
+fn bind(
+    gpu: &Gpu,
+    p: &Pipelines,
+    scene: &[wgpu::Buffer],
+    frame: &wgpu::Buffer,
+    wave: [&wgpu::Buffer; 3],
+) -> wgpu::BindGroup {
+    let all = std::iter::once(frame)
+        .chain(&scene[..9])
+        .chain(wave)
+        .chain(&scene[9..]);
+    let entries: Vec<wgpu::BindGroupEntry> = all
+        .enumerate()
+        .map(|(k, b)| wgpu::BindGroupEntry {
+            binding: k as u32,
+            resource: b.as_entire_binding(),
+        })
+        .collect();
+    gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("direct"),
+        layout: &p.layout,
+        entries: &entries,
+    })
+}
+
+/// One ray of [`probe`]: what the kernels' nearest-hit query found.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Probe {
+    /// 0 miss, 1 hit, 2 overflow (a fixed capacity ran out: the renderer hands such
+    /// samples to the CPU).
+    pub status: u32,
+    /// The ray parameter of the hit.
+    pub t: f32,
+    /// The outward unit normal there.
+    pub normal: [f32; 3],
+    /// Loop iterations the query took (GPU.md §3.1).
+    pub loops: u32,
+}
+
+/// The nearest object hit of each ray `(origin, direction)` against the objects of
+/// `data`, by the render kernels' own query (a ray batch, GPU.md §9).
+pub fn probe(
+    gpu: &Gpu,
+    data: &SceneData,
+    rays: &[([f32; 3], [f32; 3])],
+) -> Result<Vec<Probe>, GpuError> {
+    let mut pack = DirectScene::new(data, &RenderOptions::default())?;
+    let p = kernels(gpu, &pack)?;
+    let scene = scene_buffers(gpu, &pack)?;
+    let n = rays.len().max(1) as u32;
+    pack.frame.slots = n;
+    pack.frame.mode = 3;
+    let d = &gpu.device;
+    let mut input = vec![[0f32; 4]; n as usize * DRAW_WORDS / 4];
+    for (i, (o, dir)) in rays.iter().enumerate() {
+        input[i * DRAW_WORDS / 4] = [o[0], o[1], o[2], 0.0];
+        input[i * DRAW_WORDS / 4 + 1] = [dir[0], dir[1], dir[2], 0.0];
+    }
+    let draws = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some("rays"),
+        contents: bytemuck::cast_slice(&input),
+        usage: wgpu::BufferUsages::STORAGE,
+    });
+    let bytes = u64::from(n) * HIT_WORDS as u64 * 4;
+    gpu.check_binding(bytes)?;
+    let hits = d.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("probe hits"),
+        size: bytes,
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+        mapped_at_creation: false,
+    });
+    let loops = d.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("stats"),
+        size: 16,
+        usage: wgpu::BufferUsages::STORAGE,
+        mapped_at_creation: false,
+    });
+    let readback = d.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("probe readback"),
+        size: bytes,
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let frame = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some("frame"),
+        contents: bytemuck::bytes_of(&pack.frame),
+        usage: wgpu::BufferUsages::UNIFORM,
+    });
+    let group = bind(gpu, &p, &scene, &frame, [&hits, &draws, &loops]);
+    let mut enc = d.create_command_encoder(&Default::default());
+    {
+        let mut pass = enc.begin_compute_pass(&Default::default());
+        pass.set_pipeline(&p.trace);
+        pass.set_bind_group(0, &group, &[]);
+        pass.dispatch_workgroups(n.div_ceil(64), 1, 1);
+    }
+    enc.copy_buffer_to_buffer(&hits, 0, &readback, 0, bytes);
+    gpu.queue.submit([enc.finish()]);
+    let out = read_back(gpu, &readback, bytes)?;
+    let v: &[f32] = bytemuck::cast_slice(&out);
+    Ok(rays
+        .iter()
+        .enumerate()
+        .map(|(i, _)| {
+            let h = &v[i * HIT_WORDS..];
+            Probe {
+                status: h[2] as u32,
+                t: h[0],
+                normal: [h[4], h[5], h[6]],
+                loops: h[3] as u32,
+            }
+        })
+        .collect())
+}
+
 fn storage(gpu: &Gpu, label: &str, bytes: &[u8]) -> Result<wgpu::Buffer, GpuError> {
     gpu.check_binding(bytes.len() as u64)?;
     // Empty bindings are invalid: give an empty pool one zeroed 16-byte element.
@@ -784,21 +938,7 @@ pub fn render_range(
     let acc = Accumulator::new(scene, &o).map_err(GpuError::Unsupported)?;
     let mut pack = DirectScene::new(data, &o)?;
     let started = Instant::now();
-    let tape_wgsl = pack.tape_wgsl();
-    let p = {
-        let mut cache = gpu
-            .direct
-            .lock()
-            .map_err(|e| GpuError::Run(e.to_string()))?;
-        match cache.iter().find(|(src, _)| *src == tape_wgsl) {
-            Some((_, p)) => p.clone(),
-            None => {
-                let p = std::sync::Arc::new(pipelines(gpu, &tape_wgsl)?);
-                cache.push((tape_wgsl, p.clone()));
-                p
-            }
-        }
-    };
+    let p = kernels(gpu, &pack)?;
     let mut stats = GpuStats::default();
     let (w, h) = (data.camera.width, data.camera.height);
     let header = StateHeader::new(w, h, &o);
@@ -812,24 +952,7 @@ pub fn render_range(
     let per_wave = (WAVE_DRAWS / (pixels * per_slot_draws)).max(1);
     let max_slots = u64::from(per_wave * pixels);
     let d = &gpu.device;
-    let buffers = [
-        storage(gpu, "shapes", bytemuck::cast_slice(&pack.shapes))?,
-        storage(gpu, "objects", bytemuck::cast_slice(&pack.leaves))?,
-        storage(gpu, "quadrics", bytemuck::cast_slice(&pack.quadrics))?,
-        storage(
-            gpu,
-            "perturbations",
-            bytemuck::cast_slice(&pack.perturbations),
-        )?,
-        storage(gpu, "nodes", bytemuck::cast_slice(&pack.nodes))?,
-        storage(gpu, "items", bytemuck::cast_slice(&pack.items))?,
-        storage(gpu, "materials", bytemuck::cast_slice(&pack.materials))?,
-        storage(gpu, "lights", bytemuck::cast_slice(&pack.lights))?,
-        storage(gpu, "tables", bytemuck::cast_slice(&pack.tables))?,
-    ];
-    let csg = storage(gpu, "csg", bytemuck::cast_slice(&pack.csg))?;
-    let tape_words: &[u32] = pack.tape.as_ref().map_or(&[], |t| t.tape.words());
-    let tape = storage(gpu, "tape", bytemuck::cast_slice(tape_words))?;
+    let buffers = scene_buffers(gpu, &pack)?;
     let hit_bytes = max_slots * HIT_WORDS as u64 * 4;
     let draw_bytes = max_slots * u64::from(per_slot_draws) * DRAW_WORDS as u64 * 4;
     gpu.check_binding(draw_bytes)?;
@@ -871,27 +994,7 @@ pub fn render_range(
         .collect();
     let groups: Vec<wgpu::BindGroup> = frames
         .iter()
-        .map(|f| {
-            let mut entries = vec![wgpu::BindGroupEntry {
-                binding: 0,
-                resource: f.as_entire_binding(),
-            }];
-            for (k, b) in buffers
-                .iter()
-                .chain([&hits, &draws, &loops, &csg, &tape])
-                .enumerate()
-            {
-                entries.push(wgpu::BindGroupEntry {
-                    binding: k as u32 + 1,
-                    resource: b.as_entire_binding(),
-                });
-            }
-            d.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("direct"),
-                layout: &p.layout,
-                entries: &entries,
-            })
-        })
+        .map(|f| bind(gpu, &p, &buffers, f, [&hits, &draws, &loops]))
         .collect();
     // Passes per wave: the camera trace, then per depth shade, shadow and (but the last)
     // the continuation. Stage k of each: 0 camera, 1 shade, 2 shadow, 3 continuation.

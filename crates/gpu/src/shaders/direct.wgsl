@@ -531,6 +531,19 @@ fn trace_shadow(i: u32) {
     }
 }
 
+// A ray batch for tests (mode 3): ray i from draws[5i] (origin) and draws[5i + 1]
+// (direction); the nearest object hit into hits[8i] = (t, leaf key, status, loops) and
+// hits[8i + 1] = its normal.
+fn probe(i: u32) {
+    let o = draws[i * DRAW_WORDS].xyz;
+    let d = draws[i * DRAW_WORDS + 1u].xyz;
+    let h = scene_trace(o, d, inf(), false);
+    var n = vec3<f32>(0.0);
+    if (h.status == 1u) { n = leaf_normal(h.leaf, o + h.t * d); }
+    hits[i * HIT_WORDS] = vec4<f32>(h.t, bitcast<f32>(h.leaf), f32(h.status), f32(loops));
+    hits[i * HIT_WORDS + 1u] = vec4<f32>(n, 0.0);
+}
+
 @compute @workgroup_size(64)
 fn trace(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nw: vec3<u32>) {
     let i = gid.x + gid.y * nw.x * 64u;
@@ -540,7 +553,13 @@ fn trace(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
         trace_shadow(i);
     } else {
         if (i >= frame.slots) { return; }
-        if (frame.mode == 0u) { trace_camera(i); } else { trace_continuation(i); }
+        if (frame.mode == 0u) {
+            trace_camera(i);
+        } else if (frame.mode == 2u) {
+            trace_continuation(i);
+        } else {
+            probe(i);
+        }
     }
     atomicMax(&stats[select(0u, 1u, frame.mode == 1u)], loops);
 }
