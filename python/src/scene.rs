@@ -73,6 +73,7 @@ impl Scene {
             .collect();
         d.set_item("techniques", techniques)?;
         d.set_item("max_depth", o.max_depth)?;
+        d.set_item("min_depth", o.min_depth)?;
         let aovs: Vec<&str> = o.aovs.iter().map(|a| a.name()).collect();
         d.set_item("aovs", aovs)?;
         Ok(d.into_any())
@@ -185,7 +186,7 @@ fn technique_text(t: &Bound<'_, PyAny>) -> PyResult<String> {
 /// `scene` into a `RenderState`. Keyword options override the scene's settings:
 /// `spp`, `seed`, `estimator` (balance, power, maximum, cutoff, optimal-direct, …),
 /// `techniques` ("light:1,bsdf:1", a dict or a list), `integrator`, `width`, `height`,
-/// `max_depth`, `aovs`, `hide_emitters`, `beta`, `cutoff`, `ridge`, `per_light` (one MIS
+/// `max_depth`, `min_depth` (only paths of at least this many bounces, as `--min-depth`), `aovs`, `hide_emitters`, `beta`, `cutoff`, `ridge`, `per_light` (one MIS
 /// estimator per light, as `--per-light`), `pixel_center` (camera rays through pixel
 /// centres, as `--pixel-center`); `threads` (0: all
 /// cores); `backend` "cpu" (this build has no GPU back end). The GIL is released while
@@ -195,7 +196,7 @@ fn technique_text(t: &Bound<'_, PyAny>) -> PyResult<String> {
 #[pyo3(signature = (scene, spp = None, seed = None, samples = None, estimator = None,
     techniques = None, integrator = None, threads = 0, backend = "cpu", width = None,
     height = None, max_depth = None, aovs = None, hide_emitters = false, beta = None,
-    cutoff = None, ridge = None, per_light = false, pixel_center = false))]
+    cutoff = None, ridge = None, per_light = false, pixel_center = false, min_depth = None))]
 #[allow(clippy::too_many_arguments)]
 pub fn render(
     py: Python<'_>,
@@ -218,6 +219,7 @@ pub fn render(
     ridge: Option<f64>,
     per_light: bool,
     pixel_center: bool,
+    min_depth: Option<u32>,
 ) -> PyResult<RenderState> {
     match backend {
         "cpu" => {}
@@ -247,6 +249,7 @@ pub fn render(
         width,
         height,
         max_depth,
+        min_depth,
         aovs,
         hide_emitters,
         beta,
@@ -260,6 +263,7 @@ pub fn render(
         || o.width.is_some()
         || o.height.is_some()
         || o.max_depth.is_some()
+        || o.min_depth.is_some()
         || o.aovs.is_some()
         || o.hide_emitters
         || o.beta.is_some()

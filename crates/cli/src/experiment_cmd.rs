@@ -76,6 +76,11 @@ pub struct ExperimentArgs {
     /// Maximum path depth (`path`) [default: the scene's].
     #[arg(long)]
     max_depth: Option<u32>,
+    /// Minimum path depth: only light of paths with at least this many bounces reaches
+    /// the images, the reference's too; `--min-depth d --max-depth d` compares the
+    /// estimators on depth d alone [default: the scene's, 0: all].
+    #[arg(long)]
+    min_depth: Option<u32>,
     /// Leave emitters seen directly by the camera out of the images, so that the error
     /// measures the estimators, not the camera's sampling of visible lights.
     #[arg(long)]
@@ -245,6 +250,7 @@ pub fn run(a: ExperimentArgs) -> Result<(), String> {
         beta: a.beta,
         cutoff: a.cutoff,
         max_depth: a.max_depth,
+        min_depth: a.min_depth,
         ..Default::default()
     };
     let (data, settings) = scene_render::resolve(&a.scene, &o)?;
@@ -297,6 +303,10 @@ pub fn run(a: ExperimentArgs) -> Result<(), String> {
     if base.per_light > 0 {
         // Only when on, so that the settings of earlier runs read as before.
         cfg.renderer_settings += &format!(" per-light {}", base.per_light);
+    }
+    if base.min_depth > 0 {
+        // Likewise.
+        cfg.renderer_settings += &format!(" min-depth {}", base.min_depth);
     }
     cfg.size = Some((scene.camera.width, scene.camera.height));
     cfg.estimators = estimators;

@@ -102,6 +102,12 @@ struct RenderArgs {
     /// Maximum path depth (scenes, `path`).
     #[arg(long)]
     max_depth: Option<u32>,
+    /// Minimum path depth (scenes): only light of paths with at least this many bounces
+    /// reaches the image (0: all; camera-seen emitters are depth 0). With
+    /// `--min-depth d --max-depth d` the image holds depth d alone, and the images of
+    /// every depth sum to the full one [default: 0].
+    #[arg(long)]
+    min_depth: Option<u32>,
     /// Power heuristic exponent β (scenes, `--mis power`) [default: 2].
     #[arg(long, allow_negative_numbers = true)]
     beta: Option<f64>,
@@ -322,6 +328,7 @@ fn render(args: RenderArgs) -> Result<(), String> {
             width: args.width,
             height: args.height,
             max_depth: args.max_depth,
+            min_depth: args.min_depth,
             aovs: args.aovs,
             threads: 0,
             hide_emitters: args.hide_emitters,

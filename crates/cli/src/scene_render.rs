@@ -28,6 +28,8 @@ pub struct Overrides {
     pub height: Option<u32>,
     /// Path length limit.
     pub max_depth: Option<u32>,
+    /// Shallowest path depth that reaches the image.
+    pub min_depth: Option<u32>,
     /// Extra AOV channels, comma-separated.
     pub aovs: Option<String>,
     /// Worker threads (0: the global pool).
@@ -70,6 +72,7 @@ impl Overrides {
             width: self.width,
             height: self.height,
             max_depth: self.max_depth,
+            min_depth: self.min_depth,
             aovs: self.aovs.as_deref().map(list),
             hide_emitters: self.hide_emitters,
             beta: self.beta,
@@ -90,6 +93,7 @@ fn flag(key: &str) -> &'static str {
         "render.integrator" => "--integrator",
         "camera.resolution" => "--width/--height",
         "render.max_depth" => "--max-depth",
+        "render.min_depth" => "--min-depth",
         "render.aovs" => "--aovs",
         "render.hide_emitters" => "--hide-emitters",
         "render.beta" => "--beta",

@@ -59,6 +59,8 @@ pub struct StateHeader {
     pub techniques: Vec<(Technique, u32)>,
     /// Maximum path depth.
     pub max_depth: u32,
+    /// Minimum path depth (0: all).
+    pub min_depth: u32,
     /// Roulette starts after this many vertices.
     pub rr_depth: u32,
     /// Whether emitters seen by the camera are left out.
@@ -87,6 +89,7 @@ impl StateHeader {
             params: o.params.resolved(o.method),
             techniques: o.techniques.clone(),
             max_depth: o.max_depth,
+            min_depth: o.min_depth,
             rr_depth: o.rr_depth,
             hide_emitters: o.hide_emitters,
             aovs: o.aovs.clone(),
@@ -105,6 +108,7 @@ impl StateHeader {
             params: self.params,
             techniques: self.techniques.clone(),
             max_depth: self.max_depth,
+            min_depth: self.min_depth,
             rr_depth: self.rr_depth,
             hide_emitters: self.hide_emitters,
             aovs: self.aovs.clone(),
@@ -129,6 +133,7 @@ impl StateHeader {
             "train": self.params.train,
             "techniques": self.techniques.iter().map(|(t, n)| json!([t.name(), n])).collect::<Vec<_>>(),
             "max_depth": self.max_depth,
+            "min_depth": self.min_depth,
             "rr_depth": self.rr_depth,
             "hide_emitters": self.hide_emitters,
             "aovs": self.aovs.iter().map(|a| a.name()).collect::<Vec<_>>(),
@@ -198,6 +203,11 @@ impl StateHeader {
             },
             techniques,
             max_depth: u32_("max_depth")?,
+            // Absent from states written before the option existed: all depths.
+            min_depth: match v.get("min_depth") {
+                None => 0,
+                Some(_) => u32_("min_depth")?,
+            },
             rr_depth: u32_("rr_depth")?,
             hide_emitters: field("hide_emitters")?
                 .as_bool()

@@ -90,6 +90,9 @@ pub struct RenderDesc {
     pub seed: Option<u64>,
     /// Longest path, in bounces (default 5).
     pub max_depth: Option<u32>,
+    /// Only paths of at least this many bounces reach the image (default 0: all; with
+    /// `min_depth = max_depth` one depth alone).
+    pub min_depth: Option<u32>,
     /// Depth at which Russian roulette starts (default 3).
     pub rr_depth: Option<u32>,
     /// Whether emitters (area lights, the environment) seen directly by the camera are

@@ -24,6 +24,8 @@ pub struct Overrides {
     pub height: Option<u32>,
     /// `render.max_depth`.
     pub max_depth: Option<u32>,
+    /// `render.min_depth`.
+    pub min_depth: Option<u32>,
     /// `render.aovs`.
     pub aovs: Option<Vec<String>>,
     /// Sets `render.hide_emitters` when true.
@@ -48,6 +50,7 @@ impl SceneDescription {
         set(&mut r.seed, &o.seed);
         set(&mut r.integrator, &o.integrator);
         set(&mut r.max_depth, &o.max_depth);
+        set(&mut r.min_depth, &o.min_depth);
         set(&mut r.aovs, &o.aovs);
         set(&mut r.beta, &o.beta);
         set(&mut r.cutoff, &o.cutoff);
@@ -85,6 +88,7 @@ impl Overrides {
                 self.width.is_some() || self.height.is_some(),
             ),
             ("render.max_depth", self.max_depth.is_some()),
+            ("render.min_depth", self.min_depth.is_some()),
             ("render.aovs", self.aovs.is_some()),
             ("render.hide_emitters", self.hide_emitters),
             ("render.beta", self.beta.is_some()),
