@@ -46,6 +46,12 @@ pub struct Overrides {
     pub ridge: Option<f64>,
     /// One MIS estimator per light.
     pub per_light: bool,
+    /// `light-trained`'s grid cells per axis.
+    pub trained_grid: Option<u32>,
+    /// `light-trained`'s uniform floor.
+    pub trained_floor: Option<f64>,
+    /// `light-trained`'s training rays per pixel.
+    pub trained_spp: Option<u32>,
 }
 
 impl Overrides {
@@ -79,6 +85,9 @@ impl Overrides {
             cutoff: self.cutoff,
             ridge: self.ridge,
             per_light: self.per_light,
+            trained_grid: self.trained_grid,
+            trained_floor: self.trained_floor,
+            trained_spp: self.trained_spp,
         })
     }
 }
@@ -100,6 +109,9 @@ fn flag(key: &str) -> &'static str {
         "render.cutoff" => "--cutoff",
         "render.ridge" => "--ridge",
         "render.per_light" => "--per-light",
+        "render.trained_grid" => "--trained-grid",
+        "render.trained_floor" => "--trained-floor",
+        "render.trained_spp" => "--trained-spp",
         _ => "an override",
     }
 }
@@ -272,6 +284,16 @@ fn warn_unused(o: &Overrides, opts: &RenderOptions) {
             "--techniques",
             o.techniques.is_some() && !mis,
             "--integrator direct or path",
+        ),
+        (
+            "--trained-grid/--trained-floor/--trained-spp",
+            (o.trained_grid.is_some() || o.trained_floor.is_some() || o.trained_spp.is_some())
+                && !(mis
+                    && opts
+                        .techniques
+                        .iter()
+                        .any(|(t, _)| *t == render::Technique::LightTrained)),
+            "the light-trained technique",
         ),
     ];
     for (flag, _, applies) in unused.iter().filter(|u| u.1) {

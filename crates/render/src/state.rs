@@ -71,6 +71,8 @@ pub struct StateHeader {
     pub pixel_center: bool,
     /// Per-light mode: the number of MIS lights with an estimator each (0: off).
     pub per_light: u32,
+    /// The training of `light-trained`.
+    pub training: scene::Training,
     /// The seed of the random streams.
     pub seed: u64,
     /// A hash of the scene (0: unknown).
@@ -95,6 +97,7 @@ impl StateHeader {
             aovs: o.aovs.clone(),
             pixel_center: o.pixel_center,
             per_light: o.per_light,
+            training: o.training,
             seed: o.seed,
             scene_hash: o.scene_hash,
         }
@@ -114,6 +117,7 @@ impl StateHeader {
             aovs: self.aovs.clone(),
             pixel_center: self.pixel_center,
             per_light: self.per_light,
+            training: self.training,
             seed: self.seed,
             scene_hash: self.scene_hash,
             ..RenderOptions::default()
@@ -139,6 +143,9 @@ impl StateHeader {
             "aovs": self.aovs.iter().map(|a| a.name()).collect::<Vec<_>>(),
             "pixel_center": self.pixel_center,
             "per_light": self.per_light,
+            "trained_grid": self.training.grid,
+            "trained_floor": self.training.floor,
+            "trained_spp": self.training.spp,
             "seed": self.seed,
             "scene_hash": format!("{:016x}", self.scene_hash),
         })
@@ -224,6 +231,24 @@ impl StateHeader {
             per_light: match v.get("per_light") {
                 None => 0,
                 Some(_) => u32_("per_light")?,
+            },
+            // Absent from states written before these options existed: the defaults.
+            training: {
+                let d = scene::Training::default();
+                scene::Training {
+                    grid: match v.get("trained_grid") {
+                        None => d.grid,
+                        Some(_) => u32_("trained_grid")?,
+                    },
+                    floor: match v.get("trained_floor") {
+                        None => d.floor,
+                        Some(_) => float("trained_floor")?,
+                    },
+                    spp: match v.get("trained_spp") {
+                        None => d.spp,
+                        Some(_) => u32_("trained_spp")?,
+                    },
+                }
             },
             seed: uint("seed")?,
             scene_hash: u64::from_str_radix(text("scene_hash")?, 16)

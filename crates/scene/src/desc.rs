@@ -102,6 +102,12 @@ pub struct RenderDesc {
     pub aovs: Option<Vec<String>>,
     /// One MIS estimator per light instead of one for all (default false).
     pub per_light: Option<bool>,
+    /// Cells per axis of `light-trained`'s grid (default 8).
+    pub trained_grid: Option<u32>,
+    /// The uniform share of `light-trained`'s pmfs, in (0, 1] (default 0.1).
+    pub trained_floor: Option<f64>,
+    /// Training rays per pixel of `light-trained` (default 4).
+    pub trained_spp: Option<u32>,
 }
 
 /// One sampling technique with its number of samples per camera sample.

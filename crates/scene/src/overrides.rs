@@ -38,6 +38,12 @@ pub struct Overrides {
     pub ridge: Option<f64>,
     /// Sets `render.per_light` when true.
     pub per_light: bool,
+    /// `render.trained_grid`.
+    pub trained_grid: Option<u32>,
+    /// `render.trained_floor`.
+    pub trained_floor: Option<f64>,
+    /// `render.trained_spp`.
+    pub trained_spp: Option<u32>,
 }
 
 impl SceneDescription {
@@ -55,6 +61,9 @@ impl SceneDescription {
         set(&mut r.beta, &o.beta);
         set(&mut r.cutoff, &o.cutoff);
         set(&mut r.ridge, &o.ridge);
+        set(&mut r.trained_grid, &o.trained_grid);
+        set(&mut r.trained_floor, &o.trained_floor);
+        set(&mut r.trained_spp, &o.trained_spp);
         if o.hide_emitters {
             r.hide_emitters = Some(true);
         }
@@ -95,6 +104,9 @@ impl Overrides {
             ("render.cutoff", self.cutoff.is_some()),
             ("render.ridge", self.ridge.is_some()),
             ("render.per_light", self.per_light),
+            ("render.trained_grid", self.trained_grid.is_some()),
+            ("render.trained_floor", self.trained_floor.is_some()),
+            ("render.trained_spp", self.trained_spp.is_some()),
         ];
         given.iter().filter(|g| g.1).map(|g| g.0).collect()
     }

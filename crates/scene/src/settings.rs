@@ -309,6 +309,8 @@ pub struct RenderSettings {
     /// its own MIS estimator (Kondapaneni et al. 2019: "the illumination from individual
     /// light sources is evaluated separately"); 0 (default): one estimator for all.
     pub per_light: u32,
+    /// How `light-trained` is trained (`trained_grid`, `trained_floor`, `trained_spp`).
+    pub training: crate::Training,
 }
 
 impl Default for RenderSettings {
@@ -328,6 +330,7 @@ impl Default for RenderSettings {
             exposure: 0.0,
             tonemap: Tonemap::Clamp,
             per_light: 0,
+            training: crate::Training::default(),
         }
     }
 }
@@ -516,6 +519,12 @@ pub(crate) fn settings(
         }
         s.per_light = n as u32;
     }
+    let t = &mut s.training;
+    t.grid = r.trained_grid.unwrap_or(t.grid);
+    t.floor = r.trained_floor.unwrap_or(t.floor);
+    t.spp = r.trained_spp.unwrap_or(t.spp);
+    t.validate()
+        .map_err(|(key, e)| src.at_value(&kp!["render", key], e))?;
     if let Some(aovs) = &r.aovs {
         for (i, a) in aovs.iter().enumerate() {
             let at = kp!["render", "aovs", i];

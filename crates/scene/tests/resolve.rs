@@ -362,3 +362,61 @@ fn light_technique_names() {
     let e = with("light#x").unwrap_err();
     assert!(e.message.contains("light#k"), "{e}");
 }
+
+/// `trained_grid`, `trained_floor`, `trained_spp` and `min_depth`: defaults when left
+/// out, read from the file or an override, and an out-of-range value is an error at its
+/// key.
+#[test]
+fn training_and_min_depth_keys() {
+    let f = scenes_dir().join("many-lights.toml");
+    let text = std::fs::read_to_string(&f).unwrap();
+    let with = |o: Overrides| parse_with(&text, SceneFormat::Toml, &f, &o);
+    let (_, s) = with(Overrides::default()).unwrap();
+    assert_eq!(s.training, scene::Training::default());
+    assert_eq!(s.min_depth, 0);
+    let (_, s) = with(Overrides {
+        trained_grid: Some(1),
+        trained_floor: Some(0.5),
+        trained_spp: Some(16),
+        integrator: Some("path".into()),
+        min_depth: Some(2),
+        ..Default::default()
+    })
+    .unwrap();
+    let t = scene::Training {
+        grid: 1,
+        floor: 0.5,
+        spp: 16,
+    };
+    assert_eq!((s.training, s.min_depth), (t, 2));
+    let in_file = text.replace("[render]\n", "[render]\ntrained_grid = 0\n");
+    let e = parse_with(&in_file, SceneFormat::Toml, &f, &Overrides::default()).unwrap_err();
+    assert_eq!(e.key, "render.trained_grid", "{e}");
+    assert!(e.message.contains("1..=64"), "{e}");
+    for (o, key) in [
+        (
+            Overrides {
+                trained_floor: Some(0.0),
+                ..Default::default()
+            },
+            "render.trained_floor",
+        ),
+        (
+            Overrides {
+                trained_spp: Some(0),
+                ..Default::default()
+            },
+            "render.trained_spp",
+        ),
+        (
+            // The scene's integrator is `direct`: one vertex.
+            Overrides {
+                min_depth: Some(2),
+                ..Default::default()
+            },
+            "render.min_depth",
+        ),
+    ] {
+        assert_eq!(with(o).unwrap_err().key, key);
+    }
+}

@@ -113,6 +113,9 @@ pub struct RenderOptions {
     /// the pixel (a diagnostic: the variance left is the directions' alone, without the
     /// pixel footprint's; the image converges to point samples, not pixel averages).
     pub pixel_center: bool,
+    /// How `light-trained` is trained: grid, floor, training rays per pixel
+    /// (`integrator/train.rs`).
+    pub training: scene::Training,
     /// Per-light mode: 0 for one MIS estimator per pixel and depth; n (the scene's
     /// number of MIS lights, [`crate::light::Lights::count`]) for one per pixel, depth
     /// and light, each fed only the radiance of the light its draws reach (module docs).
@@ -150,6 +153,7 @@ impl Default for RenderOptions {
             hide_emitters: false,
             aovs: Vec::new(),
             pixel_center: false,
+            training: scene::Training::default(),
             per_light: 0,
             tile_size: 16,
             pass_spp: 0,
@@ -178,6 +182,7 @@ impl RenderOptions {
             hide_emitters: s.hide_emitters,
             aovs: s.aovs.iter().map(|a| a.parse()).collect::<Result<_, _>>()?,
             per_light: s.per_light,
+            training: s.training,
             ..Self::default()
         })
     }
@@ -213,6 +218,9 @@ impl RenderOptions {
                 return Err(format!("AOV {} listed twice", a.name()));
             }
         }
+        self.training
+            .validate()
+            .map_err(|(key, e)| format!("{key}: {e}"))?;
         let deepest = match self.integrator {
             IntegratorKind::Direct => 1,
             _ => self.max_depth,
@@ -286,6 +294,8 @@ pub(crate) struct Integrator {
     pub per_light: usize,
     /// The render's seed (the training pass derives its streams from it).
     pub seed: u64,
+    /// How the training pass runs ([`RenderOptions::training`]).
+    pub training: scene::Training,
     /// The trained light selection, once [`Self::prepare`] has trained it.
     pub trained: Option<Arc<TrainedSelection>>,
 }
@@ -345,6 +355,7 @@ impl Integrator {
             pixel_center: o.pixel_center,
             per_light: o.per_light as usize,
             seed: o.seed,
+            training: o.training,
             trained: None,
         })
     }
