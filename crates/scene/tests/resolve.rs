@@ -15,12 +15,13 @@ fn scenes_dir() -> PathBuf {
 
 /// The scenes shipped in scenes/, named (not globbed: a user's own scene saved there
 /// must not change what the tests check).
-const SCENES: [&str; 7] = [
+const SCENES: [&str; 8] = [
     "cornell.json",
     "cornell.toml",
     "environment.toml",
     "many-lights.toml",
     "point-lights.toml",
+    "rooms.toml",
     "table.json",
     "table.toml",
 ];
@@ -389,6 +390,8 @@ fn training_and_min_depth_keys() {
         spp: 16,
     };
     assert_eq!((s.training, s.min_depth), (t, 2));
+    let rooms = load(&scenes_dir().join("rooms.toml")).unwrap().1;
+    assert_eq!(rooms.training.grid, 4);
     let in_file = text.replace("[render]\n", "[render]\ntrained_grid = 0\n");
     let e = parse_with(&in_file, SceneFormat::Toml, &f, &Overrides::default()).unwrap_err();
     assert_eq!(e.key, "render.trained_grid", "{e}");
