@@ -13,8 +13,8 @@
 //! Russian roulette ends the path with probability `q = max(0.05, 1 − max β)` and divides
 //! β by `1 − q` otherwise (pbrt-v3 §14.5.1), and `max_depth` vertices at most are shaded.
 //!
-//! **Minimum depth.** With [`super::RenderOptions::min_depth`] the vertices above it are
-//! shaded as usual (same random numbers, same continuation) but add nothing, so a render
+//! **Minimum depth.** With [`super::RenderOptions::min_depth`] the vertices shallower
+//! than it are shaded as usual (same random numbers, same continuation) but add nothing, so a render
 //! with `min_depth = max_depth = d` holds exactly the light of depth d: the per-depth
 //! images sum to the full one, heuristics and optimal estimators alike (each depth has
 //! its own estimator, which the others never touch).
