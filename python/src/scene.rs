@@ -73,6 +73,7 @@ impl Scene {
             .collect();
         d.set_item("techniques", techniques)?;
         d.set_item("max_depth", o.max_depth)?;
+        d.set_item("min_depth", o.min_depth)?;
         let aovs: Vec<&str> = o.aovs.iter().map(|a| a.name()).collect();
         d.set_item("aovs", aovs)?;
         Ok(d.into_any())
@@ -185,9 +186,10 @@ fn technique_text(t: &Bound<'_, PyAny>) -> PyResult<String> {
 /// `scene` into a `RenderState`. Keyword options override the scene's settings:
 /// `spp`, `seed`, `estimator` (balance, power, maximum, cutoff, optimal-direct, …),
 /// `techniques` ("light:1,bsdf:1", a dict or a list), `integrator`, `width`, `height`,
-/// `max_depth`, `aovs`, `hide_emitters`, `beta`, `cutoff`, `ridge`, `per_light` (one MIS
+/// `max_depth`, `min_depth` (only paths of at least this many bounces, as `--min-depth`), `aovs`, `hide_emitters`, `beta`, `cutoff`, `ridge`, `per_light` (one MIS
 /// estimator per light, as `--per-light`), `pixel_center` (camera rays through pixel
-/// centres, as `--pixel-center`); `threads` (0: all
+/// centres, as `--pixel-center`), `trained_grid`, `trained_floor`, `trained_spp` (how
+/// `light-trained` is trained, as `--trained-grid` …); `threads` (0: all
 /// cores); `backend` "cpu" (this build has no GPU back end). The GIL is released while
 /// rendering; Ctrl-C stops the render and raises KeyboardInterrupt with the partial
 /// state as its `state` attribute.
@@ -195,7 +197,8 @@ fn technique_text(t: &Bound<'_, PyAny>) -> PyResult<String> {
 #[pyo3(signature = (scene, spp = None, seed = None, samples = None, estimator = None,
     techniques = None, integrator = None, threads = 0, backend = "cpu", width = None,
     height = None, max_depth = None, aovs = None, hide_emitters = false, beta = None,
-    cutoff = None, ridge = None, per_light = false, pixel_center = false))]
+    cutoff = None, ridge = None, per_light = false, pixel_center = false, min_depth = None,
+    trained_grid = None, trained_floor = None, trained_spp = None))]
 #[allow(clippy::too_many_arguments)]
 pub fn render(
     py: Python<'_>,
@@ -218,6 +221,10 @@ pub fn render(
     ridge: Option<f64>,
     per_light: bool,
     pixel_center: bool,
+    min_depth: Option<u32>,
+    trained_grid: Option<u32>,
+    trained_floor: Option<f64>,
+    trained_spp: Option<u32>,
 ) -> PyResult<RenderState> {
     match backend {
         "cpu" => {}
@@ -247,12 +254,16 @@ pub fn render(
         width,
         height,
         max_depth,
+        min_depth,
         aovs,
         hide_emitters,
         beta,
         cutoff,
         ridge,
         per_light,
+        trained_grid,
+        trained_floor,
+        trained_spp,
     };
     let reresolve = o.estimator.is_some()
         || o.techniques.is_some()
@@ -260,12 +271,16 @@ pub fn render(
         || o.width.is_some()
         || o.height.is_some()
         || o.max_depth.is_some()
+        || o.min_depth.is_some()
         || o.aovs.is_some()
         || o.hide_emitters
         || o.beta.is_some()
         || o.cutoff.is_some()
         || o.ridge.is_some()
-        || o.per_light;
+        || o.per_light
+        || o.trained_grid.is_some()
+        || o.trained_floor.is_some()
+        || o.trained_spp.is_some();
     let resolved = if reresolve {
         Arc::new(scene.resolve(py, &o)?)
     } else {

@@ -144,3 +144,27 @@ def test_render_releases_the_gil(many_lights):
         time.sleep(0.005)
     worker.join()
     assert ticks > 5
+
+
+def test_training_options_and_min_depth_equal_the_cli(many_lights, cli, tmp_path):
+    trained = ["--techniques", "light-trained:1,light-uniform:1", "--trained-grid", "1",
+               "--trained-floor", "0.5", "--trained-spp", "2"]
+    deep = ["--integrator", "path", "--min-depth", "2", "--max-depth", "2"]
+    kw = dict(techniques="light-trained:1,light-uniform:1", trained_grid=1,
+              trained_floor=0.5, trained_spp=2)
+    for flags, opts in [(trained, kw), (deep, dict(integrator="path", min_depth=2,
+                                                   max_depth=2))]:
+        exr = tmp_path / "cli.exr"
+        run_cli(cli, "render", many_lights.source()[1], "-o", exr, "--spp", "2", "--seed",
+                "5", "--mis", "optimal-direct", "--width", "24", "--height", "16",
+                "--quiet", *flags)
+        st = frepray.render(many_lights, spp=2, seed=5, estimator="optimal-direct",
+                            **opts, **SMALL)
+        assert np.array_equal(frepray.read_exr(exr)[0], st.image())
+    # The training options change the image (they are not ignored).
+    default = frepray.render(many_lights, spp=2, seed=5, estimator="optimal-direct",
+                             techniques=kw["techniques"], **SMALL)
+    assert not np.array_equal(default.image(), frepray.render(
+        many_lights, spp=2, seed=5, estimator="optimal-direct", **kw, **SMALL).image())
+    with pytest.raises(Exception, match="trained_grid"):
+        frepray.render(many_lights, spp=1, trained_grid=0, **SMALL)

@@ -76,6 +76,11 @@ pub struct ExperimentArgs {
     /// Maximum path depth (`path`) [default: the scene's].
     #[arg(long)]
     max_depth: Option<u32>,
+    /// Minimum path depth: only light of paths with at least this many bounces reaches
+    /// the images, the reference's too; `--min-depth d --max-depth d` compares the
+    /// estimators on depth d alone [default: the scene's, 0: all].
+    #[arg(long)]
+    min_depth: Option<u32>,
     /// Leave emitters seen directly by the camera out of the images, so that the error
     /// measures the estimators, not the camera's sampling of visible lights.
     #[arg(long)]
@@ -91,6 +96,17 @@ pub struct ExperimentArgs {
     /// Per-light mode: one MIS estimator per light, summed.
     #[arg(long)]
     per_light: bool,
+    /// `light-trained`: cells per axis of the grid over the first hits whose cells
+    /// each learn a light pmf (1: one pmf for the whole scene; at most 64) [default: 8].
+    #[arg(long)]
+    trained_grid: Option<u32>,
+    /// `light-trained`: the uniform share ε of every cell's pmf,
+    /// `P(k) = (1 − ε)·w_k/Σw + ε/L`, in (0, 1] [default: 0.1].
+    #[arg(long)]
+    trained_floor: Option<f64>,
+    /// `light-trained`: camera rays per pixel of the training pass [default: 4].
+    #[arg(long)]
+    trained_spp: Option<u32>,
     /// Worker threads (0: one per core).
     #[arg(long, default_value_t = 0)]
     threads: usize,
@@ -245,6 +261,10 @@ pub fn run(a: ExperimentArgs) -> Result<(), String> {
         beta: a.beta,
         cutoff: a.cutoff,
         max_depth: a.max_depth,
+        min_depth: a.min_depth,
+        trained_grid: a.trained_grid,
+        trained_floor: a.trained_floor,
+        trained_spp: a.trained_spp,
         ..Default::default()
     };
     let (data, settings) = scene_render::resolve(&a.scene, &o)?;
@@ -297,6 +317,16 @@ pub fn run(a: ExperimentArgs) -> Result<(), String> {
     if base.per_light > 0 {
         // Only when on, so that the settings of earlier runs read as before.
         cfg.renderer_settings += &format!(" per-light {}", base.per_light);
+    }
+    if base.min_depth > 0 {
+        // Likewise.
+        cfg.renderer_settings += &format!(" min-depth {}", base.min_depth);
+    }
+    if base.training != scene::Training::default() {
+        // Likewise.
+        let t = base.training;
+        cfg.renderer_settings +=
+            &format!(" trained grid {} floor {} spp {}", t.grid, t.floor, t.spp);
     }
     cfg.size = Some((scene.camera.width, scene.camera.height));
     cfg.estimators = estimators;

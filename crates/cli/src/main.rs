@@ -103,6 +103,12 @@ struct RenderArgs {
     /// Maximum path depth (scenes, `path`).
     #[arg(long)]
     max_depth: Option<u32>,
+    /// Minimum path depth (scenes): only light of paths with at least this many bounces
+    /// reaches the image (0: all; camera-seen emitters are depth 0). With
+    /// `--min-depth d --max-depth d` the image holds depth d alone, and the images of
+    /// every depth sum to the full one [default: 0].
+    #[arg(long)]
+    min_depth: Option<u32>,
     /// Power heuristic exponent β (scenes, `--mis power`) [default: 2].
     #[arg(long, allow_negative_numbers = true)]
     beta: Option<f64>,
@@ -125,6 +131,17 @@ struct RenderArgs {
     /// is their sum. Changes only the optimal estimators' result.
     #[arg(long)]
     per_light: bool,
+    /// `light-trained`: cells per axis of the grid over the first hits whose cells
+    /// each learn a light pmf (1: one pmf for the whole scene; at most 64) [default: 8].
+    #[arg(long)]
+    trained_grid: Option<u32>,
+    /// `light-trained`: the uniform share ε of every cell's pmf,
+    /// `P(k) = (1 − ε)·w_k/Σw + ε/L`, in (0, 1] [default: 0.1].
+    #[arg(long)]
+    trained_floor: Option<f64>,
+    /// `light-trained`: camera rays per pixel of the training pass [default: 4].
+    #[arg(long)]
+    trained_spp: Option<u32>,
     /// Extra EXR channels (scenes), e.g. `depth,normal,albedo`.
     #[arg(long)]
     aovs: Option<String>,
@@ -336,6 +353,7 @@ fn render(args: RenderArgs) -> Result<(), String> {
             width: args.width,
             height: args.height,
             max_depth: args.max_depth,
+            min_depth: args.min_depth,
             aovs: args.aovs,
             threads: 0,
             hide_emitters: args.hide_emitters,
@@ -345,6 +363,9 @@ fn render(args: RenderArgs) -> Result<(), String> {
             ridge: args.ridge,
             per_light: args.per_light,
             backend: args.backend,
+            trained_grid: args.trained_grid,
+            trained_floor: args.trained_floor,
+            trained_spp: args.trained_spp,
         };
         let samples = args
             .samples

@@ -101,6 +101,8 @@ pub struct Overrides {
     pub height: Option<u32>,
     /// Path length limit.
     pub max_depth: Option<u32>,
+    /// Shallowest path depth that reaches the image.
+    pub min_depth: Option<u32>,
     /// Extra AOV channels, comma-separated.
     pub aovs: Option<String>,
     /// Worker threads (0: the global pool).
@@ -119,6 +121,12 @@ pub struct Overrides {
     pub per_light: bool,
     /// Where to render.
     pub backend: Backend,
+    /// `light-trained`'s grid cells per axis.
+    pub trained_grid: Option<u32>,
+    /// `light-trained`'s uniform floor.
+    pub trained_floor: Option<f64>,
+    /// `light-trained`'s training rays per pixel.
+    pub trained_spp: Option<u32>,
 }
 
 impl Overrides {
@@ -145,12 +153,16 @@ impl Overrides {
             width: self.width,
             height: self.height,
             max_depth: self.max_depth,
+            min_depth: self.min_depth,
             aovs: self.aovs.as_deref().map(list),
             hide_emitters: self.hide_emitters,
             beta: self.beta,
             cutoff: self.cutoff,
             ridge: self.ridge,
             per_light: self.per_light,
+            trained_grid: self.trained_grid,
+            trained_floor: self.trained_floor,
+            trained_spp: self.trained_spp,
         })
     }
 }
@@ -165,12 +177,16 @@ fn flag(key: &str) -> &'static str {
         "render.integrator" => "--integrator",
         "camera.resolution" => "--width/--height",
         "render.max_depth" => "--max-depth",
+        "render.min_depth" => "--min-depth",
         "render.aovs" => "--aovs",
         "render.hide_emitters" => "--hide-emitters",
         "render.beta" => "--beta",
         "render.cutoff" => "--cutoff",
         "render.ridge" => "--ridge",
         "render.per_light" => "--per-light",
+        "render.trained_grid" => "--trained-grid",
+        "render.trained_floor" => "--trained-floor",
+        "render.trained_spp" => "--trained-spp",
         _ => "an override",
     }
 }
@@ -354,6 +370,16 @@ fn warn_unused(o: &Overrides, opts: &RenderOptions) {
             "--techniques",
             o.techniques.is_some() && !mis,
             "--integrator direct or path",
+        ),
+        (
+            "--trained-grid/--trained-floor/--trained-spp",
+            (o.trained_grid.is_some() || o.trained_floor.is_some() || o.trained_spp.is_some())
+                && !(mis
+                    && opts
+                        .techniques
+                        .iter()
+                        .any(|(t, _)| *t == render::Technique::LightTrained)),
+            "the light-trained technique",
         ),
     ];
     for (flag, _, applies) in unused.iter().filter(|u| u.1) {

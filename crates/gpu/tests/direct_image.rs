@@ -349,14 +349,20 @@ fn optimal_direct_agrees() {
 }
 
 /// `path` (depth 3, roulette from depth 2) with the power heuristic and with
-/// optimal-progressive per depth: the same z-tests as `direct`, same seed.
+/// optimal-progressive per depth, and depths 2–3 alone (`min_depth`): the same z-tests
+/// as `direct`, same seed.
 #[test]
 fn path_images_agree() {
     let Some(g) = device() else { return };
-    for method in [mis::Method::Power, mis::Method::OptimalProgressive] {
+    for (method, min_depth) in [
+        (mis::Method::Power, 0),
+        (mis::Method::OptimalProgressive, 0),
+        (mis::Method::Power, 2),
+    ] {
         let mut s = load(SCENE);
         s.2.integrator = render::integrator::IntegratorKind::Path;
         s.2.max_depth = 3;
+        s.2.min_depth = min_depth;
         s.2.rr_depth = 2;
         s.2.method = method;
         let gpu_subs = subs(|r| gpu_render(g, &s, r));

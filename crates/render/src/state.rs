@@ -59,6 +59,8 @@ pub struct StateHeader {
     pub techniques: Vec<(Technique, u32)>,
     /// Maximum path depth.
     pub max_depth: u32,
+    /// Minimum path depth (0: all).
+    pub min_depth: u32,
     /// Roulette starts after this many vertices.
     pub rr_depth: u32,
     /// Whether emitters seen by the camera are left out.
@@ -69,6 +71,8 @@ pub struct StateHeader {
     pub pixel_center: bool,
     /// Per-light mode: the number of MIS lights with an estimator each (0: off).
     pub per_light: u32,
+    /// The training of `light-trained`.
+    pub training: scene::Training,
     /// The seed of the random streams.
     pub seed: u64,
     /// A hash of the scene (0: unknown).
@@ -87,11 +91,13 @@ impl StateHeader {
             params: o.params.resolved(o.method),
             techniques: o.techniques.clone(),
             max_depth: o.max_depth,
+            min_depth: o.min_depth,
             rr_depth: o.rr_depth,
             hide_emitters: o.hide_emitters,
             aovs: o.aovs.clone(),
             pixel_center: o.pixel_center,
             per_light: o.per_light,
+            training: o.training,
             seed: o.seed,
             scene_hash: o.scene_hash,
         }
@@ -105,11 +111,13 @@ impl StateHeader {
             params: self.params,
             techniques: self.techniques.clone(),
             max_depth: self.max_depth,
+            min_depth: self.min_depth,
             rr_depth: self.rr_depth,
             hide_emitters: self.hide_emitters,
             aovs: self.aovs.clone(),
             pixel_center: self.pixel_center,
             per_light: self.per_light,
+            training: self.training,
             seed: self.seed,
             scene_hash: self.scene_hash,
             ..RenderOptions::default()
@@ -129,11 +137,15 @@ impl StateHeader {
             "train": self.params.train,
             "techniques": self.techniques.iter().map(|(t, n)| json!([t.name(), n])).collect::<Vec<_>>(),
             "max_depth": self.max_depth,
+            "min_depth": self.min_depth,
             "rr_depth": self.rr_depth,
             "hide_emitters": self.hide_emitters,
             "aovs": self.aovs.iter().map(|a| a.name()).collect::<Vec<_>>(),
             "pixel_center": self.pixel_center,
             "per_light": self.per_light,
+            "trained_grid": self.training.grid,
+            "trained_floor": self.training.floor,
+            "trained_spp": self.training.spp,
             "seed": self.seed,
             "scene_hash": format!("{:016x}", self.scene_hash),
         })
@@ -198,6 +210,11 @@ impl StateHeader {
             },
             techniques,
             max_depth: u32_("max_depth")?,
+            // Absent from states written before the option existed: all depths.
+            min_depth: match v.get("min_depth") {
+                None => 0,
+                Some(_) => u32_("min_depth")?,
+            },
             rr_depth: u32_("rr_depth")?,
             hide_emitters: field("hide_emitters")?
                 .as_bool()
@@ -214,6 +231,24 @@ impl StateHeader {
             per_light: match v.get("per_light") {
                 None => 0,
                 Some(_) => u32_("per_light")?,
+            },
+            // Absent from states written before these options existed: the defaults.
+            training: {
+                let d = scene::Training::default();
+                scene::Training {
+                    grid: match v.get("trained_grid") {
+                        None => d.grid,
+                        Some(_) => u32_("trained_grid")?,
+                    },
+                    floor: match v.get("trained_floor") {
+                        None => d.floor,
+                        Some(_) => float("trained_floor")?,
+                    },
+                    spp: match v.get("trained_spp") {
+                        None => d.spp,
+                        Some(_) => u32_("trained_spp")?,
+                    },
+                }
             },
             seed: uint("seed")?,
             scene_hash: u64::from_str_radix(text("scene_hash")?, 16)

@@ -100,3 +100,72 @@ fn trained_renders_are_deterministic_and_merge() {
         .fold(0.0, f64::max);
     assert!(rel < 1e-12, "{rel:e}");
 }
+
+/// The training's options change what is learned: with one grid cell every point gets
+/// the same pmf (a global, visibility-weighted pmf: the hidden floor point no longer
+/// learns its shadow, so the sphere light keeps over 3× the floor share); floor ε = 0.5
+/// gives the hidden point exactly ε/2 for the sphere light; floor 1 is uniform; fewer
+/// training rays learn a different table; the options travel through a state's header.
+#[test]
+fn training_options_change_what_is_learned() {
+    let s = scene(true);
+    let base = options(IntegratorKind::Direct, Method::Balance, &TRAINED, 1, 4);
+    let with = |t: scene::Training| {
+        let o = RenderOptions {
+            training: t,
+            ..base.clone()
+        };
+        trained_selection(&s, &o).unwrap().unwrap()
+    };
+    let d = scene::Training::default();
+    assert_eq!(
+        (d.grid as usize, d.floor),
+        (render::light::TRAIN_GRID, TRAIN_FLOOR)
+    );
+    let (hidden, open) = (DVec3::new(0.5, 0.1, 0.0), DVec3::new(-0.9, -0.8, 0.0));
+    let global = with(scene::Training { grid: 1, ..d });
+    assert_eq!(global.pmf(hidden), global.pmf(open));
+    let cells = with(d);
+    assert_ne!(cells.pmf(hidden), cells.pmf(open));
+    println!(
+        "P(sphere light) at the hidden point: grid 8 {:.3}, grid 1 {:.3}",
+        cells.pmf(hidden)[0],
+        global.pmf(hidden)[0]
+    );
+    assert!(
+        global.pmf(hidden)[0] > 3.0 * cells.pmf(hidden)[0],
+        "{:?}",
+        global.pmf(hidden)
+    );
+    let half = with(scene::Training { floor: 0.5, ..d });
+    assert!(
+        (half.pmf(hidden)[0] - 0.25).abs() < 1e-3,
+        "{:?}",
+        half.pmf(hidden)
+    );
+    let uniform = with(scene::Training { floor: 1.0, ..d });
+    for p in [hidden, open] {
+        assert!(uniform.pmf(p).iter().all(|&q| (q - 0.5).abs() < 1e-15));
+    }
+    assert_ne!(with(scene::Training { spp: 1, ..d }), cells);
+    let o = RenderOptions {
+        training: scene::Training {
+            grid: 3,
+            floor: 0.25,
+            spp: 2,
+        },
+        ..base.clone()
+    };
+    // Through a state's bytes, and states trained differently refuse to merge.
+    let state = render::RenderState::new(render::StateHeader::new(4, 4, &o), 0..1).unwrap();
+    let back = render::RenderState::from_bytes(&state.to_bytes()).unwrap();
+    assert_eq!(back.header().options().training, o.training);
+    let mut plain = render::RenderState::new(render::StateHeader::new(4, 4, &base), 1..2).unwrap();
+    assert!(plain.merge(&state).is_err());
+    let bad = RenderOptions {
+        training: scene::Training { floor: 0.0, ..d },
+        ..base
+    };
+    let e = bad.validate().unwrap_err();
+    assert!(e.starts_with("trained_floor:"), "{e}");
+}

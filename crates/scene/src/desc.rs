@@ -90,6 +90,9 @@ pub struct RenderDesc {
     pub seed: Option<u64>,
     /// Longest path, in bounces (default 5).
     pub max_depth: Option<u32>,
+    /// Only paths of at least this many bounces reach the image (default 0: all; with
+    /// `min_depth = max_depth` one depth alone).
+    pub min_depth: Option<u32>,
     /// Depth at which Russian roulette starts (default 3).
     pub rr_depth: Option<u32>,
     /// Whether emitters (area lights, the environment) seen directly by the camera are
@@ -99,6 +102,12 @@ pub struct RenderDesc {
     pub aovs: Option<Vec<String>>,
     /// One MIS estimator per light instead of one for all (default false).
     pub per_light: Option<bool>,
+    /// Cells per axis of `light-trained`'s grid (default 8).
+    pub trained_grid: Option<u32>,
+    /// The uniform share of `light-trained`'s pmfs, in (0, 1] (default 0.1).
+    pub trained_floor: Option<f64>,
+    /// Training rays per pixel of `light-trained` (default 4).
+    pub trained_spp: Option<u32>,
 }
 
 /// One sampling technique with its number of samples per camera sample.

@@ -56,6 +56,7 @@ mod overrides;
 mod resolve;
 mod settings;
 mod solids;
+mod training;
 
 pub use data::{
     CameraData, CameraKind, EnvMapTable, EnvironmentData, Light, LightData, LightKind, MapId,
@@ -80,6 +81,7 @@ pub use settings::{
     Emitters, IntegratorKind, RenderSettings, TechniqueKind, Tonemap, UnknownName, AOV_NAMES,
 };
 pub use solids::SolidPool;
+pub use training::{Training, MAX_TRAINED_GRID};
 
 /// The image size of a scene that gives no `camera.resolution`.
 pub const DEFAULT_RESOLUTION: [u32; 2] = [320, 240];

@@ -24,6 +24,8 @@ pub struct Overrides {
     pub height: Option<u32>,
     /// `render.max_depth`.
     pub max_depth: Option<u32>,
+    /// `render.min_depth`.
+    pub min_depth: Option<u32>,
     /// `render.aovs`.
     pub aovs: Option<Vec<String>>,
     /// Sets `render.hide_emitters` when true.
@@ -36,6 +38,12 @@ pub struct Overrides {
     pub ridge: Option<f64>,
     /// Sets `render.per_light` when true.
     pub per_light: bool,
+    /// `render.trained_grid`.
+    pub trained_grid: Option<u32>,
+    /// `render.trained_floor`.
+    pub trained_floor: Option<f64>,
+    /// `render.trained_spp`.
+    pub trained_spp: Option<u32>,
 }
 
 impl SceneDescription {
@@ -48,10 +56,14 @@ impl SceneDescription {
         set(&mut r.seed, &o.seed);
         set(&mut r.integrator, &o.integrator);
         set(&mut r.max_depth, &o.max_depth);
+        set(&mut r.min_depth, &o.min_depth);
         set(&mut r.aovs, &o.aovs);
         set(&mut r.beta, &o.beta);
         set(&mut r.cutoff, &o.cutoff);
         set(&mut r.ridge, &o.ridge);
+        set(&mut r.trained_grid, &o.trained_grid);
+        set(&mut r.trained_floor, &o.trained_floor);
+        set(&mut r.trained_spp, &o.trained_spp);
         if o.hide_emitters {
             r.hide_emitters = Some(true);
         }
@@ -85,12 +97,16 @@ impl Overrides {
                 self.width.is_some() || self.height.is_some(),
             ),
             ("render.max_depth", self.max_depth.is_some()),
+            ("render.min_depth", self.min_depth.is_some()),
             ("render.aovs", self.aovs.is_some()),
             ("render.hide_emitters", self.hide_emitters),
             ("render.beta", self.beta.is_some()),
             ("render.cutoff", self.cutoff.is_some()),
             ("render.ridge", self.ridge.is_some()),
             ("render.per_light", self.per_light),
+            ("render.trained_grid", self.trained_grid.is_some()),
+            ("render.trained_floor", self.trained_floor.is_some()),
+            ("render.trained_spp", self.trained_spp.is_some()),
         ];
         given.iter().filter(|g| g.1).map(|g| g.0).collect()
     }

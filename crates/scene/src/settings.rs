@@ -293,6 +293,8 @@ pub struct RenderSettings {
     pub seed: u64,
     /// Longest path in bounces (default 5).
     pub max_depth: u32,
+    /// Only paths of at least this many bounces reach the image (default 0: all).
+    pub min_depth: u32,
     /// Bounce from which Russian roulette may end paths (default 3).
     pub rr_depth: u32,
     /// Leave emitters seen directly by the camera out of the image (default false).
@@ -307,6 +309,8 @@ pub struct RenderSettings {
     /// its own MIS estimator (Kondapaneni et al. 2019: "the illumination from individual
     /// light sources is evaluated separately"); 0 (default): one estimator for all.
     pub per_light: u32,
+    /// How `light-trained` is trained (`trained_grid`, `trained_floor`, `trained_spp`).
+    pub training: crate::Training,
 }
 
 impl Default for RenderSettings {
@@ -319,12 +323,14 @@ impl Default for RenderSettings {
             techniques: vec![(TechniqueKind::Bsdf, 1), (TechniqueKind::LightPower, 1)],
             seed: 0,
             max_depth: 5,
+            min_depth: 0,
             rr_depth: 3,
             hide_emitters: false,
             aovs: Vec::new(),
             exposure: 0.0,
             tonemap: Tonemap::Clamp,
             per_light: 0,
+            training: crate::Training::default(),
         }
     }
 }
@@ -485,6 +491,22 @@ pub(crate) fn settings(
     }
     s.seed = r.seed.unwrap_or(s.seed);
     s.max_depth = r.max_depth.unwrap_or(s.max_depth);
+    if let Some(m) = r.min_depth {
+        let deepest = match s.integrator {
+            IntegratorKind::Direct => 1,
+            _ => s.max_depth,
+        };
+        if m > deepest {
+            return Err(src.at_value(
+                &kp!["render", "min_depth"],
+                format!(
+                    "min_depth {m} exceeds the deepest bounce {deepest} (max_depth, or 1 for \
+                     direct): the image would be black"
+                ),
+            ));
+        }
+        s.min_depth = m;
+    }
     s.rr_depth = r.rr_depth.unwrap_or(s.rr_depth);
     s.hide_emitters = r.hide_emitters.unwrap_or(s.hide_emitters);
     if r.per_light == Some(true) {
@@ -497,6 +519,12 @@ pub(crate) fn settings(
         }
         s.per_light = n as u32;
     }
+    let t = &mut s.training;
+    t.grid = r.trained_grid.unwrap_or(t.grid);
+    t.floor = r.trained_floor.unwrap_or(t.floor);
+    t.spp = r.trained_spp.unwrap_or(t.spp);
+    t.validate()
+        .map_err(|(key, e)| src.at_value(&kp!["render", key], e))?;
     if let Some(aovs) = &r.aovs {
         for (i, a) in aovs.iter().enumerate() {
             let at = kp!["render", "aovs", i];

@@ -15,12 +15,13 @@ fn scenes_dir() -> PathBuf {
 
 /// The scenes shipped in scenes/, named (not globbed: a user's own scene saved there
 /// must not change what the tests check).
-const SCENES: [&str; 7] = [
+const SCENES: [&str; 8] = [
     "cornell.json",
     "cornell.toml",
     "environment.toml",
     "many-lights.toml",
     "point-lights.toml",
+    "rooms.toml",
     "table.json",
     "table.toml",
 ];
@@ -361,4 +362,64 @@ fn light_technique_names() {
     assert!(e.message.contains("twice"), "{e}");
     let e = with("light#x").unwrap_err();
     assert!(e.message.contains("light#k"), "{e}");
+}
+
+/// `trained_grid`, `trained_floor`, `trained_spp` and `min_depth`: defaults when left
+/// out, read from the file or an override, and an out-of-range value is an error at its
+/// key.
+#[test]
+fn training_and_min_depth_keys() {
+    let f = scenes_dir().join("many-lights.toml");
+    let text = std::fs::read_to_string(&f).unwrap();
+    let with = |o: Overrides| parse_with(&text, SceneFormat::Toml, &f, &o);
+    let (_, s) = with(Overrides::default()).unwrap();
+    assert_eq!(s.training, scene::Training::default());
+    assert_eq!(s.min_depth, 0);
+    let (_, s) = with(Overrides {
+        trained_grid: Some(1),
+        trained_floor: Some(0.5),
+        trained_spp: Some(16),
+        integrator: Some("path".into()),
+        min_depth: Some(2),
+        ..Default::default()
+    })
+    .unwrap();
+    let t = scene::Training {
+        grid: 1,
+        floor: 0.5,
+        spp: 16,
+    };
+    assert_eq!((s.training, s.min_depth), (t, 2));
+    let rooms = load(&scenes_dir().join("rooms.toml")).unwrap().1;
+    assert_eq!(rooms.training.grid, 4);
+    let in_file = text.replace("[render]\n", "[render]\ntrained_grid = 0\n");
+    let e = parse_with(&in_file, SceneFormat::Toml, &f, &Overrides::default()).unwrap_err();
+    assert_eq!(e.key, "render.trained_grid", "{e}");
+    assert!(e.message.contains("1..=64"), "{e}");
+    for (o, key) in [
+        (
+            Overrides {
+                trained_floor: Some(0.0),
+                ..Default::default()
+            },
+            "render.trained_floor",
+        ),
+        (
+            Overrides {
+                trained_spp: Some(0),
+                ..Default::default()
+            },
+            "render.trained_spp",
+        ),
+        (
+            // The scene's integrator is `direct`: one vertex.
+            Overrides {
+                min_depth: Some(2),
+                ..Default::default()
+            },
+            "render.min_depth",
+        ),
+    ] {
+        assert_eq!(with(o).unwrap_err().key, key);
+    }
 }

@@ -80,17 +80,23 @@ impl Accumulator {
     /// Adds sample `index` of a pixel to its record `rec`: `outside` outside MIS, and
     /// the draws of each vertex the path shaded (vertex d at `vertices[d]`; none when
     /// the camera ray met no surface), technique by technique in list order, with the
-    /// path throughput in `f`. Panics if a vertex does not have Σ n_k draws.
+    /// path throughput in `f`. Vertices below the options' `min_depth` add nothing. Panics if a vertex does not have Σ n_k draws.
     pub fn add(&self, rec: &mut [f64], index: u32, outside: [f64; 3], vertices: &[&[ShadedDraw]]) {
         let mut px = Pixel {
             rec,
             key: u64::from(index),
+            mute: false,
         };
-        px.add(Rgb::from_array(outside));
+        // The outside sum holds the emitters the camera saw: depth 0, muted below
+        // `min_depth` as in `integrator/path.rs`.
+        if self.it.min_depth == 0 {
+            px.add(Rgb::from_array(outside));
+        }
         let total: u32 = self.it.counts.iter().sum();
         let t = self.it.techniques.len();
         for (depth, draws) in vertices.iter().enumerate() {
             assert_eq!(draws.len(), total as usize, "one entry per draw");
+            px.mute = depth + 1 < self.it.min_depth as usize;
             let mut at = 0;
             for (k, &n) in self.it.counts.iter().enumerate() {
                 for _ in 0..n {
@@ -105,6 +111,7 @@ impl Accumulator {
                 }
             }
             px.end_vertex(&self.it, depth);
+            px.mute = false;
         }
         px.end_sample();
     }

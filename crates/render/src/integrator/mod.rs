@@ -97,6 +97,13 @@ pub struct RenderOptions {
     /// Maximum number of scattering vertices of `path` (1: direct lighting only; 0: only
     /// what the camera sees directly).
     pub max_depth: u32,
+    /// Only light carried by paths of at least this many scattering vertices reaches the
+    /// image (pbrt-style minimum depth; 0: all). Emitters seen by the camera have depth
+    /// 0, the direct lighting of the d-th vertex (its MIS draws, delta lights and delta
+    /// lobes) depth d; with `min_depth = max_depth = d` the image holds depth d alone, and
+    /// the images of depths 0…D sum to the image of `max_depth = D`. Shallower vertices
+    /// still draw (the same random numbers) and extend the path; they add nothing.
+    pub min_depth: u32,
     /// Russian roulette is played after this many vertices.
     pub rr_depth: u32,
     /// Leave emitters (area lights, environment) seen directly by the camera out of the
@@ -108,6 +115,9 @@ pub struct RenderOptions {
     /// the pixel (a diagnostic: the variance left is the directions' alone, without the
     /// pixel footprint's; the image converges to point samples, not pixel averages).
     pub pixel_center: bool,
+    /// How `light-trained` is trained: grid, floor, training rays per pixel
+    /// (`integrator/train.rs`).
+    pub training: scene::Training,
     /// Per-light mode: 0 for one MIS estimator per pixel and depth; n (the scene's
     /// number of MIS lights, [`crate::light::Lights::count`]) for one per pixel, depth
     /// and light, each fed only the radiance of the light its draws reach (module docs).
@@ -140,10 +150,12 @@ impl Default for RenderOptions {
             params: Params::default(),
             techniques: vec![(Technique::Bsdf, 1), (Technique::LightPower, 1)],
             max_depth: 5,
+            min_depth: 0,
             rr_depth: 3,
             hide_emitters: false,
             aovs: Vec::new(),
             pixel_center: false,
+            training: scene::Training::default(),
             per_light: 0,
             tile_size: 16,
             pass_spp: 0,
@@ -167,10 +179,12 @@ impl RenderOptions {
             params: s.params,
             techniques: s.techniques.iter().map(|&(t, n)| (t.into(), n)).collect(),
             max_depth: s.max_depth,
+            min_depth: s.min_depth,
             rr_depth: s.rr_depth,
             hide_emitters: s.hide_emitters,
             aovs: s.aovs.iter().map(|a| a.parse()).collect::<Result<_, _>>()?,
             per_light: s.per_light,
+            training: s.training,
             ..Self::default()
         })
     }
@@ -205,6 +219,24 @@ impl RenderOptions {
             if self.aovs[..i].contains(a) {
                 return Err(format!("AOV {} listed twice", a.name()));
             }
+        }
+        self.training
+            .validate()
+            .map_err(|(key, e)| format!("{key}: {e}"))?;
+        let deepest = match self.integrator {
+            IntegratorKind::Direct => 1,
+            _ => self.max_depth,
+        };
+        if uses_mis(self.integrator) && self.min_depth > deepest {
+            return Err(format!(
+                "min_depth {} exceeds the deepest vertex {deepest} ({}): the image would be black",
+                self.min_depth,
+                if self.integrator == IntegratorKind::Direct {
+                    "direct shades one vertex"
+                } else {
+                    "max_depth"
+                }
+            ));
         }
         self.params.validate()
     }
@@ -251,6 +283,8 @@ pub(crate) struct Integrator {
     /// Index of [`Technique::Bsdf`] in the list.
     pub bsdf_index: Option<usize>,
     pub max_depth: u32,
+    /// Vertices shallower than this add nothing ([`RenderOptions::min_depth`]).
+    pub min_depth: u32,
     pub rr_depth: u32,
     /// Whether emitters seen by the camera are left out.
     pub hide_emitters: bool,
@@ -262,6 +296,8 @@ pub(crate) struct Integrator {
     pub per_light: usize,
     /// The render's seed (the training pass derives its streams from it).
     pub seed: u64,
+    /// How the training pass runs ([`RenderOptions::training`]).
+    pub training: scene::Training,
     /// The trained light selection, once [`Self::prepare`] has trained it.
     pub trained: Option<Arc<TrainedSelection>>,
 }
@@ -314,12 +350,14 @@ impl Integrator {
             record,
             dims,
             max_depth: o.max_depth,
+            min_depth: o.min_depth,
             rr_depth: o.rr_depth,
             hide_emitters: o.hide_emitters,
             aovs: !o.aovs.is_empty(),
             pixel_center: o.pixel_center,
             per_light: o.per_light as usize,
             seed: o.seed,
+            training: o.training,
             trained: None,
         })
     }
@@ -400,6 +438,7 @@ impl Integrator {
         let mut px = Pixel {
             rec,
             key: u64::from(index),
+            mute: false,
         };
         match self.kind {
             IntegratorKind::Direct | IntegratorKind::Path => {

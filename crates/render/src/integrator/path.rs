@@ -13,6 +13,12 @@
 //! Russian roulette ends the path with probability `q = max(0.05, 1 − max β)` and divides
 //! β by `1 − q` otherwise (pbrt-v3 §14.5.1), and `max_depth` vertices at most are shaded.
 //!
+//! **Minimum depth.** With [`super::RenderOptions::min_depth`] the vertices shallower
+//! than it are shaded as usual (same random numbers, same continuation) but add nothing, so a render
+//! with `min_depth = max_depth = d` holds exactly the light of depth d: the per-depth
+//! images sum to the full one, heuristics and optimal estimators alike (each depth has
+//! its own estimator, which the others never touch).
+//!
 //! **Heuristic MIS** weights each draw by `w_k(ω) f/(n_k p_k)`, summed into the pixel.
 //!
 //! **Optimal MIS per depth.** The depth-d contributions of a pixel form one integral over
@@ -60,15 +66,16 @@ impl Integrator {
         if self.aovs {
             self.add_aovs(scene, &first, &ray, rng, px);
         }
+        let camera_emitters = !self.hide_emitters && self.min_depth == 0;
         let mut hit = match first {
             Trace::Light(l) => {
-                if !self.hide_emitters {
+                if camera_emitters {
                     px.add(l.radiance);
                 }
                 return;
             }
             Trace::Escape => {
-                if !self.hide_emitters {
+                if camera_emitters {
                     px.add(scene.lights.environment_radiance(ray.d));
                 }
                 return;
@@ -85,7 +92,10 @@ impl Integrator {
         while depth < max_depth {
             let v = Vertex::new(scene, &hit, wo);
             let extend = depth + 1 < max_depth;
-            let Some(next) = self.shade(scene, &v, beta, depth, extend, rng, px, rays) else {
+            px.mute = depth + 1 < self.min_depth as usize;
+            let next = self.shade(scene, &v, beta, depth, extend, rng, px, rays);
+            px.mute = false;
+            let Some(next) = next else {
                 break;
             };
             beta *= next.weight;

@@ -75,16 +75,22 @@ impl Record {
 }
 
 /// One pixel's record while a sample runs: the view the integrators add into. `key` is
-/// the sample's global index, which keys the uncorrelated estimator's sets.
+/// the sample's global index, which keys the uncorrelated estimator's sets. While
+/// `mute` is set (a vertex below [`super::RenderOptions::min_depth`]) nothing but AOVs
+/// is added.
 pub(crate) struct Pixel<'a> {
     pub rec: &'a mut [f64],
     pub key: u64,
+    pub mute: bool,
 }
 
 impl Pixel<'_> {
     /// Adds `c` outside MIS.
     #[inline]
     pub fn add(&mut self, c: Rgb) {
+        if self.mute {
+            return;
+        }
         let s = &mut self.rec[Record::OUTSIDE..Record::OUTSIDE + 3];
         s[0] += c.x;
         s[1] += c.y;
@@ -122,6 +128,9 @@ impl Pixel<'_> {
         pdfs: &[f64],
         light: Option<usize>,
     ) {
+        if self.mute {
+            return;
+        }
         match &it.combine {
             Combine::Heuristic(h) => {
                 // w_k f / (n_k p_k) (Veach 1997, eq. 9.4); a draw with own pdf 0 adds 0.
@@ -160,6 +169,9 @@ impl Pixel<'_> {
     /// Technique `k` produced no draw (or a delta-lobe draw) at vertex `depth`.
     #[inline]
     pub fn add_failed(&mut self, it: &Integrator, depth: usize, k: usize) {
+        if self.mute {
+            return;
+        }
         if let Combine::Estimator(kernel) = &it.combine {
             for l in 0..it.record.lights {
                 let r = it.record.depth_light(depth, l);
@@ -171,6 +183,9 @@ impl Pixel<'_> {
     /// Closes the iteration of vertex `depth`'s estimator.
     #[inline]
     pub fn end_vertex(&mut self, it: &Integrator, depth: usize) {
+        if self.mute {
+            return;
+        }
         if let Combine::Estimator(kernel) = &it.combine {
             for l in 0..it.record.lights {
                 let r = it.record.depth_light(depth, l);

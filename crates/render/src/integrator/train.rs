@@ -1,10 +1,11 @@
 //! The training pass of `light-trained` ([`crate::light::TrainedSelection`]): before the
-//! render, [`TRAIN_SPP`] camera rays per pixel find first-hit shading points; at each,
+//! render, [`RenderOptions::training`](super::RenderOptions::training)`.spp` camera rays
+//! per pixel (default [`TRAIN_SPP`]) find first-hit shading points; at each,
 //! one MIS light chosen uniformly is sampled once and its contribution
 //! `L · lum(f_s · |cos θ| · Li) / p` is measured with a shadow ray (visibility included,
 //! L the number of MIS lights: the uniform choice's 1/L undone). The sums per cell of a
-//! [`TRAIN_GRID`]³ grid over the bounding box of those points are the weights of
-//! [`TrainedSelection::from_weights`].
+//! `grid`³ grid over the bounding box of those points (default [`TRAIN_GRID`]) are the
+//! weights of [`TrainedSelection::with_floor`], with the options' `floor`.
 //!
 //! The pass draws from its own random streams (the render's seed with a salt), so it is
 //! the same for every sample range of a render (split renders merge) and for any thread
@@ -16,13 +17,15 @@
 use super::vertex::{incident, spawn, Vertex};
 use super::{Integrator, RayCounts};
 use crate::color::luminance;
-use crate::light::{Selection, TrainedSelection, TRAIN_GRID};
+#[cfg(doc)]
+use crate::light::TRAIN_GRID;
+use crate::light::{Selection, TrainedSelection};
 use crate::sampler::Sampler;
 use crate::scene::Scene;
 use crate::technique::Technique;
 use glam::{DVec2, DVec3};
 
-/// Training samples per pixel.
+/// Training samples per pixel, by default (`scene::Training::spp`).
 pub const TRAIN_SPP: u32 = 4;
 
 /// Mixed into the seed for the training streams ("light-tr").
@@ -45,7 +48,7 @@ impl Integrator {
         let (w, h) = (scene.camera.width, scene.camera.height);
         for y in 0..h {
             for x in 0..w {
-                for i in 0..TRAIN_SPP {
+                for i in 0..self.training.spp {
                     let rng = sampler.stream(x, y, i);
                     let ray = scene.camera.ray(x, y, rng.get_2d(0));
                     let Some(hit) = scene.intersect(&ray, 0.0, f64::INFINITY) else {
@@ -86,17 +89,18 @@ impl Integrator {
         } else {
             (DVec3::ZERO, DVec3::ONE)
         };
-        let cells = TRAIN_GRID * TRAIN_GRID * TRAIN_GRID;
+        let (grid, floor) = (self.training.grid as usize, self.training.floor);
+        let cells = grid * grid * grid;
         let empty =
-            TrainedSelection::from_weights(lo, hi, TRAIN_GRID, lights, &vec![0.0; cells * lights]);
+            TrainedSelection::with_floor(lo, hi, grid, lights, &vec![0.0; cells * lights], floor);
         let mut weights = vec![0.0; cells * lights];
         for (p, k, value) in draws {
             if value.is_finite() && value > 0.0 {
                 weights[empty.cell(p) * lights + k] += value;
             }
         }
-        Some(TrainedSelection::from_weights(
-            lo, hi, TRAIN_GRID, lights, &weights,
+        Some(TrainedSelection::with_floor(
+            lo, hi, grid, lights, &weights, floor,
         ))
     }
 }

@@ -9,10 +9,11 @@
 
 use glam::DVec3;
 
-/// Cells per axis of the training grid.
+/// Cells per axis of the training grid, by default (`scene::Training::grid`).
 pub const TRAIN_GRID: usize = 8;
 
-/// The uniform share ε of the trained pmf: `P(k) = (1 − ε)·w_k/Σw + ε/L`.
+/// The uniform share ε of the trained pmf, `P(k) = (1 − ε)·w_k/Σw + ε/L`, by default
+/// (`scene::Training::floor`).
 pub const TRAIN_FLOOR: f64 = 0.1;
 
 /// Per-cell light-selection pmfs learned from measured contributions (module docs).
@@ -33,8 +34,21 @@ impl TrainedSelection {
     /// in each cell `P(k) = (1 − ε)·w_k/Σw + ε/L` with ε = [`TRAIN_FLOOR`], uniform where
     /// nothing was measured.
     pub fn from_weights(lo: DVec3, hi: DVec3, res: usize, lights: usize, weights: &[f64]) -> Self {
+        Self::with_floor(lo, hi, res, lights, weights, TRAIN_FLOOR)
+    }
+
+    /// [`Self::from_weights`] with the uniform share ε = `floor`, in (0, 1].
+    pub fn with_floor(
+        lo: DVec3,
+        hi: DVec3,
+        res: usize,
+        lights: usize,
+        weights: &[f64],
+        floor: f64,
+    ) -> Self {
         assert_eq!(weights.len(), res * res * res * lights, "weights");
         assert!(lights > 0 && res > 0);
+        assert!(floor > 0.0 && floor <= 1.0, "floor {floor}");
         let ext = (hi - lo).max(DVec3::splat(1e-12));
         let mut pmf = Vec::with_capacity(weights.len());
         let uniform = 1.0 / lights as f64;
@@ -43,7 +57,7 @@ impl TrainedSelection {
             for &x in w {
                 let x = if x.is_finite() && x > 0.0 { x } else { 0.0 };
                 pmf.push(if sum > 0.0 {
-                    (1.0 - TRAIN_FLOOR) * x / sum + TRAIN_FLOOR * uniform
+                    (1.0 - floor) * x / sum + floor * uniform
                 } else {
                     uniform
                 });
