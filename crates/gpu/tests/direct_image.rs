@@ -370,7 +370,7 @@ fn path_images_agree() {
         let (over, z) = compare(&spread(&gpu_subs), &spread(&cpu_subs));
         let cells = (W * H * 3) as usize;
         eprintln!(
-            "path, {}: {over} of {cells} beyond 4σ; image-mean z {z:?}",
+            "path, {}, min depth {min_depth}: {over} of {cells} beyond 4σ; image-mean z {z:?}",
             method.name()
         );
         assert!(
