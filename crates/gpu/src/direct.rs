@@ -634,6 +634,7 @@ pub(crate) type PipelineCache = std::sync::Mutex<Vec<(String, std::sync::Arc<Pip
 pub(crate) struct Pipelines {
     trace: wgpu::ComputePipeline,
     shade: wgpu::ComputePipeline,
+    prepare: wgpu::ComputePipeline,
     layout: wgpu::BindGroupLayout,
 }
 
@@ -723,13 +724,14 @@ fn pipelines(gpu: &Gpu, tape_wgsl: &str) -> Result<Pipelines, GpuError> {
             cache: None,
         })
     };
-    let (trace, shade) = (make("trace"), make("shade"));
+    let (trace, shade, prepare) = (make("trace"), make("shade"), make("prepare"));
     if let Some(e) = pollster::block_on(scope.pop()) {
         return Err(GpuError::Run(format!("direct kernels: {e}")));
     }
     Ok(Pipelines {
         trace,
         shade,
+        prepare,
         layout,
     })
 }
@@ -973,7 +975,25 @@ pub fn render_range(
         })
     };
     let (hits, draws) = (rw("hits", hit_bytes), rw("draws", draw_bytes));
-    let loops = rw("stats", 16);
+    // Loop maxima, the shadow queue's length and indirect arguments, then its entries.
+    let stats_bytes = (16 + max_slots * u64::from(nd1)) * 4;
+    gpu.check_binding(stats_bytes)?;
+    let loops = d.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("stats and shadow queue"),
+        size: stats_bytes,
+        usage: wgpu::BufferUsages::STORAGE
+            | wgpu::BufferUsages::COPY_SRC
+            | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    // The shadow pass's indirect arguments, copied out of `stats` (a buffer bound for
+    // storage cannot also drive a dispatch).
+    let args = d.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("shadow dispatch"),
+        size: 16,
+        usage: wgpu::BufferUsages::INDIRECT | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
     let (hits_r, draws_r, loops_r) = (
         read("hits readback", hit_bytes),
         read("draws readback", draw_bytes),
@@ -1052,11 +1072,25 @@ pub fn render_range(
         }
         let mut enc = d.create_command_encoder(&Default::default());
         for (q, &(stage, depth, mode)) in passes.iter().enumerate() {
+            let group = &groups[3 * depth as usize + mode as usize];
             let (pipe, n) = match stage {
                 1 => (&p.shade, slots * nd1),
-                2 => (&p.trace, slots * nd1),
+                2 => (&p.trace, 0),
                 _ => (&p.trace, slots),
             };
+            if stage == 1 {
+                // An empty shadow queue for this depth's shade pass to fill.
+                enc.clear_buffer(&loops, 16, Some(4));
+            }
+            if stage == 2 {
+                {
+                    let mut pass = enc.begin_compute_pass(&Default::default());
+                    pass.set_pipeline(&p.prepare);
+                    pass.set_bind_group(0, group, &[]);
+                    pass.dispatch_workgroups(1, 1, 1);
+                }
+                enc.copy_buffer_to_buffer(&loops, 20, &args, 0, 12);
+            }
             let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: None,
                 timestamp_writes: timestamps
@@ -1068,9 +1102,14 @@ pub fn render_range(
                     }),
             });
             pass.set_pipeline(pipe);
-            pass.set_bind_group(0, &groups[3 * depth as usize + mode as usize], &[]);
-            let (gx, gy) = groups_for(n);
-            pass.dispatch_workgroups(gx, gy, 1);
+            pass.set_bind_group(0, group, &[]);
+            if stage == 2 {
+                // The shadow rays the shade pass queued, and no other slot.
+                pass.dispatch_workgroups_indirect(&args, 0);
+            } else {
+                let (gx, gy) = groups_for(n);
+                pass.dispatch_workgroups(gx, gy, 1);
+            }
         }
         if let Some(qs) = &timestamps {
             enc.resolve_query_set(qs, 0..n_queries, &ts_buf, 0);

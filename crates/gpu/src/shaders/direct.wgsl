@@ -57,6 +57,9 @@ struct GpuMaterial { bsdf: GpuBsdf, tex_kind: u32, pad0: u32, pad1: u32, pad2: u
 @group(0) @binding(9) var<storage, read> sel_buf: array<f32>;
 @group(0) @binding(10) var<storage, read_write> hits: array<vec4<f32>>;
 @group(0) @binding(11) var<storage, read_write> draws: array<vec4<f32>>;
+// stats[0..3]: the most loop iterations per invocation (camera and continuation trace,
+// shadow trace, shade); stats[4]: the shadow queue's length; stats[5..8]: its indirect
+// dispatch (x, y, z); stats[16 + q]: queue entry q, a draw index (GPU.md §7.4).
 @group(0) @binding(12) var<storage, read_write> stats: array<atomic<u32>>;
 // CSG nodes of kind-2 shapes in post-order: (op, leaf or part count, 0, 0), op 0 leaf,
 // 1 union, 2 intersection, 3 difference.
@@ -83,6 +86,10 @@ const D_SHADOW: f32 = 3.0;    // a direction with a shadow ray to trace
 const D_VISIBLE: f32 = 4.0;   // traced: unoccluded
 const D_OCCLUDED: f32 = 5.0;  // traced: occluded
 const D_CARRIED: f32 = 6.0;   // the draw that extends the path: traced as its next ray
+
+const QUEUE_LEN: u32 = 4u;
+const QUEUE_ARGS: u32 = 5u;
+const QUEUE_ITEMS: u32 = 16u;
 
 const T_BSDF: u32 = 0u;
 const T_POWER: u32 = 1u;
@@ -518,9 +525,10 @@ fn trace_continuation(slot: u32) {
     write_vertex(at, o + h.t * d, h.leaf, -d, hits[at + 7u].xyz);
 }
 
-fn trace_shadow(i: u32) {
+fn trace_shadow(q: u32) {
+    if (q >= atomicLoad(&stats[QUEUE_LEN])) { return; }
+    let i = atomicLoad(&stats[QUEUE_ITEMS + q]);
     let at = (frame.depth * frame.slots * (frame.n_draws + 1u) + i) * DRAW_WORDS;
-    if (draws[at + 1u].w != D_SHADOW) { return; }
     let h = scene_trace(draws[at].xyz, draws[at + 1u].xyz, draws[at].w, true);
     if (h.status == 2u) {
         draws[at + 1u].w = S_OVERFLOW + 10.0;
@@ -549,7 +557,6 @@ fn trace(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
     let i = gid.x + gid.y * nw.x * 64u;
     loops = 0u;
     if (frame.mode == 1u) {
-        if (i >= frame.slots * (frame.n_draws + 1u)) { return; }
         trace_shadow(i);
     } else {
         if (i >= frame.slots) { return; }
@@ -712,5 +719,19 @@ fn shade(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
     draws[at] = vec4<f32>(o, lh.t);
     draws[at + 1u] = vec4<f32>(wi, status);
     draws[at + 2u] = vec4<f32>(beta * fc * lh.le, 0.0);
+    if (status == D_SHADOW) {
+        // Queue the shadow ray: the shadow pass runs over the queue alone (compaction).
+        let q = atomicAdd(&stats[QUEUE_LEN], 1u);
+        atomicStore(&stats[QUEUE_ITEMS + q], i);
+    }
     atomicMax(&stats[2], loops);
+}
+
+// The shadow pass's indirect dispatch from the queue's length (one invocation).
+@compute @workgroup_size(1)
+fn prepare() {
+    let groups = (atomicLoad(&stats[QUEUE_LEN]) + 63u) / 64u;
+    atomicStore(&stats[QUEUE_ARGS], max(groups, 1u));
+    atomicStore(&stats[QUEUE_ARGS + 1u], 1u);
+    atomicStore(&stats[QUEUE_ARGS + 2u], 1u);
 }
