@@ -328,24 +328,37 @@ fn independent_seed_images_agree() {
     assert!(z.iter().all(|z| z.abs() < 4.0), "image means: z = {z:?}");
 }
 
-/// The optimal estimators take the GPU's draws as they take the CPU's: optimal-direct
-/// on the GPU against the CPU, same seed, per-pixel z-test.
+/// Every other estimator takes the GPU's draws as it takes the CPU's: power, maximum,
+/// cutoff and the four optimal ones on `direct`, same seed, the same z-tests.
 #[test]
-fn optimal_direct_agrees() {
+fn every_estimator_agrees() {
     let Some(g) = device() else { return };
-    let mut s = load(SCENE);
-    s.2.method = mis::Method::OptimalDirect;
-    let gpu_subs = subs(|r| gpu_render(g, &s, r));
-    let cpu_subs = subs(|r| cpu_render(&s, r));
-    let (over, z) = compare(&spread(&gpu_subs), &spread(&cpu_subs));
-    let cells = (W * H * 3) as usize;
-    eprintln!("optimal-direct: {over} of {cells} beyond 4σ; image-mean z {z:?}");
-    assert!(
-        over * 1000 < cells,
-        "{over} of {cells} channel-pixels beyond 4σ"
-    );
-    assert!(z.iter().all(|z| z.abs() < 3.0), "image means: z = {z:?}");
-    assert_correlated(&gpu_subs, &cpu_subs);
+    for method in [
+        mis::Method::Power,
+        mis::Method::Maximum,
+        mis::Method::Cutoff,
+        mis::Method::OptimalDirect,
+        mis::Method::OptimalUncorrelated,
+        mis::Method::OptimalProgressive,
+        mis::Method::OptimalFull,
+    ] {
+        let mut s = load(SCENE);
+        s.2.method = method;
+        let gpu_subs = subs(|r| gpu_render(g, &s, r));
+        let cpu_subs = subs(|r| cpu_render(&s, r));
+        let (over, z) = compare(&spread(&gpu_subs), &spread(&cpu_subs));
+        let cells = (W * H * 3) as usize;
+        eprintln!(
+            "{}: {over} of {cells} beyond 4σ; image-mean z {z:?}",
+            method.name()
+        );
+        assert!(
+            over * 1000 < cells,
+            "{over} of {cells} channel-pixels beyond 4σ"
+        );
+        assert!(z.iter().all(|z| z.abs() < 3.0), "image means: z = {z:?}");
+        assert_correlated(&gpu_subs, &cpu_subs);
+    }
 }
 
 /// `path` (depth 3, roulette from depth 2) with the power heuristic and with
