@@ -27,7 +27,7 @@
 //! ray), or an expression solid (at most one per scene: its tape is compiled into the
 //! kernels, GPU.md §6.2); diffuse, conductor, dielectric and plastic materials
 //! that are rough (no delta lobes), with constant or point-space checker colours; sphere,
-//! rectangle and disk lights; the techniques `bsdf`, `light`, `light-uniform`,
+//! rectangle and disk lights, point and spot lights; the techniques `bsdf`, `light`, `light-uniform`,
 //! `light-area` and `light#k`; every MIS method; `path` up to depth
 //! [`MAX_GPU_DEPTH`]. Anything else is a
 //! [`GpuError::Unsupported`] naming it, before any work.
@@ -46,7 +46,9 @@ use bytemuck::{Pod, Zeroable};
 use frep::flat::CsgOp;
 use frep::LeafView;
 use render::bsdf::CoatTable;
-use render::integrator::{Accumulator, IntegratorKind, RayCounts, RenderOptions, ShadedDraw};
+use render::integrator::{
+    Accumulator, IntegratorKind, RayCounts, RenderOptions, ShadedDraw, ShadedVertex,
+};
 use render::scene::Scene;
 use render::{RenderState, RenderStats, StateHeader, Technique};
 use scene::{CameraKind, LightKind, MaterialData, SceneData, TextureData, TextureSpace};
@@ -130,7 +132,9 @@ struct Frame {
     rr_depth: u32,
     stride: u32,
     carry: u32,
-    pad: [u32; 3],
+    n_delta: u32,
+    per_slot: u32,
+    pad: u32,
     eye: [f32; 4],
     right: [f32; 4],
     up: [f32; 4],
@@ -488,9 +492,6 @@ fn tape_normal(p: vec3<f32>) -> vec3<f32> {
     }
 
     fn pack_lights(&mut self, data: &SceneData) -> Result<(), GpuError> {
-        if !data.lights.delta.is_empty() {
-            return Err(unsupported("point and spot lights"));
-        }
         if data.environment.is_some() {
             return Err(unsupported("an environment light"));
         }
@@ -507,6 +508,20 @@ fn tape_normal(p: vec3<f32>) -> vec3<f32> {
                 LightKind::Point | LightKind::Spot => unreachable!("area lights only"),
             });
         }
+        // Point and spot lights after them (shape 3 and 4; the kernel's shade_delta).
+        for l in &data.lights.delta {
+            let spot = l.kind == LightKind::Spot;
+            self.lights.push(GpuAreaLight {
+                shape: if spot { 4 } else { 3 },
+                two_sided: 0,
+                pad: [0; 2],
+                radiance: f4(l.emission, 0.0),
+                p0: f4(l.p0, 0.0),
+                e1: f4(l.e1, l.cos_falloff_start),
+                e2: [l.cos_falloff_end as f32, 0.0, 0.0, 0.0],
+            });
+        }
+        self.frame.n_delta = data.lights.delta.len() as u32;
         Ok(())
     }
 
@@ -523,7 +538,7 @@ fn tape_normal(p: vec3<f32>) -> vec3<f32> {
         if self.tables.is_empty() {
             self.tables.push(0.0);
         }
-        f.n_lights = self.lights.len() as u32;
+        f.n_lights = data.lights.area.len() as u32;
         f.n_shapes = self.shapes.len() as u32;
         let c = &data.camera;
         let (w, h) = (c.width, c.height);
@@ -581,6 +596,7 @@ fn tape_normal(p: vec3<f32>) -> vec3<f32> {
         // render::integrator::dims: the vertex stride, and the draw that extends a path
         // (the BSDF technique's first, else the extra draw).
         f.stride = (3 * (f.n_draws + 1) + 1).div_ceil(4) * 4;
+        f.per_slot = f.n_draws + 1 + f.n_delta;
         f.carry = f.n_draws;
         let mut slot = 0;
         for &(t, n) in &o.techniques {
@@ -948,7 +964,9 @@ pub fn render_range(
         .map_err(|e| GpuError::Unsupported(e.to_string()))?;
     let pixels = w * h;
     let n_draws = pack.frame.n_draws;
-    let nd1 = n_draws + 1;
+    // Draw records per slot and depth: the techniques', the extra BSDF draw, and one per
+    // point or spot light.
+    let nd1 = pack.frame.per_slot;
     let depths = pack.frame.max_depth;
     let per_slot_draws = nd1 * depths.max(1);
     let per_wave = (WAVE_DRAWS / (pixels * per_slot_draws)).max(1);
@@ -1192,6 +1210,20 @@ pub fn render_range(
                 }
             }
             let mut vertices: Vec<Vec<ShadedDraw>> = Vec::with_capacity(shaded);
+            let mut delta = vec![[0.0f64; 3]; shaded];
+            for (k, sum) in delta.iter_mut().enumerate() {
+                // Point and spot lights, outside MIS: the unoccluded ones.
+                for d in vertex(k as u32)
+                    .chunks_exact(DRAW_WORDS)
+                    .skip(n_draws as usize + 1)
+                {
+                    if d[7] == 4.0 {
+                        for c in 0..3 {
+                            sum[c] += f64::from(d[8 + c]);
+                        }
+                    }
+                }
+            }
             for k in 0..shaded {
                 let draws = vertex(k as u32)
                     .chunks_exact(DRAW_WORDS)
@@ -1215,7 +1247,11 @@ pub fn render_range(
                     .collect();
                 vertices.push(draws);
             }
-            let refs: Vec<&[ShadedDraw]> = vertices.iter().map(Vec::as_slice).collect();
+            let refs: Vec<ShadedVertex> = vertices
+                .iter()
+                .zip(&delta)
+                .map(|(draws, &outside)| ShadedVertex { outside, draws })
+                .collect();
             acc.add(rec, index, outside, &refs);
         }
         stats.stages.accumulate += t1.elapsed();

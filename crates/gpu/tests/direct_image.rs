@@ -26,7 +26,8 @@ use std::sync::OnceLock;
 /// Every feature the GPU integrator covers: a box floor with a point checker, a
 /// perturbed sphere, a plain sphere, a perturbed ellipsoid, a CSG tree of plain
 /// quadrics (union, difference, intersection) and an expression solid (a blend); diffuse, rough plastic,
-/// rough conductor and rough glass; sphere, disk and rect lights of different powers.
+/// rough conductor and rough glass; sphere, disk and rect lights of different powers, a
+/// point light and a spot light.
 const SCENE: &str = r#"
 [camera]
 eye = [0.0, -6.0, 2.6]
@@ -113,6 +114,21 @@ output blend_union(blend_union(a, b, 0.4, 0.5, 0.5), c, 0.4, 0.5, 0.5)
 """
 transform = { translate = [0.9, -0.6, 0.25] }
 material = "glossy"
+
+[[lights]]
+type = "point"
+position = [1.2, -1.8, 1.6]
+color = [1.0, 0.9, 0.7]
+power = 60
+
+[[lights]]
+type = "spot"
+position = [-1.0, -2.0, 2.2]
+target = [-1.2, 0.0, 0.0]
+cone = 30
+falloff_start = 20
+color = [0.6, 1.0, 0.6]
+power = 80
 
 [[lights]]
 type = "sphere"

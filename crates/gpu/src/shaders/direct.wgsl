@@ -28,7 +28,7 @@ struct Frame {
     n_tech: u32, n_draws: u32, n_lights: u32, power_off: u32,
     area_off: u32, flags: u32, mode: u32, zero: u32,
     depth: u32, max_depth: u32, rr_depth: u32, stride: u32,
-    carry: u32, pad0: u32, pad1: u32, pad2: u32,
+    carry: u32, n_delta: u32, per_slot: u32, pad2: u32,
     eye: vec4<f32>,
     right: vec4<f32>,
     up: vec4<f32>,
@@ -455,8 +455,10 @@ fn camera_ray(px: vec3<u32>) -> array<vec3<f32>, 2> {
     return array<vec3<f32>, 2>(frame.eye.xyz, normalize(frame.forward.xyz + sx * frame.right.xyz + sy * frame.up.xyz));
 }
 
+// Draw records per slot and depth: the techniques' Σ n_k, the extra BSDF draw, then one
+// per point or spot light (frame.per_slot in all).
 fn draw_at(slot: u32, j: u32) -> u32 {
-    return ((frame.depth * frame.slots + slot) * (frame.n_draws + 1u) + j) * DRAW_WORDS;
+    return ((frame.depth * frame.slots + slot) * frame.per_slot + j) * DRAW_WORDS;
 }
 
 fn write_vertex(at: u32, p: vec3<f32>, leaf: u32, wo: vec3<f32>, beta: vec3<f32>) {
@@ -528,7 +530,7 @@ fn trace_continuation(slot: u32) {
 fn trace_shadow(q: u32) {
     if (q >= atomicLoad(&stats[QUEUE_LEN])) { return; }
     let i = atomicLoad(&stats[QUEUE_ITEMS + q]);
-    let at = (frame.depth * frame.slots * (frame.n_draws + 1u) + i) * DRAW_WORDS;
+    let at = (frame.depth * frame.slots * frame.per_slot + i) * DRAW_WORDS;
     let h = scene_trace(draws[at].xyz, draws[at + 1u].xyz, draws[at].w, true);
     if (h.status == 2u) {
         draws[at + 1u].w = S_OVERFLOW + 10.0;
@@ -576,7 +578,7 @@ fn trace(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
 @compute @workgroup_size(64)
 fn shade(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nw: vec3<u32>) {
     let i = gid.x + gid.y * nw.x * 64u;
-    let nd = frame.n_draws + 1u;
+    let nd = frame.per_slot;
     if (i >= frame.slots * nd) { return; }
     loops = 0u;
     let slot = i / nd;
@@ -611,6 +613,13 @@ fn shade(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
         m.rgb = select(mat.b, mat.a, r < 0.5);
         m.rgb.w = 0.0;
     }
+    let f = basis(n);
+    let wo_l = to_local(f, wo);
+    if (j > frame.n_draws) {
+        shade_delta(i, at, j - frame.n_draws - 1u, p, n, f, wo_l, m, beta);
+        atomicMax(&stats[2], loops);
+        return;
+    }
     // Technique k of draw j (the extra draw samples the BSDF).
     var k = 0u;
     var first = 0u;
@@ -628,8 +637,6 @@ fn shade(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
     let dim = base + 3u * j;
     let uc = rnd(px.x, px.y, px.z, dim);
     let u = vec2<f32>(rnd(px.x, px.y, px.z, dim + 1u), rnd(px.x, px.y, px.z, dim + 2u));
-    let f = basis(n);
-    let wo_l = to_local(f, wo);
     var wi = vec3<f32>(0.0);
     var ok = false;
     var weight = vec3<f32>(0.0);
@@ -655,12 +662,7 @@ fn shade(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
         ok = ls.ok != 0u;
         wi = ls.wi;
     }
-    // render::integrator::vertex::spawn, with an offset for f32: the CPU's 10⁻⁷ (for
-    // f64) left 2.7 % of a test image's pixels darker by over 30 % (shadow rays finding
-    // the surface they leave); 10⁻⁵ left none (docs/gpu.md).
-    var side = n;
-    if (dot(wi, n) < 0.0) { side = -n; }
-    let o = p + side * (1e-5 * (1.0 + max(abs(p.x), max(abs(p.y), abs(p.z)))));
+    let o = spawn(p, n, wi);
     if (carries) {
         // The path's next ray, β after it, and roulette (render::integrator::path).
         var next = beta * weight;
@@ -725,6 +727,54 @@ fn shade(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
         atomicStore(&stats[QUEUE_ITEMS + q], i);
     }
     atomicMax(&stats[2], loops);
+}
+
+// render::integrator::vertex::spawn, with an offset for f32: the CPU's 10⁻⁷ (for f64)
+// left 2.7 % of a test image's pixels darker by over 30 % (shadow rays finding the
+// surface they leave); 10⁻⁵ left none (docs/gpu.md).
+fn spawn(p: vec3<f32>, n: vec3<f32>, wi: vec3<f32>) -> vec3<f32> {
+    var side = n;
+    if (dot(wi, n) < 0.0) { side = -n; }
+    return p + side * (1e-5 * (1.0 + max(abs(p.x), max(abs(p.y), abs(p.z)))));
+}
+
+// Point or spot light l (after the area lights in `lights`: shape 3 point, 4 spot;
+// radiance = intensity, p0 = position, e1 = axis and cos of the falloff's start,
+// e2.x = cos of the cone) at the vertex, outside MIS (Integrator::delta_lights): its
+// shadow ray is queued with β·f·|cos|·I/d², unless nothing could arrive.
+fn shade_delta(i: u32, at: u32, l: u32, p: vec3<f32>, n: vec3<f32>, f: Basis, wo_l: vec3<f32>, m: GpuBsdf, beta: vec3<f32>) {
+    draws[at + 1u] = vec4<f32>(0.0, 0.0, 0.0, 0.0);
+    let dl = lights[frame.n_lights + l];
+    let v = dl.p0.xyz - p;
+    let d2 = dot(v, v);
+    if (d2 == 0.0) { return; }
+    let wi = v / sqrt(d2);
+    var intensity = dl.radiance.xyz;
+    if (dl.shape == 4u) {
+        // smoothstep(axis·(−wi), cos_end, cos_start), as render::light::delta.
+        let a = dl.e2.x;
+        let b = dl.e1.w;
+        let x = dot(dl.e1.xyz, -wi);
+        var s = 0.0;
+        if (a == b) {
+            s = select(1.0, 0.0, x < a);
+        } else {
+            let t = clamp((x - a) / (b - a), 0.0, 1.0);
+            s = t * t * (3.0 - 2.0 * t);
+        }
+        intensity = intensity * s;
+    }
+    let radiance = intensity / d2;
+    let fc = bsdf_eval(m, wo_l, to_local(f, wi)).xyz * abs(dot(wi, n));
+    if (all(fc == vec3<f32>(0.0)) || all(radiance == vec3<f32>(0.0))) { return; }
+    let o = spawn(p, n, wi);
+    let dist = length(dl.p0.xyz - o);
+    if (nearest_light(o, wi, dist).t < inf()) { return; }
+    draws[at] = vec4<f32>(o, dist);
+    draws[at + 1u] = vec4<f32>(wi, D_SHADOW);
+    draws[at + 2u] = vec4<f32>(beta * fc * radiance, 0.0);
+    let q = atomicAdd(&stats[QUEUE_LEN], 1u);
+    atomicStore(&stats[QUEUE_ITEMS + q], i);
 }
 
 // The shadow pass's indirect dispatch from the queue's length (one invocation).

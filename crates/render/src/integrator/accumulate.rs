@@ -30,6 +30,16 @@ pub enum ShadedDraw<'a> {
     },
 }
 
+/// One vertex shaded elsewhere: what it adds outside MIS (point and spot lights,
+/// throughput included) and its technique draws.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ShadedVertex<'a> {
+    /// Σ β·f·|cos|·I/d² over the point and spot lights that reach the vertex.
+    pub outside: [f64; 3],
+    /// Σ n_k draws, technique by technique in list order.
+    pub draws: &'a [ShadedDraw<'a>],
+}
+
 /// The `direct` and `path` integrators' bookkeeping for samples shaded elsewhere.
 #[derive(Clone, Debug)]
 pub struct Accumulator {
@@ -77,11 +87,12 @@ impl Accumulator {
         &self.it.counts
     }
 
-    /// Adds sample `index` of a pixel to its record `rec`: `outside` outside MIS, and
-    /// the draws of each vertex the path shaded (vertex d at `vertices[d]`; none when
-    /// the camera ray met no surface), technique by technique in list order, with the
-    /// path throughput in `f`. Vertices below the options' `min_depth` add nothing. Panics if a vertex does not have Σ n_k draws.
-    pub fn add(&self, rec: &mut [f64], index: u32, outside: [f64; 3], vertices: &[&[ShadedDraw]]) {
+    /// Adds sample `index` of a pixel to its record `rec`: `outside` (the emitters the
+    /// camera saw) outside MIS, and each vertex the path shaded (vertex d at
+    /// `vertices[d]`; none when the camera ray met no surface): its own outside-MIS
+    /// light, then its draws technique by technique in list order, with the path
+    /// throughput in `f`. Vertices below the options' `min_depth` add nothing. Panics if a vertex does not have Σ n_k draws.
+    pub fn add(&self, rec: &mut [f64], index: u32, outside: [f64; 3], vertices: &[ShadedVertex]) {
         let mut px = Pixel {
             rec,
             key: u64::from(index),
@@ -94,9 +105,11 @@ impl Accumulator {
         }
         let total: u32 = self.it.counts.iter().sum();
         let t = self.it.techniques.len();
-        for (depth, draws) in vertices.iter().enumerate() {
+        for (depth, v) in vertices.iter().enumerate() {
+            let draws = v.draws;
             assert_eq!(draws.len(), total as usize, "one entry per draw");
             px.mute = depth + 1 < self.it.min_depth as usize;
+            px.add(Rgb::from_array(v.outside));
             let mut at = 0;
             for (k, &n) in self.it.counts.iter().enumerate() {
                 for _ in 0..n {
