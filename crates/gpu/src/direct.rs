@@ -26,7 +26,7 @@
 //! quadrics (boxes, capped cylinders, unions, differences: by inside spans along the
 //! ray), or an expression solid (at most one per scene: its tape is compiled into the
 //! kernels, GPU.md §6.2); diffuse, conductor, dielectric and plastic materials
-//! that are rough (no delta lobes), with constant or point-space checker colours; sphere,
+//! rough or smooth (delta lobes outside MIS, as the CPU), with constant or point-space checker colours; sphere,
 //! rectangle and disk lights, point and spot lights; the techniques `bsdf`, `light`, `light-uniform`,
 //! `light-area` and `light#k`; every MIS method; `path` up to depth
 //! [`MAX_GPU_DEPTH`]. Anything else is a
@@ -475,11 +475,6 @@ fn tape_normal(p: vec3<f32>) -> vec3<f32> {
                     GpuBsdf::plastic(rgb(diffuse), eta, roughness, coat.r_int, at)
                 }
             };
-            if bsdf.delta != 0 {
-                return Err(unsupported(format!(
-                    "material '{name}' is smooth (delta lobes; roughness ≥ 0.001 is needed)"
-                )));
-            }
             self.materials.push(GpuMaterial {
                 bsdf,
                 tex_kind: tex.0,
@@ -1210,27 +1205,31 @@ pub fn render_range(
                 }
             }
             let mut vertices: Vec<Vec<ShadedDraw>> = Vec::with_capacity(shaded);
-            let mut delta = vec![[0.0f64; 3]; shaded];
-            for (k, sum) in delta.iter_mut().enumerate() {
-                // Point and spot lights, outside MIS: the unoccluded ones.
-                for d in vertex(k as u32)
-                    .chunks_exact(DRAW_WORDS)
-                    .skip(n_draws as usize + 1)
-                {
-                    if d[7] == 4.0 {
+            let mut vertex_outside = vec![[0.0f64; 3]; shaded];
+            let mut mis = vec![true; shaded];
+            for k in 0..shaded {
+                let records = vertex(k as u32);
+                // Word 11 of a record: 1 a delta-lobe draw (outside MIS), 2 a purely
+                // specular vertex (no MIS at all).
+                let flags = |d: &[f32]| d[11] as u32;
+                mis[k] = flags(records) & 2 == 0;
+                let sum = &mut vertex_outside[k];
+                for (j, d) in records.chunks_exact(DRAW_WORDS).enumerate() {
+                    // Outside MIS: point and spot lights (j > Σ n_k) and delta lobes,
+                    // where their light arrived.
+                    let outside = j > n_draws as usize || flags(d) & 1 != 0;
+                    if outside && (d[7] == 4.0 || d[7] == 6.0) {
                         for c in 0..3 {
                             sum[c] += f64::from(d[8 + c]);
                         }
                     }
                 }
-            }
-            for k in 0..shaded {
-                let draws = vertex(k as u32)
+                let draws = records
                     .chunks_exact(DRAW_WORDS)
-                    .take(n_draws as usize)
+                    .take(if mis[k] { n_draws as usize } else { 0 })
                     .enumerate()
                     .map(|(j, d)| {
-                        if d[7] == 1.0 {
+                        if d[7] == 1.0 || flags(d) & 1 != 0 {
                             return ShadedDraw::Failed;
                         }
                         let f = if d[7] == 4.0 || d[7] == 6.0 {
@@ -1249,8 +1248,13 @@ pub fn render_range(
             }
             let refs: Vec<ShadedVertex> = vertices
                 .iter()
-                .zip(&delta)
-                .map(|(draws, &outside)| ShadedVertex { outside, draws })
+                .zip(&vertex_outside)
+                .zip(&mis)
+                .map(|((draws, &outside), &mis)| ShadedVertex {
+                    outside,
+                    draws,
+                    mis,
+                })
                 .collect();
             acc.add(rec, index, outside, &refs);
         }

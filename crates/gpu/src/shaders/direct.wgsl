@@ -86,6 +86,11 @@ const D_SHADOW: f32 = 3.0;    // a direction with a shadow ray to trace
 const D_VISIBLE: f32 = 4.0;   // traced: unoccluded
 const D_OCCLUDED: f32 = 5.0;  // traced: occluded
 const D_CARRIED: f32 = 6.0;   // the draw that extends the path: traced as its next ray
+const D_SKIP: f32 = 7.0;      // a technique that does not draw at a purely specular vertex
+// Flags in draws[·].w of word 2: an outside-MIS draw (a delta lobe), and a purely
+// specular vertex (no MIS there: Integrator::shade).
+const F_OUTSIDE: f32 = 1.0;
+const F_PURE: f32 = 2.0;
 
 const QUEUE_LEN: u32 = 4u;
 const QUEUE_ARGS: u32 = 5u;
@@ -514,12 +519,11 @@ fn trace_continuation(slot: u32) {
         return;
     }
     let lh = nearest_light(o, d, h.t);
-    if (frame.carry < frame.n_draws) {
-        let r = draw_at(slot, frame.carry);
-        var g = vec3<f32>(0.0);
-        if (lh.t < inf()) { g = draws[r + 2u].xyz * lh.le; }
-        draws[r + 2u] = vec4<f32>(g, 0.0);
-    }
+    let r = draw_at(slot, frame.carry);
+    let w2 = draws[r + 2u];
+    var g = vec3<f32>(0.0);
+    if (lh.t < inf()) { g = w2.xyz * lh.le; }
+    draws[r + 2u] = vec4<f32>(g, w2.w);
     if (lh.t < inf() || h.status == 0u || cd.w != 1.0) {
         hits[at].w = S_NONE;
         return;
@@ -592,17 +596,24 @@ fn shade(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
     }
     let extend = frame.depth + 1u < frame.max_depth;
     let carries = extend && j == frame.carry;
-    if (j == frame.n_draws && !carries) {
+    let hn = hits[ha + 1u];
+    let mat = materials[bitcast<u32>(hn.w)];
+    // Delta lobes (render::bsdf::Bxdf::has_specular) and nothing else but them.
+    let spec_mat = mat.bsdf.delta != 0u;
+    let pure = spec_mat && (mat.bsdf.kind == 1u || mat.bsdf.kind == 2u);
+    let vflags = select(0.0, F_PURE, pure);
+    // The extra BSDF draw serves the continuation and, without a BSDF technique, the
+    // delta lobes (Integrator::shade).
+    let extra_used = carries || (frame.carry == frame.n_draws && spec_mat);
+    if (j == frame.n_draws && !extra_used) {
         draws[at + 1u] = vec4<f32>(0.0, 0.0, 0.0, 0.0);
         return;
     }
     let px = slot_pixel(slot);
     let p = hp.xyz;
-    let hn = hits[ha + 1u];
     let n = hn.xyz;
     let wo = hits[ha + 2u].xyz;
     let beta = hits[ha + 4u].xyz;
-    let mat = materials[bitcast<u32>(hn.w)];
     var m = mat.bsdf;
     m.zero = frame.zero;
     if (mat.tex_kind == 1u) {
@@ -633,6 +644,11 @@ fn shade(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
         }
         code = tech_code(k);
     }
+    if (pure && code != T_BSDF) {
+        draws[at + 1u] = vec4<f32>(0.0, 0.0, 0.0, D_SKIP);
+        draws[at + 2u] = vec4<f32>(0.0, 0.0, 0.0, vflags);
+        return;
+    }
     let base = 8u + frame.depth * frame.stride;
     let dim = base + 3u * j;
     let uc = rnd(px.x, px.y, px.z, dim);
@@ -640,9 +656,11 @@ fn shade(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
     var wi = vec3<f32>(0.0);
     var ok = false;
     var weight = vec3<f32>(0.0);
+    var spec = false;
     if (code == T_BSDF) {
         let s = bsdf_sample_f(m, wo_l, uc, u);
         ok = (s.flags & 1u) != 0u;
+        spec = ok && (s.flags & 2u) != 0u;
         wi = from_local(f, s.wi);
         weight = s.weight;
     } else if (frame.n_lights == 0u) {
@@ -678,8 +696,36 @@ fn shade(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
         hits[ha + 5u] = vec4<f32>(o, select(0.0, 1.0, ok));
         hits[ha + 6u] = vec4<f32>(wi, select(0.0, 1.0, survives));
         hits[ha + 7u] = vec4<f32>(next, 0.0);
+    }
+    if (spec) {
+        // A delta lobe: outside MIS, weight·Li/n (n the BSDF technique's draws, 1 for the
+        // extra draw), Li from the continuation's trace or a shadow ray.
+        var nk = 1u;
+        if (j < frame.n_draws) { nk = frame.count[k / 4u][k % 4u]; }
+        let gw = beta * weight / f32(nk);
+        if (carries) {
+            draws[at] = vec4<f32>(o, 0.0);
+            draws[at + 1u] = vec4<f32>(wi, D_CARRIED);
+            draws[at + 2u] = vec4<f32>(gw, F_OUTSIDE + vflags);
+        } else {
+            let lh = nearest_light(o, wi, inf());
+            var status = D_SHADOW;
+            if (all(lh.le == vec3<f32>(0.0))) { status = D_ZERO; }
+            draws[at] = vec4<f32>(o, lh.t);
+            draws[at + 1u] = vec4<f32>(wi, status);
+            draws[at + 2u] = vec4<f32>(gw * lh.le, F_OUTSIDE + vflags);
+            if (status == D_SHADOW) {
+                let q = atomicAdd(&stats[QUEUE_LEN], 1u);
+                atomicStore(&stats[QUEUE_ITEMS + q], i);
+            }
+        }
+        atomicMax(&stats[2], loops);
+        return;
+    }
+    if (carries) {
         if (j == frame.n_draws) {
             draws[at + 1u] = vec4<f32>(wi, select(0.0, D_CARRIED, ok));
+            draws[at + 2u] = vec4<f32>(0.0, 0.0, 0.0, vflags);
             atomicMax(&stats[2], loops);
             return;
         }
@@ -699,8 +745,11 @@ fn shade(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
         let own = pdfs[k];
         if (code != T_BSDF) { ok = own > 0.0 && is_finite(own); }
     }
-    if (!ok) {
-        draws[at + 1u] = vec4<f32>(0.0, 0.0, 0.0, D_FAILED);
+    if (!ok || j == frame.n_draws) {
+        // (The extra draw, when it neither extends the path nor hit a delta lobe, adds
+        // nothing.)
+        draws[at + 1u] = vec4<f32>(0.0, 0.0, 0.0, select(D_FAILED, 0.0, j == frame.n_draws));
+        draws[at + 2u] = vec4<f32>(0.0, 0.0, 0.0, vflags);
         atomicMax(&stats[2], loops);
         return;
     }
@@ -710,7 +759,7 @@ fn shade(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
         // Li comes from the continuation's trace (mode 2), which multiplies it in.
         draws[at] = vec4<f32>(o, 0.0);
         draws[at + 1u] = vec4<f32>(wi, D_CARRIED);
-        draws[at + 2u] = vec4<f32>(beta * fc, 0.0);
+        draws[at + 2u] = vec4<f32>(beta * fc, vflags);
         atomicMax(&stats[2], loops);
         return;
     }
@@ -720,7 +769,7 @@ fn shade(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
     if (all(fc == vec3<f32>(0.0)) || all(lh.le == vec3<f32>(0.0))) { status = D_ZERO; }
     draws[at] = vec4<f32>(o, lh.t);
     draws[at + 1u] = vec4<f32>(wi, status);
-    draws[at + 2u] = vec4<f32>(beta * fc * lh.le, 0.0);
+    draws[at + 2u] = vec4<f32>(beta * fc * lh.le, vflags);
     if (status == D_SHADOW) {
         // Queue the shadow ray: the shadow pass runs over the queue alone (compaction).
         let q = atomicAdd(&stats[QUEUE_LEN], 1u);

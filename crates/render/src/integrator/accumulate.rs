@@ -34,10 +34,14 @@ pub enum ShadedDraw<'a> {
 /// throughput included) and its technique draws.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ShadedVertex<'a> {
-    /// Σ β·f·|cos|·I/d² over the point and spot lights that reach the vertex.
+    /// Σ β·f·|cos|·I/d² over the point and spot lights that reach the vertex, and
+    /// the delta-lobe draws' β·weight·Li/n.
     pub outside: [f64; 3],
     /// Σ n_k draws, technique by technique in list order.
     pub draws: &'a [ShadedDraw<'a>],
+    /// False at a purely specular vertex: no technique draws there and no MIS
+    /// iteration is counted (`draws` is ignored); its light is all in `outside`.
+    pub mis: bool,
 }
 
 /// The `direct` and `path` integrators' bookkeeping for samples shaded elsewhere.
@@ -106,10 +110,14 @@ impl Accumulator {
         let total: u32 = self.it.counts.iter().sum();
         let t = self.it.techniques.len();
         for (depth, v) in vertices.iter().enumerate() {
-            let draws = v.draws;
-            assert_eq!(draws.len(), total as usize, "one entry per draw");
             px.mute = depth + 1 < self.it.min_depth as usize;
             px.add(Rgb::from_array(v.outside));
+            if !v.mis {
+                px.mute = false;
+                continue;
+            }
+            let draws = v.draws;
+            assert_eq!(draws.len(), total as usize, "one entry per draw");
             let mut at = 0;
             for (k, &n) in self.it.counts.iter().enumerate() {
                 for _ in 0..n {
