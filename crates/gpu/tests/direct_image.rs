@@ -291,6 +291,36 @@ fn assert_correlated(a: &[RenderState], b: &[RenderState]) {
     );
 }
 
+/// Renders `s` on the GPU and `cpu` on the CPU, 16 sub-renders each, and asserts the
+/// z-tests: fewer than 0.1 % of channel-pixels beyond 4σ, each channel's image mean
+/// within `z_max`σ, and, for the same seed, the correlation check. Returns the
+/// sub-renders.
+fn assert_agree(
+    g: &gpu::Gpu,
+    label: &str,
+    s: &(SceneData, Scene, RenderOptions),
+    cpu: &(SceneData, Scene, RenderOptions),
+    z_max: f64,
+) -> (Vec<RenderState>, Vec<RenderState>) {
+    let gpu_subs = subs(|r| gpu_render(g, s, r));
+    let cpu_subs = subs(|r| cpu_render(cpu, r));
+    let (over, z) = compare(&spread(&gpu_subs), &spread(&cpu_subs));
+    let cells = (W * H * 3) as usize;
+    eprintln!("{label}: {over} of {cells} beyond 4σ; image-mean z {z:?}");
+    assert!(
+        over * 1000 < cells,
+        "{label}: {over} of {cells} channel-pixels beyond 4σ"
+    );
+    assert!(
+        z.iter().all(|z| z.abs() < z_max),
+        "{label}: image means: z = {z:?}"
+    );
+    if s.2.seed == cpu.2.seed {
+        assert_correlated(&gpu_subs, &cpu_subs);
+    }
+    (gpu_subs, cpu_subs)
+}
+
 /// Same seed, same sample ranges: every pixel within 4σ (< 0.1 % of channel-pixels
 /// beyond), every channel's mean within 3σ; and GPU [0, 16) merged with CPU [16, 32)
 /// holds exactly the sums of both and agrees with CPU [0, 32) in the same way.
@@ -298,18 +328,8 @@ fn assert_correlated(a: &[RenderState], b: &[RenderState]) {
 fn same_seed_images_agree_and_merge_with_the_cpu() {
     let Some(g) = device() else { return };
     let s = load(SCENE);
-    let gpu_subs = subs(|r| gpu_render(g, &s, r));
-    let cpu_subs = subs(|r| cpu_render(&s, r));
-    let (over, z) = compare(&spread(&gpu_subs), &spread(&cpu_subs));
+    let (gpu_subs, cpu_subs) = assert_agree(g, "same seed", &s, &s, 3.0);
     let cells = (W * H * 3) as usize;
-    eprintln!("same seed: {over} of {cells} beyond 4σ; image-mean z {z:?}");
-    assert!(
-        over * 1000 < cells,
-        "{over} of {cells} channel-pixels beyond 4σ"
-    );
-    assert!(z.iter().all(|z| z.abs() < 3.0), "image means: z = {z:?}");
-    assert_correlated(&gpu_subs, &cpu_subs);
-
     let half = (SUBS / 2) as usize;
     let g_first = merged(&gpu_subs[..half]);
     let c_second = merged(&cpu_subs[half..]);
@@ -344,19 +364,9 @@ fn same_seed_images_agree_and_merge_with_the_cpu() {
 #[test]
 fn independent_seed_images_agree() {
     let Some(g) = device() else { return };
-    let mut s = load(SCENE);
-    s.2.seed = 11;
-    let gpu_subs = subs(|r| gpu_render(g, &s, r));
-    s.2.seed = 12;
-    let cpu_subs = subs(|r| cpu_render(&s, r));
-    let (over, z) = compare(&spread(&gpu_subs), &spread(&cpu_subs));
-    let cells = (W * H * 3) as usize;
-    eprintln!("independent seeds: {over} of {cells} beyond 4σ; image-mean z {z:?}");
-    assert!(
-        over * 1000 < cells,
-        "{over} of {cells} channel-pixels beyond 4σ"
-    );
-    assert!(z.iter().all(|z| z.abs() < 4.0), "image means: z = {z:?}");
+    let (mut s, mut c) = (load(SCENE), load(SCENE));
+    (s.2.seed, c.2.seed) = (11, 12);
+    assert_agree(g, "independent seeds", &s, &c, 4.0);
 }
 
 /// Every other estimator takes the GPU's draws as it takes the CPU's: power, maximum,
@@ -375,20 +385,7 @@ fn every_estimator_agrees() {
     ] {
         let mut s = load(SCENE);
         s.2.method = method;
-        let gpu_subs = subs(|r| gpu_render(g, &s, r));
-        let cpu_subs = subs(|r| cpu_render(&s, r));
-        let (over, z) = compare(&spread(&gpu_subs), &spread(&cpu_subs));
-        let cells = (W * H * 3) as usize;
-        eprintln!(
-            "{}: {over} of {cells} beyond 4σ; image-mean z {z:?}",
-            method.name()
-        );
-        assert!(
-            over * 1000 < cells,
-            "{over} of {cells} channel-pixels beyond 4σ"
-        );
-        assert!(z.iter().all(|z| z.abs() < 3.0), "image means: z = {z:?}");
-        assert_correlated(&gpu_subs, &cpu_subs);
+        assert_agree(g, method.name(), &s, &s, 3.0);
     }
 }
 
@@ -415,20 +412,11 @@ fn path_images_agree() {
         s.2.min_depth = min_depth;
         s.2.rr_depth = 2;
         s.2.method = method;
-        let gpu_subs = subs(|r| gpu_render(g, &s, r));
-        let cpu_subs = subs(|r| cpu_render(&s, r));
-        let (over, z) = compare(&spread(&gpu_subs), &spread(&cpu_subs));
-        let cells = (W * H * 3) as usize;
-        eprintln!(
-            "path, {}, min depth {min_depth}, bsdf technique {bsdf}: {over} of {cells} beyond 4σ; image-mean z {z:?}",
+        let label = format!(
+            "path, {}, min depth {min_depth}, bsdf technique {bsdf}",
             method.name()
         );
-        assert!(
-            over * 1000 < cells,
-            "{over} of {cells} channel-pixels beyond 4σ"
-        );
-        assert!(z.iter().all(|z| z.abs() < 3.0), "image means: z = {z:?}");
-        assert_correlated(&gpu_subs, &cpu_subs);
+        assert_agree(g, &label, &s, &s, 3.0);
     }
 }
 
