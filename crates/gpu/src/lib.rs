@@ -3,9 +3,10 @@
 //! The same renderer as the CPU's, on `wgpu` 30 with WGSL compute shaders, reading the same
 //! resolved scene (`scene::SceneData`) and returning the same per-pixel sums
 //! (`render::RenderState`), so that a GPU sample range merges with a CPU one
-//! (../shared/GPU.md; DESIGN.md §2–§3). This crate is being built in the order of
-//! GPU.md §12; today it holds steps 1 and 2 (the kernel twins; docs/gpu.md says what
-//! they measured and where they depart from GPU.md). There is no integrator yet:
+//! (../shared/GPU.md; DESIGN.md §2–§3). It holds GPU.md §12's steps 1–4: the kernel
+//! twins, and the wavefront `direct` and `path` integrators ([`direct`], behind
+//! `frepray render --backend gpu`); docs/gpu.md says what they cover, what they measured
+//! and where they depart from GPU.md:
 //!
 //! - [`Gpu`]: adapter choice with the features frepray uses (f64, int64, subgroups,
 //!   timestamps), each of which can be forced off ([`GpuOptions`], or the environment
@@ -34,7 +35,11 @@
 //!   sampling with their pdfs, and light selection, equal bit for bit on lavapipe to
 //!   their CPU f32 twins;
 //! - [`sums`]: per-pixel MIS sums in f64 where the device has `SHADER_F64`, else in
-//!   laundered double-float (GPU.md §3.2, §8), exact on the compensated-sum check.
+//!   laundered double-float (GPU.md §3.2, §8), exact on the compensated-sum check (not
+//!   yet used by the integrators, whose sums are the CPU's);
+//! - [`direct`]: the scene packed into buffers and the `direct` and `path` integrators
+//!   (camera, shade, shadow and continuation passes per wave), their draws added into a
+//!   `render::RenderState` by the CPU integrator's own bookkeeping.
 //!
 //! On machines without a GPU, tests run on Mesa's lavapipe (`mesa-vulkan-drivers`). They
 //! skip, saying so, where no adapter exists, unless `FREPRAY_REQUIRE_GPU=1` (set by
