@@ -161,12 +161,14 @@ impl Counter {
 /// Counts and times evaluations on every `stride`-th pixel of the N² view.
 pub fn run(m: &Model, n: usize, frep_depth: &[f32], args: &Args) -> Result<String, Box<dyn Error>> {
     let solid = Solid::build(&m.shape)?;
-    let Solid::Leaf(_) = &solid else {
+    let flat = solid.flat();
+    let one_expr = flat.nodes.len() == 1 && matches!(flat.leaf(0), frep::LeafView::Expr(_));
+    if !one_expr {
         return Ok(format!(
             "| {} | {n}² | (not one expression leaf: profile skipped) | | | | | |",
             m.name
         ));
-    };
+    }
     let bounds = solid.bounds();
     let diag = if bounds.is_finite() && !bounds.is_empty() {
         bounds.extent().length()
