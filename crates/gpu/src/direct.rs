@@ -324,15 +324,16 @@ fn tape_normal(p: vec3<f32>) -> vec3<f32> {
                 _ => None,
             }
         };
-        let (kind, count) = match node.op {
+        // (kind, first leaf or CSG node, leaves or nodes)
+        let (kind, first, count) = match node.op {
             CsgOp::Leaf => match flat.leaf(node.operands.first as usize) {
                 LeafView::Perturbed(v) => {
                     self.pack_leaf(&v, material);
-                    (0, 1)
+                    (0, first, 1)
                 }
                 LeafView::Expr(v) => {
                     self.pack_expr(flat, node.operands.first as usize, &v, &obj.name, material)?;
-                    (0, 1)
+                    (0, first, 1)
                 }
             },
             CsgOp::Intersection if flat.parts(root).iter().all(|&k| plain(k).is_some()) => {
@@ -340,7 +341,7 @@ fn tape_normal(p: vec3<f32>) -> vec3<f32> {
                     let v = plain(k).expect("checked");
                     self.pack_leaf(&v, material);
                 }
-                (1, flat.parts(root).len() as u32)
+                (1, first, flat.parts(root).len() as u32)
             }
             _ => {
                 // Any CSG tree of plain quadrics: its post-order nodes, each op's parts
@@ -385,16 +386,7 @@ fn tape_normal(p: vec3<f32>) -> vec3<f32> {
                         obj.name
                     )));
                 }
-                let (lo, hi) = outward(&node.bounds);
-                self.shapes.push(GpuShape {
-                    kind: 2,
-                    first: first_node,
-                    count,
-                    material,
-                    lo: [lo[0], lo[1], lo[2], 0.0],
-                    hi: [hi[0], hi[1], hi[2], 0.0],
-                });
-                return Ok(());
+                (2, first_node, count)
             }
         };
         let (lo, hi) = outward(&node.bounds);

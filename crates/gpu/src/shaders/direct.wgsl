@@ -704,20 +704,11 @@ fn shade(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
         if (j < frame.n_draws) { nk = frame.count[k / 4u][k % 4u]; }
         let gw = beta * weight / f32(nk);
         if (carries) {
-            draws[at] = vec4<f32>(o, 0.0);
-            draws[at + 1u] = vec4<f32>(wi, D_CARRIED);
-            draws[at + 2u] = vec4<f32>(gw, F_OUTSIDE + vflags);
+            write_carried(at, o, wi, gw, F_OUTSIDE + vflags);
         } else {
             let lh = nearest_light(o, wi, inf());
-            var status = D_SHADOW;
-            if (all(lh.le == vec3<f32>(0.0))) { status = D_ZERO; }
-            draws[at] = vec4<f32>(o, lh.t);
-            draws[at + 1u] = vec4<f32>(wi, status);
-            draws[at + 2u] = vec4<f32>(gw * lh.le, F_OUTSIDE + vflags);
-            if (status == D_SHADOW) {
-                let q = atomicAdd(&stats[QUEUE_LEN], 1u);
-                atomicStore(&stats[QUEUE_ITEMS + q], i);
-            }
+            let traced = any(lh.le != vec3<f32>(0.0));
+            write_shadow(i, at, o, wi, lh.t, gw * lh.le, F_OUTSIDE + vflags, traced);
         }
         atomicMax(&stats[2], loops);
         return;
@@ -756,26 +747,35 @@ fn shade(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
     draws[at + 3u] = vec4<f32>(pdfs[0], pdfs[1], pdfs[2], pdfs[3]);
     draws[at + 4u] = vec4<f32>(pdfs[4], pdfs[5], pdfs[6], pdfs[7]);
     if (carries) {
-        // Li comes from the continuation's trace (mode 2), which multiplies it in.
-        draws[at] = vec4<f32>(o, 0.0);
-        draws[at + 1u] = vec4<f32>(wi, D_CARRIED);
-        draws[at + 2u] = vec4<f32>(beta * fc, vflags);
-        atomicMax(&stats[2], loops);
-        return;
+        write_carried(at, o, wi, beta * fc, vflags);
+    } else {
+        // render::integrator::vertex::incident.
+        let lh = nearest_light(o, wi, inf());
+        let traced = any(fc != vec3<f32>(0.0)) && any(lh.le != vec3<f32>(0.0));
+        write_shadow(i, at, o, wi, lh.t, beta * fc * lh.le, vflags, traced);
     }
-    // render::integrator::vertex::incident.
-    let lh = nearest_light(o, wi, inf());
-    var status = D_SHADOW;
-    if (all(fc == vec3<f32>(0.0)) || all(lh.le == vec3<f32>(0.0))) { status = D_ZERO; }
-    draws[at] = vec4<f32>(o, lh.t);
-    draws[at + 1u] = vec4<f32>(wi, status);
-    draws[at + 2u] = vec4<f32>(beta * fc * lh.le, vflags);
-    if (status == D_SHADOW) {
-        // Queue the shadow ray: the shadow pass runs over the queue alone (compaction).
+    atomicMax(&stats[2], loops);
+}
+
+// A draw whose light arrives along a shadow ray from o along wi up to t_max: its record,
+// with g the integrand before visibility, and, where `traced`, the ray queued for the
+// shadow pass (which runs over the queue alone: compaction, GPU.md §7.4).
+fn write_shadow(i: u32, at: u32, o: vec3<f32>, wi: vec3<f32>, t_max: f32, g: vec3<f32>, flags: f32, traced: bool) {
+    draws[at] = vec4<f32>(o, t_max);
+    draws[at + 1u] = vec4<f32>(wi, select(D_ZERO, D_SHADOW, traced));
+    draws[at + 2u] = vec4<f32>(g, flags);
+    if (traced) {
         let q = atomicAdd(&stats[QUEUE_LEN], 1u);
         atomicStore(&stats[QUEUE_ITEMS + q], i);
     }
-    atomicMax(&stats[2], loops);
+}
+
+// The draw that extends the path: Li comes from the continuation's trace (mode 2),
+// which multiplies it into g.
+fn write_carried(at: u32, o: vec3<f32>, wi: vec3<f32>, g: vec3<f32>, flags: f32) {
+    draws[at] = vec4<f32>(o, 0.0);
+    draws[at + 1u] = vec4<f32>(wi, D_CARRIED);
+    draws[at + 2u] = vec4<f32>(g, flags);
 }
 
 // render::integrator::vertex::spawn, with an offset for f32: the CPU's 10⁻⁷ (for f64)
@@ -819,11 +819,7 @@ fn shade_delta(i: u32, at: u32, l: u32, p: vec3<f32>, n: vec3<f32>, f: Basis, wo
     let o = spawn(p, n, wi);
     let dist = length(dl.p0.xyz - o);
     if (nearest_light(o, wi, dist).t < inf()) { return; }
-    draws[at] = vec4<f32>(o, dist);
-    draws[at + 1u] = vec4<f32>(wi, D_SHADOW);
-    draws[at + 2u] = vec4<f32>(beta * fc * radiance, 0.0);
-    let q = atomicAdd(&stats[QUEUE_LEN], 1u);
-    atomicStore(&stats[QUEUE_ITEMS + q], i);
+    write_shadow(i, at, o, wi, dist, beta * fc * radiance, 0.0, true);
 }
 
 // The shadow pass's indirect dispatch from the queue's length (one invocation).
