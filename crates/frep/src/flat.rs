@@ -11,6 +11,7 @@
 use crate::bvh::{BvhNode, BvhRef};
 use crate::expr::Node;
 use crate::interval_trace::ExprView;
+use crate::occupancy::GridView;
 use crate::perturbed::{Perturbation, PerturbedView};
 use crate::quadric::Quadric;
 use crate::ray::Aabb;
@@ -111,6 +112,10 @@ pub enum Leaf {
         eps: f64,
         /// Its occupancy grid in [`Flat::grids`] (empty: none).
         grid: Span,
+        /// Its cells' tape ranges in [`Flat::grid_cells`] (relative to `cell_tapes`).
+        grid_cells: Span,
+        /// Its cell tapes in [`Flat::cell_tapes`].
+        cell_tapes: Span,
     },
 }
 
@@ -151,6 +156,10 @@ pub struct Flat {
     pub bytecode: Vec<u32>,
     /// Expression leaves' occupancy grids ([`crate::occupancy`]), one bitset each.
     pub grids: Vec<u64>,
+    /// Per cell of each occupancy grid, its tape's range in the leaf's `cell_tapes`.
+    pub grid_cells: Vec<[u32; 2]>,
+    /// The cell tapes of every occupancy grid ([`crate::occupancy::Grid::nodes`]).
+    pub cell_tapes: Vec<Node>,
 }
 
 impl Flat {
@@ -189,7 +198,11 @@ impl Flat {
         let c0 = self.bytecode.len();
         self.bytecode.extend_from_slice(code.words());
         let g0 = self.grids.len();
-        self.grids.extend_from_slice(v.grid);
+        self.grids.extend_from_slice(v.grid.words);
+        let gc0 = self.grid_cells.len();
+        self.grid_cells.extend_from_slice(v.grid.cells);
+        let ct0 = self.cell_tapes.len();
+        self.cell_tapes.extend_from_slice(v.grid.nodes);
         self.leaves.push(Leaf::Expr {
             tape: Span::since(t0, self.tapes.len()),
             code: Span::since(c0, self.bytecode.len()),
@@ -197,6 +210,8 @@ impl Flat {
             bounds: v.bounds,
             eps: v.eps,
             grid: Span::since(g0, self.grids.len()),
+            grid_cells: Span::since(gc0, self.grid_cells.len()),
+            cell_tapes: Span::since(ct0, self.cell_tapes.len()),
         });
         Ok(self.leaves.len() as u32 - 1)
     }
@@ -228,12 +243,18 @@ impl Flat {
                 bounds,
                 eps,
                 grid,
+                grid_cells,
+                cell_tapes,
                 ..
             } => LeafView::Expr(ExprView {
                 tape: &self.tapes[tape.range()],
                 bounds,
                 eps,
-                grid: &self.grids[grid.range()],
+                grid: GridView {
+                    words: &self.grids[grid.range()],
+                    cells: &self.grid_cells[grid_cells.range()],
+                    nodes: &self.cell_tapes[cell_tapes.range()],
+                },
             }),
         }
     }

@@ -19,7 +19,7 @@
 use crate::dual::Dual;
 use crate::expr::{eval_choices_nodes, eval_nodes, simplify_into, Choice, Expr, Node};
 use crate::interval::Interval;
-use crate::occupancy;
+use crate::occupancy::{self, GridView};
 use crate::ray::{Aabb, Ray};
 use crate::surface::{outward, Surface};
 use glam::DVec3;
@@ -44,7 +44,7 @@ pub struct ExprSurface {
     expr: Arc<Expr>,
     bounds: Aabb,
     eps: f64,
-    grid: Arc<[u64]>,
+    grid: Arc<occupancy::Grid>,
 }
 
 /// An expression solid over a borrowed tape (root last): what [`ExprSurface`] and the
@@ -57,9 +57,10 @@ pub struct ExprView<'a> {
     pub bounds: Aabb,
     /// The resolution along rays ([`RESOLUTION`] × the bounds' diagonal).
     pub eps: f64,
-    /// The occupancy grid over the bounds grown by `eps` ([`crate::occupancy`]; empty:
-    /// none, every ray searches its whole segment).
-    pub grid: &'a [u64],
+    /// The occupancy grid over the bounds grown by `eps`, with a simplified tape per
+    /// cell ([`crate::occupancy`]; [`GridView::NONE`]: none, every ray searches its
+    /// whole segment with the whole tape).
+    pub grid: GridView<'a>,
 }
 
 thread_local! {
@@ -98,7 +99,7 @@ impl ExprSurface {
     /// A solid whose every point with F ≥ 0 lies in `bounds` (see [`crate::bounds`]).
     pub fn new(expr: Expr, bounds: Aabb) -> Self {
         let eps = resolution(&bounds);
-        let grid = occupancy::build(expr.nodes(), &grown(&bounds, eps)).into();
+        let grid = Arc::new(occupancy::build(expr.nodes(), &grown(&bounds, eps)));
         Self {
             expr: Arc::new(expr),
             bounds,
@@ -118,7 +119,7 @@ impl ExprSurface {
             tape: self.expr.nodes(),
             bounds: self.bounds,
             eps: self.eps,
-            grid: &self.grid,
+            grid: self.grid.view(),
         }
     }
 }
@@ -207,18 +208,44 @@ fn refine(tape: &[Node], ray: &Ray, mut a: f64, mut b: f64, inside_a: bool, tol:
     b
 }
 
+/// Grows this thread's scratch to a tape of `n` nodes, so that the shorter cell tapes a
+/// ray meets first never leave a longer one to grow it later (nothing allocates once
+/// warm).
+fn reserve(n: usize) {
+    fn at_least<T>(v: &mut Vec<T>, n: usize) {
+        if v.capacity() < n {
+            v.reserve(n - v.len());
+        }
+    }
+    SCRATCH_D.with_borrow_mut(|s| at_least(s, n));
+    SCRATCH_G.with_borrow_mut(|s| at_least(s, n));
+    SCRATCH_T.with_borrow_mut(|s| at_least(s, n));
+    TRACE.with_borrow_mut(|tr| {
+        at_least(&mut tr.choices, n);
+        at_least(&mut tr.arena, 2 * n);
+    });
+}
+
 /// Expressions shorter than this are not worth simplifying per segment.
 const SIMPLIFY_MIN_LEN: usize = 24;
 
 impl ExprView<'_> {
+    /// The tape that equals F at p: its cell's where the grid has one, else the whole.
+    #[inline]
+    fn tape_at(&self, p: DVec3) -> &[Node] {
+        let grown = grown(&self.bounds, self.eps);
+        self.grid.tape_at(&grown, p).unwrap_or(self.tape)
+    }
+
     /// F at p.
     pub fn value(&self, p: DVec3) -> f64 {
-        SCRATCH_F.with_borrow_mut(|s| eval_nodes(self.tape, p.x, p.y, p.z, s))
+        let tape = self.tape_at(p);
+        SCRATCH_F.with_borrow_mut(|s| eval_nodes(tape, p.x, p.y, p.z, s))
     }
 
     /// ∇F at p.
     pub fn gradient(&self, p: DVec3) -> DVec3 {
-        gradient_by(self.tape, p)
+        gradient_by(self.tape_at(p), p)
     }
 
     /// The first crossing in (t_min, t_max) and, when `normal`, the outward normal there
@@ -241,7 +268,7 @@ impl ExprView<'_> {
         // enters the bounds inside the solid crosses there; one that leaves them inside
         // it crosses there unless F crosses first. (The segments below carry the true
         // signs of F at the ends, so that a crossing inside is found between them.)
-        let (ia, ib) = (inside_at(root, ray, t0), inside_at(root, ray, t1));
+        let (ia, ib) = (self.value(ray.at(t0)) >= 0.0, self.value(ray.at(t1)) >= 0.0);
         let cap = |t: f64| {
             let n = match normal {
                 true => face_normal(&grown, ray.at(t)),
@@ -259,16 +286,30 @@ impl ExprView<'_> {
             tol,
             normal,
         };
+        reserve(root.len());
         let inner = TRACE.with_borrow_mut(|tr| {
             let mut visits = 0u32;
-            if self.grid.len() != occupancy::GRID_WORDS {
+            if !self.grid.is_some() {
                 return search.run(tr, (t0, t1), (ia, ib), &mut visits);
             }
             // Only runs of occupied cells can hold a crossing; F keeps its sign between.
+            // Each run is searched with its cells' tape, which equals F there.
             let mut found = None;
-            occupancy::runs(self.grid, &grown, ray, t0, t1, |a, b| {
-                let ia = if a == t0 { ia } else { inside_at(root, ray, a) };
-                let ib = if b == t1 { ib } else { inside_at(root, ray, b) };
+            occupancy::runs(self.grid, &grown, ray, t0, t1, |a, b, tape| {
+                let search = Search {
+                    root: tape.unwrap_or(root),
+                    ..search
+                };
+                let ia = if a == t0 {
+                    ia
+                } else {
+                    inside_at(search.root, ray, a)
+                };
+                let ib = if b == t1 {
+                    ib
+                } else {
+                    inside_at(search.root, ray, b)
+                };
                 found = search.run(tr, (a, b), (ia, ib), &mut visits);
                 found.is_some()
             });

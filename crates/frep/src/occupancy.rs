@@ -5,11 +5,13 @@
 //! stretches of its segment that lie in empty cells and search only runs of occupied
 //! ones. It is sound: a crossing needs a sign change, and across an empty cell F keeps
 //! the sign its interval proves; two neighbouring empty cells share their boundary
-//! points, so their signs agree. The occupied set is dilated by one cell so that the
-//! walk along a ray (Amanatides & Woo 1987), which may put a point within rounding of a
-//! cell face in the neighbouring cell, never skips an occupied cell.
+//! points, so their signs agree. Every box is bounded grown by [`MARGIN`] of its side,
+//! so that the walk along a ray (Amanatides & Woo 1987), which may put a point within
+//! rounding of a cell face in the neighbouring cell, never skips a crossing: an empty
+//! cell holds none within the margin around it either. (Before cell tapes the occupied
+//! set was dilated by one cell instead, which searched three times the cells.)
 
-use crate::expr::{eval_nodes, Node};
+use crate::expr::{eval_choices_nodes, simplify_into, Node};
 use crate::interval::Interval;
 use crate::ray::{Aabb, Ray};
 use glam::DVec3;
@@ -30,22 +32,100 @@ fn bit(x: usize, y: usize, z: usize) -> usize {
     (z * GRID + y) * GRID + x
 }
 
-/// The occupancy bitset of `tape` over `b` ([`GRID_WORDS`] words), or an empty vector
-/// when the box is not finite or the build would exceed its budget.
-pub fn build(tape: &[Node], b: &Aabb) -> Vec<u64> {
+/// Nodes the cell tapes of one grid may hold in all; past it, cells keep the tape of
+/// the octree node where the budget ran out (still exact, only longer).
+const TAPE_BUDGET: usize = 1 << 20;
+
+/// Octree boxes are grown by this fraction of their side before they are bounded, so
+/// that an empty cell holds no crossing, and a cell's tape equals F, also at points a
+/// ray walk puts within rounding of its faces.
+pub const MARGIN: f64 = 1e-4;
+
+/// A grid as built: the occupancy bitset and each cell's tape.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Grid {
+    /// One bit per cell ([`GRID_WORDS`] words; empty: no grid).
+    pub words: Vec<u64>,
+    /// Per cell, its tape as a range of `nodes` (empty: no cell tapes).
+    pub cells: Vec<[u32; 2]>,
+    /// The cell tapes, each root last; the first is the whole tape.
+    pub nodes: Vec<Node>,
+}
+
+/// A grid, borrowed.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct GridView<'a> {
+    /// See [`Grid::words`].
+    pub words: &'a [u64],
+    /// See [`Grid::cells`].
+    pub cells: &'a [[u32; 2]],
+    /// See [`Grid::nodes`].
+    pub nodes: &'a [Node],
+}
+
+impl Grid {
+    /// The grid, borrowed.
+    pub fn view(&self) -> GridView<'_> {
+        GridView {
+            words: &self.words,
+            cells: &self.cells,
+            nodes: &self.nodes,
+        }
+    }
+}
+
+impl<'a> GridView<'a> {
+    /// No grid: rays search their whole segment with the whole tape.
+    pub const NONE: GridView<'static> = GridView {
+        words: &[],
+        cells: &[],
+        nodes: &[],
+    };
+
+    /// Whether there is an occupancy bitset.
+    #[inline]
+    pub fn is_some(&self) -> bool {
+        self.words.len() == GRID_WORDS
+    }
+
+    /// The tape of the cell holding `p`, for a grid over `b`; None when `p` lies
+    /// outside `b` or the grid has no cell tapes.
+    #[inline]
+    pub fn tape_at(&self, b: &Aabb, p: DVec3) -> Option<&'a [Node]> {
+        if self.cells.len() != GRID * GRID * GRID || !b.contains(p) {
+            return None;
+        }
+        let c = ((p - b.lo) / (b.hi - b.lo) * GRID as f64)
+            .floor()
+            .clamp(DVec3::ZERO, DVec3::splat(GRID as f64 - 1.0));
+        let [s, e] = self.cells[bit(c.x as usize, c.y as usize, c.z as usize)];
+        Some(&self.nodes[s as usize..e as usize])
+    }
+}
+
+/// The occupancy grid of `tape` over `b` and, per cell, `tape` simplified over the cell
+/// (Keeter 2020, §3.2: the min/max branches that interval arithmetic proves decided
+/// over a box are dropped; each octree level simplifies its parent's tape, so the
+/// tapes shrink as the boxes do). An empty grid when the box is not finite or the
+/// build would exceed its budget.
+pub fn build(tape: &[Node], b: &Aabb) -> Grid {
     if !b.is_finite() || b.is_empty() || tape.is_empty() {
-        return Vec::new();
+        return Grid::default();
     }
     let mut occupied = vec![false; GRID * GRID * GRID];
+    let mut cells = vec![[0u32; 2]; GRID * GRID * GRID];
+    let mut nodes = tape.to_vec();
     let mut scratch = Vec::new();
+    let mut choices = Vec::new();
     let mut spent = 0usize;
     let cell = (b.hi - b.lo) / GRID as f64;
-    // Octree nodes: (corner cell, size in cells).
-    let mut stack = vec![([0usize; 3], GRID)];
-    while let Some((c, size)) = stack.pop() {
-        spent += tape.len();
+    // Octree nodes: (corner cell, size in cells, the tape that holds over them).
+    let mut stack = vec![([0usize; 3], GRID, [0u32, tape.len() as u32])];
+    while let Some((c, size, span)) = stack.pop() {
+        let (s, e) = (span[0] as usize, span[1] as usize);
+        spent += e - s;
         if spent > BUILD_BUDGET {
-            return Vec::new();
+            return Grid::default();
         }
         let lo = b.lo + DVec3::new(c[0] as f64, c[1] as f64, c[2] as f64) * cell;
         let hi = if c.iter().all(|&k| k + size == GRID) {
@@ -53,51 +133,69 @@ pub fn build(tape: &[Node], b: &Aabb) -> Vec<u64> {
         } else {
             lo + cell * size as f64
         };
-        let iv = |k: usize| Interval::new(lo[k], hi[k].max(lo[k]));
-        let v = eval_nodes(tape, iv(0), iv(1), iv(2), &mut scratch);
-        if v.lo > 0.0 || v.hi < 0.0 {
-            continue;
+        let m = cell * (size as f64 * MARGIN);
+        let iv = |k: usize| Interval::new(lo[k] - m[k], hi[k].max(lo[k]) + m[k]);
+        let v = eval_choices_nodes(
+            &nodes[s..e],
+            iv(0),
+            iv(1),
+            iv(2),
+            &mut scratch,
+            &mut choices,
+        );
+        let excluded = v.lo > 0.0 || v.hi < 0.0;
+        // The tape over this box: the one it was given, simplified where it can be.
+        let mut own = span;
+        if !excluded && nodes.len() < TAPE_BUDGET {
+            let start = nodes.len();
+            if simplify_into(&[], Some(s..e), &choices, &mut nodes) {
+                own = [start as u32, nodes.len() as u32];
+            }
         }
-        if size == 1 {
-            occupied[bit(c[0], c[1], c[2])] = true;
+        if excluded || size == 1 {
+            for z in c[2]..c[2] + size {
+                for y in c[1]..c[1] + size {
+                    for x in c[0]..c[0] + size {
+                        cells[bit(x, y, z)] = own;
+                    }
+                }
+            }
+            if !excluded {
+                occupied[bit(c[0], c[1], c[2])] = true;
+            }
             continue;
         }
         let h = size / 2;
         for k in 0..8 {
             let d = [(k & 1) * h, (k >> 1 & 1) * h, (k >> 2 & 1) * h];
-            stack.push(([c[0] + d[0], c[1] + d[1], c[2] + d[2]], h));
+            stack.push(([c[0] + d[0], c[1] + d[1], c[2] + d[2]], h, own));
         }
     }
     let mut words = vec![0u64; GRID_WORDS];
-    for z in 0..GRID {
-        for y in 0..GRID {
-            for x in 0..GRID {
-                let near = |a: usize| a.saturating_sub(1)..=(a + 1).min(GRID - 1);
-                let any = near(z).any(|k| near(y).any(|j| near(x).any(|i| occupied[bit(i, j, k)])));
-                if any {
-                    let n = bit(x, y, z);
-                    words[n / 64] |= 1 << (n % 64);
-                }
-            }
-        }
+    for (n, _) in occupied.iter().enumerate().filter(|(_, o)| **o) {
+        words[n / 64] |= 1 << (n % 64);
     }
-    words
+    Grid {
+        words,
+        cells,
+        nodes,
+    }
 }
 
-/// Calls `visit(a, b)` for each maximal run [a, b] of occupied cells that the segment
-/// [t0, t1] of `ray` (inside `b`) crosses, in order, until `visit` returns true.
-pub fn runs(
-    words: &[u64],
+/// Calls `visit(a, b, tape)` for each maximal run [a, b] of occupied cells with one
+/// tape (None: no cell tapes) that the segment [t0, t1] of `ray` (inside `b`) crosses,
+/// in order, until `visit` returns true.
+pub fn runs<'g>(
+    grid: GridView<'g>,
     b: &Aabb,
     ray: &Ray,
     t0: f64,
     t1: f64,
-    mut visit: impl FnMut(f64, f64) -> bool,
+    mut visit: impl FnMut(f64, f64, Option<&'g [Node]>) -> bool,
 ) {
-    let occupied = |c: [i64; 3]| {
-        let n = bit(c[0] as usize, c[1] as usize, c[2] as usize);
-        words[n / 64] >> (n % 64) & 1 == 1
-    };
+    let words = grid.words;
+    let occupied = |n: usize| words[n / 64] >> (n % 64) & 1 == 1;
+    let span = |n: usize| grid.cells.get(n).copied();
     let size = (b.hi - b.lo) / GRID as f64;
     let last = GRID as i64 - 1;
     let p = ray.at(t0);
@@ -115,15 +213,24 @@ pub fn runs(
             delta[k] = size[k] / d.abs();
         }
     }
-    let mut start: Option<f64> = None;
+    let tape = |s: Option<[u32; 2]>| s.map(|[s, e]| &grid.nodes[s as usize..e as usize]);
+    // The open run: where it starts and its cell tape.
+    let mut start: Option<(f64, Option<[u32; 2]>)> = None;
     let mut t = t0;
     loop {
         let k = (0..3).fold(0, |m, k| if next[k] < next[m] { k } else { m });
         let exit = next[k].min(t1);
-        match (occupied(c), start) {
-            (true, None) => start = Some(t),
-            (false, Some(a)) => {
-                if visit(a, t) {
+        let n = bit(c[0] as usize, c[1] as usize, c[2] as usize);
+        match (occupied(n), start) {
+            (true, None) => start = Some((t, span(n))),
+            (true, Some((a, s))) if s != span(n) => {
+                if visit(a, t, tape(s)) {
+                    return;
+                }
+                start = Some((t, span(n)));
+            }
+            (false, Some((a, s))) => {
+                if visit(a, t, tape(s)) {
                     return;
                 }
                 start = None;
@@ -140,7 +247,7 @@ pub fn runs(
         next[k] += delta[k];
         t = exit.max(t);
     }
-    if let Some(a) = start {
-        visit(a, t1);
+    if let Some((a, s)) = start {
+        visit(a, t1, tape(s));
     }
 }

@@ -4,7 +4,7 @@
 //! every crossing of a dense march lies in an occupied cell.
 
 use frep::interval_trace::ExprView;
-use frep::occupancy::{GRID, GRID_WORDS};
+use frep::occupancy::{GRID, GRID_WORDS, MARGIN};
 use frep::read::read_file;
 use frep::solid::Solid;
 use frep::{Aabb, LeafView, Ray};
@@ -27,13 +27,25 @@ fn leaf_views(s: &Solid) -> Vec<ExprView<'_>> {
         .collect()
 }
 
+/// Whether a cell holding `p`, grown by the build's margin, is occupied.
 fn occupied(v: &ExprView, p: DVec3) -> bool {
     let g = Aabb::new(v.bounds.lo - v.eps, v.bounds.hi + v.eps);
-    let c = ((p - g.lo) / (g.hi - g.lo) * GRID as f64)
-        .floor()
-        .clamp(DVec3::ZERO, DVec3::splat(GRID as f64 - 1.0));
-    let n = ((c.z as usize) * GRID + c.y as usize) * GRID + c.x as usize;
-    v.grid[n / 64] >> (n % 64) & 1 == 1
+    let at = |p: DVec3| {
+        let c = ((p - g.lo) / (g.hi - g.lo) * GRID as f64)
+            .floor()
+            .clamp(DVec3::ZERO, DVec3::splat(GRID as f64 - 1.0));
+        let n = ((c.z as usize) * GRID + c.y as usize) * GRID + c.x as usize;
+        v.grid.words[n / 64] >> (n % 64) & 1 == 1
+    };
+    let m = (g.hi - g.lo) / GRID as f64 * MARGIN;
+    (0..27).any(|k| {
+        let o = DVec3::new(
+            (k % 3) as f64 - 1.0,
+            (k / 3 % 3) as f64 - 1.0,
+            (k / 9) as f64 - 1.0,
+        );
+        at(p + o * m)
+    })
 }
 
 #[test]
@@ -53,9 +65,12 @@ fn the_grid_changes_no_hit() {
         let model = read_file(&path(m)).unwrap_or_else(|e| panic!("{m}: {e}"));
         let solid = Solid::build(&model.shape).unwrap();
         for v in leaf_views(&solid) {
-            assert_eq!(v.grid.len(), GRID_WORDS, "{m}: no grid");
-            let full = v.grid.iter().map(|w| w.count_ones()).sum::<u32>() as usize;
-            let plain = ExprView { grid: &[], ..v };
+            assert_eq!(v.grid.words.len(), GRID_WORDS, "{m}: no grid");
+            let full = v.grid.words.iter().map(|w| w.count_ones()).sum::<u32>() as usize;
+            let plain = ExprView {
+                grid: frep::occupancy::GridView::NONE,
+                ..v
+            };
             let b = v.bounds;
             let (c, r) = (b.center(), 0.5 * b.extent().length());
             let mut rays = Vec::new();
