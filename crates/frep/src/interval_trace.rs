@@ -196,14 +196,17 @@ fn refine(tape: &[Node], ray: &Ray, mut a: f64, mut b: f64, inside_a: bool, tol:
         }
         let step = r.v / r.d[0];
         let newton = x - step;
-        if step.is_finite() && newton > a && newton < b {
-            if step.abs() <= tol {
-                return newton;
-            }
-            x = newton;
-        } else {
-            x = 0.5 * (a + b);
+        // A step below the tolerance ends the search even when it lands on an end of
+        // the bracket (x itself, just made an end): a bisection there would throw away
+        // a converged iterate and start over from the middle.
+        if step.is_finite() && step.abs() <= tol && newton >= a && newton <= b {
+            return newton;
         }
+        x = if step.is_finite() && newton > a && newton < b {
+            newton
+        } else {
+            0.5 * (a + b)
+        };
     }
     b
 }

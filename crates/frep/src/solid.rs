@@ -165,8 +165,15 @@ impl Solid {
         self.intersect_node(self.root(), ray, t_min, t_max)
     }
 
-    /// Whether p is inside (F ≥ 0).
+    /// Whether p is inside: F ≥ 0 within the bounds (grown by rounding). Outside them
+    /// nothing is evaluated: F < 0 there, or the bounds are a model's domain, which caps
+    /// the solid for ray queries too ([`crate::interval_trace`]).
     pub fn inside(&self, p: DVec3) -> bool {
+        let b = Surface::bounds(self);
+        let pad = 1e-9 * (1.0 + b.extent().max_element());
+        if !Aabb::new(b.lo - pad, b.hi + pad).contains(p) {
+            return false;
+        }
         Surface::value(self, p) >= 0.0
     }
 

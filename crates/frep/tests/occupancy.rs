@@ -125,3 +125,45 @@ fn the_grid_changes_no_hit() {
     }
     println!("{total:?}");
 }
+
+/// Each cell's tape equals the whole tape at every point of the cell (bit for bit: a
+/// decided min/max returns the operand it was proven to return), and `inside` is F ≥ 0
+/// within the model's bounds.
+#[test]
+fn cell_tapes_equal_the_whole_tape() {
+    use frep::expr::eval_nodes;
+    use rand::{Rng, SeedableRng};
+    let mut rng = rand_pcg::Pcg64::seed_from_u64(7);
+    for m in [
+        "models/canonical/s2_csg.hf",
+        "models/canonical/s3_blend.hf",
+        "models/examples/machined_part.frep",
+        "../shared/models/fidget/colonnade.vm",
+        "../shared/models/fidget/quarter.vm",
+    ] {
+        let model = read_file(&path(m)).unwrap_or_else(|e| panic!("{m}: {e}"));
+        let solid = Solid::build(&model.shape).unwrap();
+        for v in leaf_views(&solid) {
+            let (whole, cells) = (v.tape.len(), v.grid.cells.len());
+            assert_eq!(cells, GRID * GRID * GRID, "{m}: no cell tapes");
+            let g = Aabb::new(v.bounds.lo - v.eps, v.bounds.hi + v.eps);
+            let (mut shorter, mut scratch) = (0, Vec::new());
+            for _ in 0..20_000 {
+                let u = DVec3::new(rng.gen(), rng.gen(), rng.gen());
+                // Points in the box and a little around it.
+                let p = g.lo + (g.hi - g.lo) * (u * 1.2 - 0.1);
+                let tape = v.grid.tape_at(&g, p).unwrap_or(v.tape);
+                shorter += usize::from(tape.len() < whole);
+                let exact = eval_nodes(v.tape, p.x, p.y, p.z, &mut scratch);
+                let by_cell = eval_nodes(tape, p.x, p.y, p.z, &mut scratch);
+                assert_eq!(exact.to_bits(), by_cell.to_bits(), "{m} at {p:?}");
+                assert_eq!(v.value(p).to_bits(), exact.to_bits(), "{m} at {p:?}");
+                // A model's domain caps it, for `inside` as for rays.
+                let within = frep::Surface::bounds(&solid).contains(p);
+                assert_eq!(solid.inside(p), exact >= 0.0 && within, "{m} at {p:?}");
+            }
+            println!("{m}: {shorter} of 20000 points on a shorter tape than {whole} nodes");
+            assert!(shorter > 2_000, "{m}: cell tapes simplify almost nothing");
+        }
+    }
+}
