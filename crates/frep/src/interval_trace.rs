@@ -8,6 +8,11 @@
 //! a resolution `eps` (relative to the solid's size) are decided by the signs at their
 //! ends: only a feature that enters and leaves within `eps` along the ray can be missed.
 //!
+//! **Cell tapes.** Where the solid has an occupancy grid ([`crate::occupancy`]) a ray
+//! searches only runs of occupied cells, each with the tape simplified over its cells
+//! (on colonnade.vm 23 nodes on average of 796), and point queries use the tape of the
+//! cell they fall in: the same values bit for bit, a fraction of the work.
+//!
 //! **Allocation.** A trace keeps its segment stack, the tapes it simplifies per segment
 //! (stacked in one arena: a segment's tape never ends before those of the segments under
 //! it) and its node values in thread-local vectors. They grow on a thread's first rays
