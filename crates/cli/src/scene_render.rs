@@ -463,6 +463,25 @@ pub fn bench(
         );
     }
     let mut bars = Vec::new();
+    for (_, s) in rows.iter().filter(|r| r.0 == "cpu") {
+        let st = s.rays.stages();
+        let parts = [
+            ("camera ray generation", st.generate),
+            ("camera rays", st.camera),
+            ("shade (sampling, BSDFs, lights, MIS)", st.shade),
+            ("shadow rays", st.shadow),
+            ("continuation rays", st.secondary),
+        ];
+        stage_table(&format!("CPU stage ({})", s.integrator), &parts);
+        out!("");
+        out!(
+            "CPU time of {} worker threads, summed; one query of each kind in {} timed \
+             (render::integrator::RayCounts)",
+            s.threads,
+            render::integrator::TIMED_EVERY
+        );
+        bars.push((format!("CPU {}", s.integrator), parts.to_vec()));
+    }
     for (integrator, g) in &stages {
         let st = &g.stages;
         let parts = [
@@ -473,17 +492,7 @@ pub fn bench(
             ("submit and read back (wall − passes)", st.readback),
             ("accumulate (CPU)", st.accumulate),
         ];
-        let total: f64 = parts.iter().map(|p| p.1.as_secs_f64()).sum();
-        out!("");
-        out!("| GPU stage ({integrator}) | ms | % |");
-        out!("| --- | ---: | ---: |");
-        for (name, d) in parts {
-            let ms = d.as_secs_f64() * 1e3;
-            out!(
-                "| {name} | {ms:.1} | {:.1} |",
-                100.0 * d.as_secs_f64() / total.max(1e-12)
-            );
-        }
+        stage_table(&format!("GPU stage ({integrator})"), &parts);
         out!("");
         out!(
             "kernel setup {:.1} ms (excluded); {} waves; most loop iterations per invocation (camera, shadow, shade) {:?}",
@@ -496,13 +505,28 @@ pub fn bench(
     if let Some(p) = plot {
         use std::io::Write;
         let name = input.file_name().unwrap_or_default().to_string_lossy();
-        let title = format!("GPU stage times, {name} ({} spp)", opts.spp);
+        let title = format!("Stage times, {name} ({} spp)", opts.spp);
         let svg = crate::stage_plot::svg(&title, &bars);
         render::output::write_atomically(p, |w| w.write_all(svg.as_bytes()))
             .map_err(|e| format!("{}: {e}", p.display()))?;
         eprintln!("{} written", p.display());
     }
     Ok(())
+}
+
+/// A stage breakdown as a table: each stage's time and share.
+fn stage_table(title: &str, parts: &[(&str, std::time::Duration)]) {
+    let total: f64 = parts.iter().map(|p| p.1.as_secs_f64()).sum();
+    out!("");
+    out!("| {title} | ms | % |");
+    out!("| --- | ---: | ---: |");
+    for (name, d) in parts {
+        let ms = d.as_secs_f64() * 1e3;
+        out!(
+            "| {name} | {ms:.1} | {:.1} |",
+            100.0 * d.as_secs_f64() / total.max(1e-12)
+        );
+    }
 }
 
 fn aov_list(a: &[Aov]) -> String {

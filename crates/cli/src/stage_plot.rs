@@ -1,5 +1,5 @@
-//! `frepray bench --plot FILE.svg`: the GPU's stage times as stacked horizontal bars, one
-//! per measured render (the paper's Fig. 4–5 layout: the share of each pipeline stage in
+//! `frepray bench --plot FILE.svg`: the CPU's and the GPU's stage times as stacked
+//! horizontal bars, one per measured render (the paper's Fig. 4–5 layout: the share of each pipeline stage in
 //! a frame).
 
 use std::fmt::Write;
@@ -8,17 +8,42 @@ use std::time::Duration;
 /// One bar: its label and its stages (name, time).
 pub type Bar = (String, Vec<(&'static str, Duration)>);
 
-const COLOURS: [&str; 6] = [
-    "#4e79a7", "#f28e2b", "#e15759", "#76b7b2", "#59a14f", "#edc948",
+const COLOURS: [&str; 12] = [
+    "#4e79a7", "#f28e2b", "#e15759", "#76b7b2", "#59a14f", "#edc948", "#b07aa1", "#ff9da7",
+    "#9c755f", "#bab0ac", "#86bcb6", "#d37295",
 ];
 
 /// The SVG of `bars`, each scaled to its own total (shares, in per cent), with a legend
-/// and each bar's total time written beside it.
+/// and each bar's total time written beside it. A stage keeps its colour across bars
+/// (CPU and GPU bars have different stages); the legend names each stage once.
 pub fn svg(title: &str, bars: &[Bar]) -> String {
+    let mut names: Vec<&str> = Vec::new();
+    for (_, stages) in bars {
+        for (name, _) in stages {
+            if !names.contains(name) {
+                names.push(name);
+            }
+        }
+    }
+    let colour = |name: &str| {
+        let k = names.iter().position(|n| *n == name).unwrap_or(0);
+        COLOURS[k % COLOURS.len()]
+    };
     let (w, left, bar_h, gap) = (760.0, 220.0, 26.0, 14.0);
     let top = 50.0;
     let legend_y = top + bars.len() as f64 * (bar_h + gap) + 10.0;
-    let h = legend_y + 40.0;
+    // Legend entries, wrapped into rows that fit the width.
+    let mut legend = Vec::new();
+    let (mut x, mut row) = (10.0, 0.0);
+    for name in &names {
+        let width = 24.0 + 7.0 * name.chars().count() as f64;
+        if x + width > w && x > 10.0 {
+            (x, row) = (10.0, row + 20.0);
+        }
+        legend.push((x, legend_y + row, *name));
+        x += width;
+    }
+    let h = legend_y + row + 40.0;
     let mut s = String::new();
     let _ = write!(
         s,
@@ -38,7 +63,7 @@ pub fn svg(title: &str, bars: &[Bar]) -> String {
             escape(label)
         );
         let mut x = left;
-        for (k, (name, d)) in stages.iter().enumerate() {
+        for (name, d) in stages {
             let share = if total > 0.0 {
                 d.as_secs_f64() / total
             } else {
@@ -47,8 +72,9 @@ pub fn svg(title: &str, bars: &[Bar]) -> String {
             let bw = share * span;
             let _ = writeln!(
                 s,
-                r#"<rect x="{x:.1}" y="{y:.1}" width="{bw:.1}" height="{bar_h}" fill="{}"><title>{name}: {:.1} ms ({:.1} %)</title></rect>"#,
-                COLOURS[k % COLOURS.len()],
+                r#"<rect x="{x:.1}" y="{y:.1}" width="{bw:.1}" height="{bar_h}" fill="{}"><title>{}: {:.1} ms ({:.1} %)</title></rect>"#,
+                colour(name),
+                escape(name),
                 d.as_secs_f64() * 1e3,
                 100.0 * share
             );
@@ -62,19 +88,15 @@ pub fn svg(title: &str, bars: &[Bar]) -> String {
             total
         );
     }
-    if let Some((_, stages)) = bars.first() {
-        let mut x = 10.0;
-        for (k, (name, _)) in stages.iter().enumerate() {
-            let _ = writeln!(
-                s,
-                r#"<rect x="{x}" y="{legend_y}" width="12" height="12" fill="{}"/><text x="{}" y="{}">{}</text>"#,
-                COLOURS[k % COLOURS.len()],
-                x + 16.0,
-                legend_y + 10.0,
-                escape(name)
-            );
-            x += 24.0 + 7.0 * name.chars().count() as f64;
-        }
+    for (x, y, name) in legend {
+        let _ = writeln!(
+            s,
+            r#"<rect x="{x}" y="{y}" width="12" height="12" fill="{}"/><text x="{}" y="{}">{}</text>"#,
+            colour(name),
+            x + 16.0,
+            y + 10.0,
+            escape(name)
+        );
     }
     s + "</svg>\n"
 }
@@ -104,5 +126,27 @@ mod tests {
         assert!(s.contains("b &lt;2&gt;"));
         assert!(s.contains(">x</text>") && s.contains(">y</text>"));
         assert!(s.starts_with("<svg") && s.ends_with("</svg>\n"));
+    }
+
+    /// A stage has one colour in every bar and one legend entry, whatever the bars hold.
+    #[test]
+    fn stages_keep_their_colour_across_bars() {
+        let ms = Duration::from_millis;
+        let bars = vec![
+            ("cpu".to_string(), vec![("x", ms(1)), ("shade", ms(2))]),
+            ("gpu".to_string(), vec![("shade", ms(3)), ("z", ms(4))]),
+        ];
+        let s = svg("t", &bars);
+        let fill = |name: &str| {
+            let at = s.find(&format!("<title>{name}:")).unwrap();
+            let head = &s[..at];
+            let f = head.rfind("fill=\"").unwrap();
+            head[f + 6..f + 13].to_string()
+        };
+        let shade: Vec<_> = s.match_indices("<title>shade:").collect();
+        assert_eq!(shade.len(), 2);
+        assert_eq!(fill("shade"), COLOURS[1]);
+        assert_eq!(fill("z"), COLOURS[2]);
+        assert_eq!(s.matches(">shade</text>").count(), 1);
     }
 }

@@ -127,6 +127,7 @@ impl Tile {
         stop: &AtomicBool,
     ) -> u64 {
         let stride = it.record.stride();
+        let started = Instant::now();
         let mut n = 0;
         'pixels: for (k, rec) in self.records.chunks_exact_mut(stride).enumerate() {
             let (i, j) = (k as u32 % self.w, k as u32 / self.w);
@@ -139,6 +140,7 @@ impl Tile {
             }
         }
         self.samples += n;
+        self.rays.busy_ns += started.elapsed().as_nanos() as u64;
         n
     }
 }

@@ -302,7 +302,9 @@ fn images_do_not_depend_on_threads() {
             films[0].0 == films[1].0,
             "{integrator} {method}: images differ"
         );
-        assert_eq!(films[0].1.rays, films[1].1.rays);
+        // The same rays (their timings are wall-clock and differ).
+        let counts = |r: &render::integrator::RayCounts| (r.camera, r.secondary, r.shadow);
+        assert_eq!(counts(&films[0].1.rays), counts(&films[1].1.rays));
         // The `threads` option gives the same image too.
         o.threads = 2;
         assert!(run(scene, &o).0 == films[0].0);
@@ -507,6 +509,17 @@ fn ray_counts_and_aovs() {
     let stats = run(&ball_on_floor(8), &o).1;
     assert_eq!(stats.rays.camera, 8 * 8 * 4);
     assert!(stats.rays.secondary > 0);
+    // Stage times: every kind traced was timed, and the stages share out the workers'
+    // busy time, which the threads' wall time bounds.
+    let st = stats.rays.stages();
+    let stages = [st.generate, st.camera, st.secondary, st.shadow];
+    assert!(stages.iter().all(|d| !d.is_zero()), "{st:?}");
+    let busy = std::time::Duration::from_nanos(stats.rays.busy_ns);
+    assert!(stages.iter().sum::<std::time::Duration>() + st.shade >= busy);
+    assert!(
+        busy <= stats.wall * stats.threads as u32,
+        "{busy:?} vs {stats:?}"
+    );
 }
 
 /// A smooth glass ball (purely specular: every draw outside MIS) inside a constant dome

@@ -13,7 +13,7 @@
 
 use super::dims::ALBEDO;
 use super::vertex::{trace, Trace, Vertex};
-use super::{Integrator, IntegratorKind, Pixel, RayCounts};
+use super::{Integrator, IntegratorKind, Pixel, RayCounts, RayKind};
 use crate::color::Rgb;
 use crate::sampler::SampleStream;
 use crate::scene::Scene;
@@ -109,9 +109,8 @@ impl Integrator {
         px: &mut Pixel,
         rays: &mut RayCounts,
     ) {
-        let ray = self.camera_ray(scene, x, y, rng);
-        rays.camera += 1;
-        let t = trace(scene, &ray);
+        let ray = rays.query(RayKind::Generate, || self.camera_ray(scene, x, y, rng));
+        let t = rays.query(RayKind::Camera, || trace(scene, &ray));
         let a = first_hit(scene, &t, &ray, rng);
         px.add(match self.kind {
             IntegratorKind::Depth => Rgb::splat(a[0]),

@@ -63,7 +63,7 @@ pub use accumulate::{Accumulator, ShadedDraw, ShadedVertex};
 pub use aov::Aov;
 pub(crate) use dims::Dims;
 pub(crate) use state::Pixel;
-pub use state::{RayCounts, Record};
+pub use state::{CpuStages, RayCounts, RayKind, Record, TIMED_EVERY};
 pub use train::TRAIN_SPP;
 
 use crate::light::TrainedSelection;

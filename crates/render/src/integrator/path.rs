@@ -41,7 +41,7 @@
 //! per-depth state estimates. Memory: one estimator per pixel for each depth reached.
 
 use super::vertex::{trace, Trace, Vertex};
-use super::{Integrator, IntegratorKind, Pixel, RayCounts};
+use super::{Integrator, IntegratorKind, Pixel, RayCounts, RayKind};
 use crate::color::Rgb;
 use crate::sampler::SampleStream;
 use crate::scene::Scene;
@@ -60,9 +60,8 @@ impl Integrator {
         px: &mut Pixel,
         rays: &mut RayCounts,
     ) {
-        let ray = self.camera_ray(scene, x, y, rng);
-        rays.camera += 1;
-        let first = trace(scene, &ray);
+        let ray = rays.query(RayKind::Generate, || self.camera_ray(scene, x, y, rng));
+        let first = rays.query(RayKind::Camera, || trace(scene, &ray));
         if self.aovs {
             self.add_aovs(scene, &first, &ray, rng, px);
         }

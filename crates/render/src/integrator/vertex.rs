@@ -1,7 +1,7 @@
 //! One scattering vertex: delta lights, the MIS draws of every technique, delta lobes and
 //! the path's continuation (module docs of [`crate::integrator`]).
 
-use super::{Integrator, Pixel, RayCounts, MAX_TECHNIQUES};
+use super::{Integrator, Pixel, RayCounts, RayKind, MAX_TECHNIQUES};
 use crate::bsdf::{Bsdf, BsdfSample};
 use crate::color::Rgb;
 use crate::light::LightHit;
@@ -64,8 +64,7 @@ pub(crate) fn incident(scene: &Scene, ray: &Ray, rays: &mut RayCounts) -> Rgb {
     if le == Rgb::ZERO {
         return Rgb::ZERO;
     }
-    rays.shadow += 1;
-    if scene.occluded(ray, 0.0, t_max) {
+    if rays.query(RayKind::Shadow, || scene.occluded(ray, 0.0, t_max)) {
         Rgb::ZERO
     } else {
         le
@@ -131,8 +130,7 @@ impl Integrator {
             if scene.lights.intersect(&ray, 0.0, dist).is_some() {
                 continue;
             }
-            rays.shadow += 1;
-            if !scene.occluded(&ray, 0.0, dist) {
+            if !rays.query(RayKind::Shadow, || scene.occluded(&ray, 0.0, dist)) {
                 sum += fc * ls.radiance;
             }
         }
@@ -154,8 +152,7 @@ impl Integrator {
     ) -> Rgb {
         let ray = spawn(v.p, v.n, s.wi);
         if extends {
-            rays.secondary += 1;
-            let t = trace(scene, &ray);
+            let t = rays.query(RayKind::Secondary, || trace(scene, &ray));
             let li = emitted(scene, &t, s.wi);
             *next = Some(Continuation {
                 weight: s.weight,
