@@ -82,6 +82,16 @@ def experiment(
     per_light: bool = False,
     pixel_center: bool = False,
     decompose: bool = False,
+    max_depth: Optional[int] = None,
+    min_depth: Optional[int] = None,
+    hide_emitters: bool = False,
+    beta: Optional[float] = None,
+    cutoff: Optional[float] = None,
+    ridge: Optional[float] = None,
+    trained_grid: Optional[int] = None,
+    trained_floor: Optional[float] = None,
+    trained_spp: Optional[int] = None,
+    threads: int = 0,
     pandas: Optional[bool] = None,
 ):
     """The estimator comparison of ``frepray experiment``: a reference (rendered with
@@ -94,7 +104,10 @@ def experiment(
     (``speed_up_ci``), ``overhead`` (DESIGN.md §4) -- a pandas DataFrame when pandas is installed (or ``pandas=True``),
     else a list of dicts.  ``per_light``, ``pixel_center`` and ``decompose`` are the CLI's
     ``--per-light``, ``--pixel-center`` and ``--decompose`` (the last adds
-    ``variance_jittered``, ``variance_centered`` and ``direction_share``).  ``out`` receives results.json/csv, summary.md, plots and
+    ``variance_jittered``, ``variance_centered`` and ``direction_share``); ``max_depth``,
+    ``min_depth``, ``hide_emitters``, ``beta``, ``cutoff``, ``ridge``, ``trained_grid``,
+    ``trained_floor``, ``trained_spp`` and ``threads`` are its flags of the same names
+    (``threads=0``: every core).  ``out`` receives results.json/csv, summary.md, plots and
     images (a temporary folder when not given); a rerun into the same ``out`` resumes."""
     import tempfile
 
@@ -106,7 +119,10 @@ def experiment(
             reference_estimator=reference_estimator, baseline=baseline, seed=seed,
             repeats=repeats, techniques=techniques, integrator=integrator,
             width=width, height=height, per_light=per_light, pixel_center=pixel_center,
-            decompose=decompose)
+            decompose=decompose, max_depth=max_depth, min_depth=min_depth,
+            hide_emitters=hide_emitters, beta=beta, cutoff=cutoff, ridge=ridge,
+            trained_grid=trained_grid, trained_floor=trained_floor,
+            trained_spp=trained_spp, threads=threads)
 
     if out is None:
         with tempfile.TemporaryDirectory(prefix="frepray-experiment-") as folder:

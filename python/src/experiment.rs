@@ -125,13 +125,16 @@ pub fn measure<'py>(
 /// estimator, spp, time_s, mse, rmse, relmse, mse_ci, rmse_ci, trimmed_mse, net_mse,
 /// cpu_s, improvement, improvement_ci, improvement_trimmed, median_pixel_ratio,
 /// speed_up, speed_up_ci, overhead (intervals as [lo, hi] or None with one seed), and
-/// with `decompose` variance_jittered, variance_centered, direction_share. `per_light`, `pixel_center` and `decompose` are the CLI's `--per-light`,
-/// `--pixel-center` and `--decompose`.
+/// with `decompose` variance_jittered, variance_centered, direction_share. The other
+/// arguments are the CLI's flags of the same names (`per_light` is `--per-light`, and so
+/// on); `threads` 0 uses every core.
 #[pyfunction]
 #[pyo3(signature = (scene, out, estimators, spp, reference_spp = 256, reference = None,
     reference_estimator = None, baseline = "balance", seed = 0, repeats = exp::DEFAULT_REPEATS,
     techniques = None, integrator = None, width = None, height = None, per_light = false,
-    pixel_center = false, decompose = false))]
+    pixel_center = false, decompose = false, max_depth = None, min_depth = None,
+    hide_emitters = false, beta = None, cutoff = None, ridge = None, trained_grid = None,
+    trained_floor = None, trained_spp = None, threads = 0))]
 #[allow(clippy::too_many_arguments)]
 pub fn experiment<'py>(
     py: Python<'py>,
@@ -152,6 +155,16 @@ pub fn experiment<'py>(
     per_light: bool,
     pixel_center: bool,
     decompose: bool,
+    max_depth: Option<u32>,
+    min_depth: Option<u32>,
+    hide_emitters: bool,
+    beta: Option<f64>,
+    cutoff: Option<f64>,
+    ridge: Option<f64>,
+    trained_grid: Option<u32>,
+    trained_floor: Option<f64>,
+    trained_spp: Option<u32>,
+    threads: usize,
 ) -> PyResult<Bound<'py, PyList>> {
     let canon = |s: &str| {
         mis::Method::from_str(s)
@@ -168,30 +181,27 @@ pub fn experiment<'py>(
         width,
         height,
         per_light,
+        max_depth,
+        min_depth,
+        hide_emitters,
+        beta,
+        cutoff,
+        ridge,
+        trained_grid,
+        trained_floor,
+        trained_spp,
         ..Default::default()
     };
     let s = resolved(py, scene, &o)?;
     let mut base = s.options().map_err(|e| to_py(py, e))?;
     base.pixel_center = pixel_center;
+    base.threads = threads;
+    base.validate().map_err(PyValueError::new_err)?;
     let mut cfg = ExperimentConfig::new(scene_path(scene), out);
     cfg.command_line = "frepray.experiment (Python)".into();
-    cfg.renderer_settings = format!(
-        "integrator {} techniques {:?} max_depth {} rr_depth {} hide_emitters {} params {:?} scene-hash {:016x}",
-        base.integrator,
-        base.techniques.iter().map(|(t, n)| format!("{}:{n}", t.name())).collect::<Vec<_>>(),
-        base.max_depth,
-        base.rr_depth,
-        base.hide_emitters,
-        base.params,
-        s.hash()
-    );
-    // As the CLI writes them, so that a rerun with other settings renders anew.
-    if base.pixel_center {
-        cfg.renderer_settings += " pixel-centres";
-    }
-    if base.per_light > 0 {
-        cfg.renderer_settings += &format!(" per-light {}", base.per_light);
-    }
+    let (width, height) = s.resolution();
+    cfg.renderer_settings = exp::renderer_settings(&base, width, height);
+    cfg.size = Some((width, height));
     cfg.estimators = estimators
         .iter()
         .map(|e| canon(e))

@@ -2,6 +2,8 @@
 
 import math
 
+import pytest
+
 import frepray
 
 
@@ -35,3 +37,26 @@ def test_experiment_per_light_pixel_center_and_decompose(many_lights, tmp_path):
     centred = frepray.experiment(many_lights, ["balance"], [2], out=tmp_path / "c",
                                  pixel_center=True, **opts)
     assert centred[0]["mse"] != [r for r in plain if r["estimator"] == "balance"][0]["mse"]
+
+
+def test_experiment_takes_the_render_options(many_lights, tmp_path):
+    # The CLI's render flags reach every render of the sweep: depth 2 alone of `path`
+    # is a different image from the whole path, a rerun with the same options reuses
+    # the renders (the same MSE), and one thread gives the same image as all of them.
+    opts = dict(reference_spp=8, width=24, height=16, repeats=1, pandas=False,
+                integrator="path", max_depth=2)
+    full = frepray.experiment(many_lights, ["power"], [2], out=tmp_path / "a", **opts)
+    depth2 = frepray.experiment(many_lights, ["power"], [2], out=tmp_path / "b",
+                                min_depth=2, hide_emitters=True, beta=3.0, **opts)
+    again = frepray.experiment(many_lights, ["power"], [2], out=tmp_path / "b",
+                               min_depth=2, hide_emitters=True, beta=3.0, threads=1, **opts)
+    mse = lambda rows: {(r["estimator"], r["spp"]): r["mse"] for r in rows}
+    assert mse(full) != mse(depth2)
+    assert mse(depth2) == mse(again)
+    settings = (tmp_path / "b" / "summary.md").read_text()
+    assert "min-depth 2" in settings and "hide_emitters true" in settings
+    assert "max_depth 2" in settings and "beta: 3.0" in settings
+    with pytest.raises(frepray.SceneError) as e:
+        frepray.experiment(many_lights, ["power"], [2], out=tmp_path / "c",
+                           trained_floor=2.0, **opts)
+    assert e.value.key == "render.trained_floor"

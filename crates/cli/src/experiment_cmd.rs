@@ -301,33 +301,8 @@ pub fn run(a: ExperimentArgs) -> Result<(), String> {
     }
     let mut cfg = ExperimentConfig::new(&a.scene, &a.out);
     cfg.command_line = std::env::args().collect::<Vec<_>>().join(" ");
-    cfg.renderer_settings = format!(
-        "integrator {} techniques {:?} max_depth {} rr_depth {} hide_emitters {}{} resolution {}x{} params {:?} scene-hash {:016x}",
-        base.integrator,
-        base.techniques.iter().map(|(t, n)| format!("{}:{n}", t.name())).collect::<Vec<_>>(),
-        base.max_depth,
-        base.rr_depth,
-        base.hide_emitters,
-        if base.pixel_center { " pixel-centres" } else { "" },
-        scene.camera.width,
-        scene.camera.height,
-        base.params,
-        base.scene_hash
-    );
-    if base.per_light > 0 {
-        // Only when on, so that the settings of earlier runs read as before.
-        cfg.renderer_settings += &format!(" per-light {}", base.per_light);
-    }
-    if base.min_depth > 0 {
-        // Likewise.
-        cfg.renderer_settings += &format!(" min-depth {}", base.min_depth);
-    }
-    if base.training != scene::Training::default() {
-        // Likewise.
-        let t = base.training;
-        cfg.renderer_settings +=
-            &format!(" trained grid {} floor {} spp {}", t.grid, t.floor, t.spp);
-    }
+    cfg.renderer_settings =
+        frepray::experiment::renderer_settings(&base, scene.camera.width, scene.camera.height);
     cfg.size = Some((scene.camera.width, scene.camera.height));
     cfg.estimators = estimators;
     cfg.spp = a.spp;

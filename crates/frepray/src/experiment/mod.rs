@@ -21,6 +21,7 @@ mod maps;
 mod metrics;
 mod plot;
 mod report;
+mod settings;
 pub mod stats;
 #[cfg(test)]
 mod tests;
@@ -28,6 +29,7 @@ mod tests;
 pub use cpu_time::process_cpu_seconds;
 pub use manifest::{Comparison, Row};
 pub use metrics::{measure, Metrics, REL_EPSILON, TRIM_FRACTION};
+pub use settings::renderer_settings;
 
 use manifest::{Manifest, ReferenceInfo, ReferenceSource, RenderRecord, FORMAT};
 use std::path::{Path, PathBuf};
