@@ -15,7 +15,7 @@ mod trained;
 pub use area::{AreaLight, Crossing, Shape};
 pub use delta::DeltaLight;
 pub use environment::{EnvMap, Environment};
-pub use select::{importance, Selection};
+pub use select::{importance, Crossed, Selection};
 pub use trained::{TrainedSelection, TRAIN_FLOOR, TRAIN_GRID};
 
 use crate::color::{luminance, Rgb};
@@ -202,15 +202,28 @@ impl Lights {
     }
     /// Σ_lights P(light) · pdf_area,light(wi).
     pub fn pdf_by_area(&self, p: DVec3, wi: DVec3) -> f64 {
+        self.pdf_by_area_over(p, wi, None)
+    }
+    /// [`Self::pdf_by_area`] over the lights `crossed` lists (with their by-area pdfs;
+    /// None: found by the BVH here), bit for bit the same.
+    pub fn pdf_by_area_over(&self, p: DVec3, wi: DVec3, crossed: Option<&Crossed>) -> f64 {
         let Some(d) = &self.by_area else {
             return 0.0;
         };
         // Only the lights the ray from p along wi crosses have density there.
         let mut sum = 0.0;
-        self.bvh
-            .for_each_hit(&Ray::new(p, wi), 0.0, f64::INFINITY, |i| {
-                sum += d.pmf(i) * self.area[i].pdf_area(p, wi)
-            });
+        match crossed {
+            Some(c) => {
+                for (&i, &pdf) in c.lights().iter().zip(c.pdf_area()) {
+                    sum += d.pmf(i as usize) * pdf;
+                }
+            }
+            None => self
+                .bvh
+                .for_each_hit(&Ray::new(p, wi), 0.0, f64::INFINITY, |i| {
+                    sum += d.pmf(i) * self.area[i].pdf_area(p, wi)
+                }),
+        }
         sum
     }
     /// Environment sampling (None without an environment).

@@ -264,6 +264,19 @@ impl Lights {
     /// Σ_k P(k | p, n) · p_k(wi) over the MIS lights: the density of
     /// [`Self::sample_selected`].
     pub fn pdf_selected(&self, sel: Selection<'_>, p: DVec3, n: DVec3, wi: DVec3) -> f64 {
+        self.pdf_selected_over(sel, p, n, wi, None)
+    }
+
+    /// [`Self::pdf_selected`] over the lights `crossed` lists (None: found by the BVH
+    /// here). The same terms in the same order: the same value bit for bit.
+    pub fn pdf_selected_over(
+        &self,
+        sel: Selection<'_>,
+        p: DVec3,
+        n: DVec3,
+        wi: DVec3,
+        crossed: Option<&Crossed>,
+    ) -> f64 {
         if let Selection::One(k) = sel {
             return if k < self.count() {
                 self.pdf_one(p, k, wi)
@@ -275,21 +288,84 @@ impl Lights {
             Selection::Spatial => self.importance_total(p, n),
             _ => 0.0,
         };
-        let term = |k: usize| {
+        let term = |k: usize, pdf: &dyn Fn() -> f64| {
             let pm = self.pmf_with(sel, p, n, k, total);
             if pm > 0.0 {
-                pm * self.pdf_one(p, k, wi)
+                pm * pdf()
             } else {
                 0.0
             }
         };
         // Only the area lights the ray from p along wi crosses have density there.
         let mut sum = 0.0;
-        self.bvh
-            .for_each_hit(&Ray::new(p, wi), 0.0, f64::INFINITY, |k| sum += term(k));
+        match crossed {
+            Some(c) => {
+                for (&k, &pdf) in c.lights().iter().zip(c.pdf_li()) {
+                    sum += term(k as usize, &|| pdf);
+                }
+            }
+            None => self
+                .bvh
+                .for_each_hit(&Ray::new(p, wi), 0.0, f64::INFINITY, |k| {
+                    sum += term(k, &|| self.pdf_one(p, k, wi))
+                }),
+        }
         if self.environment.is_some() {
-            sum += term(self.area.len());
+            sum += term(self.area.len(), &|| self.pdf_one(p, self.area.len(), wi));
         }
         sum
+    }
+
+    /// The area lights the ray from `p` along `wi` crosses, in the BVH's order, with
+    /// each one's own solid-angle pdf (and, with `area`, its by-area pdf): what every
+    /// light technique's density at `wi` needs, found once for them all. None past
+    /// [`Crossed::CAPACITY`] lights.
+    pub fn crossed(&self, p: DVec3, wi: DVec3, area: bool) -> Option<Crossed> {
+        let mut c = Crossed::default();
+        let mut over = false;
+        self.bvh
+            .for_each_hit(&Ray::new(p, wi), 0.0, f64::INFINITY, |k| {
+                if c.n == Crossed::CAPACITY {
+                    over = true;
+                    return;
+                }
+                c.lights[c.n] = k as u32;
+                c.li[c.n] = self.area[k].pdf_li(p, wi);
+                if area {
+                    c.area[c.n] = self.area[k].pdf_area(p, wi);
+                }
+                c.n += 1;
+            });
+        (!over).then_some(c)
+    }
+}
+
+/// The area lights one direction crosses, with their pdfs ([`Lights::crossed`]).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Crossed {
+    n: usize,
+    lights: [u32; Crossed::CAPACITY],
+    li: [f64; Crossed::CAPACITY],
+    area: [f64; Crossed::CAPACITY],
+}
+
+impl Crossed {
+    /// The most lights one list holds.
+    pub const CAPACITY: usize = 8;
+
+    /// The lights crossed, nearest subtrees first.
+    pub fn lights(&self) -> &[u32] {
+        &self.lights[..self.n]
+    }
+
+    /// Each light's own solid-angle pdf ([`crate::light::AreaLight::pdf_li`]).
+    pub fn pdf_li(&self) -> &[f64] {
+        &self.li[..self.n]
+    }
+
+    /// Each light's by-area pdf ([`crate::light::AreaLight::pdf_area`]; 0 unless asked
+    /// for).
+    pub fn pdf_area(&self) -> &[f64] {
+        &self.area[..self.n]
     }
 }

@@ -5,7 +5,7 @@
 
 use crate::bsdf::{Bsdf, BsdfSample};
 use crate::frame::Frame;
-use crate::light::{LightSample, Lights, Selection, TrainedSelection};
+use crate::light::{Crossed, LightSample, Lights, Selection, TrainedSelection};
 use crate::warp::{cosine_hemisphere, cosine_hemisphere_pdf};
 use glam::{DVec2, DVec3};
 use std::borrow::Cow;
@@ -199,26 +199,50 @@ impl Technique {
     /// The solid-angle density with which [`Self::sample`] produces the unit direction
     /// `wi` (delta lobes excluded).
     pub fn pdf(self, ctx: &ShadingPoint, wi: DVec3) -> f64 {
+        self.pdf_over(ctx, wi, None)
+    }
+
+    /// [`Self::pdf`], the light mixtures' over the lights `crossed` lists (None: found
+    /// here); bit for bit the same.
+    fn pdf_over(self, ctx: &ShadingPoint, wi: DVec3, crossed: Option<&Crossed>) -> f64 {
         match self {
             Technique::Bsdf => ctx.bsdf.pdf(ctx.wo, wi),
             Technique::LightPower
             | Technique::LightUniform
             | Technique::LightSpatial
             | Technique::LightTrained
-            | Technique::Light(_) => self
-                .selection(ctx)
-                .map_or(0.0, |sel| ctx.lights.pdf_selected(sel, ctx.p, ctx.n, wi)),
-            Technique::LightArea => ctx.lights.pdf_by_area(ctx.p, wi),
+            | Technique::Light(_) => self.selection(ctx).map_or(0.0, |sel| {
+                ctx.lights.pdf_selected_over(sel, ctx.p, ctx.n, wi, crossed)
+            }),
+            Technique::LightArea => ctx.lights.pdf_by_area_over(ctx.p, wi, crossed),
             Technique::Environment => ctx.lights.pdf_environment(wi),
             Technique::CosineHemisphere => cosine_hemisphere_pdf(Self::facing_normal(ctx).dot(wi)),
         }
     }
 }
 
-/// Fills `out[k]` with `techniques[k].pdf(ctx, wi)`.
+/// Fills `out[k]` with `techniques[k].pdf(ctx, wi)`. Where two or more techniques mix
+/// over the lights the direction crosses, those lights and their pdfs are found once
+/// ([`Lights::crossed`]) instead of once per technique.
 pub fn pdfs(techniques: &[Technique], ctx: &ShadingPoint, wi: DVec3, out: &mut [f64]) {
+    let mixes = |t: &&Technique| {
+        matches!(
+            t,
+            Technique::LightPower
+                | Technique::LightUniform
+                | Technique::LightSpatial
+                | Technique::LightTrained
+                | Technique::LightArea
+        )
+    };
+    let crossed = if techniques.iter().filter(mixes).count() >= 2 {
+        let area = techniques.contains(&Technique::LightArea);
+        ctx.lights.crossed(ctx.p, wi, area)
+    } else {
+        None
+    };
     for (o, t) in out.iter_mut().zip(techniques) {
-        *o = t.pdf(ctx, wi);
+        *o = t.pdf_over(ctx, wi, crossed.as_ref());
     }
 }
 

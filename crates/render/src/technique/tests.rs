@@ -267,3 +267,53 @@ fn irradiance_matches_analytic() {
         }
     }
 }
+
+/// [`pdfs`] finds the lights a direction crosses once for every light mixture; each
+/// density is the one [`Technique::pdf`] gives alone, bit for bit, on directions drawn
+/// by every technique (so that many cross lights, some two at once in scene B).
+#[test]
+fn shared_crossings_give_each_techniques_own_pdf() {
+    let all = [
+        Technique::Bsdf,
+        Technique::LightPower,
+        Technique::LightUniform,
+        Technique::LightArea,
+        Technique::LightSpatial,
+        Technique::Light(1),
+        Technique::LightTrained,
+        Technique::Environment,
+        Technique::CosineHemisphere,
+    ];
+    let bsdf = Bsdf::new(DVec3::Z, Bxdf::Diffuse(DiffuseBxdf { r: Rgb::ONE }));
+    let (mut crossing, mut total) = (0, 0);
+    for lights in [&scene_lights(), &planar_lights()] {
+        let table = trained_table(lights);
+        let ctx = ShadingPoint {
+            p: DVec3::new(0.1, 0.0, 0.0),
+            n: DVec3::Z,
+            wo: DVec3::new(0.3, -0.4, 0.8).normalize(),
+            bsdf: &bsdf,
+            lights,
+            trained: Some(&table),
+        };
+        let s = Sampler::new(5);
+        let mut out = [0.0; 9];
+        for i in 0..4000u32 {
+            let r = s.stream(i, 0, 0);
+            let t = all[i as usize % all.len()];
+            let Some(d) = t.sample(&ctx, r.get(0), r.get_2d(1)) else {
+                continue;
+            };
+            pdfs(&all, &ctx, d.wi, &mut out);
+            for (k, t) in all.iter().enumerate() {
+                assert_eq!(out[k].to_bits(), t.pdf(&ctx, d.wi).to_bits(), "{t:?}");
+            }
+            total += 1;
+            crossing += usize::from(out[3] > 0.0);
+        }
+    }
+    assert!(
+        crossing > total / 4,
+        "{crossing} of {total} directions cross a light"
+    );
+}
