@@ -192,7 +192,10 @@ pub fn render_range(
                 w,
                 h,
                 records: vec![0.0; (w * h) as usize * stride],
-                rays: RayCounts::default(),
+                rays: RayCounts {
+                    timing: o.stage_times,
+                    ..RayCounts::default()
+                },
                 samples: 0,
             });
         }
@@ -272,6 +275,7 @@ pub fn bench(
         }
         let o = RenderOptions {
             integrator,
+            stage_times: true,
             ..options.clone()
         };
         out.push(render(scene, &o, stop, &|_, _| {})?.1);

@@ -456,6 +456,10 @@ fn ray_counts_and_aovs() {
     let (film, stats) = run(&scene, &o);
     assert_eq!(stats.rays.camera, 8 * 8 * 4);
     assert_eq!(stats.rays.secondary, 0);
+    assert_eq!(
+        stats.rays.timed_ns, [0; 4],
+        "timers run only when asked for"
+    );
     assert!(stats.rays.shadow > 0 && stats.rays.shadow <= 8 * 8 * 4 * 3);
     assert_eq!(stats.samples, 8 * 8 * 4);
     assert_eq!(film.aov_names().len(), 7);
@@ -506,6 +510,7 @@ fn ray_counts_and_aovs() {
     }
     let mut o = options(IntegratorKind::Path, Method::Balance, &MIX, 4, 101);
     o.max_depth = 3;
+    o.stage_times = true;
     let stats = run(&ball_on_floor(8), &o).1;
     assert_eq!(stats.rays.camera, 8 * 8 * 4);
     assert!(stats.rays.secondary > 0);

@@ -109,8 +109,12 @@ impl Integrator {
         px: &mut Pixel,
         rays: &mut RayCounts,
     ) {
-        let ray = rays.query(RayKind::Generate, || self.camera_ray(scene, x, y, rng));
-        let t = rays.query(RayKind::Camera, || trace(scene, &ray));
+        let clock = rays.begin(RayKind::Generate);
+        let ray = self.camera_ray(scene, x, y, rng);
+        rays.end(RayKind::Generate, clock);
+        let clock = rays.begin(RayKind::Camera);
+        let t = trace(scene, &ray);
+        rays.end(RayKind::Camera, clock);
         let a = first_hit(scene, &t, &ray, rng);
         px.add(match self.kind {
             IntegratorKind::Depth => Rgb::splat(a[0]),

@@ -136,6 +136,9 @@ pub struct RenderOptions {
     /// A hash of the scene, recorded in the [`crate::RenderState`] so that states of
     /// different scenes refuse to merge (0: unknown).
     pub scene_hash: u64,
+    /// Time the render's stages ([`RayCounts::stages`]; `frepray bench` does). Off by
+    /// default: the timers cost a few per cent on small scenes.
+    pub stage_times: bool,
 }
 
 impl Default for RenderOptions {
@@ -162,6 +165,7 @@ impl Default for RenderOptions {
             threads: 0,
             max_memory: 0,
             scene_hash: 0,
+            stage_times: false,
         }
     }
 }

@@ -60,8 +60,12 @@ impl Integrator {
         px: &mut Pixel,
         rays: &mut RayCounts,
     ) {
-        let ray = rays.query(RayKind::Generate, || self.camera_ray(scene, x, y, rng));
-        let first = rays.query(RayKind::Camera, || trace(scene, &ray));
+        let clock = rays.begin(RayKind::Generate);
+        let ray = self.camera_ray(scene, x, y, rng);
+        rays.end(RayKind::Generate, clock);
+        let clock = rays.begin(RayKind::Camera);
+        let first = trace(scene, &ray);
+        rays.end(RayKind::Camera, clock);
         if self.aovs {
             self.add_aovs(scene, &first, &ray, rng, px);
         }

@@ -12,9 +12,9 @@ use std::ops::AddAssign;
 /// Rays traced, by kind: camera rays, secondary rays (nearest-hit queries that extend a
 /// path) and shadow rays (any-hit visibility queries). Queries against the analytic area
 /// lights alone are not counted. Also where the time went, for the stage breakdown of
-/// `frepray bench` (the paper's Fig. 4–5): one query of each kind in [`TIMED_EVERY`] (and
-/// the camera ray's generation with it) is timed, so that the timers cost a few ns per
-/// ray, and each worker's busy time per tile.
+/// `frepray bench` (the paper's Fig. 4–5): with `timing`, one query of each kind in
+/// [`TIMED_EVERY`] (and the camera ray's generation with it) is timed, so that the timers
+/// cost a few ns per ray, and each worker's busy time per tile.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct RayCounts {
     /// Camera rays.
@@ -28,6 +28,8 @@ pub struct RayCounts {
     pub timed_ns: [u64; 4],
     /// Nanoseconds the workers spent rendering tiles, all threads together.
     pub busy_ns: u64,
+    /// Whether queries are timed ([`super::RenderOptions::stage_times`]).
+    pub timing: bool,
 }
 
 /// One query of each kind in this many is timed.
@@ -68,36 +70,40 @@ impl RayCounts {
         self.camera + self.secondary + self.shadow
     }
 
-    /// Counts a query of `kind` and runs it, timing one in [`TIMED_EVERY`].
-    #[inline(always)]
-    pub(crate) fn query<R>(&mut self, kind: RayKind, f: impl FnOnce() -> R) -> R {
+    /// Counts a query of `kind` (none for [`RayKind::Generate`]) and, for one in
+    /// [`TIMED_EVERY`] when timing, starts its timer; pass the result to [`Self::end`]
+    /// after the query. (Start and end, not a closure around the query, so that the
+    /// query's code is the same with timing as without.)
+    #[inline]
+    pub(crate) fn begin(&mut self, kind: RayKind) -> Option<std::time::Instant> {
         let n = match kind {
-            RayKind::Generate => return self.time(kind, self.camera % TIMED_EVERY == 0, f),
-            RayKind::Camera => &mut self.camera,
-            RayKind::Secondary => &mut self.secondary,
-            RayKind::Shadow => &mut self.shadow,
+            RayKind::Generate => self.camera,
+            RayKind::Camera => {
+                self.camera += 1;
+                self.camera - 1
+            }
+            RayKind::Secondary => {
+                self.secondary += 1;
+                self.secondary - 1
+            }
+            RayKind::Shadow => {
+                self.shadow += 1;
+                self.shadow - 1
+            }
         };
-        *n += 1;
-        let timed = *n % TIMED_EVERY == 1;
-        self.time(kind, timed, f)
-    }
-
-    #[inline(always)]
-    fn time<R>(&mut self, kind: RayKind, timed: bool, f: impl FnOnce() -> R) -> R {
-        if !timed {
-            return f();
+        if self.timing && n % TIMED_EVERY == 0 {
+            Some(std::time::Instant::now())
+        } else {
+            None
         }
-        self.timed(kind, f)
     }
 
-    /// The timed path, kept out of line so that the untimed one stays small.
-    #[cold]
-    #[inline(never)]
-    fn timed<R>(&mut self, kind: RayKind, f: impl FnOnce() -> R) -> R {
-        let t = std::time::Instant::now();
-        let r = f();
-        self.timed_ns[kind as usize] += t.elapsed().as_nanos() as u64;
-        r
+    /// Ends the timer [`Self::begin`] started, if any.
+    #[inline]
+    pub(crate) fn end(&mut self, kind: RayKind, started: Option<std::time::Instant>) {
+        if let Some(t) = started {
+            self.timed_ns[kind as usize] += t.elapsed().as_nanos() as u64;
+        }
     }
 
     /// The estimated time per stage: each kind's timed queries scaled by all its
@@ -132,6 +138,7 @@ impl AddAssign for RayCounts {
             *a += b;
         }
         self.busy_ns += o.busy_ns;
+        self.timing |= o.timing;
     }
 }
 

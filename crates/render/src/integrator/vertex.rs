@@ -64,7 +64,10 @@ pub(crate) fn incident(scene: &Scene, ray: &Ray, rays: &mut RayCounts) -> Rgb {
     if le == Rgb::ZERO {
         return Rgb::ZERO;
     }
-    if rays.query(RayKind::Shadow, || scene.occluded(ray, 0.0, t_max)) {
+    let clock = rays.begin(RayKind::Shadow);
+    let occluded = scene.occluded(ray, 0.0, t_max);
+    rays.end(RayKind::Shadow, clock);
+    if occluded {
         Rgb::ZERO
     } else {
         le
@@ -130,7 +133,10 @@ impl Integrator {
             if scene.lights.intersect(&ray, 0.0, dist).is_some() {
                 continue;
             }
-            if !rays.query(RayKind::Shadow, || scene.occluded(&ray, 0.0, dist)) {
+            let clock = rays.begin(RayKind::Shadow);
+            let occluded = scene.occluded(&ray, 0.0, dist);
+            rays.end(RayKind::Shadow, clock);
+            if !occluded {
                 sum += fc * ls.radiance;
             }
         }
@@ -152,7 +158,9 @@ impl Integrator {
     ) -> Rgb {
         let ray = spawn(v.p, v.n, s.wi);
         if extends {
-            let t = rays.query(RayKind::Secondary, || trace(scene, &ray));
+            let clock = rays.begin(RayKind::Secondary);
+            let t = trace(scene, &ray);
+            rays.end(RayKind::Secondary, clock);
             let li = emitted(scene, &t, s.wi);
             *next = Some(Continuation {
                 weight: s.weight,

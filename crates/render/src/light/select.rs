@@ -288,30 +288,33 @@ impl Lights {
             Selection::Spatial => self.importance_total(p, n),
             _ => 0.0,
         };
-        let term = |k: usize, pdf: &dyn Fn() -> f64| {
-            let pm = self.pmf_with(sel, p, n, k, total);
+        // P(k)·p_k, p_k evaluated only where P(k) > 0.
+        #[inline(always)]
+        fn term(pm: f64, pdf: impl FnOnce() -> f64) -> f64 {
             if pm > 0.0 {
                 pm * pdf()
             } else {
                 0.0
             }
-        };
+        }
+        let pmf = |k: usize| self.pmf_with(sel, p, n, k, total);
         // Only the area lights the ray from p along wi crosses have density there.
         let mut sum = 0.0;
         match crossed {
             Some(c) => {
                 for (&k, &pdf) in c.lights().iter().zip(c.pdf_li()) {
-                    sum += term(k as usize, &|| pdf);
+                    sum += term(pmf(k as usize), || pdf);
                 }
             }
             None => self
                 .bvh
                 .for_each_hit(&Ray::new(p, wi), 0.0, f64::INFINITY, |k| {
-                    sum += term(k, &|| self.pdf_one(p, k, wi))
+                    sum += term(pmf(k), || self.pdf_one(p, k, wi))
                 }),
         }
         if self.environment.is_some() {
-            sum += term(self.area.len(), &|| self.pdf_one(p, self.area.len(), wi));
+            let k = self.area.len();
+            sum += term(pmf(k), || self.pdf_one(p, k, wi));
         }
         sum
     }

@@ -235,14 +235,17 @@ pub fn pdfs(techniques: &[Technique], ctx: &ShadingPoint, wi: DVec3, out: &mut [
                 | Technique::LightArea
         )
     };
-    let crossed = if techniques.iter().filter(mixes).count() >= 2 {
+    if techniques.iter().filter(mixes).count() >= 2 {
         let area = techniques.contains(&Technique::LightArea);
-        ctx.lights.crossed(ctx.p, wi, area)
-    } else {
-        None
-    };
+        if let Some(c) = ctx.lights.crossed(ctx.p, wi, area) {
+            for (o, t) in out.iter_mut().zip(techniques) {
+                *o = t.pdf_over(ctx, wi, Some(&c));
+            }
+            return;
+        }
+    }
     for (o, t) in out.iter_mut().zip(techniques) {
-        *o = t.pdf_over(ctx, wi, crossed.as_ref());
+        *o = t.pdf(ctx, wi);
     }
 }
 
