@@ -192,10 +192,7 @@ pub fn render_range(
                 w,
                 h,
                 records: vec![0.0; (w * h) as usize * stride],
-                rays: RayCounts {
-                    timing: o.stage_times,
-                    ..RayCounts::default()
-                },
+                rays: RayCounts::new(o.stage_times),
                 samples: 0,
             });
         }

@@ -12,8 +12,9 @@
 //! AOVs changes no other random number of the render.
 
 use super::dims::ALBEDO;
+use super::state::RayLog;
 use super::vertex::{trace, Trace, Vertex};
-use super::{Integrator, IntegratorKind, Pixel, RayCounts, RayKind};
+use super::{Integrator, IntegratorKind, Pixel, RayKind};
 use crate::color::Rgb;
 use crate::sampler::SampleStream;
 use crate::scene::Scene;
@@ -107,14 +108,14 @@ impl Integrator {
         y: u32,
         rng: &SampleStream,
         px: &mut Pixel,
-        rays: &mut RayCounts,
+        rays: &mut impl RayLog,
     ) {
-        let clock = rays.begin(RayKind::Generate);
+        rays.begin(RayKind::Generate);
         let ray = self.camera_ray(scene, x, y, rng);
-        rays.end(RayKind::Generate, clock);
-        let clock = rays.begin(RayKind::Camera);
+        rays.end(RayKind::Generate);
+        rays.begin(RayKind::Camera);
         let t = trace(scene, &ray);
-        rays.end(RayKind::Camera, clock);
+        rays.end(RayKind::Camera);
         let a = first_hit(scene, &t, &ray, rng);
         px.add(match self.kind {
             IntegratorKind::Depth => Rgb::splat(a[0]),

@@ -63,6 +63,7 @@ pub use accumulate::{Accumulator, ShadedDraw, ShadedVertex};
 pub use aov::Aov;
 pub(crate) use dims::Dims;
 pub(crate) use state::Pixel;
+use state::RayLog;
 pub use state::{CpuStages, RayCounts, RayKind, Record, TIMED_EVERY};
 pub use train::TRAIN_SPP;
 
@@ -437,6 +438,23 @@ impl Integrator {
         index: u32,
         rec: &mut [f64],
         rays: &mut RayCounts,
+    ) {
+        if rays.timing {
+            self.sample_with(scene, x, y, index, rec, &mut state::Timed(rays));
+        } else {
+            self.sample_with(scene, x, y, index, rec, rays);
+        }
+    }
+
+    /// [`Self::sample`], reporting queries to `rays`.
+    fn sample_with(
+        &self,
+        scene: &Scene,
+        x: u32,
+        y: u32,
+        index: u32,
+        rec: &mut [f64],
+        rays: &mut impl RayLog,
     ) {
         let rng = self.sampler.stream(x, y, index);
         let mut px = Pixel {

@@ -40,8 +40,9 @@
 //! the α minimising the variance is the optimum for the paths that do, which is what the
 //! per-depth state estimates. Memory: one estimator per pixel for each depth reached.
 
+use super::state::RayLog;
 use super::vertex::{trace, Trace, Vertex};
-use super::{Integrator, IntegratorKind, Pixel, RayCounts, RayKind};
+use super::{Integrator, IntegratorKind, Pixel, RayKind};
 use crate::color::Rgb;
 use crate::sampler::SampleStream;
 use crate::scene::Scene;
@@ -58,14 +59,14 @@ impl Integrator {
         y: u32,
         rng: &SampleStream,
         px: &mut Pixel,
-        rays: &mut RayCounts,
+        rays: &mut impl RayLog,
     ) {
-        let clock = rays.begin(RayKind::Generate);
+        rays.begin(RayKind::Generate);
         let ray = self.camera_ray(scene, x, y, rng);
-        rays.end(RayKind::Generate, clock);
-        let clock = rays.begin(RayKind::Camera);
+        rays.end(RayKind::Generate);
+        rays.begin(RayKind::Camera);
         let first = trace(scene, &ray);
-        rays.end(RayKind::Camera, clock);
+        rays.end(RayKind::Camera);
         if self.aovs {
             self.add_aovs(scene, &first, &ray, rng, px);
         }

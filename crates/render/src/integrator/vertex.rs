@@ -1,7 +1,8 @@
 //! One scattering vertex: delta lights, the MIS draws of every technique, delta lobes and
 //! the path's continuation (module docs of [`crate::integrator`]).
 
-use super::{Integrator, Pixel, RayCounts, RayKind, MAX_TECHNIQUES};
+use super::state::RayLog;
+use super::{Integrator, Pixel, RayKind, MAX_TECHNIQUES};
 use crate::bsdf::{Bsdf, BsdfSample};
 use crate::color::Rgb;
 use crate::light::LightHit;
@@ -56,7 +57,7 @@ pub(crate) fn spawn(p: DVec3, n: DVec3, wi: DVec3) -> Ray {
 
 /// `Li(ω)` by one shadow ray: the nearest area light along the ray (or the environment)
 /// if no object lies before it. No ray is traced when there is nothing to see.
-pub(crate) fn incident(scene: &Scene, ray: &Ray, rays: &mut RayCounts) -> Rgb {
+pub(crate) fn incident(scene: &Scene, ray: &Ray, rays: &mut impl RayLog) -> Rgb {
     let (t_max, le) = match scene.lights.intersect(ray, 0.0, f64::INFINITY) {
         Some(h) => (h.t, h.radiance),
         None => (f64::INFINITY, scene.lights.environment_radiance(ray.d)),
@@ -64,9 +65,9 @@ pub(crate) fn incident(scene: &Scene, ray: &Ray, rays: &mut RayCounts) -> Rgb {
     if le == Rgb::ZERO {
         return Rgb::ZERO;
     }
-    let clock = rays.begin(RayKind::Shadow);
+    rays.begin(RayKind::Shadow);
     let occluded = scene.occluded(ray, 0.0, t_max);
-    rays.end(RayKind::Shadow, clock);
+    rays.end(RayKind::Shadow);
     if occluded {
         Rgb::ZERO
     } else {
@@ -120,7 +121,7 @@ pub(crate) struct Continuation {
 
 impl Integrator {
     /// Point and spot lights at `v`: Σ f·|cos|·I/d² over the visible ones (outside MIS).
-    fn delta_lights(&self, scene: &Scene, v: &Vertex, rays: &mut RayCounts) -> Rgb {
+    fn delta_lights(&self, scene: &Scene, v: &Vertex, rays: &mut impl RayLog) -> Rgb {
         let mut sum = Rgb::ZERO;
         for l in scene.lights.delta() {
             let Some(ls) = l.sample_li(v.p) else { continue };
@@ -133,9 +134,9 @@ impl Integrator {
             if scene.lights.intersect(&ray, 0.0, dist).is_some() {
                 continue;
             }
-            let clock = rays.begin(RayKind::Shadow);
+            rays.begin(RayKind::Shadow);
             let occluded = scene.occluded(&ray, 0.0, dist);
-            rays.end(RayKind::Shadow, clock);
+            rays.end(RayKind::Shadow);
             if !occluded {
                 sum += fc * ls.radiance;
             }
@@ -154,13 +155,13 @@ impl Integrator {
         extends: bool,
         needed: bool,
         next: &mut Option<Continuation>,
-        rays: &mut RayCounts,
+        rays: &mut impl RayLog,
     ) -> Rgb {
         let ray = spawn(v.p, v.n, s.wi);
         if extends {
-            let clock = rays.begin(RayKind::Secondary);
+            rays.begin(RayKind::Secondary);
             let t = trace(scene, &ray);
-            rays.end(RayKind::Secondary, clock);
+            rays.end(RayKind::Secondary);
             let li = emitted(scene, &t, s.wi);
             *next = Some(Continuation {
                 weight: s.weight,
@@ -189,7 +190,7 @@ impl Integrator {
         extend: bool,
         rng: &SampleStream,
         px: &mut Pixel,
-        rays: &mut RayCounts,
+        rays: &mut impl RayLog,
     ) -> Option<Continuation> {
         px.add(beta * self.delta_lights(scene, v, rays));
         let mut next = None;
