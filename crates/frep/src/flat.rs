@@ -116,6 +116,8 @@ pub enum Leaf {
         grid_cells: Span,
         /// Its cell tapes in [`Flat::cell_tapes`].
         cell_tapes: Span,
+        /// Its grid's cells per axis (0: no grid).
+        grid_n: u32,
     },
 }
 
@@ -212,6 +214,7 @@ impl Flat {
             grid: Span::since(g0, self.grids.len()),
             grid_cells: Span::since(gc0, self.grid_cells.len()),
             cell_tapes: Span::since(ct0, self.cell_tapes.len()),
+            grid_n: v.grid.n as u32,
         });
         Ok(self.leaves.len() as u32 - 1)
     }
@@ -245,6 +248,7 @@ impl Flat {
                 grid,
                 grid_cells,
                 cell_tapes,
+                grid_n,
                 ..
             } => LeafView::Expr(ExprView {
                 tape: &self.tapes[tape.range()],
@@ -254,6 +258,7 @@ impl Flat {
                     words: &self.grids[grid.range()],
                     cells: &self.grid_cells[grid_cells.range()],
                     nodes: &self.cell_tapes[cell_tapes.range()],
+                    n: grid_n as usize,
                 },
             }),
         }

@@ -4,7 +4,7 @@
 //! every crossing of a dense march lies in an occupied cell.
 
 use frep::interval_trace::ExprView;
-use frep::occupancy::{GRID, GRID_WORDS, MARGIN};
+use frep::occupancy::{FINE_GRID, GRID, MARGIN};
 use frep::read::read_file;
 use frep::solid::Solid;
 use frep::{Aabb, LeafView, Ray};
@@ -31,13 +31,14 @@ fn leaf_views(s: &Solid) -> Vec<ExprView<'_>> {
 fn occupied(v: &ExprView, p: DVec3) -> bool {
     let g = Aabb::new(v.bounds.lo - v.eps, v.bounds.hi + v.eps);
     let at = |p: DVec3| {
-        let c = ((p - g.lo) / (g.hi - g.lo) * GRID as f64)
+        let n = v.grid.n;
+        let c = ((p - g.lo) / (g.hi - g.lo) * n as f64)
             .floor()
-            .clamp(DVec3::ZERO, DVec3::splat(GRID as f64 - 1.0));
-        let n = ((c.z as usize) * GRID + c.y as usize) * GRID + c.x as usize;
+            .clamp(DVec3::ZERO, DVec3::splat(n as f64 - 1.0));
+        let n = ((c.z as usize) * n + c.y as usize) * n + c.x as usize;
         v.grid.words[n / 64] >> (n % 64) & 1 == 1
     };
-    let m = (g.hi - g.lo) / GRID as f64 * MARGIN;
+    let m = (g.hi - g.lo) / v.grid.n as f64 * MARGIN;
     (0..27).any(|k| {
         let o = DVec3::new(
             (k % 3) as f64 - 1.0,
@@ -65,7 +66,9 @@ fn the_grid_changes_no_hit() {
         let model = read_file(&path(m)).unwrap_or_else(|e| panic!("{m}: {e}"));
         let solid = Solid::build(&model.shape).unwrap();
         for v in leaf_views(&solid) {
-            assert_eq!(v.grid.words.len(), GRID_WORDS, "{m}: no grid");
+            let n = v.grid.n;
+            assert!(n == GRID || n == FINE_GRID, "{m}: no grid");
+            assert_eq!(v.grid.words.len(), n * n * n / 64, "{m}");
             let full = v.grid.words.iter().map(|w| w.count_ones()).sum::<u32>() as usize;
             let plain = ExprView {
                 grid: frep::occupancy::GridView::NONE,
@@ -116,10 +119,10 @@ fn the_grid_changes_no_hit() {
                 }
             }
             assert!(hits > 100, "{m}: {hits} hits");
-            total = (total.0 + hits, total.1 + full, total.2 + GRID * GRID * GRID);
+            total = (total.0 + hits, total.1 + full, total.2 + n * n * n);
             println!(
                 "{m}: {hits} crossings, {full} of {} cells occupied",
-                GRID * GRID * GRID
+                n * n * n
             );
         }
     }
@@ -145,7 +148,8 @@ fn cell_tapes_equal_the_whole_tape() {
         let solid = Solid::build(&model.shape).unwrap();
         for v in leaf_views(&solid) {
             let (whole, cells) = (v.tape.len(), v.grid.cells.len());
-            assert_eq!(cells, GRID * GRID * GRID, "{m}: no cell tapes");
+            let n = v.grid.n;
+            assert_eq!(cells, n * n * n, "{m}: no cell tapes");
             let g = Aabb::new(v.bounds.lo - v.eps, v.bounds.hi + v.eps);
             let (mut shorter, mut scratch) = (0, Vec::new());
             for _ in 0..20_000 {
