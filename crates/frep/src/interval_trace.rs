@@ -10,7 +10,7 @@
 //!
 //! **Cell tapes.** Where the solid has an occupancy grid ([`crate::occupancy`]) a ray
 //! searches only runs of occupied cells, each with the tape simplified over its cells
-//! (on colonnade.vm 23 nodes on average of 796), and point queries use the tape of the
+//! (on colonnade.vm's 32³ grid, 23 nodes on average of 796), and point queries use the tape of the
 //! cell they fall in: the same values bit for bit, a fraction of the work.
 //!
 //! **Allocation.** A trace keeps its segment stack, the tapes it simplifies per segment
