@@ -21,7 +21,7 @@ use glam::DVec3;
 pub const GRID: usize = 32;
 
 /// Cells per axis of a fine grid, built where the coarse one's cost says it fits in
-/// [`BUILD_BUDGET`]: smaller cells hold shorter tapes and less empty space (colonnade
+/// the build budget: smaller cells hold shorter tapes and less empty space (colonnade
 /// and tanglecube rays 1.4–2× faster), at 8× the cell table (2 MiB).
 pub const FINE_GRID: usize = 64;
 
