@@ -126,6 +126,11 @@ struct RenderArgs {
     /// pixel-footprint variance, and the image converges to point samples).
     #[arg(long)]
     pixel_center: bool,
+    /// Print the CPU's time per stage after the render (camera-ray generation, camera,
+    /// shadow and continuation rays, shading), as `bench` does; the timers slow the
+    /// render by a few per cent.
+    #[arg(long)]
+    stage_times: bool,
     /// Per-light mode (scenes): one MIS estimator per light (area lights, then the
     /// environment), each fed only the radiance of the light its draws reach; the pixel
     /// is their sum. Changes only the optimal estimators' result.
@@ -358,6 +363,7 @@ fn render(args: RenderArgs) -> Result<(), String> {
             threads: 0,
             hide_emitters: args.hide_emitters,
             pixel_center: args.pixel_center,
+            stage_times: args.stage_times,
             beta: args.beta,
             cutoff: args.cutoff,
             ridge: args.ridge,

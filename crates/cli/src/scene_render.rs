@@ -59,6 +59,22 @@ fn render_on(
     Ok((state, stats, None))
 }
 
+/// The CPU's stage times, one line (all worker threads' time, summed).
+fn cpu_line(s: &render::RenderStats) -> String {
+    let st = s.rays.stages();
+    let ms = |d: std::time::Duration| d.as_secs_f64() * 1e3;
+    format!(
+        "CPU stages ({} threads' time, summed): camera ray generation {:.1} ms, camera rays \
+         {:.1} ms, shade {:.1} ms, shadow rays {:.1} ms, continuation rays {:.1} ms",
+        s.threads,
+        ms(st.generate),
+        ms(st.camera),
+        ms(st.shade),
+        ms(st.shadow),
+        ms(st.secondary)
+    )
+}
+
 /// The GPU's stage times and counters, one line.
 fn gpu_line(g: &gpu::direct::GpuStats) -> String {
     let s = &g.stages;
@@ -111,6 +127,8 @@ pub struct Overrides {
     pub hide_emitters: bool,
     /// Camera rays through pixel centres (a diagnostic; `RenderOptions::pixel_center`).
     pub pixel_center: bool,
+    /// Time the CPU's stages and print them (`RenderOptions::stage_times`).
+    pub stage_times: bool,
     /// MIS parameters: power heuristic β, cutoff c, optimal-MIS ridge λ.
     pub beta: Option<f64>,
     /// Cutoff heuristic c.
@@ -259,6 +277,7 @@ pub fn run(
     let mut opts = RenderOptions::from_settings(&settings)?;
     opts.threads = o.threads;
     opts.pixel_center = o.pixel_center;
+    opts.stage_times = o.stage_times;
     opts.max_memory = max_memory;
     opts.validate()?;
     warn_unused(o, &opts);
@@ -308,6 +327,8 @@ pub fn run(
     eprintln!("{stats}");
     if let Some(g) = &g {
         eprintln!("{}", gpu_line(g));
+    } else if opts.stage_times {
+        eprintln!("{}", cpu_line(&stats));
     }
     let outs: Vec<PathBuf> = if stats.stopped {
         outs.iter()

@@ -532,3 +532,42 @@ fn gpu_backend_refuses_by_name_and_auto_falls_back() {
     assert!(err.contains("--backend auto renders on the CPU"), "{err}");
     assert!(d.join("a.exr").exists());
 }
+
+/// `render --stage-times` prints the CPU's stage times after the render, and the image is
+/// the one a render without timers writes, byte for byte.
+#[test]
+fn render_stage_times() {
+    let dir = out_dir("stage-times");
+    let scene = root().join("scenes/many-lights.toml");
+    let run = |extra: &[&str], out: &Path| {
+        let o = frepray()
+            .arg("render")
+            .arg(&scene)
+            .args(["--spp", "2", "--width", "32", "--height", "24", "-o"])
+            .arg(out)
+            .args(extra)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        String::from_utf8_lossy(&o.stderr).to_string()
+    };
+    let (timed, plain) = (dir.join("timed.exr"), dir.join("plain.exr"));
+    let err = run(&["--stage-times"], &timed);
+    let line = err
+        .lines()
+        .find(|l| l.starts_with("CPU stages"))
+        .unwrap_or_else(|| panic!("no stage line in:\n{err}"));
+    for stage in [
+        "camera ray generation",
+        "camera rays",
+        "shade",
+        "shadow rays",
+    ] {
+        assert!(line.contains(stage), "{line}");
+    }
+    assert!(!run(&[], &plain).contains("CPU stages"));
+    assert_eq!(
+        std::fs::read(&timed).unwrap(),
+        std::fs::read(&plain).unwrap()
+    );
+}
