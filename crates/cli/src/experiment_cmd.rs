@@ -96,17 +96,9 @@ pub struct ExperimentArgs {
     /// Per-light mode: one MIS estimator per light, summed.
     #[arg(long)]
     per_light: bool,
-    /// `light-trained`: cells per axis of the grid over the first hits whose cells
-    /// each learn a light pmf (1: one pmf for the whole scene; at most 64) [default: 8].
-    #[arg(long)]
-    trained_grid: Option<u32>,
-    /// `light-trained`: the uniform share ε of every cell's pmf,
-    /// `P(k) = (1 − ε)·w_k/Σw + ε/L`, in (0, 1] [default: 0.1].
-    #[arg(long)]
-    trained_floor: Option<f64>,
-    /// `light-trained`: camera rays per pixel of the training pass [default: 4].
-    #[arg(long)]
-    trained_spp: Option<u32>,
+    /// How `light-trained` learns its pmfs.
+    #[command(flatten)]
+    trained: crate::TrainedArgs,
     /// Worker threads (0: one per core).
     #[arg(long, default_value_t = 0)]
     threads: usize,
@@ -262,9 +254,9 @@ pub fn run(a: ExperimentArgs) -> Result<(), String> {
         cutoff: a.cutoff,
         max_depth: a.max_depth,
         min_depth: a.min_depth,
-        trained_grid: a.trained_grid,
-        trained_floor: a.trained_floor,
-        trained_spp: a.trained_spp,
+        trained_grid: a.trained.trained_grid,
+        trained_floor: a.trained.trained_floor,
+        trained_spp: a.trained.trained_spp,
         ..Default::default()
     };
     let (data, settings) = scene_render::resolve(&a.scene, &o)?;

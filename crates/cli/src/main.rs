@@ -136,17 +136,9 @@ struct RenderArgs {
     /// is their sum. Changes only the optimal estimators' result.
     #[arg(long)]
     per_light: bool,
-    /// `light-trained`: cells per axis of the grid over the first hits whose cells
-    /// each learn a light pmf (1: one pmf for the whole scene; at most 64) [default: 8].
-    #[arg(long)]
-    trained_grid: Option<u32>,
-    /// `light-trained`: the uniform share ε of every cell's pmf,
-    /// `P(k) = (1 − ε)·w_k/Σw + ε/L`, in (0, 1] [default: 0.1].
-    #[arg(long)]
-    trained_floor: Option<f64>,
-    /// `light-trained`: camera rays per pixel of the training pass [default: 4].
-    #[arg(long)]
-    trained_spp: Option<u32>,
+    /// How `light-trained` learns its pmfs.
+    #[command(flatten)]
+    trained: crate::TrainedArgs,
     /// Extra EXR channels (scenes), e.g. `depth,normal,albedo`.
     #[arg(long)]
     aovs: Option<String>,
@@ -369,9 +361,9 @@ fn render(args: RenderArgs) -> Result<(), String> {
             ridge: args.ridge,
             per_light: args.per_light,
             backend: args.backend,
-            trained_grid: args.trained_grid,
-            trained_floor: args.trained_floor,
-            trained_spp: args.trained_spp,
+            trained_grid: args.trained.trained_grid,
+            trained_floor: args.trained.trained_floor,
+            trained_spp: args.trained.trained_spp,
         };
         let samples = args
             .samples
@@ -536,4 +528,20 @@ fn bench(args: BenchArgs) -> Result<(), String> {
         &args.backend,
         args.plot.as_deref(),
     )
+}
+
+/// The `light-trained` flags, shared by `render`, `bench` and `experiment`.
+#[derive(clap::Args, Clone, Debug)]
+pub struct TrainedArgs {
+    /// `light-trained`: cells per axis of the grid over the first hits whose cells
+    /// each learn a light pmf (1: one pmf for the whole scene; at most 64) [default: 8].
+    #[arg(long)]
+    pub trained_grid: Option<u32>,
+    /// `light-trained`: the uniform share ε of every cell's pmf,
+    /// `P(k) = (1 − ε)·w_k/Σw + ε/L`, in (0, 1] [default: 0.1].
+    #[arg(long)]
+    pub trained_floor: Option<f64>,
+    /// `light-trained`: camera rays per pixel of the training pass [default: 4].
+    #[arg(long)]
+    pub trained_spp: Option<u32>,
 }

@@ -440,7 +440,7 @@ impl Integrator {
         rays: &mut RayCounts,
     ) {
         if rays.timing {
-            self.sample_with(scene, x, y, index, rec, &mut state::Timed(rays));
+            self.sample_with(scene, x, y, index, rec, &mut state::Timed(rays, None));
         } else {
             self.sample_with(scene, x, y, index, rec, rays);
         }

@@ -30,8 +30,6 @@ pub struct RayCounts {
     pub busy_ns: u64,
     /// Whether queries are timed ([`super::RenderOptions::stage_times`]).
     pub timing: bool,
-    /// When the query being timed started.
-    clock: Option<std::time::Instant>,
 }
 
 /// One query of each kind in this many is timed.
@@ -137,18 +135,19 @@ impl RayLog for RayCounts {
     fn end(&mut self, _: RayKind) {}
 }
 
-/// [`RayCounts`] that also times one query of each kind in [`TIMED_EVERY`].
-pub(crate) struct Timed<'a>(pub &'a mut RayCounts);
+/// [`RayCounts`] that also times one query of each kind in [`TIMED_EVERY`]: the counts,
+/// and when the query being timed started.
+pub(crate) struct Timed<'a>(pub &'a mut RayCounts, pub Option<std::time::Instant>);
 
 impl RayLog for Timed<'_> {
     #[inline(always)]
     fn begin(&mut self, kind: RayKind) {
         let n = self.0.count(kind);
-        self.0.clock = (n % TIMED_EVERY == 0).then(std::time::Instant::now);
+        self.1 = (n % TIMED_EVERY == 0).then(std::time::Instant::now);
     }
     #[inline(always)]
     fn end(&mut self, kind: RayKind) {
-        if let Some(t) = self.0.clock.take() {
+        if let Some(t) = self.1.take() {
             self.0.timed_ns[kind as usize] += t.elapsed().as_nanos() as u64;
         }
     }
