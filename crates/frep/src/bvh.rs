@@ -179,26 +179,54 @@ impl Build<'_> {
 struct Slab {
     o: DVec3,
     inv: DVec3,
+    /// Whether o and 1/d are finite, so that no slab parameter is NaN and the near and
+    /// far planes follow from d's signs ([`Slab::enter`]'s fast path).
+    finite: bool,
+    /// Which components of d are negative.
+    neg: [bool; 3],
 }
 
 impl Slab {
     fn new(ray: &Ray) -> Self {
+        let inv = ray.d.recip();
         Self {
             o: ray.o,
-            inv: ray.d.recip(),
+            inv,
+            finite: inv.is_finite() && ray.o.is_finite(),
+            neg: [ray.d.x < 0.0, ray.d.y < 0.0, ray.d.z < 0.0],
         }
     }
-    /// The entry parameter when the segment meets the box (Kay & Kajiya 1986). NaN
-    /// (0·∞, an origin on the slab of a parallel ray) never narrows the range.
-    #[inline]
+    /// The entry parameter when the segment meets the (non-empty) box (Kay & Kajiya
+    /// 1986). NaN (0·∞, an origin on the slab of a parallel ray) never narrows the
+    /// range. Where no parameter can be NaN, the near and far planes are picked by d's
+    /// signs and compared without NaN guards: the same values, at about half the
+    /// instructions of `f64::min`/`max` (the hottest loop of every BVH query).
+    #[inline(always)]
     fn enter(&self, b: &Aabb, t0: f64, t1: f64) -> Option<f64> {
-        let mut lo = t0;
-        let mut hi = t1;
+        let (mut lo, mut hi) = (t0, t1);
+        if !self.finite {
+            for k in 0..3 {
+                let a = (b.lo[k] - self.o[k]) * self.inv[k];
+                let c = (b.hi[k] - self.o[k]) * self.inv[k];
+                lo = lo.max(a.min(c));
+                hi = hi.min(a.max(c));
+            }
+            return (lo <= hi).then_some(lo);
+        }
         for k in 0..3 {
-            let a = (b.lo[k] - self.o[k]) * self.inv[k];
-            let c = (b.hi[k] - self.o[k]) * self.inv[k];
-            lo = lo.max(a.min(c));
-            hi = hi.min(a.max(c));
+            let (n, f) = if self.neg[k] {
+                (b.hi[k], b.lo[k])
+            } else {
+                (b.lo[k], b.hi[k])
+            };
+            let tn = (n - self.o[k]) * self.inv[k];
+            let tf = (f - self.o[k]) * self.inv[k];
+            if tn > lo {
+                lo = tn;
+            }
+            if tf < hi {
+                hi = tf;
+            }
         }
         (lo <= hi).then_some(lo)
     }
@@ -397,7 +425,7 @@ impl BvhRef<'_> {
             return;
         }
         let slab = Slab::new(ray);
-        let neg = [ray.d.x < 0.0, ray.d.y < 0.0, ray.d.z < 0.0];
+        let neg = slab.neg;
         let mut stack = [0u32; STACK];
         let mut top = 0;
         let mut cur = 0usize;

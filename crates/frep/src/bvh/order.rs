@@ -31,10 +31,6 @@ pub struct EntryOrder<'a, 'h> {
     heap: &'h mut Heap,
     len: usize,
     overflowed: bool,
-    /// Whether every component of 1/d is finite (the fast slab test applies).
-    finite: bool,
-    /// Which components of d are negative.
-    neg: [bool; 3],
 }
 
 impl<'a, 'h> EntryOrder<'a, 'h> {
@@ -49,8 +45,6 @@ impl<'a, 'h> EntryOrder<'a, 'h> {
         let mut walk = Self {
             bvh,
             slab,
-            finite: slab.inv.is_finite(),
-            neg: [ray.d.x < 0.0, ray.d.y < 0.0, ray.d.z < 0.0],
             lo,
             hi,
             unbounded: 0,
@@ -132,30 +126,10 @@ impl<'a, 'h> EntryOrder<'a, 'h> {
         }
     }
 
-    /// [`Slab::enter`] over [lo, hi]; where no component of d is zero, without its NaN
-    /// guards (the same values: the near and far planes are known from d's signs).
+    /// [`Slab::enter`] over [lo, hi].
     #[inline(always)]
     fn enter(&self, b: &Aabb) -> Option<f64> {
-        if !self.finite {
-            return self.slab.enter(b, self.lo, self.hi);
-        }
-        let (mut lo, mut hi) = (self.lo, self.hi);
-        for k in 0..3 {
-            let (n, f) = if self.neg[k] {
-                (b.hi[k], b.lo[k])
-            } else {
-                (b.lo[k], b.hi[k])
-            };
-            let tn = (n - self.slab.o[k]) * self.slab.inv[k];
-            let tf = (f - self.slab.o[k]) * self.slab.inv[k];
-            if tn > lo {
-                lo = tn;
-            }
-            if tf < hi {
-                hi = tf;
-            }
-        }
-        (lo <= hi).then_some(lo)
+        self.slab.enter(b, self.lo, self.hi)
     }
 
     #[inline]
