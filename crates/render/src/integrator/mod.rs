@@ -287,6 +287,8 @@ pub(crate) struct Integrator {
     pub dims: Dims,
     /// Index of [`Technique::Bsdf`] in the list.
     pub bsdf_index: Option<usize>,
+    /// Whether a technique needs the lights' by-area pdfs ([`Technique::LightArea`]).
+    pub area_pdfs: bool,
     pub max_depth: u32,
     /// Vertices shallower than this add nothing ([`RenderOptions::min_depth`]).
     pub min_depth: u32,
@@ -348,6 +350,7 @@ impl Integrator {
             kind: o.integrator,
             sampler: Sampler::new(o.seed),
             bsdf_index: techniques.iter().position(|&t| t == Technique::Bsdf),
+            area_pdfs: techniques.contains(&Technique::LightArea),
             techniques,
             counts,
             layout,

@@ -5,7 +5,7 @@ use super::state::RayLog;
 use super::{Integrator, Pixel, RayKind, MAX_TECHNIQUES};
 use crate::bsdf::{Bsdf, BsdfSample};
 use crate::color::Rgb;
-use crate::light::LightHit;
+use crate::light::{Along, LightHit};
 use crate::sampler::SampleStream;
 use crate::scene::{Scene, SurfaceHit};
 use crate::technique::{ShadingPoint, Technique};
@@ -37,6 +37,16 @@ pub(crate) fn trace(scene: &Scene, ray: &Ray) -> Trace {
     hit.map_or(Trace::Escape, Trace::Surface)
 }
 
+/// [`trace`] with the lights along the ray already found ([`Lights::along`]).
+fn trace_along(scene: &Scene, ray: &Ray, along: &Along) -> Trace {
+    let hit = scene.intersect(ray, 0.0, f64::INFINITY);
+    let t_max = hit.map_or(f64::INFINITY, |h| h.t);
+    if let Some(l) = along.nearest.filter(|l| l.t < t_max) {
+        return Trace::Light(l);
+    }
+    hit.map_or(Trace::Escape, Trace::Surface)
+}
+
 /// Emitted radiance arriving along a traced ray of direction `d`: the light's, the
 /// environment's on escape, 0 at an object.
 pub(crate) fn emitted(scene: &Scene, t: &Trace, d: DVec3) -> Rgb {
@@ -58,7 +68,17 @@ pub(crate) fn spawn(p: DVec3, n: DVec3, wi: DVec3) -> Ray {
 /// `Li(ω)` by one shadow ray: the nearest area light along the ray (or the environment)
 /// if no object lies before it. No ray is traced when there is nothing to see.
 pub(crate) fn incident(scene: &Scene, ray: &Ray, rays: &mut impl RayLog) -> Rgb {
-    let (t_max, le) = match scene.lights.intersect(ray, 0.0, f64::INFINITY) {
+    incident_from(
+        scene,
+        ray,
+        scene.lights.intersect(ray, 0.0, f64::INFINITY),
+        rays,
+    )
+}
+
+/// [`incident`] with the nearest area light along the ray already found.
+fn incident_from(scene: &Scene, ray: &Ray, light: Option<LightHit>, rays: &mut impl RayLog) -> Rgb {
+    let (t_max, le) = match light {
         Some(h) => (h.t, h.radiance),
         None => (f64::INFINITY, scene.lights.environment_radiance(ray.d)),
     };
@@ -76,11 +96,11 @@ pub(crate) fn incident(scene: &Scene, ray: &Ray, rays: &mut impl RayLog) -> Rgb 
 }
 
 /// The MIS light a ray reaches if nothing but lights were in the scene: the nearest
-/// area light along it, else the environment (index `area().len()`), else None. It
-/// decides which per-light estimator a draw feeds; an object in front of the light
-/// makes the draw's integrand 0, not its light another.
-pub(crate) fn light_reached(scene: &Scene, ray: &Ray) -> Option<usize> {
-    match scene.lights.intersect(ray, 0.0, f64::INFINITY) {
+/// area light along it (`nearest`), else the environment (index `area().len()`), else
+/// None. It decides which per-light estimator a draw feeds; an object in front of the
+/// light makes the draw's integrand 0, not its light another.
+fn light_reached(scene: &Scene, nearest: Option<LightHit>) -> Option<usize> {
+    match nearest {
         Some(h) => Some(h.light),
         None => scene
             .lights
@@ -145,7 +165,8 @@ impl Integrator {
     }
 
     /// Traces a BSDF draw's ray (nearest hit) when it extends the path, else evaluates
-    /// `Li` by a shadow ray; returns `Li` and records the continuation.
+    /// `Li` by a shadow ray; returns `Li` and records the continuation. `along`: the
+    /// lights along the draw's ray ([`spawn`]), where the caller found them.
     #[allow(clippy::too_many_arguments)]
     fn li_of_bsdf_draw(
         &self,
@@ -154,13 +175,17 @@ impl Integrator {
         s: &BsdfSample,
         extends: bool,
         needed: bool,
+        along: Option<&Along>,
         next: &mut Option<Continuation>,
         rays: &mut impl RayLog,
     ) -> Rgb {
         let ray = spawn(v.p, v.n, s.wi);
         if extends {
             rays.begin(RayKind::Secondary);
-            let t = trace(scene, &ray);
+            let t = match along {
+                Some(a) => trace_along(scene, &ray, a),
+                None => trace(scene, &ray),
+            };
             rays.end(RayKind::Secondary);
             let li = emitted(scene, &t, s.wi);
             *next = Some(Continuation {
@@ -170,7 +195,10 @@ impl Integrator {
             });
             li
         } else if needed {
-            incident(scene, &ray, rays)
+            match along {
+                Some(a) => incident_from(scene, &ray, a.nearest, rays),
+                None => incident(scene, &ray, rays),
+            }
         } else {
             Rgb::ZERO
         }
@@ -203,8 +231,16 @@ impl Integrator {
                     None => self.dims.extra(rng, depth),
                 };
                 if let Some(s) = v.bsdf.sample_f(v.wo, d.uc, d.u) {
-                    let li =
-                        self.li_of_bsdf_draw(scene, v, &s, extend && j == 0, true, &mut next, rays);
+                    let li = self.li_of_bsdf_draw(
+                        scene,
+                        v,
+                        &s,
+                        extend && j == 0,
+                        true,
+                        None,
+                        &mut next,
+                        rays,
+                    );
                     px.add(beta * s.weight * li / f64::from(nb));
                 }
             }
@@ -232,21 +268,39 @@ impl Integrator {
                     // A delta lobe: a failed draw for MIS, its own estimate outside.
                     px.add_failed(self, depth, k);
                     let bs = s.bsdf.expect("specular draws come from the BSDF");
-                    let li = self.li_of_bsdf_draw(scene, v, &bs, carries, true, &mut next, rays);
+                    let li =
+                        self.li_of_bsdf_draw(scene, v, &bs, carries, true, None, &mut next, rays);
                     px.add(beta * bs.weight * li / f64::from(n_k));
                     continue;
                 }
                 let fc = v.bsdf.f(v.wo, s.wi) * s.wi.dot(v.n).abs();
+                // One walk of the light BVH along the draw's ray gives the light its Li
+                // needs and every light's pdf there (taken from the ray's origin).
+                let ray = spawn(v.p, v.n, s.wi);
+                let along = scene.lights.along(&ray, self.area_pdfs);
                 let li = match &s.bsdf {
-                    Some(bs) if carries => {
-                        self.li_of_bsdf_draw(scene, v, bs, true, true, &mut next, rays)
-                    }
-                    _ if fc != Rgb::ZERO => incident(scene, &spawn(v.p, v.n, s.wi), rays),
+                    Some(bs) if carries => self.li_of_bsdf_draw(
+                        scene,
+                        v,
+                        bs,
+                        true,
+                        true,
+                        Some(&along),
+                        &mut next,
+                        rays,
+                    ),
+                    _ if fc != Rgb::ZERO => incident_from(scene, &ray, along.nearest, rays),
                     _ => Rgb::ZERO,
                 };
-                crate::technique::pdfs(&self.techniques, &ctx, s.wi, &mut pdfs[..t_count]);
+                crate::technique::pdfs(
+                    &self.techniques,
+                    &ctx,
+                    s.wi,
+                    along.crossed.as_ref(),
+                    &mut pdfs[..t_count],
+                );
                 let light = if self.record.lights > 1 {
-                    light_reached(scene, &spawn(v.p, v.n, s.wi))
+                    light_reached(scene, along.nearest)
                 } else {
                     None
                 };
@@ -259,7 +313,8 @@ impl Integrator {
             // its continuous outcomes are already covered by the techniques.
             let d = self.dims.extra(rng, depth);
             if let Some(s) = v.bsdf.sample_f(v.wo, d.uc, d.u) {
-                let li = self.li_of_bsdf_draw(scene, v, &s, extend, s.specular, &mut next, rays);
+                let li =
+                    self.li_of_bsdf_draw(scene, v, &s, extend, s.specular, None, &mut next, rays);
                 if s.specular {
                     px.add(beta * s.weight * li);
                 }

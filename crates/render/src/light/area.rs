@@ -270,8 +270,13 @@ impl AreaLight {
     /// [`Self::sample_area`] at direction `wi` (unit).
     pub fn pdf_area(&self, p: DVec3, wi: DVec3) -> f64 {
         let (c, k) = self.crossings(p, wi);
+        self.pdf_area_over(wi, &c[..k])
+    }
+    /// [`Self::pdf_area`] from the crossings of the line from p along `wi`
+    /// ([`Self::crossings`]), already found.
+    pub fn pdf_area_over(&self, wi: DVec3, crossings: &[Option<Crossing>]) -> f64 {
         let a = self.area();
-        c[..k]
+        crossings
             .iter()
             .flatten()
             .map(|c| {
@@ -312,12 +317,22 @@ impl AreaLight {
     }
     /// The solid-angle density of [`Self::sample_li`] at direction `wi` (unit).
     pub fn pdf_li(&self, p: DVec3, wi: DVec3) -> f64 {
+        self.pdf_li_with(p, wi, || self.pdf_area(p, wi))
+    }
+    /// [`Self::pdf_li`] with [`Self::pdf_area`] from the crossings of the line from p
+    /// along `wi`, already found: the same value bit for bit.
+    pub fn pdf_li_over(&self, p: DVec3, wi: DVec3, crossings: &[Option<Crossing>]) -> f64 {
+        self.pdf_li_with(p, wi, || self.pdf_area_over(wi, crossings))
+    }
+    /// [`Self::pdf_li`], taking [`Self::pdf_area`] from `area` where it is needed.
+    #[inline]
+    fn pdf_li_with(&self, p: DVec3, wi: DVec3, area: impl FnOnce() -> f64) -> f64 {
         let Shape::Sphere { center, radius } = self.shape else {
-            return self.pdf_area(p, wi);
+            return area();
         };
         let dc2 = p.distance_squared(center);
         if dc2 <= radius * radius {
-            return self.pdf_area(p, wi);
+            return area();
         }
         let sin2_max = radius * radius / dc2;
         let one_minus_cos_max = sin2_max / (1.0 + safe_sqrt(1.0 - sin2_max));

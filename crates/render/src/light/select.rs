@@ -9,7 +9,7 @@
 //! lights included), as MIS needs (Veach 1997, §9.2). Both are O(number of lights) per
 //! query.
 
-use super::{AreaLight, LightSample, Lights, Shape, TrainedSelection};
+use super::{AreaLight, LightHit, LightSample, Lights, Shape, TrainedSelection};
 use crate::color::luminance;
 use crate::warp::safe_sqrt;
 use frep::Ray;
@@ -324,23 +324,73 @@ impl Lights {
     /// light technique's density at `wi` needs, found once for them all. None past
     /// [`Crossed::CAPACITY`] lights.
     pub fn crossed(&self, p: DVec3, wi: DVec3, area: bool) -> Option<Crossed> {
+        self.walk_crossed(&Ray::new(p, wi), area, false).crossed
+    }
+
+    /// What a ray from a shading point (unit direction) meets among the area lights,
+    /// from one walk of the light BVH: the nearest light (what `Li` along it needs,
+    /// as [`Self::intersect`] over (0, ∞) finds it) and every light crossed with its pdfs
+    /// from the ray's origin (as [`Self::crossed`] finds them), each light's crossings
+    /// computed once for both.
+    pub fn along(&self, ray: &Ray, area: bool) -> Along {
+        self.walk_crossed(ray, area, true)
+    }
+
+    /// [`Self::along`]; without `nearest`, only the lights crossed and their pdfs.
+    #[inline]
+    fn walk_crossed(&self, ray: &Ray, area: bool, nearest: bool) -> Along {
+        let (p, wi) = (ray.o, ray.d);
         let mut c = Crossed::default();
         let mut over = false;
-        self.bvh
-            .for_each_hit(&Ray::new(p, wi), 0.0, f64::INFINITY, |k| {
-                if c.n == Crossed::CAPACITY {
-                    over = true;
-                    return;
+        let mut best: Option<(usize, super::Crossing)> = None;
+        self.bvh.for_each_hit(ray, 0.0, f64::INFINITY, |k| {
+            let l = &self.area[k];
+            let (li, pa) = if nearest || area {
+                let (cr, m) = l.crossings(p, wi);
+                // Crossings come nearest first, all at t > 0; the first light found wins
+                // a tie, as in the nearest-hit walk.
+                if let Some(first) = cr[0].filter(|_| nearest && m > 0) {
+                    if best.is_none_or(|(_, b)| first.t < b.t) {
+                        best = Some((k, first));
+                    }
                 }
-                c.lights[c.n] = k as u32;
-                c.li[c.n] = self.area[k].pdf_li(p, wi);
-                if area {
-                    c.area[c.n] = self.area[k].pdf_area(p, wi);
-                }
-                c.n += 1;
-            });
-        (!over).then_some(c)
+                let pa = if area {
+                    l.pdf_area_over(wi, &cr[..m])
+                } else {
+                    0.0
+                };
+                (l.pdf_li_over(p, wi, &cr[..m]), pa)
+            } else {
+                (l.pdf_li(p, wi), 0.0)
+            };
+            if c.n == Crossed::CAPACITY {
+                over = true;
+                return;
+            }
+            c.lights[c.n] = k as u32;
+            c.li[c.n] = li;
+            c.area[c.n] = pa;
+            c.n += 1;
+        });
+        Along {
+            nearest: best.map(|(light, h)| LightHit {
+                light,
+                t: h.t,
+                n: h.n,
+                radiance: self.area[light].emitted(h.n, -wi),
+            }),
+            crossed: (!over).then_some(c),
+        }
     }
+}
+
+/// The area lights along one ray ([`Lights::along`]).
+#[derive(Clone, Copy, Debug)]
+pub struct Along {
+    /// The nearest light crossed (t > 0).
+    pub nearest: Option<LightHit>,
+    /// Every light crossed, with its pdfs; None past [`Crossed::CAPACITY`] lights.
+    pub crossed: Option<Crossed>,
 }
 
 /// The area lights one direction crosses, with their pdfs ([`Lights::crossed`]).

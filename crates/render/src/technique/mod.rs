@@ -221,10 +221,23 @@ impl Technique {
     }
 }
 
-/// Fills `out[k]` with `techniques[k].pdf(ctx, wi)`. Where two or more techniques mix
-/// over the lights the direction crosses, those lights and their pdfs are found once
-/// ([`Lights::crossed`]) instead of once per technique.
-pub fn pdfs(techniques: &[Technique], ctx: &ShadingPoint, wi: DVec3, out: &mut [f64]) {
+/// Fills `out[k]` with `techniques[k].pdf(ctx, wi)`, the light mixtures' over the lights
+/// `crossed` lists where the caller found them ([`Lights::along`]). Otherwise, where
+/// two or more techniques mix over the lights the direction crosses, those lights and
+/// their pdfs are found once ([`Lights::crossed`]) instead of once per technique.
+pub fn pdfs(
+    techniques: &[Technique],
+    ctx: &ShadingPoint,
+    wi: DVec3,
+    crossed: Option<&Crossed>,
+    out: &mut [f64],
+) {
+    if crossed.is_some() {
+        for (o, t) in out.iter_mut().zip(techniques) {
+            *o = t.pdf_over(ctx, wi, crossed);
+        }
+        return;
+    }
     let mixes = |t: &&Technique| {
         matches!(
             t,

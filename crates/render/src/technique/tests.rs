@@ -270,7 +270,9 @@ fn irradiance_matches_analytic() {
 
 /// [`pdfs`] finds the lights a direction crosses once for every light mixture; each
 /// density is the one [`Technique::pdf`] gives alone, bit for bit, on directions drawn
-/// by every technique (so that many cross lights, some two at once in scene B).
+/// by every technique (so that many cross lights, some two at once in scene B). So are
+/// the densities from [`Lights::along`]'s single walk, whose nearest light is
+/// [`Lights::intersect`]'s.
 #[test]
 fn shared_crossings_give_each_techniques_own_pdf() {
     let all = [
@@ -304,10 +306,18 @@ fn shared_crossings_give_each_techniques_own_pdf() {
             let Some(d) = t.sample(&ctx, r.get(0), r.get_2d(1)) else {
                 continue;
             };
-            pdfs(&all, &ctx, d.wi, &mut out);
+            pdfs(&all, &ctx, d.wi, None, &mut out);
             for (k, t) in all.iter().enumerate() {
                 assert_eq!(out[k].to_bits(), t.pdf(&ctx, d.wi).to_bits(), "{t:?}");
             }
+            // One walk for Li and the pdfs: the same pdfs, and the nearest light the
+            // nearest-hit query finds.
+            let ray = Ray::new(ctx.p, d.wi);
+            let along = lights.along(&ray, true);
+            let mut shared = [0.0; 9];
+            pdfs(&all, &ctx, d.wi, along.crossed.as_ref(), &mut shared);
+            assert_eq!(shared.map(f64::to_bits), out.map(f64::to_bits));
+            assert_eq!(along.nearest, lights.intersect(&ray, 0.0, f64::INFINITY));
             total += 1;
             crossing += usize::from(out[3] > 0.0);
         }
