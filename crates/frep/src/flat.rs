@@ -38,7 +38,7 @@ pub struct Span {
 
 impl Span {
     /// The span of the elements from `first` to the pool's current length.
-    fn since(first: usize, len: usize) -> Self {
+    pub(crate) fn since(first: usize, len: usize) -> Self {
         Self {
             first: first as u32,
             count: (len - first) as u32,

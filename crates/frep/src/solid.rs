@@ -14,6 +14,7 @@ use crate::expr::Expr;
 use crate::flat::{CsgNode, CsgOp, Flat, LeafView, Span, MAX_DEPTH, MAX_PARTS};
 use crate::interval_trace::ExprSurface;
 use crate::perturbed::along::{positive_set, q_local_f64};
+use crate::quadric::Quadric;
 use crate::ray::{Aabb, Ray};
 use crate::shape::Shape;
 use crate::surface::{outward, Surface};
@@ -34,6 +35,56 @@ pub struct Hit {
 #[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub struct Solid {
     flat: Flat,
+    /// The nodes that intersect planes only, derived from `flat` ([`Polytopes`]).
+    #[cfg_attr(feature = "serde", serde(skip))]
+    polytopes: Polytopes,
+}
+
+/// The CSG intersections whose parts are all plain planes (boxes, slabs, wedges):
+/// their crossing is the ends of one interval along the ray, found without the leaves'
+/// generic machinery ([`Solid::polytope_intersection`]).
+#[derive(Clone, Debug, Default, PartialEq)]
+struct Polytopes {
+    /// Per CSG node, its planes in `planes` (count 0: not such a node).
+    spans: Vec<Span>,
+    /// The planes' quadrics (no quadratic terms), in part order.
+    planes: Vec<Quadric>,
+}
+
+impl Polytopes {
+    fn new(flat: &Flat) -> Self {
+        let mut p = Self {
+            spans: vec![Span::default(); flat.nodes.len()],
+            planes: Vec::new(),
+        };
+        for (i, node) in flat.nodes.iter().enumerate() {
+            if node.op != CsgOp::Intersection {
+                continue;
+            }
+            let plane = |&k: &u32| {
+                let part = &flat.nodes[k as usize];
+                if part.op != CsgOp::Leaf {
+                    return None;
+                }
+                match flat.leaf(part.operands.first as usize) {
+                    LeafView::Perturbed(v)
+                        if v.perturbations.is_empty()
+                            && v.base.c[..6].iter().all(|&c| c == 0.0) =>
+                    {
+                        Some(*v.base)
+                    }
+                    _ => None,
+                }
+            };
+            let Some(planes) = flat.parts(i).iter().map(plane).collect::<Option<Vec<_>>>() else {
+                continue;
+            };
+            let first = p.planes.len();
+            p.planes.extend(planes);
+            p.spans[i] = Span::since(first, p.planes.len());
+        }
+        p
+    }
 }
 
 /// How a CSG node combines its parts' inside states.
@@ -66,7 +117,8 @@ impl Solid {
                 "CSG nested {depth} deep; at most {MAX_DEPTH} levels are supported"
             ));
         }
-        Ok(Solid { flat })
+        let polytopes = Polytopes::new(&flat);
+        Ok(Solid { flat, polytopes })
     }
 
     /// Appends the nodes of `shape` moved by `m`; returns the root's index and depth.
@@ -192,6 +244,11 @@ impl Solid {
             }
             CsgOp::Union => Rule::Any,
             CsgOp::Intersection => {
+                let planes = self.polytopes.spans[i];
+                if planes.count > 0 && ray.o.is_finite() && ray.d.is_finite() {
+                    let planes = &self.polytopes.planes[planes.range()];
+                    return polytope_intersection(planes, ray, t_min, t_max);
+                }
                 if let Some(hit) = self.plain_intersection(i, ray, t_min, t_max) {
                     return hit;
                 }
@@ -473,6 +530,56 @@ fn transform_box(b: &Aabb, m: &Affine) -> Aabb {
     out
 }
 
+/// [`Solid::plain_intersection`] for an intersection of planes, bit for bit (the same
+/// expansions along the ray as `q_local_f64`'s plane shortcut, o and d finite; the same
+/// roots as `positive_set`'s linear case; ties kept by the earlier part): each plane
+/// cuts the one interval where every part is positive, and the crossing is its first
+/// end in (t_min, t_max).
+fn polytope_intersection(planes: &[Quadric], ray: &Ray, t_min: f64, t_max: f64) -> Option<Hit> {
+    let [x, y, z] = ray.o.to_array();
+    let [u, v, w] = ray.d.to_array();
+    let (mut lo, mut hi, mut klo, mut khi) = (f64::NEG_INFINITY, f64::INFINITY, 0, 0);
+    for (k, q) in planes.iter().enumerate() {
+        let c = &q.c;
+        let a0 = x * c[6] + y * c[7] + z * c[8] + c[9];
+        let a1 = c[6] * u + c[7] * v + c[8] * w;
+        let (s, e) = if a1 == 0.0 {
+            if a0 > 0.0 {
+                continue;
+            }
+            return None;
+        } else {
+            let r = -a0 / a1;
+            if a1 > 0.0 {
+                (r, f64::INFINITY)
+            } else {
+                (f64::NEG_INFINITY, r)
+            }
+        };
+        if s > lo {
+            (lo, klo) = (s, k);
+        }
+        if e < hi {
+            (hi, khi) = (e, k);
+        }
+        if !(lo < hi) {
+            return None;
+        }
+    }
+    let usable = |t: f64| t > t_min && t < t_max && t.is_finite();
+    let (t, k) = if usable(lo) {
+        (lo, klo)
+    } else if usable(hi) {
+        (hi, khi)
+    } else {
+        return None;
+    };
+    Some(Hit {
+        t,
+        normal: outward(planes[k].gradient(ray.at(t))),
+    })
+}
+
 impl Surface for Solid {
     fn value(&self, p: DVec3) -> f64 {
         self.value_node(self.root(), p)
@@ -503,6 +610,71 @@ mod tests {
     fn ball(c: DVec3, r: f64) -> Shape {
         let (x, y, z) = (Tree::x(), Tree::y(), Tree::z());
         Shape::function(r * r - ((x - c.x).square() + (y - c.y).square() + (z - c.z).square()))
+    }
+
+    /// The planes-only path gives the general closed form's hits bit for bit (t and
+    /// normal): an axis-aligned box, a rotated and scaled one, and a wedge of three
+    /// tilted planes (unbounded), on rays from outside, from inside and along faces.
+    #[test]
+    fn polytopes_equal_the_general_closed_form() {
+        use crate::perturbed::PerturbedQuadric;
+        use rand::{Rng, SeedableRng};
+        let plane =
+            |n: DVec3, d: f64| Shape::Perturbed(PerturbedQuadric::new(Quadric::plane(n, d)));
+        let cube: Vec<Shape> = [DVec3::X, DVec3::Y, DVec3::Z]
+            .into_iter()
+            .flat_map(|n| [plane(n, 0.5), plane(-n, 0.5)])
+            .collect();
+        let moved = Affine::scale(DVec3::new(2.0, 0.5, 1.0))
+            .then(&Affine::rotate(DVec3::new(1.0, 2.0, 3.0).normalize(), 0.7))
+            .then(&Affine::translate(DVec3::new(0.3, -0.2, 0.1)));
+        let wedge = vec![
+            plane(DVec3::new(1.0, 1.0, 0.0).normalize(), 0.4),
+            plane(DVec3::new(-1.0, 0.5, 0.2).normalize(), 0.3),
+            plane(DVec3::new(0.1, -0.3, 1.0).normalize(), 0.6),
+        ];
+        let shapes = [
+            Shape::Intersection(cube.clone()),
+            Shape::Transformed(moved, Box::new(Shape::Intersection(cube))),
+            Shape::Intersection(wedge),
+        ];
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(12);
+        for shape in &shapes {
+            let s = Solid::build(shape).unwrap();
+            let root = s.root();
+            assert!(s.polytopes.spans[root].count >= 3);
+            let mut hits = 0;
+            for k in 0..4000 {
+                let mut o = DVec3::new(
+                    rng.gen_range(-3.0..3.0),
+                    rng.gen_range(-3.0..3.0),
+                    rng.gen_range(-3.0..3.0),
+                );
+                if k % 5 == 0 {
+                    o *= 0.1;
+                }
+                let mut d = DVec3::new(
+                    rng.gen_range(-1.0..1.0),
+                    rng.gen_range(-1.0..1.0),
+                    rng.gen_range(-1.0..1.0),
+                );
+                if k % 7 == 0 {
+                    d.x = 0.0; // parallel to the cube's x faces
+                    o.x = 0.5;
+                }
+                let ray = Ray::new(o, d.normalize());
+                let t_min = if k % 3 == 0 { 0.5 } else { 0.0 };
+                let fast = s.intersect(&ray, t_min, 10.0);
+                let general = s.plain_intersection(root, &ray, t_min, 10.0).unwrap();
+                assert_eq!(
+                    fast.map(|h| (h.t.to_bits(), h.normal.to_array().map(f64::to_bits))),
+                    general.map(|h| (h.t.to_bits(), h.normal.to_array().map(f64::to_bits))),
+                    "ray {k}: {ray:?}"
+                );
+                hits += usize::from(fast.is_some());
+            }
+            assert!(hits > 500, "{hits} hits");
+        }
     }
 
     /// Span logic along the x axis through two overlapping balls, [-2, 0.5] and [-0.5, 2]
