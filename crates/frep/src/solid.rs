@@ -562,7 +562,8 @@ fn polytope_intersection(planes: &[Quadric], ray: &Ray, t_min: f64, t_max: f64) 
         if e < hi {
             (hi, khi) = (e, k);
         }
-        if !(lo < hi) {
+        // Never NaN: a NaN root fails both comparisons above.
+        if lo >= hi {
             return None;
         }
     }
