@@ -259,7 +259,8 @@ impl Integrator {
         for (k, (&tech, &n_k)) in self.techniques.iter().zip(&self.counts).enumerate() {
             for j in 0..n_k {
                 let d = self.dims.technique(rng, depth, k, j);
-                let Some(s) = tech.sample(&ctx, d.uc, d.u) else {
+                // A light technique's draw leaves its pdf to `pdfs` below (NaN here).
+                let Some(s) = tech.draw(&ctx, d.uc, d.u) else {
                     px.add_failed(self, depth, k);
                     continue;
                 };
@@ -273,11 +274,23 @@ impl Integrator {
                     px.add(beta * bs.weight * li / f64::from(n_k));
                     continue;
                 }
-                let fc = v.bsdf.f(v.wo, s.wi) * s.wi.dot(v.n).abs();
                 // One walk of the light BVH along the draw's ray gives the light its Li
                 // needs and every light's pdf there (taken from the ray's origin).
                 let ray = spawn(v.p, v.n, s.wi);
                 let along = scene.lights.along(&ray, self.area_pdfs);
+                crate::technique::pdfs(
+                    &self.techniques,
+                    &ctx,
+                    s.wi,
+                    along.crossed.as_ref(),
+                    &mut pdfs[..t_count],
+                );
+                if s.pdf.is_nan() && !(pdfs[k] > 0.0 && pdfs[k].is_finite()) {
+                    // What `Technique::sample` refuses: no density of its own there.
+                    px.add_failed(self, depth, k);
+                    continue;
+                }
+                let fc = v.bsdf.f(v.wo, s.wi) * s.wi.dot(v.n).abs();
                 let li = match &s.bsdf {
                     Some(bs) if carries => self.li_of_bsdf_draw(
                         scene,
@@ -292,13 +305,6 @@ impl Integrator {
                     _ if fc != Rgb::ZERO => incident_from(scene, &ray, along.nearest, rays),
                     _ => Rgb::ZERO,
                 };
-                crate::technique::pdfs(
-                    &self.techniques,
-                    &ctx,
-                    s.wi,
-                    along.crossed.as_ref(),
-                    &mut pdfs[..t_count],
-                );
                 let light = if self.record.lights > 1 {
                     light_reached(scene, along.nearest)
                 } else {

@@ -191,11 +191,17 @@ impl Lights {
     /// on it, i.e. a point uniform over the total emitting area; pdf =
     /// [`Self::pdf_by_area`].
     pub fn sample_by_area(&self, p: DVec3, uc: f64, u: DVec2) -> Option<LightSample> {
+        let s = self.draw_by_area(p, uc, u)?;
+        let pdf = self.pdf_by_area(p, s.wi);
+        (pdf > 0.0).then_some(LightSample { pdf, ..s })
+    }
+    /// [`Self::sample_by_area`]'s direction without its pdf (NaN), for a caller that
+    /// evaluates every technique's pdf at the direction anyway.
+    pub fn draw_by_area(&self, p: DVec3, uc: f64, u: DVec2) -> Option<LightSample> {
         let (i, _, _) = self.by_area.as_ref()?.sample_discrete(uc);
         let s = self.area[i].sample_area(p, u)?;
-        let pdf = self.pdf_by_area(p, s.wi);
-        (pdf > 0.0).then_some(LightSample {
-            pdf,
+        Some(LightSample {
+            pdf: f64::NAN,
             light: Some(i),
             ..s
         })

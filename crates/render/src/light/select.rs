@@ -248,8 +248,24 @@ impl Lights {
         uc: f64,
         u: DVec2,
     ) -> Option<LightSample> {
+        let mut s = self.draw_selected(sel, p, n, uc, u)?;
+        s.pdf = self.pdf_selected(sel, p, n, s.wi);
+        (s.pdf > 0.0 && s.pdf.is_finite()).then_some(s)
+    }
+
+    /// [`Self::sample_selected`]'s direction without its mixture pdf (NaN), for a
+    /// caller that evaluates every technique's pdf at the direction anyway: the walk
+    /// over the lights it crosses is then done once, not twice.
+    pub fn draw_selected(
+        &self,
+        sel: Selection<'_>,
+        p: DVec3,
+        n: DVec3,
+        uc: f64,
+        u: DVec2,
+    ) -> Option<LightSample> {
         let i = self.select(sel, p, n, uc)?;
-        let mut s = if i == self.area.len() {
+        let s = if i == self.area.len() {
             self.env_sample(u)?
         } else {
             LightSample {
@@ -257,8 +273,7 @@ impl Lights {
                 ..self.area[i].sample_li(p, u)?
             }
         };
-        s.pdf = self.pdf_selected(sel, p, n, s.wi);
-        (s.pdf > 0.0 && s.pdf.is_finite()).then_some(s)
+        Some(LightSample { pdf: f64::NAN, ..s })
     }
 
     /// Σ_k P(k | p, n) · p_k(wi) over the MIS lights: the density of

@@ -155,6 +155,25 @@ impl Technique {
     /// Draws a direction from three uniform numbers (`uc` and `u`); None when the
     /// technique yields nothing here (a failed sample, which MIS must still count).
     pub fn sample(self, ctx: &ShadingPoint, uc: f64, u: DVec2) -> Option<TechniqueSample> {
+        let s = self.draw(ctx, uc, u)?;
+        if !s.pdf.is_nan() {
+            return Some(s);
+        }
+        let pdf = self.pdf(ctx, s.wi);
+        (pdf > 0.0 && pdf.is_finite()).then_some(TechniqueSample {
+            pdf,
+            light: s.light.map(|l| LightSample { pdf, ..l }),
+            ..s
+        })
+    }
+
+    /// [`Self::sample`]'s direction, where the light mixtures (`light-power`,
+    /// `light-uniform`, `light-spatial`, `light-trained`, `light#k`, `light-area`) leave
+    /// the pdf NaN instead of walking the lights the direction crosses: for an
+    /// integrator that evaluates every technique's pdf there anyway ([`pdfs`]), and
+    /// counts a draw whose own pdf is not positive as failed, as [`Self::sample`] would
+    /// have.
+    pub fn draw(self, ctx: &ShadingPoint, uc: f64, u: DVec2) -> Option<TechniqueSample> {
         match self {
             Technique::Bsdf => {
                 let s = ctx.bsdf.sample_f(ctx.wo, uc, u)?;
@@ -172,11 +191,11 @@ impl Technique {
             | Technique::LightTrained
             | Technique::Light(_) => ctx
                 .lights
-                .sample_selected(self.selection(ctx)?, ctx.p, ctx.n, uc, u)
+                .draw_selected(self.selection(ctx)?, ctx.p, ctx.n, uc, u)
                 .map(TechniqueSample::from_light),
             Technique::LightArea => ctx
                 .lights
-                .sample_by_area(ctx.p, uc, u)
+                .draw_by_area(ctx.p, uc, u)
                 .map(TechniqueSample::from_light),
             Technique::Environment => ctx
                 .lights
