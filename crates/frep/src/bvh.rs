@@ -11,6 +11,7 @@
 
 use crate::ray::{slab_f32, Aabb, Ray};
 use glam::DVec3;
+use std::mem::MaybeUninit;
 
 mod order;
 pub use order::{EntryOrder, Heap};
@@ -24,6 +25,34 @@ const BINS: usize = 16;
 const MEDIAN_DEPTH: usize = 40;
 /// Traversal stack size (MEDIAN_DEPTH plus log₂ of any realistic item count).
 const STACK: usize = 80;
+
+/// The pending node indices of a walk, never zeroed: a walk reads only what it pushed
+/// (zeroing 80 words cost more than a small BVH's whole walk).
+struct Stack {
+    v: [MaybeUninit<u32>; STACK],
+    top: usize,
+}
+
+impl Stack {
+    #[inline(always)]
+    fn new() -> Self {
+        Self {
+            v: [const { MaybeUninit::uninit() }; STACK],
+            top: 0,
+        }
+    }
+    #[inline(always)]
+    fn push(&mut self, node: u32) {
+        self.v[self.top] = MaybeUninit::new(node);
+        self.top += 1;
+    }
+    #[inline(always)]
+    fn pop(&mut self) -> Option<usize> {
+        self.top = self.top.checked_sub(1)?;
+        // SAFETY: slots below the old top were written by `push`.
+        Some(unsafe { self.v[self.top].assume_init() } as usize)
+    }
+}
 
 /// One node of the flattened tree.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -426,8 +455,7 @@ impl BvhRef<'_> {
         }
         let slab = Slab::new(ray);
         let neg = slab.neg;
-        let mut stack = [0u32; STACK];
-        let mut top = 0;
+        let mut stack = Stack::new();
         let mut cur = 0usize;
         loop {
             let node = &self.nodes[cur];
@@ -448,17 +476,15 @@ impl BvhRef<'_> {
                     } else {
                         (first, second)
                     };
-                    stack[top] = far as u32;
-                    top += 1;
+                    stack.push(far as u32);
                     cur = near;
                     continue;
                 }
             }
-            if top == 0 {
+            let Some(next) = stack.pop() else {
                 return;
-            }
-            top -= 1;
-            cur = stack[top] as usize;
+            };
+            cur = next;
         }
     }
 
@@ -485,8 +511,7 @@ impl BvhRef<'_> {
             let (lo, hi) = b.outward_f32();
             slab_f32(lo, hi, o, inv, t0, t1).is_some()
         };
-        let mut stack = [0u32; STACK];
-        let mut top = 0;
+        let mut stack = Stack::new();
         let mut cur = 0usize;
         loop {
             let node = &self.nodes[cur];
@@ -499,17 +524,15 @@ impl BvhRef<'_> {
                         }
                     }
                 } else {
-                    stack[top] = node.offset;
-                    top += 1;
+                    stack.push(node.offset);
                     cur += 1;
                     continue;
                 }
             }
-            if top == 0 {
+            let Some(next) = stack.pop() else {
                 return;
-            }
-            top -= 1;
-            cur = stack[top] as usize;
+            };
+            cur = next;
         }
     }
 
@@ -521,8 +544,7 @@ impl BvhRef<'_> {
         if self.nodes.is_empty() {
             return;
         }
-        let mut stack = [0u32; STACK];
-        let mut top = 0;
+        let mut stack = Stack::new();
         let mut cur = 0usize;
         loop {
             let node = &self.nodes[cur];
@@ -535,17 +557,15 @@ impl BvhRef<'_> {
                         }
                     }
                 } else {
-                    stack[top] = node.offset;
-                    top += 1;
+                    stack.push(node.offset);
                     cur += 1;
                     continue;
                 }
             }
-            if top == 0 {
+            let Some(next) = stack.pop() else {
                 return;
-            }
-            top -= 1;
-            cur = stack[top] as usize;
+            };
+            cur = next;
         }
     }
 }
