@@ -34,6 +34,9 @@
 //! - [`light`]: area lights (sphere, rect, disk) in WGSL: crossings, area and cone
 //!   sampling with their pdfs, and light selection, equal bit for bit on lavapipe to
 //!   their CPU f32 twins;
+//! - [`env`]: the environment light (a constant dome or a lat-long map) in WGSL:
+//!   radiance lookup, importance sampling and its pdf, equal bit for bit on lavapipe to
+//!   its CPU f32 twin;
 //! - [`sums`]: per-pixel MIS sums in f64 where the device has `SHADER_F64`, else in
 //!   laundered double-float (GPU.md §3.2, §8), exact on the compensated-sum check (not
 //!   yet used by the integrators, whose sums are the CPU's);
@@ -54,6 +57,7 @@
 mod adapter;
 pub mod bsdf;
 pub mod direct;
+pub mod env;
 mod kernel;
 pub mod layout;
 pub mod light;
