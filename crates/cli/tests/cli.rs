@@ -501,12 +501,12 @@ fn exposure_and_tone_mapping_shape_the_png_only() {
 }
 
 /// `--backend gpu` refuses, before any work and naming the feature, a scene the GPU back
-/// end does not cover (an environment light), exiting non-zero; `--backend auto`
+/// end does not cover (CSG whose parts are shared), exiting non-zero; `--backend auto`
 /// renders it on the CPU and says why; without any adapter both say what to install.
 #[test]
 fn gpu_backend_refuses_by_name_and_auto_falls_back() {
     let d = out_dir("gpu-backend");
-    let scene = root().join("scenes/environment.toml");
+    let scene = root().join("scenes/rooms.toml");
     let small = ["--width", "16", "--height", "12", "--spp", "1", "--quiet"];
     let gpu = frepray()
         .args(["render", scene.to_str().unwrap(), "--backend", "gpu", "-o"])
@@ -517,7 +517,7 @@ fn gpu_backend_refuses_by_name_and_auto_falls_back() {
     let err = String::from_utf8_lossy(&gpu.stderr);
     assert!(!gpu.status.success());
     assert!(
-        err.contains("an environment light") || err.contains("no GPU adapter"),
+        err.contains("parts are shared") || err.contains("no GPU adapter"),
         "{err}"
     );
     assert!(!d.join("g.exr").exists());

@@ -27,12 +27,14 @@
 //! ray), or an expression solid (at most one per scene: its tape is compiled into the
 //! kernels, GPU.md §6.2); diffuse, conductor, dielectric and plastic materials
 //! rough or smooth (delta lobes outside MIS, as the CPU), with constant or point-space checker colours; sphere,
-//! rectangle and disk lights, point and spot lights; the techniques `bsdf`, `light`, `light-uniform`,
-//! `light-area` and `light#k`; every MIS method; `path` up to depth
+//! rectangle and disk lights, point and spot lights, a constant or mapped environment
+//! ([`crate::env`]); the techniques `bsdf`, `light`, `light-uniform`, `light-area`,
+//! `light#k` and `environment`; every MIS method; `path` up to depth
 //! [`MAX_GPU_DEPTH`]. Anything else is a
 //! [`GpuError::Unsupported`] naming it, before any work.
 
 use crate::bsdf::{GpuBsdf, BSDF_STRUCT_WGSL, BSDF_WGSL, COAT_TABLE_LEN};
+use crate::env::{GpuEnv, ENV_WGSL};
 use crate::layout::{outward, GpuObject, GpuPerturbation, GpuQuadric, LAYOUT_WGSL};
 use crate::layout::{GpuBvhNode, GpuItemBox};
 use crate::light::{self, GpuAreaLight, GPU_AREA_LIGHT_WGSL, LIGHT_WGSL};
@@ -141,11 +143,12 @@ struct Frame {
     forward: [f32; 4],
     tech: [[u32; 4]; 2],
     count: [[u32; 4]; 2],
+    env: GpuEnv,
 }
 
 const _: () = assert!(size_of::<GpuShape>() == 48);
 const _: () = assert!(size_of::<GpuMaterial>() == 112);
-const _: () = assert!(size_of::<Frame>() == 224);
+const _: () = assert!(size_of::<Frame>() == 320);
 
 /// The scene and options as the kernels read them.
 #[derive(Clone, Debug, Default)]
@@ -479,9 +482,6 @@ fn tape_normal(p: vec3<f32>) -> vec3<f32> {
     }
 
     fn pack_lights(&mut self, data: &SceneData) -> Result<(), GpuError> {
-        if data.environment.is_some() {
-            return Err(unsupported("an environment light"));
-        }
         for l in &data.lights.area {
             let (rad, area) = (f3(l.emission), l.area as f32);
             self.lights.push(match l.kind {
@@ -522,10 +522,14 @@ fn tape_normal(p: vec3<f32>) -> vec3<f32> {
         if let Some(d) = &data.lights.by_area {
             self.tables.extend(light::table(d));
         }
+        // The environment's map and tables after the selection tables (`sel_buf`).
+        f.env = GpuEnv::pack(data, &mut self.tables);
         if self.tables.is_empty() {
             self.tables.push(0.0);
         }
         f.n_lights = data.lights.area.len() as u32;
+        // The MIS lights: the area lights, then the environment.
+        let n_mis = data.lights.area.len() + usize::from(data.environment.is_some());
         f.n_shapes = self.shapes.len() as u32;
         let c = &data.camera;
         let (w, h) = (c.width, c.height);
@@ -573,7 +577,8 @@ fn tape_normal(p: vec3<f32>) -> vec3<f32> {
                 Technique::LightPower => 1,
                 Technique::LightUniform => 2,
                 Technique::LightArea => 3,
-                Technique::Light(l) if l < self.lights.len() => 4 | (l as u32) << 8,
+                Technique::Light(l) if l < n_mis => 4 | (l as u32) << 8,
+                Technique::Environment => 5,
                 t => return Err(unsupported(format!("technique {}", t.name()))),
             };
             f.tech[k / 4][k % 4] = code;
@@ -662,6 +667,7 @@ fn pipelines(gpu: &Gpu, tape_wgsl: &str) -> Result<Pipelines, GpuError> {
         BSDF_WGSL,
         GPU_AREA_LIGHT_WGSL,
         LIGHT_WGSL,
+        ENV_WGSL,
         tape_wgsl,
         DIRECT_WGSL,
     ]

@@ -20,7 +20,7 @@
 // and kernel goes to stats[mode].
 //
 // Needs FLOAT_WGSL, LAYOUT_WGSL, PERTURBED_WGSL, QUADRIC_WGSL, PHILOX_WGSL,
-// BSDF_STRUCT_WGSL, BSDF_WGSL, GPU_AREA_LIGHT_WGSL, LIGHT_WGSL before it.
+// BSDF_STRUCT_WGSL, BSDF_WGSL, GPU_AREA_LIGHT_WGSL, LIGHT_WGSL, ENV_WGSL before it.
 
 struct Frame {
     width: u32, height: u32, pixels: u32, slots: u32,
@@ -35,6 +35,7 @@ struct Frame {
     forward: vec4<f32>,
     tech: array<vec4<u32>, 2>,
     count: array<vec4<u32>, 2>,
+    env: GpuEnv,
 }
 
 // One scene object: a single leaf (kind 0) or an intersection of plain-quadric leaves
@@ -101,6 +102,7 @@ const T_POWER: u32 = 1u;
 const T_UNIFORM: u32 = 2u;
 const T_AREA: u32 = 3u;
 const T_ONE: u32 = 4u;
+const T_ENV: u32 = 5u;
 
 fn bsdf_table(i: u32) -> f32 { return sel_buf[i]; }
 
@@ -411,6 +413,18 @@ fn nearest_light(o: vec3<f32>, d: vec3<f32>, t_max: f32) -> LightHit {
     return h;
 }
 
+// The MIS lights: the area lights, then the environment (render::light::Lights::count).
+fn n_mis() -> u32 {
+    return frame.n_lights + select(0u, 1u, frame.env.kind != ENV_NONE);
+}
+
+// Radiance arriving along d from the nearest light `lh` found, or from the environment
+// where the ray escapes (render::light::Lights::radiance_along over (0, ∞)).
+fn incoming(lh: LightHit, d: vec3<f32>) -> vec3<f32> {
+    if (lh.t < inf()) { return lh.le; }
+    return env_radiance(frame.env, d);
+}
+
 fn pmf_at(off: u32, i: u32) -> f32 {
     let n = bitcast<u32>(sel_buf[off]);
     return sel_buf[off + 1u + (n + 1u) + i];
@@ -420,7 +434,11 @@ fn pmf_at(off: u32, i: u32) -> f32 {
 // BSDF's being `bsdf_pdf` (render::technique::Technique::pdf).
 fn tech_pdf(code: u32, one: u32, p: vec3<f32>, wi: vec3<f32>, bsdf_pdf: f32) -> f32 {
     if (code == T_BSDF) { return bsdf_pdf; }
-    if (code == T_ONE) { return light_pdf_li(lights[one], p, wi); }
+    if (code == T_ENV) { return env_pdf(frame.env, wi); }
+    if (code == T_ONE) {
+        if (one == frame.n_lights) { return env_pdf(frame.env, wi); }
+        return light_pdf_li(lights[one], p, wi);
+    }
     var sum = 0.0;
     for (var i = 0u; i < frame.n_lights; i++) {
         loops++;
@@ -428,10 +446,16 @@ fn tech_pdf(code: u32, one: u32, p: vec3<f32>, wi: vec3<f32>, bsdf_pdf: f32) -> 
             let pm = pmf_at(frame.area_off, i);
             if (pm > 0.0) { sum += pm * light_pdf_area(lights[i], p, wi); }
         } else {
-            var pm = 1.0 / f32(frame.n_lights);
+            var pm = 1.0 / f32(n_mis());
             if (code == T_POWER) { pm = pmf_at(frame.power_off, i); }
             if (pm > 0.0) { sum += pm * light_pdf_li(lights[i], p, wi); }
         }
+    }
+    // The environment last, as Lights::pdf_selected_over (not a by-area light).
+    if (code != T_AREA && frame.env.kind != ENV_NONE) {
+        var pm = 1.0 / f32(n_mis());
+        if (code == T_POWER) { pm = pmf_at(frame.power_off, frame.n_lights); }
+        if (pm > 0.0) { sum += pm * env_pdf(frame.env, wi); }
     }
     return sum;
 }
@@ -494,7 +518,11 @@ fn trace_camera(slot: u32) {
         return;
     }
     if (h.status == 0u) {
+        // Escaped: the environment seen directly, outside MIS.
+        var le = env_radiance(frame.env, d);
+        if ((frame.flags & FLAG_HIDE) != 0u) { le = vec3<f32>(0.0); }
         hits[at] = vec4<f32>(0.0, 0.0, 0.0, S_NONE);
+        hits[at + 3u] = vec4<f32>(le, 0.0);
         return;
     }
     write_vertex(at, o + h.t * d, h.leaf, -d, vec3<f32>(1.0));
@@ -522,7 +550,7 @@ fn trace_continuation(slot: u32) {
     let r = draw_at(slot, frame.carry);
     let w2 = draws[r + 2u];
     var g = vec3<f32>(0.0);
-    if (lh.t < inf()) { g = w2.xyz * lh.le; }
+    if (lh.t < inf() || h.status == 0u) { g = w2.xyz * incoming(lh, d); }
     draws[r + 2u] = vec4<f32>(g, w2.w);
     if (lh.t < inf() || h.status == 0u || cd.w != 1.0) {
         hits[at].w = S_NONE;
@@ -663,22 +691,33 @@ fn shade(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
         spec = ok && (s.flags & 2u) != 0u;
         wi = from_local(f, s.wi);
         weight = s.weight;
-    } else if (frame.n_lights == 0u) {
-        ok = false;
+    } else if (code == T_ENV) {
+        let es = env_sample(frame.env, u);
+        ok = es.ok != 0u;
+        wi = es.wi;
     } else if (code == T_AREA) {
-        let sel = light_select(frame.area_off, true, frame.n_lights, uc);
-        let ls = light_sample_area(lights[bitcast<u32>(sel.x)], p, u);
-        ok = ls.ok != 0u;
-        wi = ls.wi;
-    } else {
+        if (frame.n_lights > 0u) {
+            let sel = light_select(frame.area_off, true, frame.n_lights, uc);
+            let ls = light_sample_area(lights[bitcast<u32>(sel.x)], p, u);
+            ok = ls.ok != 0u;
+            wi = ls.wi;
+        }
+    } else if (n_mis() > 0u) {
         var li = tech_light(k);
         if (code != T_ONE) {
-            let sel = light_select(frame.power_off, code == T_POWER, frame.n_lights, uc);
+            let sel = light_select(frame.power_off, code == T_POWER, n_mis(), uc);
             li = bitcast<u32>(sel.x);
         }
-        let ls = light_sample_li(lights[li], p, u);
-        ok = ls.ok != 0u;
-        wi = ls.wi;
+        if (li == frame.n_lights) {
+            // The environment, the last MIS light.
+            let es = env_sample(frame.env, u);
+            ok = es.ok != 0u;
+            wi = es.wi;
+        } else {
+            let ls = light_sample_li(lights[li], p, u);
+            ok = ls.ok != 0u;
+            wi = ls.wi;
+        }
     }
     let o = spawn(p, n, wi);
     if (carries) {
@@ -707,8 +746,9 @@ fn shade(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
             write_carried(at, o, wi, gw, F_OUTSIDE + vflags);
         } else {
             let lh = nearest_light(o, wi, inf());
-            let traced = any(lh.le != vec3<f32>(0.0));
-            write_shadow(i, at, o, wi, lh.t, gw * lh.le, F_OUTSIDE + vflags, traced);
+            let le = incoming(lh, wi);
+            let traced = any(le != vec3<f32>(0.0));
+            write_shadow(i, at, o, wi, lh.t, gw * le, F_OUTSIDE + vflags, traced);
         }
         atomicMax(&stats[2], loops);
         return;
@@ -751,8 +791,9 @@ fn shade(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
     } else {
         // render::integrator::vertex::incident.
         let lh = nearest_light(o, wi, inf());
-        let traced = any(fc != vec3<f32>(0.0)) && any(lh.le != vec3<f32>(0.0));
-        write_shadow(i, at, o, wi, lh.t, beta * fc * lh.le, vflags, traced);
+        let le = incoming(lh, wi);
+        let traced = any(fc != vec3<f32>(0.0)) && any(le != vec3<f32>(0.0));
+        write_shadow(i, at, o, wi, lh.t, beta * fc * le, vflags, traced);
     }
     atomicMax(&stats[2], loops);
 }
