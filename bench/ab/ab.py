@@ -20,11 +20,18 @@ def run(binary, scene, extra):
     out = subprocess.run([binary, "bench", scene, *extra], capture_output=True, text=True)
     if out.returncode != 0:
         sys.exit(f"{binary} bench {scene} failed:\n{out.stderr}")
-    rows = {}
+    # The first table's columns by name: `bench` has grown columns before (backend).
+    rows, header = {}, None
     for line in out.stdout.splitlines():
         cells = [c.strip() for c in line.strip().strip("|").split("|")]
-        if len(cells) == 11 and cells[1] in ("direct", "path"):
-            rows[cells[1]] = (float(cells[6]), float(cells[7]))
+        if header is None and "integrator" in cells and "MSamples/s" in cells:
+            header = {name: k for k, name in enumerate(cells)}
+            continue
+        if header and len(cells) == len(header) and cells[header["integrator"]] in ("direct", "path"):
+            rows[cells[header["integrator"]]] = (
+                float(cells[header["MSamples/s"]]),
+                float(cells[header["MRays/s"]]),
+            )
     return rows
 
 
