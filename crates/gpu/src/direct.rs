@@ -29,7 +29,7 @@
 //! rough or smooth (delta lobes outside MIS, as the CPU), with constant or point-space checker colours; sphere,
 //! rectangle and disk lights, point and spot lights, a constant or mapped environment
 //! ([`crate::env`]); the techniques `bsdf`, `light`, `light-uniform`, `light-area`,
-//! `light#k` and `environment`; every MIS method; `path` up to depth
+//! `light-spatial`, `light#k` and `environment`; every MIS method; `path` up to depth
 //! [`MAX_GPU_DEPTH`]. Anything else is a
 //! [`GpuError::Unsupported`] naming it, before any work.
 
@@ -136,7 +136,7 @@ struct Frame {
     carry: u32,
     n_delta: u32,
     per_slot: u32,
-    pad: u32,
+    spatial_off: u32,
     eye: [f32; 4],
     right: [f32; 4],
     up: [f32; 4],
@@ -522,7 +522,14 @@ fn tape_normal(p: vec3<f32>) -> vec3<f32> {
         if let Some(d) = &data.lights.by_area {
             self.tables.extend(light::table(d));
         }
-        // The environment's map and tables after the selection tables (`sel_buf`).
+        // The spatial selection's importance records, then the environment's map and
+        // tables after the selection tables (`sel_buf`).
+        f.spatial_off = self.tables.len() as u32;
+        for l in &data.lights.area {
+            if let Some(a) = render::light::AreaLight::from_data(l) {
+                self.tables.extend(light::importance_record(&a));
+            }
+        }
         f.env = GpuEnv::pack(data, &mut self.tables);
         if self.tables.is_empty() {
             self.tables.push(0.0);
@@ -579,6 +586,7 @@ fn tape_normal(p: vec3<f32>) -> vec3<f32> {
                 Technique::LightArea => 3,
                 Technique::Light(l) if l < n_mis => 4 | (l as u32) << 8,
                 Technique::Environment => 5,
+                Technique::LightSpatial => 6,
                 t => return Err(unsupported(format!("technique {}", t.name()))),
             };
             f.tech[k / 4][k % 4] = code;

@@ -3,8 +3,9 @@
 //! operation for operation as the kernel, which it equals bit for bit on lavapipe
 //! (GPU.md §3.5). The f64 originals are `render::light::AreaLight` (pbrt-v4 §6.2, §6.5,
 //! §12.2): uniform area sampling with its solid-angle pdf, the sphere's cone sampling
-//! (pbrt-v4 §6.2.4), crossings, and light selection by power, uniformly or by area from a
-//! CDF table (pbrt-v4 §A.5.1, `render::distribution`).
+//! (pbrt-v4 §6.2.4), crossings, light selection by power, uniformly or by area from a
+//! CDF table (pbrt-v4 §A.5.1, `render::distribution`), and the spatial selection's
+//! importance bound ([`importance`], pbrt-v4 §12.6.3, `render::light::importance`).
 //!
 //! Differences from the f64 code, each needed for f32:
 //! - sin and cos are polynomials ([`sincos_small`]) written identically in WGSL and
@@ -393,6 +394,98 @@ pub fn pdf_li(l: &GpuAreaLight, p: V3, wi: V3) -> f32 {
     let x = cross(pc, wi);
     if along > 0.0 && dot(x, x) <= r * r + RIM * r * dc2.sqrt() {
         1.0 / (TWO_PI * omc)
+    } else {
+        0.0
+    }
+}
+
+/// f32 words of one light's [`importance_record`].
+pub const IMPORTANCE_WORDS: usize = 12;
+
+/// What the spatial selection's importance reads of an area light, in the f32 buffer:
+/// its bounding sphere's centre and radius, its normal cone's axis and cos θo, the
+/// luminance of its power and whether it is two-sided (1 or 0), then two words of padding
+/// (`render::light::AreaLight::importance_bounds`, rounded from f64).
+pub fn importance_record(l: &render::light::AreaLight) -> [f32; IMPORTANCE_WORDS] {
+    let b = l.importance_bounds();
+    let phi = render::color::luminance(l.power());
+    let c = b.center.as_vec3();
+    let a = b.axis.as_vec3();
+    [
+        c.x,
+        c.y,
+        c.z,
+        b.radius as f32,
+        a.x,
+        a.y,
+        a.z,
+        b.cos_o as f32,
+        phi as f32,
+        f32::from(u8::from(b.two_sided)),
+        0.0,
+        0.0,
+    ]
+}
+
+/// cos(max(0, θa − θb)) (pbrt-v4 `CosSubClamped`).
+fn cos_sub_clamped(sin_a: f32, cos_a: f32, sin_b: f32, cos_b: f32) -> f32 {
+    if cos_a > cos_b {
+        1.0
+    } else {
+        cos_a * cos_b + sin_a * sin_b
+    }
+}
+
+/// sin(max(0, θa − θb)) (pbrt-v4 `SinSubClamped`).
+fn sin_sub_clamped(sin_a: f32, cos_a: f32, sin_b: f32, cos_b: f32) -> f32 {
+    if cos_a > cos_b {
+        0.0
+    } else {
+        sin_a * cos_b - cos_a * sin_b
+    }
+}
+
+/// The spatial selection's bound on a light's contribution at p with normal n
+/// (`render::light::importance`, pbrt-v4 §12.6.3) from its [`importance_record`] at
+/// `buf[at..]` (the kernel's `light_importance`).
+pub fn importance(buf: &[f32], at: usize, p: V3, n: V3) -> f32 {
+    let r = &buf[at..at + IMPORTANCE_WORDS];
+    let (center, radius) = ([r[0], r[1], r[2]], r[3]);
+    let (axis, cos_o) = ([r[4], r[5], r[6]], r[7]);
+    let (phi, two_sided) = (r[8], r[9] != 0.0);
+    let v = sub(p, center);
+    let dist2 = dot(v, v);
+    let r2 = radius * radius;
+    let d2 = dist2.max(r2);
+    let w = if dist2 > 0.0 {
+        scale(v, 1.0 / dist2.sqrt())
+    } else {
+        axis
+    };
+    let mut cos_w = dot(axis, w);
+    if two_sided {
+        cos_w = cos_w.abs();
+    }
+    let sin_w = safe_sqrt(1.0 - cos_w * cos_w);
+    let cos_b = if dist2 <= r2 {
+        -1.0
+    } else {
+        safe_sqrt(1.0 - r2 / dist2)
+    };
+    let sin_b = safe_sqrt(1.0 - cos_b * cos_b);
+    let sin_o = safe_sqrt(1.0 - cos_o * cos_o);
+    let cos_x = cos_sub_clamped(sin_w, cos_w, sin_o, cos_o);
+    let sin_x = sin_sub_clamped(sin_w, cos_w, sin_o, cos_o);
+    let cos_p = cos_sub_clamped(sin_x, cos_x, sin_b, cos_b);
+    if cos_p <= 0.0 {
+        return 0.0;
+    }
+    let cos_i = dot(n, w).abs();
+    let sin_i = safe_sqrt(1.0 - cos_i * cos_i);
+    let cos_ip = cos_sub_clamped(sin_i, cos_i, sin_b, cos_b);
+    let v = phi * cos_p * cos_ip / d2;
+    if v > 0.0 {
+        v
     } else {
         0.0
     }

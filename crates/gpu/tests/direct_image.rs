@@ -429,9 +429,11 @@ fn path_images_agree() {
 /// (`light` selects it by power as the last MIS light), the sky map turned about z with
 /// `light-uniform` and the `environment` technique, the map alone through `light#3` (the
 /// environment's MIS index), and `path` (depth 3) under the map with the power
-/// heuristic. Same seed, the same z-tests as the other scenes.
+/// heuristic; and the spatial light selection (`light-spatial`, ∝ each light's
+/// importance at the shading point) without and with the map. Same seed, the same
+/// z-tests as the other scenes.
 #[test]
-fn environment_images_agree() {
+fn environment_and_spatial_images_agree() {
     let Some(g) = device() else { return };
     let sky = concat!(env!("CARGO_MANIFEST_DIR"), "/../../scenes/sky.exr");
     let map = format!("[environment]\nmap = \"{sky}\"\nscale = 0.5\nrotate = {{ axis = [0, 0, 1], degrees = 40 }}\n");
@@ -460,6 +462,19 @@ fn environment_images_agree() {
             false,
         ),
         ("map, path", format!("{SCENE}\n{map}"), true),
+        (
+            "spatial selection, bsdf + light-spatial + light-area",
+            techniques(
+                "{ technique = \"bsdf\", samples = 1 }, { technique = \"light-spatial\", samples = 1 }, { technique = \"light-area\", samples = 1 }",
+            ),
+            false,
+        ),
+        (
+            "map, bsdf + light-spatial (the environment at ½)",
+            techniques("{ technique = \"bsdf\", samples = 1 }, { technique = \"light-spatial\", samples = 1 }")
+                + "\n" + &map,
+            false,
+        ),
     ];
     for (label, text, path) in cases {
         let mut s = load(&text);
@@ -504,8 +519,8 @@ fn unsupported_scenes_are_refused_by_name() {
         "union(sphere([1.5, 0, 0.6], 0.6), perturb(sphere([1.5, 0, 1.2], 0.3), 0.2 * sphere([1.5, 0, 1.5], 0.1)^3))",
     ));
     assert!(e.contains("CSG") && e.contains("--backend cpu"), "{e}");
-    let e = err(&SCENE.replace("\"light-area\"", "\"light-spatial\""));
-    assert!(e.contains("light-spatial"), "{e}");
+    let e = err(&SCENE.replace("\"light-area\"", "\"light-trained\""));
+    assert!(e.contains("light-trained"), "{e}");
     let e = err(&SCENE.replace("integrator = \"direct\"", "integrator = \"depth\""));
     assert!(e.contains("depth"), "{e}");
     let e = err(&SCENE.replace(

@@ -6,7 +6,7 @@ mod common;
 use common::Rng;
 
 use glam::{DVec2, DVec3};
-use gpu::light::{self, GpuAreaLight, Select, GPU_AREA_LIGHT_WGSL, LIGHT_WGSL};
+use gpu::light::{self, GpuAreaLight, Select, GPU_AREA_LIGHT_WGSL, IMPORTANCE_WORDS, LIGHT_WGSL};
 use gpu::{GpuOptions, Kernel};
 use render::light::{AreaLight, Shape};
 use render::Rgb;
@@ -15,8 +15,9 @@ use render::Rgb;
 const N: usize = 4096;
 /// f32 words per case: p, u, wi2, light index, uc.
 const IN: usize = 10;
-/// f32 words out per case.
-const OUT: usize = 26;
+/// f32 words out per case (the last: the spatial selection's importance at p, normal
+/// wi2).
+const OUT: usize = 27;
 
 impl Rng {
     fn vec(&mut self, s: f64) -> DVec3 {
@@ -180,6 +181,13 @@ fn twin(ls: &[GpuAreaLight], sel: &[f32], area_off: u32, c: &[f32; IN]) -> [f32;
         o[19 + 2 * k] = f32::from_bits(i);
         o[20 + 2 * k] = pmf;
     }
+    let li = c[8].to_bits() as usize;
+    o[26] = light::importance(
+        sel,
+        importance_off(ls.len()) + IMPORTANCE_WORDS * li,
+        p,
+        wi2,
+    );
     o
 }
 
@@ -200,7 +208,7 @@ fn lights_case(@builtin(global_invocation_id) id: vec3<u32>) {
     let i = id.x;
     if (10u * i >= arrayLength(&cases)) { return; }
     let c = 10u * i;
-    let o = 26u * i;
+    let o = 27u * i;
     let l = lights[bitcast<u32>(cases[c + 8u])];
     let p = vec3<f32>(cases[c], cases[c + 1u], cases[c + 2u]);
     let u = vec2<f32>(cases[c + 3u], cases[c + 4u]);
@@ -220,8 +228,16 @@ fn lights_case(@builtin(global_invocation_id) id: vec3<u32>) {
         out[o + 19u + 2u * k] = s.x;
         out[o + 20u + 2u * k] = s.y;
     }
+    // The importance records after both tables (n, cdf[n + 1], pmf[n] each).
+    let imp = 2u * (2u * n + 2u) + 12u * bitcast<u32>(cases[c + 8u]);
+    out[o + 26u] = light_importance(imp, p, wi2);
 }
 ";
+
+/// Where the importance records start: after the power and area tables.
+fn importance_off(n: usize) -> usize {
+    2 * (2 * n + 2)
+}
 
 fn tables(ls: &[(AreaLight, GpuAreaLight)]) -> (Vec<f32>, u32) {
     let power: Vec<f64> = ls
@@ -232,6 +248,10 @@ fn tables(ls: &[(AreaLight, GpuAreaLight)]) -> (Vec<f32>, u32) {
     let mut sel = light::table(&scene::Distribution1D::new(&power));
     let off = sel.len() as u32;
     sel.extend(light::table(&scene::Distribution1D::new(&area)));
+    assert_eq!(sel.len(), importance_off(ls.len()));
+    for (l, _) in ls {
+        sel.extend(light::importance_record(l));
+    }
     (sel, off)
 }
 
@@ -316,6 +336,7 @@ fn twin_matches_the_f64_lights() {
     let mut hit_disagree = [0usize; 3];
     let mut unresolved = 0;
     let mut sel_near = 0;
+    let mut worst_imp = 0f64;
     for (i, c) in cs.iter().enumerate() {
         let li = c[8].to_bits() as usize;
         let (l64, l32) = (&ls[li].0, &gl[li]);
@@ -401,6 +422,19 @@ fn twin_matches_the_f64_lights() {
             }
             assert!(rel(pmf32.into(), pmf64) < 1e-6, "case {i}: pmf");
         }
+        // The spatial selection's importance: f32 against f64 within 10⁻⁴ of the
+        // light's largest possible value Φ / r² (its terms are cosines and sines of
+        // differences, bounded by 1; the cancellations are absolute, not relative).
+        let imp32 = light::importance(
+            &sel,
+            importance_off(gl.len()) + IMPORTANCE_WORDS * li,
+            a32(p),
+            a32(wi2),
+        );
+        let imp64 = render::light::importance(l64, p, wi2);
+        let b = l64.importance_bounds();
+        let top = render::color::luminance(l64.power()) / (b.radius * b.radius);
+        worst_imp = worst_imp.max((f64::from(imp32) - imp64).abs() / top);
         let (iu, pu) = light::select(&sel, Select::Uniform, gl.len() as u32, c[9]);
         assert_eq!(
             iu as usize,
@@ -424,6 +458,8 @@ fn twin_matches_the_f64_lights() {
     assert!(hit_disagree.iter().all(|&k| k <= 3), "{hit_disagree:?}");
     assert!(unresolved <= cs.len() / 100, "{unresolved} unresolved");
     assert_eq!(sel_near, 0);
+    eprintln!("importance: max |Δ| / (Φ / r²) {worst_imp:.2e}");
+    assert!(worst_imp < 1e-4, "importance {worst_imp:e}");
 }
 
 /// Every sample's pdf is the pdf function at the sampled direction: sample_li's pdf is

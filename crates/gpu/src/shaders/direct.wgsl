@@ -28,7 +28,7 @@ struct Frame {
     n_tech: u32, n_draws: u32, n_lights: u32, power_off: u32,
     area_off: u32, flags: u32, mode: u32, zero: u32,
     depth: u32, max_depth: u32, rr_depth: u32, stride: u32,
-    carry: u32, n_delta: u32, per_slot: u32, pad2: u32,
+    carry: u32, n_delta: u32, per_slot: u32, spatial_off: u32,
     eye: vec4<f32>,
     right: vec4<f32>,
     up: vec4<f32>,
@@ -103,6 +103,7 @@ const T_UNIFORM: u32 = 2u;
 const T_AREA: u32 = 3u;
 const T_ONE: u32 = 4u;
 const T_ENV: u32 = 5u;
+const T_SPATIAL: u32 = 6u;
 
 fn bsdf_table(i: u32) -> f32 { return sel_buf[i]; }
 
@@ -425,6 +426,50 @@ fn incoming(lh: LightHit, d: vec3<f32>) -> vec3<f32> {
     return env_radiance(frame.env, d);
 }
 
+// The spatial selection (render::light::Selection::Spatial): the environment with
+// probability ½ (1 without area lights), the area lights with the rest ∝ their
+// importance at (p, n).
+fn spatial_env() -> f32 {
+    if (frame.env.kind == ENV_NONE) { return 0.0; }
+    if (frame.n_lights == 0u) { return 1.0; }
+    return 0.5;
+}
+
+fn importance_of(i: u32, p: vec3<f32>, n: vec3<f32>) -> f32 {
+    return light_importance(frame.spatial_off + 12u * i, p, n);
+}
+
+fn importance_total(p: vec3<f32>, n: vec3<f32>) -> f32 {
+    var total = 0.0;
+    for (var i = 0u; i < frame.n_lights; i++) {
+        loops++;
+        total += importance_of(i, p, n);
+    }
+    return total;
+}
+
+// The MIS light the spatial selection picks with uc, as bits (n_lights: the
+// environment), or 0xffffffff when none has probability (Lights::select).
+fn spatial_select(p: vec3<f32>, n: vec3<f32>, uc: f32) -> u32 {
+    let pe = spatial_env();
+    if (uc < pe) { return frame.n_lights; }
+    let total = importance_total(p, n);
+    if (!(total > 0.0)) { return 0xffffffffu; }
+    let aim = (uc - pe) / (1.0 - pe) * total;
+    var acc = 0.0;
+    var last = 0xffffffffu;
+    for (var i = 0u; i < frame.n_lights; i++) {
+        loops++;
+        let w = importance_of(i, p, n);
+        if (w > 0.0) {
+            acc += w;
+            last = i;
+            if (aim < acc) { return i; }
+        }
+    }
+    return last;
+}
+
 fn pmf_at(off: u32, i: u32) -> f32 {
     let n = bitcast<u32>(sel_buf[off]);
     return sel_buf[off + 1u + (n + 1u) + i];
@@ -432,9 +477,25 @@ fn pmf_at(off: u32, i: u32) -> f32 {
 
 // The solid-angle pdf of technique `code` (light index `one` for T_ONE) at wi, the
 // BSDF's being `bsdf_pdf` (render::technique::Technique::pdf).
-fn tech_pdf(code: u32, one: u32, p: vec3<f32>, wi: vec3<f32>, bsdf_pdf: f32) -> f32 {
+fn tech_pdf(code: u32, one: u32, p: vec3<f32>, n: vec3<f32>, wi: vec3<f32>, bsdf_pdf: f32) -> f32 {
     if (code == T_BSDF) { return bsdf_pdf; }
     if (code == T_ENV) { return env_pdf(frame.env, wi); }
+    if (code == T_SPATIAL) {
+        // Σ P(k | p, n) p_k(wi): (1 − P(env)) · importance_k / total over the area
+        // lights, then the environment (Lights::pdf_selected_over).
+        let pe = spatial_env();
+        var sum = 0.0;
+        let total = importance_total(p, n);
+        if (total > 0.0) {
+            for (var i = 0u; i < frame.n_lights; i++) {
+                loops++;
+                let pm = (1.0 - pe) * importance_of(i, p, n) / total;
+                if (pm > 0.0) { sum += pm * light_pdf_li(lights[i], p, wi); }
+            }
+        }
+        if (pe > 0.0) { sum += pe * env_pdf(frame.env, wi); }
+        return sum;
+    }
     if (code == T_ONE) {
         if (one == frame.n_lights) { return env_pdf(frame.env, wi); }
         return light_pdf_li(lights[one], p, wi);
@@ -704,11 +765,15 @@ fn shade(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
         }
     } else if (n_mis() > 0u) {
         var li = tech_light(k);
-        if (code != T_ONE) {
+        if (code == T_SPATIAL) {
+            li = spatial_select(p, n, uc);
+        } else if (code != T_ONE) {
             let sel = light_select(frame.power_off, code == T_POWER, n_mis(), uc);
             li = bitcast<u32>(sel.x);
         }
-        if (li == frame.n_lights) {
+        if (li == 0xffffffffu) {
+            ok = false;
+        } else if (li == frame.n_lights) {
             // The environment, the last MIS light.
             let es = env_sample(frame.env, u);
             ok = es.ok != 0u;
@@ -769,7 +834,7 @@ fn shade(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
         fc = ev.xyz * abs(dot(wi, n));
         for (var t = 0u; t < frame.n_tech; t++) {
             loops++;
-            pdfs[t] = tech_pdf(tech_code(t), tech_light(t), p, wi, ev.w);
+            pdfs[t] = tech_pdf(tech_code(t), tech_light(t), p, n, wi, ev.w);
         }
         // A light draw's own density is the mixture's, and it fails where that is not
         // positive (Lights::sample_selected, sample_by_area).

@@ -284,3 +284,48 @@ fn light_select(off: u32, table: bool, n: u32, uc: f32) -> vec2<f32> {
     let i = min(max(lo, 1u) - 1u, m - 1u);
     return vec2<f32>(bitcast<f32>(i), sel_buf[cdf + m + 1u + i]);
 }
+
+// cos(max(0, θa − θb)) and sin(max(0, θa − θb)) (pbrt-v4 CosSubClamped, SinSubClamped).
+fn l_cos_sub(sin_a: f32, cos_a: f32, sin_b: f32, cos_b: f32) -> f32 {
+    if (cos_a > cos_b) { return 1.0; }
+    return cos_a * cos_b + sin_a * sin_b;
+}
+fn l_sin_sub(sin_a: f32, cos_a: f32, sin_b: f32, cos_b: f32) -> f32 {
+    if (cos_a > cos_b) { return 0.0; }
+    return sin_a * cos_b - cos_a * sin_b;
+}
+
+// The spatial selection's bound on a light's contribution at p with normal n
+// (render::light::importance, pbrt-v4 §12.6.3), from its 12-word record in sel_buf at
+// `at` (light.rs importance_record: centre, radius, axis, cos θo, Φ, two-sided).
+fn light_importance(at: u32, p: vec3<f32>, n: vec3<f32>) -> f32 {
+    let center = vec3<f32>(sel_buf[at], sel_buf[at + 1u], sel_buf[at + 2u]);
+    let radius = sel_buf[at + 3u];
+    let axis = vec3<f32>(sel_buf[at + 4u], sel_buf[at + 5u], sel_buf[at + 6u]);
+    let cos_o = sel_buf[at + 7u];
+    let phi = sel_buf[at + 8u];
+    let two_sided = sel_buf[at + 9u] != 0.0;
+    let v = p - center;
+    let dist2 = l_dot(v, v);
+    let r2 = radius * radius;
+    let d2 = max(dist2, r2);
+    var w = axis;
+    if (dist2 > 0.0) { w = v * (1.0 / sqrt(dist2)); }
+    var cos_w = l_dot(axis, w);
+    if (two_sided) { cos_w = abs(cos_w); }
+    let sin_w = l_safe_sqrt(1.0 - cos_w * cos_w);
+    var cos_b = -1.0;
+    if (!(dist2 <= r2)) { cos_b = l_safe_sqrt(1.0 - r2 / dist2); }
+    let sin_b = l_safe_sqrt(1.0 - cos_b * cos_b);
+    let sin_o = l_safe_sqrt(1.0 - cos_o * cos_o);
+    let cos_x = l_cos_sub(sin_w, cos_w, sin_o, cos_o);
+    let sin_x = l_sin_sub(sin_w, cos_w, sin_o, cos_o);
+    let cos_p = l_cos_sub(sin_x, cos_x, sin_b, cos_b);
+    if (cos_p <= 0.0) { return 0.0; }
+    let cos_i = abs(l_dot(n, w));
+    let sin_i = l_safe_sqrt(1.0 - cos_i * cos_i);
+    let cos_ip = l_cos_sub(sin_i, cos_i, sin_b, cos_b);
+    let r = phi * cos_p * cos_ip / d2;
+    if (r > 0.0) { return r; }
+    return 0.0;
+}

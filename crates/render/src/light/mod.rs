@@ -15,7 +15,7 @@ mod trained;
 pub use area::{AreaLight, Crossing, Shape};
 pub use delta::DeltaLight;
 pub use environment::{EnvMap, Environment};
-pub use select::{importance, Along, Crossed, Selection};
+pub use select::{importance, Along, Crossed, ImportanceBounds, Selection};
 pub use trained::{TrainedSelection, TRAIN_FLOOR, TRAIN_GRID};
 
 use crate::color::{luminance, Rgb};

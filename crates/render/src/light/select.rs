@@ -62,28 +62,13 @@ fn sin_sub_clamped(sin_a: f64, cos_a: f64, sin_b: f64, cos_b: f64) -> f64 {
 /// and `|diagonal|/2` as the least distance), the bound uses the light's bounding
 /// sphere and its radius squared.
 pub fn importance(l: &AreaLight, p: DVec3, n: DVec3) -> f64 {
-    // Bounding sphere, normal-cone axis and cos θo (the spread of the normals), and
-    // whether the cone counts on both sides; cos θe = 0 (emission within π/2 of a
-    // normal) for every shape.
-    let (center, radius, axis, cos_o, two_sided) = match l.shape {
-        Shape::Sphere { center, radius } => (center, radius, DVec3::Z, -1.0, false),
-        Shape::Rect {
-            corner,
-            edge_u,
-            edge_v,
-        } => (
-            corner + (edge_u + edge_v) / 2.0,
-            (edge_u + edge_v).length().max((edge_u - edge_v).length()) / 2.0,
-            edge_u.cross(edge_v).normalize(),
-            1.0,
-            l.two_sided,
-        ),
-        Shape::Disk {
-            center,
-            normal,
-            radius,
-        } => (center, radius, normal, 1.0, l.two_sided),
-    };
+    let ImportanceBounds {
+        center,
+        radius,
+        axis,
+        cos_o,
+        two_sided,
+    } = l.importance_bounds();
     let phi = luminance(l.power());
     let v = p - center;
     let dist2 = v.length_squared();
@@ -112,6 +97,55 @@ pub fn importance(l: &AreaLight, p: DVec3, n: DVec3) -> f64 {
     let sin_i = safe_sqrt(1.0 - cos_i * cos_i);
     let cos_ip = cos_sub_clamped(sin_i, cos_i, sin_b, cos_b);
     (phi * cos_p * cos_ip / d2).max(0.0)
+}
+
+/// What [`importance`] bounds a light by: its bounding sphere, and its normal cone
+/// (axis and cos θo, the spread of its normals; cos θe = 0 for every shape), counted on
+/// both sides for two-sided planar lights.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ImportanceBounds {
+    /// Centre of the bounding sphere.
+    pub center: DVec3,
+    /// Its radius.
+    pub radius: f64,
+    /// Axis of the normal cone.
+    pub axis: DVec3,
+    /// cos θo.
+    pub cos_o: f64,
+    /// Whether the cone counts on both sides.
+    pub two_sided: bool,
+}
+
+impl AreaLight {
+    /// The bounds [`importance`] reads (module docs).
+    pub fn importance_bounds(&self) -> ImportanceBounds {
+        let (center, radius, axis, cos_o, two_sided) = match self.shape {
+            Shape::Sphere { center, radius } => (center, radius, DVec3::Z, -1.0, false),
+            Shape::Rect {
+                corner,
+                edge_u,
+                edge_v,
+            } => (
+                corner + (edge_u + edge_v) / 2.0,
+                (edge_u + edge_v).length().max((edge_u - edge_v).length()) / 2.0,
+                edge_u.cross(edge_v).normalize(),
+                1.0,
+                self.two_sided,
+            ),
+            Shape::Disk {
+                center,
+                normal,
+                radius,
+            } => (center, radius, normal, 1.0, self.two_sided),
+        };
+        ImportanceBounds {
+            center,
+            radius,
+            axis,
+            cos_o,
+            two_sided,
+        }
+    }
 }
 
 impl Lights {

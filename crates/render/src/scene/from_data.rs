@@ -51,27 +51,35 @@ fn material(data: &SceneData, m: &MaterialData) -> Material {
 }
 
 fn area_light(l: &Light) -> AreaLight {
-    let shape = match l.kind {
-        LightKind::Sphere => Shape::Sphere {
-            center: v3(l.p0),
-            radius: l.radius,
-        },
-        LightKind::Rect => Shape::Rect {
-            corner: v3(l.p0),
-            edge_u: v3(l.e1),
-            edge_v: v3(l.e2),
-        },
-        LightKind::Disk => Shape::Disk {
-            center: v3(l.p0),
-            normal: v3(l.e1),
-            radius: l.radius,
-        },
-        k => unreachable!("{k:?} is not an area light"),
-    };
-    AreaLight {
-        shape,
-        radiance: Rgb::from_array(l.emission),
-        two_sided: l.two_sided,
+    AreaLight::from_data(l).unwrap_or_else(|| unreachable!("{:?} is not an area light", l.kind))
+}
+
+impl AreaLight {
+    /// The area light a resolved scene's light describes (None for point and spot
+    /// lights).
+    pub fn from_data(l: &Light) -> Option<AreaLight> {
+        let shape = match l.kind {
+            LightKind::Sphere => Shape::Sphere {
+                center: v3(l.p0),
+                radius: l.radius,
+            },
+            LightKind::Rect => Shape::Rect {
+                corner: v3(l.p0),
+                edge_u: v3(l.e1),
+                edge_v: v3(l.e2),
+            },
+            LightKind::Disk => Shape::Disk {
+                center: v3(l.p0),
+                normal: v3(l.e1),
+                radius: l.radius,
+            },
+            LightKind::Point | LightKind::Spot => return None,
+        };
+        Some(AreaLight {
+            shape,
+            radiance: Rgb::from_array(l.emission),
+            two_sided: l.two_sided,
+        })
     }
 }
 
