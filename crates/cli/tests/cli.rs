@@ -501,13 +501,23 @@ fn exposure_and_tone_mapping_shape_the_png_only() {
 }
 
 /// `--backend gpu` refuses, before any work and naming the feature, a scene the GPU back
-/// end does not cover (CSG whose parts are shared), exiting non-zero; `--backend auto`
+/// end does not cover (an AOV integrator), exiting non-zero; `--backend auto`
 /// renders it on the CPU and says why; without any adapter both say what to install.
 #[test]
 fn gpu_backend_refuses_by_name_and_auto_falls_back() {
     let d = out_dir("gpu-backend");
-    let scene = root().join("scenes/rooms.toml");
-    let small = ["--width", "16", "--height", "12", "--spp", "1", "--quiet"];
+    let scene = root().join("scenes/cornell.toml");
+    let small = [
+        "--width",
+        "16",
+        "--height",
+        "12",
+        "--spp",
+        "1",
+        "--quiet",
+        "--integrator",
+        "normals",
+    ];
     let gpu = frepray()
         .args(["render", scene.to_str().unwrap(), "--backend", "gpu", "-o"])
         .arg(d.join("g.exr"))
@@ -517,7 +527,7 @@ fn gpu_backend_refuses_by_name_and_auto_falls_back() {
     let err = String::from_utf8_lossy(&gpu.stderr);
     assert!(!gpu.status.success());
     assert!(
-        err.contains("parts are shared") || err.contains("no GPU adapter"),
+        err.contains("integrator normals") || err.contains("no GPU adapter"),
         "{err}"
     );
     assert!(!d.join("g.exr").exists());

@@ -24,12 +24,13 @@
 //!
 //! **Scope.** Objects that are one perturbed or plain quadric, a CSG tree of plain
 //! quadrics (boxes, capped cylinders, unions, differences: by inside spans along the
-//! ray), or an expression solid (at most one per scene: its tape is compiled into the
+//! ray, the nodes in post-order from the root), or an expression solid (at most one per scene: its tape is compiled into the
 //! kernels, GPU.md §6.2); diffuse, conductor, dielectric and plastic materials
 //! rough or smooth (delta lobes outside MIS, as the CPU), with constant or point-space checker colours; sphere,
 //! rectangle and disk lights, point and spot lights, a constant or mapped environment
 //! ([`crate::env`]); the techniques `bsdf`, `light`, `light-uniform`, `light-area`,
-//! `light-spatial`, `light#k` and `environment`; every MIS method; `path` up to depth
+//! `light-spatial`, `light-trained` (the table the CPU trained), `light#k` and
+//! `environment`; every MIS method; `path` up to depth
 //! [`MAX_GPU_DEPTH`]. Anything else is a
 //! [`GpuError::Unsupported`] naming it, before any work.
 
@@ -51,6 +52,7 @@ use render::bsdf::CoatTable;
 use render::integrator::{
     Accumulator, IntegratorKind, RayCounts, RenderOptions, ShadedDraw, ShadedVertex,
 };
+use render::light::TrainedSelection;
 use render::scene::Scene;
 use render::{RenderState, RenderStats, StateHeader, Technique};
 use scene::{CameraKind, LightKind, MaterialData, SceneData, TextureData, TextureSpace};
@@ -144,11 +146,14 @@ struct Frame {
     tech: [[u32; 4]; 2],
     count: [[u32; 4]; 2],
     env: GpuEnv,
+    /// The trained selection's table in `tables` (u32::MAX: none), cells per axis, MIS
+    /// lights covered.
+    trained: [u32; 4],
 }
 
 const _: () = assert!(size_of::<GpuShape>() == 48);
 const _: () = assert!(size_of::<GpuMaterial>() == 112);
-const _: () = assert!(size_of::<Frame>() == 320);
+const _: () = assert!(size_of::<Frame>() == 336);
 
 /// The scene and options as the kernels read them.
 #[derive(Clone, Debug, Default)]
@@ -180,6 +185,9 @@ pub struct DirectScene {
     frame: Frame,
 }
 
+/// The most CSG nodes one object may have on the GPU (after shared parts are copied).
+const MAX_CSG_NODES: u32 = 256;
+
 fn unsupported(what: impl Into<String>) -> GpuError {
     GpuError::Unsupported(what.into())
 }
@@ -193,8 +201,13 @@ fn f3(v: [f64; 3]) -> [f32; 3] {
 }
 
 impl DirectScene {
-    /// Packs `data` for a `direct` render with `o`, or says what the GPU cannot do.
-    pub fn new(data: &SceneData, o: &RenderOptions) -> Result<Self, GpuError> {
+    /// Packs `data` for a `direct` render with `o` (and the light selection trained
+    /// for it, if any), or says what the GPU cannot do.
+    pub fn new(
+        data: &SceneData,
+        o: &RenderOptions,
+        trained: Option<&TrainedSelection>,
+    ) -> Result<Self, GpuError> {
         let mut s = DirectScene::default();
         s.pack_lights(data)?;
         s.pack_materials(data)?;
@@ -202,6 +215,7 @@ impl DirectScene {
             s.pack_object(data, obj)?;
         }
         s.pack_frame(data, o)?;
+        s.pack_trained(trained);
         Ok(s)
     }
 
@@ -347,45 +361,44 @@ fn tape_normal(p: vec3<f32>) -> vec3<f32> {
                 (1, first, flat.parts(root).len() as u32)
             }
             _ => {
-                // Any CSG tree of plain quadrics: its post-order nodes, each op's parts
-                // being the last lists on the kernel's stack (checked here).
+                // Any CSG tree of plain quadrics: its nodes in post-order from the root,
+                // so that each op's parts are the last lists on the kernel's stack (a
+                // part shared by two nodes is emitted under each).
                 let first_node = self.csg.len() as u32;
-                let mut stack: Vec<u32> = Vec::new();
-                for (i, n) in flat.nodes.iter().enumerate() {
-                    let refuse = || {
-                        unsupported(format!(
-                            "object '{}' is a CSG tree with a perturbed or expression part \
-                             (only plain quadrics combine on the GPU)",
-                            obj.name
-                        ))
-                    };
+                let refuse = || {
+                    unsupported(format!(
+                        "object '{}' is a CSG tree with a perturbed or expression part \
+                         (only plain quadrics combine on the GPU)",
+                        obj.name
+                    ))
+                };
+                let mut todo = vec![(root as u32, false)];
+                while let Some((i, expanded)) = todo.pop() {
+                    let n = &flat.nodes[i as usize];
                     if n.op == CsgOp::Leaf {
-                        let v = plain(i as u32).ok_or_else(refuse)?;
+                        let v = plain(i).ok_or_else(refuse)?;
                         let leaf = self.pack_leaf(&v, material);
                         self.csg.push([0, leaf, 0, 0]);
-                        stack.push(i as u32);
-                        continue;
+                    } else if expanded {
+                        let op = match n.op {
+                            CsgOp::Union => 1,
+                            CsgOp::Intersection => 2,
+                            _ => 3,
+                        };
+                        self.csg
+                            .push([op, flat.parts(i as usize).len() as u32, 0, 0]);
+                    } else {
+                        todo.push((i, true));
+                        todo.extend(flat.parts(i as usize).iter().rev().map(|&k| (k, false)));
                     }
-                    let parts = flat.parts(i);
-                    if parts.len() > stack.len() || stack[stack.len() - parts.len()..] != *parts {
-                        return Err(unsupported(format!(
-                            "object '{}': a CSG node whose parts are shared",
-                            obj.name
-                        )));
+                    if self.csg.len() as u32 - first_node > MAX_CSG_NODES {
+                        break;
                     }
-                    stack.truncate(stack.len() - parts.len());
-                    stack.push(i as u32);
-                    let op = match n.op {
-                        CsgOp::Union => 1,
-                        CsgOp::Intersection => 2,
-                        _ => 3,
-                    };
-                    self.csg.push([op, parts.len() as u32, 0, 0]);
                 }
                 let count = self.csg.len() as u32 - first_node;
-                if count > 256 {
+                if count > MAX_CSG_NODES {
                     return Err(unsupported(format!(
-                        "object '{}' has {count} CSG nodes (at most 256)",
+                        "object '{}' has more than {MAX_CSG_NODES} CSG nodes",
                         obj.name
                     )));
                 }
@@ -512,6 +525,19 @@ fn tape_normal(p: vec3<f32>) -> vec3<f32> {
         Ok(())
     }
 
+    /// The trained selection's grid (low corner, cells per unit) and pmfs after the
+    /// other tables.
+    fn pack_trained(&mut self, trained: Option<&TrainedSelection>) {
+        self.frame.trained = [u32::MAX, 0, 0, 0];
+        if let Some(t) = trained {
+            let (lo, scale, res) = t.grid();
+            self.frame.trained = [self.tables.len() as u32, res as u32, t.lights() as u32, 0];
+            self.tables.extend(lo.as_vec3().to_array());
+            self.tables.extend(scale.as_vec3().to_array());
+            self.tables.extend(t.table().iter().map(|&p| p as f32));
+        }
+    }
+
     fn pack_frame(&mut self, data: &SceneData, o: &RenderOptions) -> Result<(), GpuError> {
         let f = &mut self.frame;
         f.power_off = self.tables.len() as u32;
@@ -587,6 +613,7 @@ fn tape_normal(p: vec3<f32>) -> vec3<f32> {
                 Technique::Light(l) if l < n_mis => 4 | (l as u32) << 8,
                 Technique::Environment => 5,
                 Technique::LightSpatial => 6,
+                Technique::LightTrained => 7,
                 t => return Err(unsupported(format!("technique {}", t.name()))),
             };
             f.tech[k / 4][k % 4] = code;
@@ -838,7 +865,7 @@ pub fn probe(
     data: &SceneData,
     rays: &[([f32; 3], [f32; 3])],
 ) -> Result<Vec<Probe>, GpuError> {
-    let mut pack = DirectScene::new(data, &RenderOptions::default())?;
+    let mut pack = DirectScene::new(data, &RenderOptions::default(), None)?;
     let p = kernels(gpu, &pack)?;
     let scene = scene_buffers(gpu, &pack)?;
     let n = rays.len().max(1) as u32;
@@ -955,7 +982,7 @@ pub fn render_range(
         ..options.clone()
     };
     let acc = Accumulator::new(scene, &o).map_err(GpuError::Unsupported)?;
-    let mut pack = DirectScene::new(data, &o)?;
+    let mut pack = DirectScene::new(data, &o, acc.trained())?;
     let started = Instant::now();
     let p = kernels(gpu, &pack)?;
     let mut stats = GpuStats::default();

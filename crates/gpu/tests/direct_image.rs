@@ -429,11 +429,13 @@ fn path_images_agree() {
 /// (`light` selects it by power as the last MIS light), the sky map turned about z with
 /// `light-uniform` and the `environment` technique, the map alone through `light#3` (the
 /// environment's MIS index), and `path` (depth 3) under the map with the power
-/// heuristic; and the spatial light selection (`light-spatial`, ∝ each light's
-/// importance at the shading point) without and with the map. Same seed, the same
-/// z-tests as the other scenes.
+/// heuristic; the spatial light selection (`light-spatial`, ∝ each light's importance at
+/// the shading point) without and with the map; the trained selection (`light-trained`,
+/// its table trained on the CPU) on the test scene and on the teaser's rooms (whose
+/// walls, a union of more than 8 boxes, are a CSG tree of grouped nodes). Same seed,
+/// the same z-tests as the other scenes.
 #[test]
-fn environment_and_spatial_images_agree() {
+fn environments_and_light_selections_agree() {
     let Some(g) = device() else { return };
     let sky = concat!(env!("CARGO_MANIFEST_DIR"), "/../../scenes/sky.exr");
     let map = format!("[environment]\nmap = \"{sky}\"\nscale = 0.5\nrotate = {{ axis = [0, 0, 1], degrees = 40 }}\n");
@@ -467,6 +469,19 @@ fn environment_and_spatial_images_agree() {
             techniques(
                 "{ technique = \"bsdf\", samples = 1 }, { technique = \"light-spatial\", samples = 1 }, { technique = \"light-area\", samples = 1 }",
             ),
+            false,
+        ),
+        (
+            "trained selection, bsdf + light-trained + light-uniform",
+            techniques(
+                "{ technique = \"bsdf\", samples = 1 }, { technique = \"light-trained\", samples = 1 }, { technique = \"light-uniform\", samples = 1 }",
+            ),
+            false,
+        ),
+        (
+            "the teaser's rooms (walls: a union of 10 boxes; light-trained + light-uniform, 16 lights)",
+            include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/../../scenes/rooms.toml"))
+                .replace("resolution = [320, 240]", "resolution = [48, 36]"),
             false,
         ),
         (
@@ -519,8 +534,6 @@ fn unsupported_scenes_are_refused_by_name() {
         "union(sphere([1.5, 0, 0.6], 0.6), perturb(sphere([1.5, 0, 1.2], 0.3), 0.2 * sphere([1.5, 0, 1.5], 0.1)^3))",
     ));
     assert!(e.contains("CSG") && e.contains("--backend cpu"), "{e}");
-    let e = err(&SCENE.replace("\"light-area\"", "\"light-trained\""));
-    assert!(e.contains("light-trained"), "{e}");
     let e = err(&SCENE.replace("integrator = \"direct\"", "integrator = \"depth\""));
     assert!(e.contains("depth"), "{e}");
     let e = err(&SCENE.replace(

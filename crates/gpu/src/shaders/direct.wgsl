@@ -36,6 +36,9 @@ struct Frame {
     tech: array<vec4<u32>, 2>,
     count: array<vec4<u32>, 2>,
     env: GpuEnv,
+    // The trained selection's table in sel_buf (0xffffffff: none; lo.xyz, scale.xyz,
+    // then res³ pmfs over `z` lights), its cells per axis, the lights it covers.
+    trained: vec4<u32>,
 }
 
 // One scene object: a single leaf (kind 0) or an intersection of plain-quadric leaves
@@ -104,6 +107,7 @@ const T_AREA: u32 = 3u;
 const T_ONE: u32 = 4u;
 const T_ENV: u32 = 5u;
 const T_SPATIAL: u32 = 6u;
+const T_TRAINED: u32 = 7u;
 
 fn bsdf_table(i: u32) -> f32 { return sel_buf[i]; }
 
@@ -470,6 +474,45 @@ fn spatial_select(p: vec3<f32>, n: vec3<f32>, uc: f32) -> u32 {
     return last;
 }
 
+// The trained selection (render::light::TrainedSelection): whether its table covers the
+// MIS lights, and the offset of the pmf row of p's cell (points outside the grid go to
+// the nearest cell).
+fn trained_usable() -> bool {
+    return frame.trained.x != 0xffffffffu && frame.trained.z == n_mis();
+}
+
+fn trained_row(p: vec3<f32>) -> u32 {
+    let off = frame.trained.x;
+    let res = frame.trained.y;
+    let lo = vec3<f32>(sel_buf[off], sel_buf[off + 1u], sel_buf[off + 2u]);
+    let sc = vec3<f32>(sel_buf[off + 3u], sel_buf[off + 4u], sel_buf[off + 5u]);
+    let q = floor((p - lo) * sc);
+    let m = f32(res - 1u);
+    var c = vec3<u32>(0u);
+    for (var k = 0u; k < 3u; k++) {
+        if (q[k] == q[k]) { c[k] = u32(clamp(q[k], 0.0, m)); }
+    }
+    return off + 6u + ((c.z * res + c.y) * res + c.x) * frame.trained.z;
+}
+
+// The MIS light the trained pmf at p picks with uc (0xffffffff: none).
+fn trained_select(p: vec3<f32>, uc: f32) -> u32 {
+    if (!trained_usable()) { return 0xffffffffu; }
+    let row = trained_row(p);
+    let n = frame.trained.z;
+    var acc = 0.0;
+    for (var i = 0u; i < n; i++) {
+        loops++;
+        acc += sel_buf[row + i];
+        if (uc < acc) { return i; }
+    }
+    for (var i = n; i > 0u; i--) {
+        loops++;
+        if (sel_buf[row + i - 1u] > 0.0) { return i - 1u; }
+    }
+    return 0xffffffffu;
+}
+
 fn pmf_at(off: u32, i: u32) -> f32 {
     let n = bitcast<u32>(sel_buf[off]);
     return sel_buf[off + 1u + (n + 1u) + i];
@@ -480,6 +523,21 @@ fn pmf_at(off: u32, i: u32) -> f32 {
 fn tech_pdf(code: u32, one: u32, p: vec3<f32>, n: vec3<f32>, wi: vec3<f32>, bsdf_pdf: f32) -> f32 {
     if (code == T_BSDF) { return bsdf_pdf; }
     if (code == T_ENV) { return env_pdf(frame.env, wi); }
+    if (code == T_TRAINED) {
+        if (!trained_usable()) { return 0.0; }
+        let row = trained_row(p);
+        var sum = 0.0;
+        for (var i = 0u; i < frame.n_lights; i++) {
+            loops++;
+            let pm = sel_buf[row + i];
+            if (pm > 0.0) { sum += pm * light_pdf_li(lights[i], p, wi); }
+        }
+        if (frame.env.kind != ENV_NONE) {
+            let pm = sel_buf[row + frame.n_lights];
+            if (pm > 0.0) { sum += pm * env_pdf(frame.env, wi); }
+        }
+        return sum;
+    }
     if (code == T_SPATIAL) {
         // Σ P(k | p, n) p_k(wi): (1 − P(env)) · importance_k / total over the area
         // lights, then the environment (Lights::pdf_selected_over).
@@ -767,6 +825,8 @@ fn shade(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
         var li = tech_light(k);
         if (code == T_SPATIAL) {
             li = spatial_select(p, n, uc);
+        } else if (code == T_TRAINED) {
+            li = trained_select(p, uc);
         } else if (code != T_ONE) {
             let sel = light_select(frame.power_off, code == T_POWER, n_mis(), uc);
             li = bitcast<u32>(sel.x);

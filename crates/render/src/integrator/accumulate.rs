@@ -91,6 +91,11 @@ impl Accumulator {
         &self.it.counts
     }
 
+    /// The light selection trained for this render (`light-trained`), if it has one.
+    pub fn trained(&self) -> Option<&crate::light::TrainedSelection> {
+        self.it.trained.as_deref()
+    }
+
     /// Adds sample `index` of a pixel to its record `rec`: `outside` (the emitters the
     /// camera saw) outside MIS, and each vertex the path shaded (vertex d at
     /// `vertices[d]`; none when the camera ray met no surface): its own outside-MIS

@@ -77,6 +77,17 @@ impl TrainedSelection {
         self.lights
     }
 
+    /// The grid's low corner, cells per unit along each axis and cells per axis (what
+    /// [`Self::cell`] reads), for another back end's copy of the table.
+    pub fn grid(&self) -> (DVec3, DVec3, usize) {
+        (self.lo, self.scale, self.res)
+    }
+
+    /// Every cell's pmf over the MIS lights, cell after cell ([`Self::cell`]'s order).
+    pub fn table(&self) -> &[f64] {
+        &self.pmf
+    }
+
     /// The cell of point `p` (points outside the box go to the nearest cell).
     pub fn cell(&self, p: DVec3) -> usize {
         let q = ((p - self.lo) * self.scale).floor();
