@@ -34,7 +34,7 @@
 //! - [`light`]: area lights (sphere, rect, disk) in WGSL: crossings, area and cone
 //!   sampling with their pdfs, and light selection, equal bit for bit on lavapipe to
 //!   their CPU f32 twins;
-//! - [`env`]: the environment light (a constant dome or a lat-long map) in WGSL:
+//! - [`mod@env`]: the environment light (a constant dome or a lat-long map) in WGSL:
 //!   radiance lookup, importance sampling and its pdf, equal bit for bit on lavapipe to
 //!   its CPU f32 twin;
 //! - [`sums`]: per-pixel MIS sums in f64 where the device has `SHADER_F64`, else in
