@@ -30,7 +30,7 @@
 //! rectangle and disk lights, point and spot lights, a constant or mapped environment
 //! ([`crate::env`]); the techniques `bsdf`, `light`, `light-uniform`, `light-area`,
 //! `light-spatial`, `light-trained` (the table the CPU trained), `light#k` and
-//! `environment`; every MIS method; `path` up to depth
+//! `environment`; every MIS method, per light too; `path` up to depth
 //! [`MAX_GPU_DEPTH`]. Anything else is a
 //! [`GpuError::Unsupported`] naming it, before any work.
 
@@ -585,7 +585,8 @@ fn tape_normal(p: vec3<f32>) -> vec3<f32> {
         f.forward = f4(forward.to_array(), 0.0);
         f.flags = u32::from(o.hide_emitters)
             | (u32::from(o.pixel_center) << 1)
-            | (u32::from(c.kind == CameraKind::Orthographic) << 2);
+            | (u32::from(c.kind == CameraKind::Orthographic) << 2)
+            | (u32::from(o.per_light > 0) << 3);
         if o.techniques.len() > MAX_GPU_TECHNIQUES {
             return Err(unsupported(format!(
                 "{} techniques (at most {MAX_GPU_TECHNIQUES})",
@@ -1243,7 +1244,8 @@ pub fn render_range(
             for k in 0..shaded {
                 let records = vertex(k as u32);
                 // Word 11 of a record: 1 a delta-lobe draw (outside MIS), 2 a purely
-                // specular vertex (no MIS at all).
+                // specular vertex (no MIS at all); in per-light mode, 4 × (1 + the MIS
+                // light the draw's ray reaches) added.
                 let flags = |d: &[f32]| d[11] as u32;
                 mis[k] = flags(records) & 2 == 0;
                 let sum = &mut vertex_outside[k];
@@ -1274,6 +1276,7 @@ pub fn render_range(
                         ShadedDraw::Sample {
                             f,
                             pdfs: &pdfs[at..at + t_count],
+                            light: (flags(d) >> 2).checked_sub(1).map(|l| l as usize),
                         }
                     })
                     .collect();

@@ -394,6 +394,29 @@ fn every_estimator_agrees() {
     }
 }
 
+/// Per-light mode (one optimal-direct estimator per MIS light, Kondapaneni et al. 2019
+/// §7): the GPU tells each draw the light its ray reaches, on the test scene (3 area
+/// lights) and under the sky map (the environment the fourth); same seed, the same
+/// z-tests.
+#[test]
+fn per_light_images_agree() {
+    let Some(g) = device() else { return };
+    let sky = concat!(env!("CARGO_MANIFEST_DIR"), "/../../scenes/sky.exr");
+    for (label, text, lights) in [
+        ("per light", SCENE.to_string(), 3),
+        (
+            "per light, under the sky map",
+            format!("{SCENE}\n[environment]\nmap = \"{sky}\"\nscale = 0.5\n"),
+            4,
+        ),
+    ] {
+        let mut s = load(&text);
+        s.2.method = mis::Method::OptimalDirect;
+        s.2.per_light = lights;
+        assert_agree(g, label, &s, &s, 3.0);
+    }
+}
+
 /// `path` (depth 3, roulette from depth 2) with the power heuristic and with
 /// optimal-progressive per depth, depths 2–3 alone (`min_depth`), and without a BSDF
 /// technique: the same z-tests as `direct`, same seed.

@@ -80,6 +80,7 @@ const DRAW_WORDS: u32 = 5u;   // vec4s per draw in `draws`
 const FLAG_HIDE: u32 = 1u;
 const FLAG_CENTER: u32 = 2u;
 const FLAG_ORTHO: u32 = 4u;
+const FLAG_PER_LIGHT: u32 = 8u;
 // Slot status (hits[·].w of word 0) and draw status (draws[·].w of word 1).
 const S_NONE: f32 = 0.0;      // escaped or met a light: outside sum only
 const S_SURFACE: f32 = 1.0;   // a shading point
@@ -911,14 +912,27 @@ fn shade(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
     }
     draws[at + 3u] = vec4<f32>(pdfs[0], pdfs[1], pdfs[2], pdfs[3]);
     draws[at + 4u] = vec4<f32>(pdfs[4], pdfs[5], pdfs[6], pdfs[7]);
+    // Per-light mode: the MIS light the draw's ray reaches, objects ignored (the nearest
+    // area light, else the environment; render::integrator::vertex::light_reached),
+    // as 4 × (1 + index) in the flags (0: none).
+    let per_light = (frame.flags & FLAG_PER_LIGHT) != 0u;
+    var lh = LightHit(inf(), 0u, vec3<f32>(0.0));
+    if (!carries || per_light) { lh = nearest_light(o, wi, inf()); }
+    var reached = vflags;
+    if (per_light) {
+        if (lh.t < inf()) {
+            reached += 4.0 * f32(lh.index + 1u);
+        } else if (frame.env.kind != ENV_NONE) {
+            reached += 4.0 * f32(frame.n_lights + 1u);
+        }
+    }
     if (carries) {
-        write_carried(at, o, wi, beta * fc, vflags);
+        write_carried(at, o, wi, beta * fc, reached);
     } else {
         // render::integrator::vertex::incident.
-        let lh = nearest_light(o, wi, inf());
         let le = incoming(lh, wi);
         let traced = any(fc != vec3<f32>(0.0)) && any(le != vec3<f32>(0.0));
-        write_shadow(i, at, o, wi, lh.t, beta * fc * le, vflags, traced);
+        write_shadow(i, at, o, wi, lh.t, beta * fc * le, reached, traced);
     }
     atomicMax(&stats[2], loops);
 }

@@ -27,6 +27,10 @@ pub enum ShadedDraw<'a> {
         f: [f64; 3],
         /// The techniques' solid-angle pdfs.
         pdfs: &'a [f64],
+        /// The MIS light the draw's ray reaches, objects ignored (the nearest area light
+        /// along it, else the environment's index): which per-light block the draw
+        /// feeds in per-light mode; None reaches none.
+        light: Option<usize>,
     },
 }
 
@@ -53,8 +57,8 @@ pub struct Accumulator {
 impl Accumulator {
     /// The accumulator of a `direct` or `path` render of `scene` with `options` (the
     /// options are validated and checked against the scene as a CPU render would).
-    /// The AOV integrators, per-light mode and AOVs are refused: the external back ends
-    /// do not produce them yet.
+    /// The AOV integrators and AOVs are refused: the external back ends do not produce
+    /// them yet.
     pub fn new(scene: &Scene, options: &RenderOptions) -> Result<Self, String> {
         if !matches!(
             options.integrator,
@@ -64,9 +68,6 @@ impl Accumulator {
                 "integrator {} is not available here (only direct and path)",
                 options.integrator
             ));
-        }
-        if options.per_light > 0 {
-            return Err("per-light mode is not available here".into());
         }
         if !options.aovs.is_empty() {
             return Err("AOVs are not available here".into());
@@ -128,9 +129,9 @@ impl Accumulator {
                 for _ in 0..n {
                     match draws[at] {
                         ShadedDraw::Failed => px.add_failed(&self.it, depth, k),
-                        ShadedDraw::Sample { f, pdfs } => {
+                        ShadedDraw::Sample { f, pdfs, light } => {
                             debug_assert!(pdfs.len() == t && t <= MAX_TECHNIQUES);
-                            px.add_draw(&self.it, depth, k, Rgb::from_array(f), pdfs, None);
+                            px.add_draw(&self.it, depth, k, Rgb::from_array(f), pdfs, light);
                         }
                     }
                     at += 1;
