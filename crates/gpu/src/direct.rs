@@ -30,7 +30,7 @@
 //! rectangle and disk lights, point and spot lights, a constant or mapped environment
 //! ([`crate::env`]); the techniques `bsdf`, `light`, `light-uniform`, `light-area`,
 //! `light-spatial`, `light-trained` (the table the CPU trained), `light#k` and
-//! `environment`; every MIS method, per light too; `path` up to depth
+//! `environment`; every MIS method, per light too; AOVs and the AOV integrators; `path` up to depth
 //! [`MAX_GPU_DEPTH`]. Anything else is a
 //! [`GpuError::Unsupported`] naming it, before any work.
 
@@ -73,7 +73,7 @@ pub const MAX_GPU_TECHNIQUES: usize = 8;
 /// The deepest `path` the GPU renders (a uniform block per depth and pass).
 pub const MAX_GPU_DEPTH: u32 = 16;
 
-const HIT_WORDS: usize = 32;
+const HIT_WORDS: usize = 40;
 const DRAW_WORDS: usize = 20;
 
 /// One object: a leaf or an intersection of plain-quadric leaves (the WGSL `GpuShape`).
@@ -586,7 +586,11 @@ fn tape_normal(p: vec3<f32>) -> vec3<f32> {
         f.flags = u32::from(o.hide_emitters)
             | (u32::from(o.pixel_center) << 1)
             | (u32::from(c.kind == CameraKind::Orthographic) << 2)
-            | (u32::from(o.per_light > 0) << 3);
+            | (u32::from(o.per_light > 0) << 3)
+            | (u32::from(
+                !o.aovs.is_empty()
+                    || !matches!(o.integrator, IntegratorKind::Direct | IntegratorKind::Path),
+            ) << 4);
         if o.techniques.len() > MAX_GPU_TECHNIQUES {
             return Err(unsupported(format!(
                 "{} techniques (at most {MAX_GPU_TECHNIQUES})",
@@ -1218,6 +1222,12 @@ pub fn render_range(
                 continue;
             }
             rays.camera += 1;
+            // The first hit's depth, normal and albedo (words 8 and 9).
+            let aovs = [hw[35], hw[32], hw[33], hw[34], hw[36], hw[37], hw[38]].map(f64::from);
+            if acc.aov_integrator() {
+                acc.add_aov_sample(rec, index, &aovs);
+                continue;
+            }
             let outside = [hw[12], hw[13], hw[14]].map(f64::from);
             // Vertices shaded: draw 0 of each has a status until the path ended.
             let shaded = (0..depths)
@@ -1292,7 +1302,7 @@ pub fn render_range(
                     mis,
                 })
                 .collect();
-            acc.add(rec, index, outside, &refs);
+            acc.add(rec, index, outside, &refs, &aovs);
         }
         stats.stages.accumulate += t1.elapsed();
         stats.waves += 1;

@@ -74,13 +74,15 @@ struct GpuMaterial { bsdf: GpuBsdf, tex_kind: u32, pad0: u32, pad1: u32, pad2: u
 
 // vec4s per slot in `hits`: [p, status], [n, material], [wo, ·], [outside-MIS rgb, ·],
 // [β, ·], then the continuation the shade pass chose: [o, traced], [wi, survives],
-// [β after it and roulette, ·].
-const HIT_WORDS: u32 = 8u;
+// [β after it and roulette, ·]; then the camera ray's first hit for AOVs: [its outward
+// normal, depth], [albedo, ·] (integrator/aov.rs).
+const HIT_WORDS: u32 = 10u;
 const DRAW_WORDS: u32 = 5u;   // vec4s per draw in `draws`
 const FLAG_HIDE: u32 = 1u;
 const FLAG_CENTER: u32 = 2u;
 const FLAG_ORTHO: u32 = 4u;
 const FLAG_PER_LIGHT: u32 = 8u;
+const FLAG_AOVS: u32 = 16u;
 // Slot status (hits[·].w of word 0) and draw status (draws[·].w of word 1).
 const S_NONE: f32 = 0.0;      // escaped or met a light: outside sum only
 const S_SURFACE: f32 = 1.0;   // a shading point
@@ -400,10 +402,10 @@ fn leaf_normal(key: u32, p: vec3<f32>) -> vec3<f32> {
 
 // The nearest area light along the ray: (t, index bits) with the radiance it sends back
 // along −d (0 from a non-emitting side); t = ∞ when none.
-struct LightHit { t: f32, index: u32, le: vec3<f32> }
+struct LightHit { t: f32, index: u32, le: vec3<f32>, n: vec3<f32> }
 
 fn nearest_light(o: vec3<f32>, d: vec3<f32>, t_max: f32) -> LightHit {
-    var h = LightHit(inf(), 0u, vec3<f32>(0.0));
+    var h = LightHit(inf(), 0u, vec3<f32>(0.0), vec3<f32>(0.0));
     var best = t_max;
     for (var i = 0u; i < frame.n_lights; i++) {
         loops++;
@@ -413,7 +415,7 @@ fn nearest_light(o: vec3<f32>, d: vec3<f32>, t_max: f32) -> LightHit {
             best = c.x;
             var le = vec3<f32>(0.0);
             if (light_emits(l, c.yzw, -d)) { le = l.radiance.xyz; }
-            h = LightHit(c.x, i, le);
+            h = LightHit(c.x, i, le, c.yzw);
         }
     }
     return h;
@@ -625,12 +627,17 @@ fn trace_camera(slot: u32) {
     let h = scene_trace(o, d, inf(), false);
     let at = slot * HIT_WORDS;
     hits[at + 3u] = vec4<f32>(0.0);
+    // The first hit's AOVs: nothing where the ray escapes (integrator/aov.rs).
+    hits[at + 8u] = vec4<f32>(0.0);
+    hits[at + 9u] = vec4<f32>(0.0);
     if (h.status == 2u) {
         hits[at] = vec4<f32>(0.0, 0.0, 0.0, S_OVERFLOW);
         return;
     }
     let lh = nearest_light(o, d, h.t);
     if (lh.t < inf()) {
+        // A light: its depth and normal, albedo 0.
+        hits[at + 8u] = vec4<f32>(lh.n, lh.t);
         var le = lh.le;
         if ((frame.flags & FLAG_HIDE) != 0u) { le = vec3<f32>(0.0); }
         hits[at] = vec4<f32>(0.0, 0.0, 0.0, S_NONE);
@@ -646,6 +653,7 @@ fn trace_camera(slot: u32) {
         return;
     }
     write_vertex(at, o + h.t * d, h.leaf, -d, vec3<f32>(1.0));
+    hits[at + 8u] = vec4<f32>(hits[at + 1u].xyz, h.t);
 }
 
 // The continuation of a slot's path from vertex `depth`: its nearest hit is the extending
@@ -753,10 +761,6 @@ fn shade(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
     // The extra BSDF draw serves the continuation and, without a BSDF technique, the
     // delta lobes (Integrator::shade).
     let extra_used = carries || (frame.carry == frame.n_draws && spec_mat);
-    if (j == frame.n_draws && !extra_used) {
-        draws[at + 1u] = vec4<f32>(0.0, 0.0, 0.0, 0.0);
-        return;
-    }
     let px = slot_pixel(slot);
     let p = hp.xyz;
     let n = hn.xyz;
@@ -774,6 +778,19 @@ fn shade(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
     }
     let f = basis(n);
     let wo_l = to_local(f, wo);
+    if (frame.depth == 0u && j == 0u && (frame.flags & FLAG_AOVS) != 0u) {
+        // The albedo AOV: one BSDF draw's weight, from its own dimensions
+        // (integrator/aov.rs, dims::ALBEDO).
+        let s = bsdf_sample_f(m, wo_l, rnd(px.x, px.y, px.z, 2u),
+            vec2<f32>(rnd(px.x, px.y, px.z, 3u), rnd(px.x, px.y, px.z, 4u)));
+        var albedo = vec3<f32>(0.0);
+        if ((s.flags & 1u) != 0u) { albedo = s.weight; }
+        hits[ha + 9u] = vec4<f32>(albedo, 0.0);
+    }
+    if (j == frame.n_draws && !extra_used) {
+        draws[at + 1u] = vec4<f32>(0.0, 0.0, 0.0, 0.0);
+        return;
+    }
     if (j > frame.n_draws) {
         shade_delta(i, at, j - frame.n_draws - 1u, p, n, f, wo_l, m, beta);
         atomicMax(&stats[2], loops);
@@ -916,7 +933,7 @@ fn shade(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
     // area light, else the environment; render::integrator::vertex::light_reached),
     // as 4 × (1 + index) in the flags (0: none).
     let per_light = (frame.flags & FLAG_PER_LIGHT) != 0u;
-    var lh = LightHit(inf(), 0u, vec3<f32>(0.0));
+    var lh = LightHit(inf(), 0u, vec3<f32>(0.0), vec3<f32>(0.0));
     if (!carries || per_light) { lh = nearest_light(o, wi, inf()); }
     var reached = vflags;
     if (per_light) {

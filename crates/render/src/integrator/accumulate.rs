@@ -3,7 +3,8 @@
 //! [`crate::RenderState`] and its estimators (GPU.md §8: the sums and the solve stay on
 //! the CPU in this first version).
 //!
-//! A back end hands over, per pixel sample, what the CPU integrator would have added:
+//! A back end hands over, per pixel sample, what the CPU integrator would have added
+//! (for the AOV integrators only the first hit's AOVs, [`Accumulator::add_aov_sample`]):
 //! the outside-MIS radiance (an emitter seen by the camera) and, for each vertex the
 //! path shaded, every technique's draws there in list order (technique k, then draw j),
 //! each a failed draw or `(f, pdfs)` with the path throughput in f. [`Accumulator::add`] replays them through
@@ -55,23 +56,9 @@ pub struct Accumulator {
 }
 
 impl Accumulator {
-    /// The accumulator of a `direct` or `path` render of `scene` with `options` (the
-    /// options are validated and checked against the scene as a CPU render would).
-    /// The AOV integrators and AOVs are refused: the external back ends do not produce
-    /// them yet.
+    /// The accumulator of a render of `scene` with `options` (the options are validated
+    /// and checked against the scene as a CPU render would).
     pub fn new(scene: &Scene, options: &RenderOptions) -> Result<Self, String> {
-        if !matches!(
-            options.integrator,
-            IntegratorKind::Direct | IntegratorKind::Path
-        ) {
-            return Err(format!(
-                "integrator {} is not available here (only direct and path)",
-                options.integrator
-            ));
-        }
-        if !options.aovs.is_empty() {
-            return Err("AOVs are not available here".into());
-        }
         let mut it = Integrator::new(options)?;
         it.prepare(scene)?;
         Ok(Self { it })
@@ -97,17 +84,57 @@ impl Accumulator {
         self.it.trained.as_deref()
     }
 
-    /// Adds sample `index` of a pixel to its record `rec`: `outside` (the emitters the
-    /// camera saw) outside MIS, and each vertex the path shaded (vertex d at
-    /// `vertices[d]`; none when the camera ray met no surface): its own outside-MIS
-    /// light, then its draws technique by technique in list order, with the path
-    /// throughput in `f`. Vertices below the options' `min_depth` add nothing. Panics if a vertex does not have Σ n_k draws.
-    pub fn add(&self, rec: &mut [f64], index: u32, outside: [f64; 3], vertices: &[ShadedVertex]) {
+    /// Whether the render is one of the AOV integrators (`depth`, `normals`, `albedo`),
+    /// whose samples go to [`Self::add_aov_sample`].
+    pub fn aov_integrator(&self) -> bool {
+        !matches!(self.it.kind, IntegratorKind::Direct | IntegratorKind::Path)
+    }
+
+    /// Whether the render keeps AOVs beside its image ([`RenderOptions::aovs`]).
+    pub fn keeps_aovs(&self) -> bool {
+        self.it.aovs
+    }
+
+    /// Adds sample `index` of a pixel of an AOV integrator: the first hit's depth, normal
+    /// and albedo (`integrator/aov.rs`'s order), as its image and its AOVs.
+    pub fn add_aov_sample(&self, rec: &mut [f64], index: u32, aovs: &[f64; 7]) {
         let mut px = Pixel {
             rec,
             key: u64::from(index),
             mute: false,
         };
+        px.add(match self.it.kind {
+            IntegratorKind::Depth => Rgb::splat(aovs[0]),
+            IntegratorKind::Normals => Rgb::new(aovs[1], aovs[2], aovs[3]),
+            _ => Rgb::new(aovs[4], aovs[5], aovs[6]),
+        });
+        px.add_aovs(aovs);
+        px.end_sample();
+    }
+
+    /// Adds sample `index` of a pixel to its record `rec`: `outside` (the emitters the
+    /// camera saw) outside MIS, and each vertex the path shaded (vertex d at
+    /// `vertices[d]`; none when the camera ray met no surface): its own outside-MIS
+    /// light, then its draws technique by technique in list order, with the path
+    /// throughput in `f`; and the first hit's AOVs where the render keeps them. Vertices
+    /// below the options' `min_depth` add nothing. Panics if a vertex does not have Σ n_k
+    /// draws.
+    pub fn add(
+        &self,
+        rec: &mut [f64],
+        index: u32,
+        outside: [f64; 3],
+        vertices: &[ShadedVertex],
+        aovs: &[f64; 7],
+    ) {
+        let mut px = Pixel {
+            rec,
+            key: u64::from(index),
+            mute: false,
+        };
+        if self.it.aovs {
+            px.add_aovs(aovs);
+        }
         // The outside sum holds the emitters the camera saw: depth 0, muted below
         // `min_depth` as in `integrator/path.rs`.
         if self.it.min_depth == 0 {
