@@ -51,6 +51,7 @@ pub fn to_py(py: Python<'_>, e: frepray::Error) -> PyErr {
         frepray::Error::Render(r) => RenderError::new_err(r.to_string()),
         e @ frepray::Error::Model { .. } => ModelError::new_err(e.to_string()),
         frepray::Error::Invalid(m) => RenderError::new_err(m),
+        frepray::Error::Gpu(g) => RenderError::new_err(g.to_string()),
     }
 }
 

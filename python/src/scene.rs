@@ -190,7 +190,9 @@ fn technique_text(t: &Bound<'_, PyAny>) -> PyResult<String> {
 /// estimator per light, as `--per-light`), `pixel_center` (camera rays through pixel
 /// centres, as `--pixel-center`), `trained_grid`, `trained_floor`, `trained_spp` (how
 /// `light-trained` is trained, as `--trained-grid` …); `threads` (0: all
-/// cores); `backend` "cpu" (this build has no GPU back end). The GIL is released while
+/// cores); `backend` "cpu", "gpu" (wgpu: `direct` and `path`; a scene it does not cover
+/// raises RenderError naming what) or "auto" (the GPU where it can, else the CPU, with a
+/// warning saying why). The GIL is released while
 /// rendering; Ctrl-C stops the render and raises KeyboardInterrupt with the partial
 /// state as its `state` attribute.
 #[pyfunction]
@@ -226,19 +228,7 @@ pub fn render(
     trained_floor: Option<f64>,
     trained_spp: Option<u32>,
 ) -> PyResult<RenderState> {
-    match backend {
-        "cpu" => {}
-        "gpu" => {
-            return Err(render_err(
-                "backend \"gpu\": this build of frepray has no GPU back end (use \"cpu\")",
-            ))
-        }
-        b => {
-            return Err(PyValueError::new_err(format!(
-                "backend {b:?}: expected \"cpu\" or \"gpu\""
-            )))
-        }
-    }
+    let backend: frepray::Backend = backend.parse().map_err(PyValueError::new_err)?;
     let techniques = techniques
         .map(|t| {
             let s = technique_text(&t)?;
@@ -306,10 +296,20 @@ pub fn render(
         None => 0..options.spp,
     };
     let (result, interrupted) = interrupt::run(py, |stop| {
-        resolved.render_with(&options, range, stop, &|_, _| {})
+        resolved.render_on(backend, &options, range, stop, &|_, _| {})
     });
-    let (state, _stats) = result.map_err(|e| to_py(py, e))?;
-    let state = RenderState::from(state);
+    let rendered = result.map_err(|e| to_py(py, e))?;
+    if let Some(why) = &rendered.fallback {
+        let msg = std::ffi::CString::new(format!("backend \"auto\" renders on the CPU: {why}"))
+            .unwrap_or_default();
+        PyErr::warn(
+            py,
+            &py.get_type::<pyo3::exceptions::PyUserWarning>(),
+            &msg,
+            1,
+        )?;
+    }
+    let state = RenderState::from(rendered.state);
     if let Some(err) = interrupted {
         let _ = err.value(py).setattr("state", Py::new(py, state)?);
         return Err(err);

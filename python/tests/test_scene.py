@@ -69,8 +69,8 @@ def test_render_option_errors_are_typed():
     with pytest.raises(frepray.SceneError) as e:
         frepray.render(s, estimator="nonsense")
     assert e.value.key == "render.estimator"
-    with pytest.raises(frepray.RenderError):
-        frepray.render(s, backend="gpu")
+    with pytest.raises(ValueError):
+        frepray.render(s, backend="tpu")
     with pytest.raises(ValueError):
         frepray.render(s, samples=(4, 2))
 

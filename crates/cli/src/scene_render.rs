@@ -8,7 +8,7 @@ use render::scene::{RenderSettings, Scene, SceneData};
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 
-/// Where a scene is rendered.
+/// Where a scene is rendered (the library's [`frepray::Backend`], for the command line).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
 pub enum Backend {
     /// The CPU (every integrator and scene).
@@ -20,6 +20,16 @@ pub enum Backend {
     Auto,
 }
 
+impl From<Backend> for frepray::Backend {
+    fn from(b: Backend) -> Self {
+        match b {
+            Backend::Cpu => frepray::Backend::Cpu,
+            Backend::Gpu => frepray::Backend::Gpu,
+            Backend::Auto => frepray::Backend::Auto,
+        }
+    }
+}
+
 /// A render's result on either back end, with the GPU's own statistics.
 type Rendered = (
     render::RenderState,
@@ -27,8 +37,9 @@ type Rendered = (
     Option<gpu::direct::GpuStats>,
 );
 
-/// Renders `samples` on `backend`; `auto` falls back to the CPU, saying why, where the
-/// GPU is missing or cannot render the scene.
+/// Renders `samples` on `backend` (the library's [`frepray::render_range_on`]); `auto`
+/// falls back to the CPU, saying why, where the GPU is missing or cannot render the
+/// scene.
 fn render_on(
     backend: Backend,
     data: &SceneData,
@@ -38,25 +49,17 @@ fn render_on(
     stop: &std::sync::atomic::AtomicBool,
     progress: &(dyn Fn(u64, u64) + Sync),
 ) -> Result<Rendered, String> {
-    if backend != Backend::Cpu {
-        let tried = gpu::Gpu::new(&gpu::GpuOptions::from_env()).and_then(|g| {
-            if backend == Backend::Gpu {
-                eprintln!("GPU: {}", g.info());
-            }
-            gpu::direct::render_range(&g, data, scene, opts, samples.clone(), stop, progress)
-        });
-        match tried {
-            Ok((state, stats, g)) => return Ok((state, stats, Some(g))),
-            Err(e) if backend == Backend::Gpu => return Err(e.to_string()),
-            Err(e @ (gpu::GpuError::NoAdapter(_) | gpu::GpuError::Unsupported(_))) => {
-                eprintln!("note: --backend auto renders on the CPU: {e}");
-            }
-            Err(e) => return Err(e.to_string()),
+    if backend == Backend::Gpu {
+        if let Ok(g) = frepray::backend::shared_gpu() {
+            eprintln!("GPU: {}", g.info());
         }
     }
-    let (state, stats) = render_loop::render_range(scene, opts, samples, stop, progress)
+    let r = frepray::render_range_on(backend.into(), data, scene, opts, samples, stop, progress)
         .map_err(|e| e.to_string())?;
-    Ok((state, stats, None))
+    if let Some(why) = &r.fallback {
+        eprintln!("note: --backend auto renders on the CPU: {why}");
+    }
+    Ok((r.state, r.stats, r.gpu))
 }
 
 /// The CPU's stage times, one line (all worker threads' time, summed).
@@ -444,7 +447,7 @@ pub fn bench(
             rows.extend(stats.into_iter().map(|s| ("cpu", s)));
             continue;
         }
-        let g = gpu::Gpu::new(&gpu::GpuOptions::from_env()).map_err(|e| e.to_string())?;
+        let g = frepray::backend::shared_gpu().map_err(|e| e.to_string())?;
         eprintln!("GPU: {}", g.info());
         for integrator in [IntegratorKind::Direct, IntegratorKind::Path] {
             let o = RenderOptions {

@@ -39,8 +39,11 @@
 #[doc = include_str!("../../../docs/library.md")]
 pub struct LibraryGuide;
 
+pub mod backend;
 pub mod experiment;
 pub mod preview;
+
+pub use backend::{render_range_on, Backend, Rendered};
 
 pub use render::integrator::{Aov, IntegratorKind, RenderOptions};
 pub use render::{Film, Image, RenderState, RenderStats, StateHeader, Tonemap};
@@ -70,6 +73,10 @@ pub enum Error {
     /// Invalid arguments (the message says which).
     #[error("{0}")]
     Invalid(String),
+    /// The GPU back end: no adapter, a device limit, or a scene it does not cover
+    /// (named).
+    #[error(transparent)]
+    Gpu(#[from] backend::GpuError),
 }
 
 /// A resolved scene, ready to render on the CPU: the flat [`SceneData`], the settings of
@@ -153,6 +160,22 @@ impl Scene {
         Ok(render::render_range(
             &self.cpu, &o, samples, stop, progress,
         )?)
+    }
+    /// [`Self::render_with`] on `backend`: the GPU's result carries its own statistics,
+    /// and [`Backend::Auto`]'s CPU fallback says why it fell back.
+    pub fn render_on(
+        &self,
+        backend: Backend,
+        options: &RenderOptions,
+        samples: Range<u32>,
+        stop: &AtomicBool,
+        progress: &(dyn Fn(u64, u64) + Sync),
+    ) -> Result<Rendered, Error> {
+        let o = RenderOptions {
+            scene_hash: self.hash,
+            ..options.clone()
+        };
+        render_range_on(backend, &self.data, &self.cpu, &o, samples, stop, progress)
     }
 }
 

@@ -39,7 +39,7 @@ impl GpuOptions {
 }
 
 /// Why no GPU could be used.
-#[derive(Debug, thiserror::Error)]
+#[derive(Clone, Debug, thiserror::Error)]
 pub enum GpuError {
     /// No adapter: no GPU and no software driver (install `mesa-vulkan-drivers` for
     /// lavapipe).

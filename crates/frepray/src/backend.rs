@@ -1,0 +1,113 @@
+//! Where a render runs: the CPU, the GPU (wgpu; `direct` and `path`, docs/gpu.md lists
+//! what it covers), or the GPU where it can and the CPU otherwise. Both back ends fill
+//! the same [`RenderState`], so ranges rendered on either merge.
+
+use crate::{Error, RenderOptions, RenderState, RenderStats, SceneData};
+use render::render_loop;
+use std::ops::Range;
+use std::sync::atomic::AtomicBool;
+use std::sync::OnceLock;
+
+pub use gpu::direct::GpuStats;
+pub use gpu::{Gpu, GpuError, GpuInfo};
+
+/// Where a scene is rendered.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Backend {
+    /// The CPU (every integrator and scene).
+    #[default]
+    Cpu,
+    /// The GPU: an error, naming what is missing, where there is no adapter or the GPU
+    /// back end does not cover the scene or options.
+    Gpu,
+    /// The GPU where there is one and it covers the scene, else the CPU.
+    Auto,
+}
+
+impl Backend {
+    /// The names, as `"cpu"`, `"gpu"`, `"auto"`.
+    pub const fn name(self) -> &'static str {
+        match self {
+            Backend::Cpu => "cpu",
+            Backend::Gpu => "gpu",
+            Backend::Auto => "auto",
+        }
+    }
+}
+
+impl std::str::FromStr for Backend {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s.trim().to_ascii_lowercase().as_str() {
+            "cpu" => Ok(Backend::Cpu),
+            "gpu" => Ok(Backend::Gpu),
+            "auto" => Ok(Backend::Auto),
+            _ => Err(format!("backend {s:?}: expected cpu, gpu or auto")),
+        }
+    }
+}
+
+/// A render's result on either back end.
+#[derive(Clone, Debug)]
+pub struct Rendered {
+    /// The samples' per-pixel sums.
+    pub state: RenderState,
+    /// Samples, rays, time.
+    pub stats: RenderStats,
+    /// The GPU's own statistics (stage times, waves, samples it left to the CPU) where
+    /// it rendered.
+    pub gpu: Option<GpuStats>,
+    /// Why [`Backend::Auto`] rendered on the CPU.
+    pub fallback: Option<String>,
+}
+
+/// The process's GPU, opened once with [`gpu::GpuOptions::from_env`]: its compiled
+/// kernels are kept for every later render (compiling them takes minutes on lavapipe).
+pub fn shared_gpu() -> Result<&'static Gpu, GpuError> {
+    static GPU: OnceLock<Result<Gpu, GpuError>> = OnceLock::new();
+    GPU.get_or_init(|| Gpu::new(&gpu::GpuOptions::from_env()))
+        .as_ref()
+        .map_err(Clone::clone)
+}
+
+/// Renders samples `samples` of `scene` (built from `data`) with `options` on
+/// `backend`, calling `progress(done, total)` as work finishes; setting `stop` ends the
+/// render early with a partial state.
+pub fn render_range_on(
+    backend: Backend,
+    data: &SceneData,
+    scene: &render::scene::Scene,
+    options: &RenderOptions,
+    samples: Range<u32>,
+    stop: &AtomicBool,
+    progress: &(dyn Fn(u64, u64) + Sync),
+) -> Result<Rendered, Error> {
+    let mut fallback = None;
+    if backend != Backend::Cpu {
+        let tried = shared_gpu().and_then(|g| {
+            gpu::direct::render_range(g, data, scene, options, samples.clone(), stop, progress)
+        });
+        match tried {
+            Ok((state, stats, g)) => {
+                return Ok(Rendered {
+                    state,
+                    stats,
+                    gpu: Some(g),
+                    fallback: None,
+                })
+            }
+            Err(e) if backend == Backend::Gpu => return Err(Error::Gpu(e)),
+            Err(e @ (GpuError::NoAdapter(_) | GpuError::Unsupported(_))) => {
+                fallback = Some(e.to_string());
+            }
+            Err(e) => return Err(Error::Gpu(e)),
+        }
+    }
+    let (state, stats) = render_loop::render_range(scene, options, samples, stop, progress)?;
+    Ok(Rendered {
+        state,
+        stats,
+        gpu: None,
+        fallback,
+    })
+}
