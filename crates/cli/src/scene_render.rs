@@ -455,10 +455,10 @@ pub fn bench(
                 ..opts.clone()
             };
             // A first 1-spp render compiles the kernels: not timed (GPU.md §10).
-            gpu::direct::render_range(&g, &data, &scene, &o, 0..1, &stop, &|_, _| {})
+            gpu::direct::render_range(g, &data, &scene, &o, 0..1, &stop, &|_, _| {})
                 .map_err(|e| e.to_string())?;
             let (_, s, gs) =
-                gpu::direct::render_range(&g, &data, &scene, &o, 0..o.spp, &stop, &|_, _| {})
+                gpu::direct::render_range(g, &data, &scene, &o, 0..o.spp, &stop, &|_, _| {})
                     .map_err(|e| e.to_string())?;
             rows.push(("gpu", s));
             stages.push((integrator, gs));
