@@ -11,7 +11,7 @@
 //! - the distributions' tables hold f32 CDFs and densities (func / integral) rounded from
 //!   the resolved scene's f64 ones ([`table`]).
 
-use crate::light::sincos_2pi;
+use crate::light::{cdf_find, sincos_2pi};
 use bytemuck::{Pod, Zeroable};
 use scene::{Distribution1D, EnvMapTable, EnvironmentData, SceneData};
 use std::cmp::Ordering;
@@ -211,16 +211,7 @@ pub fn radiance(e: &GpuEnv, buf: &[f32], d: [f32; 3]) -> [f32; 3] {
 pub fn continuous(buf: &[f32], off: u32, u: f32) -> (f32, f32, u32) {
     let n = buf[off as usize].to_bits();
     let cdf = off as usize + 1;
-    let (mut lo, mut hi) = (0u32, n + 1);
-    while lo < hi {
-        let mid = (lo + hi) / 2;
-        if buf[cdf + mid as usize] <= u {
-            lo = mid + 1;
-        } else {
-            hi = mid;
-        }
-    }
-    let i = (lo.max(1) - 1).min(n - 1);
+    let i = cdf_find(buf, cdf, n, u);
     let iu = i as usize;
     let mut du = u - buf[cdf + iu];
     let width = buf[cdf + iu + 1] - buf[cdf + iu];

@@ -520,22 +520,26 @@ pub fn select(buf: &[f32], how: Select, n: u32, uc: f32) -> (u32, f32) {
         Select::Table(off) => {
             let off = off as usize;
             let n = buf[off].to_bits();
-            let cdf = off + 1;
-            // partition_point over cdf[0..=n]: the first index whose value exceeds uc.
-            let (mut lo, mut hi) = (0u32, n + 1);
-            while lo < hi {
-                let mid = (lo + hi) / 2;
-                if buf[cdf + mid as usize] <= uc {
-                    lo = mid + 1;
-                } else {
-                    hi = mid;
-                }
-            }
-            let i = lo.max(1) - 1;
-            let i = i.min(n - 1);
-            (i, buf[cdf + n as usize + 1 + i as usize])
+            let i = cdf_find(buf, off + 1, n, uc);
+            (i, buf[off + n as usize + 2 + i as usize])
         }
     }
+}
+
+/// The i with `cdf[i] ≤ u < cdf[i + 1]` among n cells, the CDF's n + 1 values at
+/// `buf[cdf..]`: a binary search as `partition_point(c ≤ u)`, clamped to a cell (the
+/// kernel's `cdf_find`).
+pub fn cdf_find(buf: &[f32], cdf: usize, n: u32, u: f32) -> u32 {
+    let (mut lo, mut hi) = (0u32, n + 1);
+    while lo < hi {
+        let mid = (lo + hi) / 2;
+        if buf[cdf + mid as usize] <= u {
+            lo = mid + 1;
+        } else {
+            hi = mid;
+        }
+    }
+    (lo.max(1) - 1).min(n - 1)
 }
 
 impl GpuAreaLight {

@@ -2,7 +2,7 @@
 // piecewise-constant distribution ∝ L·sin θ (render::light::environment, pbrt-v4 §12.5;
 // render::distribution, pbrt-v4 §A.5). The twin of gpu::env (Rust, f32, the same
 // operations in the same order). Tables and pixels live in `sel_buf: array<f32>`,
-// which the including shader declares; needs LIGHT_WGSL (sincos_2pi). Constants are
+// which the including shader declares; needs LIGHT_WGSL (sincos_2pi, cdf_find). Constants are
 // bit patterns so that no literal is rounded twice.
 
 struct GpuEnv {
@@ -93,13 +93,7 @@ struct EnvPick { x: f32, pdf: f32, i: u32 }
 fn env_continuous(off: u32, u: f32) -> EnvPick {
     let n = bitcast<u32>(sel_buf[off]);
     let cdf = off + 1u;
-    var lo = 0u;
-    var hi = n + 1u;
-    while (lo < hi) {
-        let mid = (lo + hi) / 2u;
-        if (sel_buf[cdf + mid] <= u) { lo = mid + 1u; } else { hi = mid; }
-    }
-    let i = min(max(lo, 1u) - 1u, n - 1u);
+    let i = cdf_find(cdf, n, u);
     var du = u - sel_buf[cdf + i];
     let width = sel_buf[cdf + i + 1u] - sel_buf[cdf + i];
     if (width > 0.0) { du = du / width; }

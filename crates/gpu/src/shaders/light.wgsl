@@ -274,15 +274,20 @@ fn light_select(off: u32, table: bool, n: u32, uc: f32) -> vec2<f32> {
         return vec2<f32>(bitcast<f32>(min(u32(uc * f32(n)), n - 1u)), 1.0 / f32(n));
     }
     let m = bitcast<u32>(sel_buf[off]);
-    let cdf = off + 1u;
+    let i = cdf_find(off + 1u, m, uc);
+    return vec2<f32>(bitcast<f32>(i), sel_buf[off + m + 2u + i]);
+}
+
+// The i with cdf[i] ≤ u < cdf[i + 1] among n cells, the CDF's n + 1 values at `cdf` in
+// sel_buf (binary search as Rust's partition_point(c ≤ u), clamped to a cell).
+fn cdf_find(cdf: u32, n: u32, u: f32) -> u32 {
     var lo = 0u;
-    var hi = m + 1u;
+    var hi = n + 1u;
     while (lo < hi) {
         let mid = (lo + hi) / 2u;
-        if (sel_buf[cdf + mid] <= uc) { lo = mid + 1u; } else { hi = mid; }
+        if (sel_buf[cdf + mid] <= u) { lo = mid + 1u; } else { hi = mid; }
     }
-    let i = min(max(lo, 1u) - 1u, m - 1u);
-    return vec2<f32>(bitcast<f32>(i), sel_buf[cdf + m + 1u + i]);
+    return min(max(lo, 1u) - 1u, n - 1u);
 }
 
 // cos(max(0, θa − θb)) and sin(max(0, θa − θb)) (pbrt-v4 CosSubClamped, SinSubClamped).
