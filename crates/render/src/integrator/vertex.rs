@@ -282,7 +282,7 @@ impl Integrator {
                     &self.techniques,
                     &ctx,
                     s.wi,
-                    along.crossed.as_ref(),
+                    along.crossed(),
                     &mut pdfs[..t_count],
                 );
                 if s.pdf.is_nan() && !(pdfs[k] > 0.0 && pdfs[k].is_finite()) {

@@ -373,7 +373,9 @@ impl Lights {
     /// light technique's density at `wi` needs, found once for them all. None past
     /// [`Crossed::CAPACITY`] lights.
     pub fn crossed(&self, p: DVec3, wi: DVec3, area: bool) -> Option<Crossed> {
-        self.walk_crossed(&Ray::new(p, wi), area, false).crossed
+        self.walk_crossed(&Ray::new(p, wi), area, false)
+            .crossed()
+            .copied()
     }
 
     /// What a ray from a shading point (unit direction) meets among the area lights,
@@ -389,8 +391,13 @@ impl Lights {
     #[inline]
     fn walk_crossed(&self, ray: &Ray, area: bool, nearest: bool) -> Along {
         let (p, wi) = (ray.o, ray.d);
-        let mut c = Crossed::default();
-        let mut over = false;
+        // Built in place: the list is the larger part of what is returned.
+        let mut out = Along {
+            nearest: None,
+            all: Crossed::default(),
+            over: false,
+        };
+        let (c, over) = (&mut out.all, &mut out.over);
         let mut best: Option<(usize, super::Crossing)> = None;
         self.bvh.for_each_hit(ray, 0.0, f64::INFINITY, |k| {
             let l = &self.area[k];
@@ -413,7 +420,7 @@ impl Lights {
                 (l.pdf_li(p, wi), 0.0)
             };
             if c.n == Crossed::CAPACITY {
-                over = true;
+                *over = true;
                 return;
             }
             c.lights[c.n] = k as u32;
@@ -421,15 +428,13 @@ impl Lights {
             c.area[c.n] = pa;
             c.n += 1;
         });
-        Along {
-            nearest: best.map(|(light, h)| LightHit {
-                light,
-                t: h.t,
-                n: h.n,
-                radiance: self.area[light].emitted(h.n, -wi),
-            }),
-            crossed: (!over).then_some(c),
-        }
+        out.nearest = best.map(|(light, h)| LightHit {
+            light,
+            t: h.t,
+            n: h.n,
+            radiance: self.area[light].emitted(h.n, -wi),
+        });
+        out
     }
 }
 
@@ -438,8 +443,15 @@ impl Lights {
 pub struct Along {
     /// The nearest light crossed (t > 0).
     pub nearest: Option<LightHit>,
+    all: Crossed,
+    over: bool,
+}
+
+impl Along {
     /// Every light crossed, with its pdfs; None past [`Crossed::CAPACITY`] lights.
-    pub crossed: Option<Crossed>,
+    pub fn crossed(&self) -> Option<&Crossed> {
+        (!self.over).then_some(&self.all)
+    }
 }
 
 /// The area lights one direction crosses, with their pdfs ([`Lights::crossed`]).

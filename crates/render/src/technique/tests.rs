@@ -315,7 +315,7 @@ fn shared_crossings_give_each_techniques_own_pdf() {
             let ray = Ray::new(ctx.p, d.wi);
             let along = lights.along(&ray, true);
             let mut shared = [0.0; 9];
-            pdfs(&all, &ctx, d.wi, along.crossed.as_ref(), &mut shared);
+            pdfs(&all, &ctx, d.wi, along.crossed(), &mut shared);
             assert_eq!(shared.map(f64::to_bits), out.map(f64::to_bits));
             assert_eq!(along.nearest, lights.intersect(&ray, 0.0, f64::INFINITY));
             total += 1;
