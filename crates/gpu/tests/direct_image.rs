@@ -601,8 +601,8 @@ fn unsupported_scenes_are_refused_by_name() {
         "union(sphere([1.5, 0, 0.6], 0.6), perturb(sphere([1.5, 0, 1.2], 0.3), 0.2 * sphere([1.5, 0, 1.5], 0.1)^3))",
     ));
     assert!(e.contains("CSG") && e.contains("--backend cpu"), "{e}");
-    let e = err(&SCENE.replace("integrator = \"direct\"", "integrator = \"depth\""));
-    assert!(e.contains("depth"), "{e}");
+    let e = err(&SCENE.replace("scale = 1.0 } }", "scale = 1.0, space = \"uv\" } }"));
+    assert!(e.contains("uv"), "{e}");
     let e = err(&SCENE.replace(
         "sphere([0, 0, 0], 0.22)",
         "sphere([0, 0, 0], 0.22) + 0.01 * sin(x)",
