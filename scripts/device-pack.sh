@@ -1,0 +1,31 @@
+#!/usr/bin/env bash
+# Prepares the real-GPU check for a lent device machine (the `device` tool of this
+# workplace): the release `frepray` and the GPU image-test binary, stripped, in .device/
+# (git-ignored), with Vulkan's loader packages in .gl/ (the device machine reaches no
+# package registry). Then, in one `run` call carrying .device and .gl:
+#
+#   for f in .gl/*.deb; do dpkg -x $f /; done; ldconfig; bash scripts/device-check.sh
+#
+# which writes its figures under $OUT (docs/gpu.md, "On a real GPU").
+set -euo pipefail
+cd "$(dirname "$0")/.."
+mkdir -p .device .gl
+cargo build --release -p frepray-cli
+# The test binary cargo builds for the GPU images (its name carries a hash).
+bin=$(cargo test --release -p gpu --test direct_image --no-run --message-format=json 2>/dev/null |
+    python3 -c 'import json,sys
+for l in sys.stdin:
+    m = json.loads(l)
+    if m.get("reason") == "compiler-artifact" and m.get("executable") and m["target"]["name"] == "direct_image":
+        print(m["executable"])')
+strip -o .device/frepray target/release/frepray
+strip -o .device/direct_image "$bin"
+# The tests read scenes/sky.exr by the path they were built at: device-check.sh links it.
+pwd > .device/root
+if ! ls .gl/*.deb >/dev/null 2>&1; then
+    o='-oAPT::Architecture=amd64 -oAPT::Architectures=amd64 -oDir::State::Lists=/tmp/amd64'
+    mkdir -p /tmp/amd64/partial
+    # shellcheck disable=SC2086
+    apt-get $o update -qq && (cd .gl && apt-get $o download libvulkan1)
+fi
+du -sh .device .gl
