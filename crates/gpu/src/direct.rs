@@ -44,7 +44,7 @@ use crate::quadric::QUADRIC_WGSL;
 use crate::sampler::PHILOX_WGSL;
 use crate::tape::GpuTape;
 use crate::tape_trace::TapeSolid;
-use crate::{Gpu, GpuError, FLOAT_WGSL};
+use crate::{f4, Gpu, GpuError, FLOAT_WGSL};
 use bytemuck::{Pod, Zeroable};
 use frep::flat::CsgOp;
 use frep::LeafView;
@@ -190,10 +190,6 @@ const MAX_CSG_NODES: u32 = 256;
 
 fn unsupported(what: impl Into<String>) -> GpuError {
     GpuError::Unsupported(what.into())
-}
-
-fn f4(v: [f64; 3], w: f64) -> [f32; 4] {
-    [v[0] as f32, v[1] as f32, v[2] as f32, w as f32]
 }
 
 fn f3(v: [f64; 3]) -> [f32; 3] {

@@ -11,6 +11,7 @@
 //! - the distributions' tables hold f32 CDFs and densities (func / integral) rounded from
 //!   the resolved scene's f64 ones ([`table`]).
 
+use crate::f4;
 use crate::light::{cdf_find, sincos_2pi};
 use bytemuck::{Pod, Zeroable};
 use scene::{Distribution1D, EnvMapTable, EnvironmentData, SceneData};
@@ -76,7 +77,7 @@ impl GpuEnv {
     pub fn constant(radiance: [f64; 3]) -> Self {
         Self {
             kind: CONSTANT,
-            radiance: f4(radiance),
+            radiance: f4(radiance, 0.0),
             ..Self::default()
         }
     }
@@ -87,9 +88,9 @@ impl GpuEnv {
             kind: MAP,
             width: m.width as u32,
             height: m.height as u32,
-            x: f4(to_world[0]),
-            y: f4(to_world[1]),
-            z: f4(to_world[2]),
+            x: f4(to_world[0], 0.0),
+            y: f4(to_world[1], 0.0),
+            z: f4(to_world[2], 0.0),
             ..Self::default()
         };
         e.pixels = tables.len() as u32;
@@ -103,15 +104,6 @@ impl GpuEnv {
         }
         e
     }
-
-    /// The f32 words a map of `width` × `height` adds to the table buffer.
-    pub fn words(width: usize, height: usize) -> usize {
-        3 * width * height + (2 * height + 2) + height * (2 * width + 2)
-    }
-}
-
-fn f4(v: [f64; 3]) -> [f32; 4] {
-    [v[0] as f32, v[1] as f32, v[2] as f32, 0.0]
 }
 
 /// A continuous 1-D distribution in the f32 buffer: n, then the CDF (n + 1 values from 0

@@ -75,3 +75,8 @@ pub use adapter::{Gpu, GpuError, GpuInfo, GpuOptions};
 /// [`perturbed::PERTURBED_WGSL`] or a tape ([`tape::GpuTape::wgsl`] includes it).
 pub const FLOAT_WGSL: &str = include_str!("shaders/float.wgsl");
 pub use kernel::Kernel;
+
+/// An f64 vector and a fourth word as the kernels' vec4<f32>.
+pub(crate) fn f4(v: [f64; 3], w: f64) -> [f32; 4] {
+    [v[0] as f32, v[1] as f32, v[2] as f32, w as f32]
+}
