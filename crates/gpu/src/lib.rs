@@ -63,6 +63,7 @@ pub mod layout;
 pub mod light;
 pub mod perturbed;
 pub mod quadric;
+pub mod record;
 pub mod sampler;
 pub mod sums;
 pub mod tape;

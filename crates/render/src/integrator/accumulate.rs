@@ -11,7 +11,9 @@
 //! the same calls as `integrator/vertex.rs` (`add_draw`, `add_failed`, `end_vertex`,
 //! `end_sample`), so a GPU sample range and a CPU one merge like two CPU ranges.
 
-use super::{Integrator, IntegratorKind, Pixel, RayCounts, RenderOptions, MAX_TECHNIQUES};
+use super::{
+    Combine, Integrator, IntegratorKind, Pixel, RayCounts, Record, RenderOptions, MAX_TECHNIQUES,
+};
 use crate::color::Rgb;
 use crate::scene::Scene;
 use crate::technique::Technique;
@@ -47,6 +49,39 @@ pub struct ShadedVertex<'a> {
     /// False at a purely specular vertex: no technique draws there and no MIS
     /// iteration is counted (`draws` is ignored); its light is all in `outside`.
     pub mis: bool,
+}
+
+/// How a draw enters a pixel's record where every record word is a plain sum of
+/// per-sample terms (`mis::block`'s layouts).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum LinearMis {
+    /// `path` with a heuristic: `w_k f / (n_k p_k)` straight into the outside sum.
+    Outside(mis::Heuristic),
+    /// A heuristic estimator block per depth: `[N | Σ (3)]`.
+    Weighted(mis::Heuristic),
+    /// An optimal-direct block per depth: `[N | Â packed, b̂ channel-major]`.
+    Direct,
+    /// An optimal-uncorrelated block per depth: `[N_A, N_B | Â, b̂ of set A | of set B]`,
+    /// a sample with global index i going to set `i mod 2`.
+    Uncorrelated,
+}
+
+/// What one sample adds to a pixel's record when every word is a sum of per-sample
+/// terms (all estimators but the progressive ones, whose α changes at milestones):
+/// enough for another back end to keep the per-pixel sums itself (GPU.md §8) and hand
+/// over only the finished record.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LinearRecord {
+    /// Where each sum lives.
+    pub record: Record,
+    /// How draws enter it.
+    pub mis: LinearMis,
+    /// Vertices shallower than this add nothing (but AOVs).
+    pub min_depth: u32,
+    /// Draws per technique per vertex.
+    pub counts: Vec<u32>,
+    /// For the AOV integrators, which AOV is the image: 0 depth, 1 normal, 2 albedo.
+    pub aov_image: Option<u32>,
 }
 
 /// The `direct` and `path` integrators' bookkeeping for samples shaded elsewhere.
@@ -88,6 +123,36 @@ impl Accumulator {
     /// whose samples go to [`Self::add_aov_sample`].
     pub fn aov_integrator(&self) -> bool {
         !matches!(self.it.kind, IntegratorKind::Direct | IntegratorKind::Path)
+    }
+
+    /// Where each sum lives in a pixel's record.
+    pub fn record(&self) -> Record {
+        self.it.record
+    }
+
+    /// The record as sums of per-sample terms ([`LinearRecord`]), or None where it is
+    /// not (the progressive optimal estimators).
+    pub fn linear(&self) -> Option<LinearRecord> {
+        let mis = match &self.it.combine {
+            Combine::Heuristic(h) => LinearMis::Outside(*h),
+            Combine::Estimator(k) => match k.method() {
+                mis::Method::OptimalDirect => LinearMis::Direct,
+                mis::Method::OptimalUncorrelated => LinearMis::Uncorrelated,
+                m => LinearMis::Weighted(m.heuristic(k.params())?),
+            },
+        };
+        Some(LinearRecord {
+            record: self.it.record,
+            mis,
+            min_depth: self.it.min_depth,
+            counts: self.it.counts.clone(),
+            aov_image: match self.it.kind {
+                IntegratorKind::Direct | IntegratorKind::Path => None,
+                IntegratorKind::Depth => Some(0),
+                IntegratorKind::Normals => Some(1),
+                IntegratorKind::Albedo => Some(2),
+            },
+        })
     }
 
     /// Whether the render keeps AOVs beside its image ([`RenderOptions::aovs`]).

@@ -59,7 +59,7 @@ mod state;
 mod train;
 mod vertex;
 
-pub use accumulate::{Accumulator, ShadedDraw, ShadedVertex};
+pub use accumulate::{Accumulator, LinearMis, LinearRecord, ShadedDraw, ShadedVertex};
 pub use aov::Aov;
 pub(crate) use dims::Dims;
 pub(crate) use state::Pixel;

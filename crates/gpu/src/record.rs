@@ -1,0 +1,566 @@
+//! Per-pixel records summed on the GPU (GPU.md §8): each sample's terms of its pixel's
+//! record, in f32 (`shaders/record.wgsl`, one invocation per slot), then added to the
+//! per-pixel sums in f64 or double-float by [`crate::sums`]' kernels, so that the
+//! integrators hand the CPU a finished record instead of every draw.
+//!
+//! The terms are what `render::integrator::Accumulator::add` adds for the same hits and
+//! draws, for every record that is a plain sum of per-sample terms
+//! ([`render::integrator::LinearRecord`]: the heuristics, optimal-direct and
+//! optimal-uncorrelated, per light too, AOVs and the AOV integrators). The optimal
+//! estimators' moments are formed as `Â_ij += r_i r_j` and `b̂_ci += (f_c/s) r_i` with
+//! `r_i = p_i/s ≤ 1/n_i` (Kondapaneni et al. 2019, eqs. 15–16), so no f32 term
+//! overflows where `p_i p_j / s²` would. [`slot_terms`] is the kernel's CPU twin,
+//! operation for operation.
+
+use crate::direct::{DRAW_WORDS, HIT_WORDS};
+use crate::{Gpu, GpuError};
+use bytemuck::{Pod, Zeroable};
+use render::integrator::{LinearMis, LinearRecord, Record};
+
+/// The terms kernel.
+pub const RECORD_WGSL: &str = include_str!("shaders/record.wgsl");
+
+/// Where the overflow list starts in the tally buffer (in u32 words).
+pub const TALLY_LIST: usize = 8;
+
+/// How draws enter the record (`LinearMis`, and the AOV integrators).
+mod code {
+    pub const AOV: u32 = 0;
+    pub const OUTSIDE: u32 = 1;
+    pub const WEIGHTED: u32 = 2;
+    pub const DIRECT: u32 = 3;
+    pub const UNCORRELATED: u32 = 4;
+}
+
+/// The kernel's uniform block (`RecordParams` in record.wgsl).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct RecordParams {
+    /// Slots in the wave.
+    pub slots: u32,
+    /// Pixels of the image (slot = sample · pixels + pixel).
+    pub pixels: u32,
+    /// Sample indices in the wave.
+    pub samples: u32,
+    /// Words of one record.
+    pub stride: u32,
+    /// [`code`].
+    pub code: u32,
+    /// 0 balance, 1 power, 2 maximum, 3 cutoff.
+    pub heuristic: u32,
+    /// AOV words (7 or 0).
+    pub aov: u32,
+    /// Depths with MIS blocks.
+    pub depths: u32,
+    /// MIS blocks per depth.
+    pub lights: u32,
+    /// Words of one MIS block.
+    pub block: u32,
+    /// Vertices shallower than this add nothing.
+    pub min_depth: u32,
+    /// Techniques T.
+    pub n_tech: u32,
+    /// Σ n_k draws per vertex.
+    pub n_draws: u32,
+    /// Draw records per slot and depth (the techniques', the extra draw, point lights).
+    pub per_slot: u32,
+    /// Vertex depths in the draws buffer.
+    pub max_depth: u32,
+    /// The wave's first sample index.
+    pub start: u32,
+    /// The AOV integrators' image: 0 depth, 1 normal, 2 albedo.
+    pub aov_image: u32,
+    /// β of the power heuristic, c of the cutoff.
+    pub param: f32,
+    /// Words of one set of moments, `T(T+1)/2 + 3T`.
+    pub moments: u32,
+    /// Padding.
+    pub pad: u32,
+    /// n_k, as f32.
+    pub counts: [[f32; 4]; 2],
+}
+
+impl RecordParams {
+    /// The parameters of `linear` for a wave's draws: `n_draws` technique draws among
+    /// `per_slot` records per vertex, `max_depth` vertices. The wave's own fields
+    /// (`slots`, `pixels`, `samples`, `start`) are left 0.
+    pub fn new(linear: &LinearRecord, n_draws: u32, per_slot: u32, max_depth: u32) -> Self {
+        let t = linear.counts.len() as u32;
+        let (code, h) = match (linear.aov_image, linear.mis) {
+            (Some(_), _) => (code::AOV, None),
+            (None, LinearMis::Outside(h)) => (code::OUTSIDE, Some(h)),
+            (None, LinearMis::Weighted(h)) => (code::WEIGHTED, Some(h)),
+            (None, LinearMis::Direct) => (code::DIRECT, None),
+            (None, LinearMis::Uncorrelated) => (code::UNCORRELATED, None),
+        };
+        let (heuristic, param) = match h {
+            None | Some(mis::Heuristic::Balance) => (0, 0.0),
+            Some(mis::Heuristic::Power { beta }) => (1, beta as f32),
+            Some(mis::Heuristic::Maximum) => (2, 0.0),
+            Some(mis::Heuristic::Cutoff { c }) => (3, c as f32),
+        };
+        let mut counts = [[0.0; 4]; 2];
+        for (k, &n) in linear.counts.iter().enumerate() {
+            counts[k / 4][k % 4] = n as f32;
+        }
+        let r = &linear.record;
+        RecordParams {
+            stride: r.stride() as u32,
+            code,
+            heuristic,
+            aov: r.aov as u32,
+            depths: r.depths as u32,
+            lights: r.lights as u32,
+            block: r.block as u32,
+            min_depth: linear.min_depth,
+            n_tech: t,
+            n_draws,
+            per_slot,
+            max_depth,
+            aov_image: linear.aov_image.unwrap_or(0),
+            param,
+            moments: t * (t + 1) / 2 + 3 * t,
+            counts,
+            ..Default::default()
+        }
+    }
+
+    /// The most iterations of the terms kernel's innermost loops one slot can run (each
+    /// technique's draw visiting every light's block and its moments): kept far below
+    /// llvmpipe's 65 535 (GPU.md §3.1) by the integrator's choice of where sums run.
+    pub fn loop_bound(&self) -> u64 {
+        let t = u64::from(self.n_tech);
+        let per_draw = u64::from(self.lights) * (t * t + 4 * t);
+        let per_vertex = u64::from(self.per_slot) * 2 + u64::from(self.n_draws) * per_draw;
+        u64::from(self.max_depth) * (u64::from(self.per_slot) + per_vertex) + 16
+    }
+}
+
+/// What one slot traced, and whether it overflowed (then it adds nothing: the CPU renders
+/// it).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct SlotTally {
+    /// A ray ran past a fixed capacity.
+    pub overflow: bool,
+    /// Camera rays (1, or 0 on overflow).
+    pub camera: u32,
+    /// Shadow rays.
+    pub shadow: u32,
+    /// Continuation rays.
+    pub secondary: u32,
+}
+
+/// The twin's view of one slot, as the kernel's private state.
+struct Slot<'a> {
+    p: &'a RecordParams,
+    slot: u32,
+    draws: &'a [f32],
+    out: &'a mut [f32],
+    set: u32,
+}
+
+fn is_finite(x: f32) -> bool {
+    x.to_bits() & 0x7f80_0000 != 0x7f80_0000
+}
+
+impl Slot<'_> {
+    fn add(&mut self, w: u32, v: f32) {
+        self.out[w as usize] += v;
+    }
+    fn add3(&mut self, w: u32, v: [f32; 3]) {
+        for (c, x) in v.into_iter().enumerate() {
+            self.add(w + c as u32, x);
+        }
+    }
+    fn draw_at(&self, depth: u32, j: u32) -> usize {
+        ((depth * self.p.slots + self.slot) * self.p.per_slot + j) as usize * DRAW_WORDS
+    }
+    fn n(&self, k: u32) -> f32 {
+        self.p.counts[k as usize / 4][k as usize % 4]
+    }
+    fn pdf(&self, at: usize, k: u32) -> f32 {
+        self.draws[at + 12 + k as usize]
+    }
+    fn q(&self, at: usize, k: u32) -> f32 {
+        self.n(k) * self.pdf(at, k)
+    }
+    fn mixture(&self, at: usize, k: u32) -> f32 {
+        let mut s = 0.0f32;
+        for t in 0..self.p.n_tech {
+            s += self.q(at, t);
+        }
+        if self.pdf(at, k) > 0.0 && is_finite(s) {
+            s
+        } else {
+            -1.0
+        }
+    }
+    fn power(&self, x: f32) -> f32 {
+        if self.p.param == 2.0 {
+            x * x
+        } else {
+            x.powf(self.p.param)
+        }
+    }
+    fn scale(&self, at: usize, k: u32, s: f32) -> f32 {
+        if self.p.heuristic == 0 {
+            return 1.0 / s;
+        }
+        let qt = self.q(at, k);
+        let tt = self.p.n_tech;
+        let mut w = 0.0f32;
+        if qt.is_nan() || qt <= 0.0 {
+            w = 0.0;
+        } else if self.p.heuristic == 2 {
+            w = 1.0;
+            for t in 0..tt {
+                let below = if t < k {
+                    self.q(at, t) < qt
+                } else {
+                    self.q(at, t) <= qt
+                };
+                if !below {
+                    w = 0.0;
+                }
+            }
+        } else {
+            let mut m = 0.0f32;
+            for t in 0..tt {
+                m = m.max(self.q(at, t));
+            }
+            if self.p.heuristic == 1 {
+                let mut sum = 0.0f32;
+                for t in 0..tt {
+                    sum += self.power(self.q(at, t) / m);
+                }
+                w = self.power(qt / m) / sum;
+            } else {
+                let floor = self.p.param * m;
+                // As the kernel's `!(qt < floor)`.
+                if qt.partial_cmp(&floor) != Some(std::cmp::Ordering::Less) {
+                    let mut sum = 0.0f32;
+                    for t in 0..tt {
+                        if self.q(at, t) >= floor {
+                            sum += self.q(at, t);
+                        }
+                    }
+                    w = qt / sum;
+                }
+            }
+        }
+        w / (self.n(k) * self.pdf(at, k))
+    }
+    fn moments_failed(&mut self, m: u32, k: u32) {
+        let n = self.n(k);
+        self.add(m + k * (k + 1) / 2 + k, 1.0 / (n * n));
+    }
+    fn moments_add(&mut self, m: u32, k: u32, f: [f32; 3], at: usize) {
+        let s = self.mixture(at, k);
+        if s < 0.0 {
+            self.moments_failed(m, k);
+            return;
+        }
+        let tt = self.p.n_tech;
+        let mut idx = m;
+        for i in 0..tt {
+            let ri = self.pdf(at, i) / s;
+            for j in 0..=i {
+                let v = ri * (self.pdf(at, j) / s);
+                self.add(idx, v);
+                idx += 1;
+            }
+        }
+        for (c, fc) in f.into_iter().enumerate() {
+            if fc != 0.0 {
+                let fs = fc / s;
+                for i in 0..tt {
+                    let v = fs * (self.pdf(at, i) / s);
+                    self.add(idx + c as u32 * tt + i, v);
+                }
+            }
+        }
+    }
+    fn block_at(&self, depth: u32, light: u32) -> u32 {
+        Record::AOV as u32 + self.p.aov + (depth * self.p.lights + light) * self.p.block
+    }
+    fn block_sample(&mut self, b: u32, k: u32, f: [f32; 3], at: usize) {
+        match self.p.code {
+            code::WEIGHTED => {
+                let s = self.mixture(at, k);
+                if s < 0.0 {
+                    return;
+                }
+                let w = self.scale(at, k, s);
+                if w != 0.0 {
+                    self.add3(b + 1, f.map(|x| x * w));
+                }
+            }
+            code::DIRECT => self.moments_add(b + 1, k, f, at),
+            _ => self.moments_add(b + 2 + self.set * self.p.moments, k, f, at),
+        }
+    }
+    fn block_failed(&mut self, b: u32, k: u32) {
+        match self.p.code {
+            code::DIRECT => self.moments_failed(b + 1, k),
+            code::UNCORRELATED => self.moments_failed(b + 2 + self.set * self.p.moments, k),
+            _ => {}
+        }
+    }
+    fn block_end(&mut self, b: u32) {
+        if self.p.code == code::UNCORRELATED {
+            self.add(b + self.set, 1.0);
+        } else {
+            self.add(b, 1.0);
+        }
+    }
+    fn add_draw(&mut self, depth: u32, k: u32, f: [f32; 3], at: usize, light: u32) {
+        if self.p.code == code::OUTSIDE {
+            let s = self.mixture(at, k);
+            if s < 0.0 {
+                return;
+            }
+            let w = self.scale(at, k, s);
+            if w != 0.0 {
+                self.add3(Record::OUTSIDE as u32, f.map(|x| x * w));
+            }
+            return;
+        }
+        if self.p.lights == 1 {
+            self.block_sample(self.block_at(depth, 0), k, f, at);
+            return;
+        }
+        for l in 0..self.p.lights {
+            if l == light {
+                self.block_sample(self.block_at(depth, l), k, f, at);
+            } else {
+                self.block_failed(self.block_at(depth, l), k);
+            }
+        }
+    }
+}
+
+/// The terms of slot `slot` of a wave (record.wgsl's `record_terms`, operation for
+/// operation): `hits` and `draws` are the wave's buffers as f32 words, `out` the slot's
+/// `stride` terms, zero on entry.
+pub fn slot_terms(
+    p: &RecordParams,
+    slot: u32,
+    hits: &[f32],
+    draws: &[f32],
+    out: &mut [f32],
+) -> SlotTally {
+    let sample = slot / p.pixels;
+    let mut s = Slot {
+        p,
+        slot,
+        draws,
+        out,
+        set: (p.start + sample) & 1,
+    };
+    let h = &hits[slot as usize * HIT_WORDS..(slot as usize + 1) * HIT_WORDS];
+    let mut tally = SlotTally::default();
+    let overflow = h[3] == 2.0
+        || (0..p.max_depth).any(|d| (0..p.per_slot).any(|j| draws[s.draw_at(d, j) + 7] == 12.0));
+    if overflow {
+        tally.overflow = true;
+        return tally;
+    }
+    tally.camera = 1;
+    let (normal, depth, albedo) = ([h[32], h[33], h[34]], h[35], [h[36], h[37], h[38]]);
+    let outside = Record::OUTSIDE as u32;
+    if p.code == code::AOV {
+        s.add3(
+            outside,
+            match p.aov_image {
+                0 => [depth; 3],
+                1 => normal,
+                _ => albedo,
+            },
+        );
+    }
+    if p.aov != 0 {
+        let aov = Record::AOV as u32;
+        s.add(aov, depth);
+        s.add3(aov + 1, normal);
+        s.add3(aov + 4, albedo);
+    }
+    if p.code == code::AOV {
+        s.add(0, 1.0);
+        return tally;
+    }
+    if p.min_depth == 0 {
+        s.add3(outside, [h[12], h[13], h[14]]);
+    }
+    let mut shaded = 0;
+    while shaded < p.max_depth && p.n_draws > 0 && draws[s.draw_at(shaded, 0) + 7] != 0.0 {
+        shaded += 1;
+    }
+    for d in 0..shaded {
+        let mute = d + 1 < p.min_depth;
+        let mut vo = [0.0f32; 3];
+        for j in 0..p.per_slot {
+            let at = s.draw_at(d, j);
+            let status = draws[at + 7];
+            if status == 4.0 || status == 5.0 {
+                tally.shadow += 1;
+            }
+            if status == 6.0 {
+                tally.secondary += 1;
+            }
+            let flags = draws[at + 11] as u32;
+            if (j > p.n_draws || flags & 1 != 0) && (status == 4.0 || status == 6.0) {
+                for c in 0..3 {
+                    vo[c] += draws[at + 8 + c];
+                }
+            }
+        }
+        if mute {
+            continue;
+        }
+        s.add3(outside, vo);
+        if draws[s.draw_at(d, 0) + 11] as u32 & 2 != 0 {
+            continue;
+        }
+        let mut j = 0;
+        for k in 0..p.n_tech {
+            for _ in 0..s.n(k) as u32 {
+                let at = s.draw_at(d, j);
+                let status = draws[at + 7];
+                let flags = draws[at + 11] as u32;
+                if status == 1.0 || flags & 1 != 0 {
+                    if p.code != code::OUTSIDE {
+                        for l in 0..p.lights {
+                            s.block_failed(s.block_at(d, l), k);
+                        }
+                    }
+                } else {
+                    let f = if status == 4.0 || status == 6.0 {
+                        [draws[at + 8], draws[at + 9], draws[at + 10]]
+                    } else {
+                        [0.0; 3]
+                    };
+                    s.add_draw(d, k, f, at, ((flags >> 2) + p.lights) % (p.lights + 1));
+                }
+                j += 1;
+            }
+        }
+        if p.code != code::OUTSIDE {
+            for l in 0..p.lights {
+                s.block_end(s.block_at(d, l));
+            }
+        }
+    }
+    s.add(0, 1.0);
+    tally
+}
+
+/// The terms kernel, compiled (entry `record_terms`, bindings: the params, the wave's
+/// hits and draws, the terms, the tally).
+pub struct RecordTerms {
+    pub(crate) pipeline: wgpu::ComputePipeline,
+}
+
+impl RecordTerms {
+    /// Compiles the kernel.
+    pub fn new(gpu: &Gpu) -> Result<Self, GpuError> {
+        let d = &gpu.device;
+        let scope = d.push_error_scope(wgpu::ErrorFilter::Validation);
+        let module = d.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("record_terms"),
+            source: wgpu::ShaderSource::Wgsl([crate::FLOAT_WGSL, RECORD_WGSL].join("\n").into()),
+        });
+        let pipeline = d.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some("record_terms"),
+            layout: None,
+            module: &module,
+            entry_point: Some("record_terms"),
+            compilation_options: Default::default(),
+            cache: None,
+        });
+        if let Some(e) = pollster::block_on(scope.pop()) {
+            return Err(GpuError::Run(format!("kernel record_terms: {e}")));
+        }
+        Ok(Self { pipeline })
+    }
+
+    /// The bind group over `params` (uniform), `hits`, `draws`, `terms` and `tally`.
+    pub(crate) fn bind(&self, gpu: &Gpu, buffers: [&wgpu::Buffer; 5]) -> wgpu::BindGroup {
+        let entries: Vec<wgpu::BindGroupEntry> = buffers
+            .iter()
+            .enumerate()
+            .map(|(k, b)| wgpu::BindGroupEntry {
+                binding: k as u32,
+                resource: b.as_entire_binding(),
+            })
+            .collect();
+        gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("record_terms"),
+            layout: &self.pipeline.get_bind_group_layout(0),
+            entries: &entries,
+        })
+    }
+
+    /// Runs the kernel over `p.slots` slots of `hits` and `draws` (f32 words) and reads
+    /// back the terms (`p.pixels · p.samples · p.stride` words) and the tally
+    /// ([`TALLY_LIST`] + `p.slots` words): for twin tests.
+    pub fn run(
+        &self,
+        gpu: &Gpu,
+        p: &RecordParams,
+        hits: &[f32],
+        draws: &[f32],
+    ) -> Result<(Vec<f32>, Vec<u32>), GpuError> {
+        use wgpu::util::DeviceExt;
+        let d = &gpu.device;
+        let init = |label, bytes: &[u8], usage| {
+            d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents: bytes,
+                usage,
+            })
+        };
+        let storage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC;
+        let params = init("params", bytemuck::bytes_of(p), wgpu::BufferUsages::UNIFORM);
+        let hits = init("hits", bytemuck::cast_slice(hits), storage);
+        // An empty binding is invalid: give no draws one zero record.
+        let draws = init(
+            "draws",
+            bytemuck::cast_slice(if draws.is_empty() {
+                &[0.0; DRAW_WORDS]
+            } else {
+                draws
+            }),
+            storage,
+        );
+        let n_terms = (p.pixels * p.samples * p.stride) as usize;
+        let terms = init("terms", &vec![0; 4 * n_terms], storage);
+        let n_tally = TALLY_LIST + p.slots as usize;
+        let tally = init("tally", &vec![0; 4 * n_tally], storage);
+        let group = self.bind(gpu, [&params, &hits, &draws, &terms, &tally]);
+        let mut enc = d.create_command_encoder(&Default::default());
+        {
+            let mut pass = enc.begin_compute_pass(&Default::default());
+            pass.set_pipeline(&self.pipeline);
+            pass.set_bind_group(0, &group, &[]);
+            pass.dispatch_workgroups(p.slots.div_ceil(64), 1, 1);
+        }
+        let staging = |size: usize| {
+            d.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("readback"),
+                size: 4 * size as u64,
+                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            })
+        };
+        let (terms_r, tally_r) = (staging(n_terms), staging(n_tally));
+        enc.copy_buffer_to_buffer(&terms, 0, &terms_r, 0, 4 * n_terms as u64);
+        enc.copy_buffer_to_buffer(&tally, 0, &tally_r, 0, 4 * n_tally as u64);
+        gpu.queue.submit([enc.finish()]);
+        let t = crate::direct::read_back(gpu, &terms_r, 4 * n_terms as u64)?;
+        let y = crate::direct::read_back(gpu, &tally_r, 4 * n_tally as u64)?;
+        Ok((
+            bytemuck::cast_slice(&t).to_vec(),
+            bytemuck::cast_slice(&y).to_vec(),
+        ))
+    }
+}
