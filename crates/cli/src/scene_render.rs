@@ -84,7 +84,8 @@ fn gpu_line(g: &gpu::direct::GpuStats) -> String {
     let ms = |d: std::time::Duration| d.as_secs_f64() * 1e3;
     format!(
         "GPU stages: camera rays {:.1} ms, shade {:.1} ms, shadow rays {:.1} ms, \
-         continuation rays {:.1} ms (GPU timestamps); readback {:.1} ms, accumulate on the CPU {:.1} ms; setup {:.1} ms; \
+         continuation rays {:.1} ms (GPU timestamps); readback {:.1} ms, accumulate {:.1} ms \
+         (sums on the {}); setup {:.1} ms; \
          {} waves; {} samples rendered on the CPU after an overflow; most loop iterations \
          per invocation {:?}",
         ms(s.camera),
@@ -93,6 +94,7 @@ fn gpu_line(g: &gpu::direct::GpuStats) -> String {
         ms(s.secondary),
         ms(s.readback),
         ms(s.accumulate),
+        g.sums,
         ms(s.setup),
         g.waves,
         g.cpu_fallbacks,
@@ -514,12 +516,13 @@ pub fn bench(
             ("shadow rays (GPU)", st.shadow),
             ("continuation rays (GPU)", st.secondary),
             ("submit and read back (wall − passes)", st.readback),
-            ("accumulate (CPU)", st.accumulate),
+            ("accumulate", st.accumulate),
         ];
         stage_table(&format!("GPU stage ({integrator})"), &parts);
         out!("");
         out!(
-            "kernel setup {:.1} ms (excluded); {} waves; most loop iterations per invocation (camera, shadow, shade) {:?}",
+            "per-pixel sums on the {}; kernel setup {:.1} ms (excluded); {} waves; most loop iterations per invocation (camera, shadow, shade) {:?}",
+            g.sums,
             st.setup.as_secs_f64() * 1e3,
             g.waves,
             g.max_loops

@@ -12,6 +12,9 @@ pub struct GpuOptions {
     pub int64: bool,
     /// Use subgroup operations where the adapter has them.
     pub subgroups: bool,
+    /// Keep the integrators' per-pixel sums on the GPU where the estimator allows
+    /// (off: every draw is read back and added by the CPU, the first version's path).
+    pub sums: bool,
 }
 
 impl Default for GpuOptions {
@@ -21,19 +24,21 @@ impl Default for GpuOptions {
             f64: true,
             int64: true,
             subgroups: true,
+            sums: true,
         }
     }
 }
 
 impl GpuOptions {
-    /// The defaults, with `FREPRAY_GPU_F64=off`, `FREPRAY_GPU_INT64=off` and
-    /// `FREPRAY_GPU_SUBGROUPS=off` turning features off.
+    /// The defaults, with `FREPRAY_GPU_F64=off`, `FREPRAY_GPU_INT64=off`,
+    /// `FREPRAY_GPU_SUBGROUPS=off` and `FREPRAY_GPU_SUMS=off` turning features off.
     pub fn from_env() -> Self {
         let on = |name: &str| std::env::var(name).map_or(true, |v| v != "off" && v != "0");
         Self {
             f64: on("FREPRAY_GPU_F64"),
             int64: on("FREPRAY_GPU_INT64"),
             subgroups: on("FREPRAY_GPU_SUBGROUPS"),
+            sums: on("FREPRAY_GPU_SUMS"),
         }
     }
 }
@@ -92,6 +97,9 @@ pub struct GpuInfo {
     pub subgroups: bool,
     /// Whether timestamp queries are available (stage times).
     pub timestamps: bool,
+    /// Whether the integrators may keep their per-pixel sums on the GPU
+    /// ([`GpuOptions::sums`]).
+    pub sums: bool,
     /// The device's largest storage-buffer binding in bytes.
     pub max_storage_binding: u64,
 }
@@ -101,7 +109,8 @@ impl fmt::Display for GpuInfo {
         let yes = |b: bool| if b { "yes" } else { "no" };
         write!(
             f,
-            "{} ({}, {}); f64 {}, int64 {}, subgroups {}, timestamps {}; storage binding ≤ {} MiB",
+            "{} ({}, {}); f64 {}, int64 {}, subgroups {}, timestamps {}, sums on the GPU {}; \
+             storage binding ≤ {} MiB",
             self.name,
             self.backend,
             self.device_type,
@@ -109,6 +118,7 @@ impl fmt::Display for GpuInfo {
             yes(self.int64),
             yes(self.subgroups),
             yes(self.timestamps),
+            yes(self.sums),
             self.max_storage_binding >> 20
         )
     }
@@ -122,6 +132,8 @@ pub struct Gpu {
     /// The `direct` kernels by the scene part of their source (its expression tape),
     /// compiled on first use (seconds to minutes on llvmpipe).
     pub(crate) direct: crate::direct::PipelineCache,
+    /// The record-terms and sums kernels, compiled on first use.
+    pub(crate) record: std::sync::Mutex<Option<std::sync::Arc<crate::record::SumKernels>>>,
 }
 
 impl Gpu {
@@ -171,6 +183,7 @@ impl Gpu {
             int64,
             subgroups,
             timestamps,
+            sums: options.sums,
             max_storage_binding: limits.max_storage_buffer_binding_size,
         };
         Ok(Gpu {
@@ -178,6 +191,7 @@ impl Gpu {
             queue,
             info,
             direct: Default::default(),
+            record: Default::default(),
         })
     }
 

@@ -6,10 +6,18 @@
 //! **Waves.** A wave is m sample indices of every pixel (m × pixels slots, at most
 //! [`WAVE_DRAWS`] draws over all depths). Its passes (the camera trace, then per depth
 //! shade, shadow rays and, but at the last depth, the continuation trace) run in one
-//! submission without a CPU wait; the hits and draws are then read back and added,
-//! pixel by pixel in sample order, through [`render::integrator::Accumulator`], the CPU
-//! integrator's own bookkeeping. The per-pixel MIS sums and the optimal estimators'
-//! solves therefore stay on the CPU in f64 (GPU.md §8's "v1"), and a GPU sample range
+//! submission without a CPU wait.
+//!
+//! **Sums.** Where every word of a pixel's record is a sum of per-sample terms (all
+//! estimators but the progressive ones), two more passes of the same submission keep
+//! the per-pixel sums on the GPU ([`crate::record`]): each slot's f32 terms, then the
+//! sums in f64 (`SHADER_F64`) or double-float, pixel by pixel in sample order; only a
+//! small tally (ray counts, overflowing slots) is read back per wave, and the sums once
+//! at the end, into the same [`RenderState`] as the CPU's. Otherwise (the progressive
+//! estimators, whose α changes at milestones; `FREPRAY_GPU_SUMS=off`; sums too large
+//! for one binding) the hits and draws are read back and added by
+//! [`render::integrator::Accumulator`], the CPU integrator's own bookkeeping, in f64.
+//! Either way the optimal estimators' solves are the CPU's and a GPU sample range
 //! merges with a CPU one.
 //!
 //! **Same numbers, not the same image.** The kernels draw the CPU's random numbers
@@ -41,6 +49,7 @@ use crate::layout::{GpuBvhNode, GpuItemBox};
 use crate::light::{self, GpuAreaLight, GPU_AREA_LIGHT_WGSL, LIGHT_WGSL};
 use crate::perturbed::{PerturbedPack, PERTURBED_WGSL};
 use crate::quadric::QUADRIC_WGSL;
+use crate::record::GpuSums;
 use crate::sampler::PHILOX_WGSL;
 use crate::tape::GpuTape;
 use crate::tape_trace::TapeSolid;
@@ -653,10 +662,35 @@ pub struct StageTimes {
     /// Submission and read-back: the wall time from submitting a wave to having its
     /// results on the CPU, less the passes' GPU time (all of it without timestamps).
     pub readback: Duration,
-    /// Adding the draws into the per-pixel records on the CPU, CPU fallbacks included.
+    /// Adding the samples into the per-pixel records: where the sums are on the GPU,
+    /// its terms and sums passes (timestamps) and the CPU's fallback samples and final
+    /// read-back; otherwise the CPU adding every draw, fallbacks included.
     pub accumulate: Duration,
     /// Pipeline creation (shader compilation), before the first wave.
     pub setup: Duration,
+}
+
+/// Where a GPU render kept its per-pixel sums (GPU.md §8).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum SumsOn {
+    /// On the CPU: every draw read back and added by the CPU's accumulator (the
+    /// progressive estimators, `FREPRAY_GPU_SUMS=off`, or sums too large for a binding).
+    #[default]
+    Cpu,
+    /// On the GPU in f64 (`SHADER_F64`).
+    GpuF64,
+    /// On the GPU in double-float pairs of f32.
+    GpuDoubleFloat,
+}
+
+impl std::fmt::Display for SumsOn {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            SumsOn::Cpu => "CPU",
+            SumsOn::GpuF64 => "GPU, f64",
+            SumsOn::GpuDoubleFloat => "GPU, double-float",
+        })
+    }
 }
 
 /// What a GPU render did, beyond [`RenderStats`].
@@ -668,6 +702,8 @@ pub struct GpuStats {
     pub waves: u32,
     /// Samples the CPU rendered because a ray overflowed a fixed capacity.
     pub cpu_fallbacks: u64,
+    /// Where the per-pixel sums were kept.
+    pub sums: SumsOn,
     /// The most loop iterations one invocation ran, per kernel: camera and
     /// continuation trace, shadow trace, shade (GPU.md §3.1: llvmpipe cuts an invocation's loops at 65 535).
     pub max_loops: [u32; 3],
@@ -1081,6 +1117,30 @@ pub fn render_range(
     stop: &AtomicBool,
     progress: &dyn Fn(u64, u64),
 ) -> Result<(RenderState, RenderStats, GpuStats), GpuError> {
+    let sums = match (gpu.info().sums, gpu.info().f64) {
+        (false, _) => SumsOn::Cpu,
+        (true, true) => SumsOn::GpuF64,
+        (true, false) => SumsOn::GpuDoubleFloat,
+    };
+    render_range_with_sums(gpu, data, scene, options, samples, stop, progress, sums)
+}
+
+/// [`render_range`] with the per-pixel sums where `sums` asks (the device's choice in
+/// [`render_range`]): on the CPU, or on the GPU in f64 (where the device has it, else
+/// double-float) or double-float. The GPU falls back to the CPU's sums for the
+/// progressive estimators and for sums too large for one binding; the returned
+/// [`GpuStats::sums`] says where they were kept.
+#[allow(clippy::too_many_arguments)]
+pub fn render_range_with_sums(
+    gpu: &Gpu,
+    data: &SceneData,
+    scene: &Scene,
+    options: &RenderOptions,
+    samples: Range<u32>,
+    stop: &AtomicBool,
+    progress: &dyn Fn(u64, u64),
+    sums_on: SumsOn,
+) -> Result<(RenderState, RenderStats, GpuStats), GpuError> {
     let o = RenderOptions {
         spp: samples.end.saturating_sub(samples.start),
         ..options.clone()
@@ -1144,11 +1204,36 @@ pub fn render_range(
         usage: wgpu::BufferUsages::INDIRECT | wgpu::BufferUsages::COPY_DST,
         mapped_at_creation: false,
     });
-    let (hits_r, draws_r, loops_r) = (
-        read("hits readback", hit_bytes),
-        read("draws readback", draw_bytes),
-        read("stats readback", 16),
-    );
+    // The per-pixel sums on the GPU where the record is a sum of per-sample terms and
+    // fits; else every wave's hits and draws are read back and added by the CPU.
+    let mut sums = match acc.linear().filter(|_| sums_on != SumsOn::Cpu) {
+        Some(linear) => GpuSums::new(
+            gpu,
+            &linear,
+            pixels,
+            max_slots as u32,
+            (n_draws, nd1, depths),
+            &hits,
+            &draws,
+            sums_on == SumsOn::GpuF64,
+        )?,
+        None => None,
+    };
+    stats.sums = match &sums {
+        None => SumsOn::Cpu,
+        Some(s) if s.is_f64() => SumsOn::GpuF64,
+        Some(_) => SumsOn::GpuDoubleFloat,
+    };
+    let per_wave = sums
+        .as_ref()
+        .map_or(per_wave, |s| per_wave.min(s.max_samples));
+    let readbacks = sums.is_none().then(|| {
+        (
+            read("hits readback", hit_bytes),
+            read("draws readback", draw_bytes),
+        )
+    });
+    let loops_r = read("stats readback", 16);
     // One uniform block and bind group per (depth, pass mode): 0 camera, 1 shadow,
     // 2 continuation.
     let n_frames = 3 * depths.max(1) as usize;
@@ -1176,7 +1261,8 @@ pub fn render_range(
             passes.push((3, depth, 2));
         }
     }
-    let n_queries = 2 * passes.len() as u32;
+    // Two timestamps per pass, and for the terms and sums passes.
+    let n_queries = 2 * (passes.len() as u32 + 2);
     let timestamps = gpu.info().timestamps.then(|| {
         d.create_query_set(&wgpu::QuerySetDescriptor {
             label: Some("stages"),
@@ -1261,47 +1347,95 @@ pub fn render_range(
                 pass.dispatch_workgroups(gx, gy, 1);
             }
         }
+        if let Some(sums) = sums.as_mut() {
+            let at = 2 * passes.len() as u32;
+            let writes = |k: u32| {
+                timestamps
+                    .as_ref()
+                    .map(|qs| wgpu::ComputePassTimestampWrites {
+                        query_set: qs,
+                        beginning_of_pass_write_index: Some(at + 2 * k),
+                        end_of_pass_write_index: Some(at + 2 * k + 1),
+                    })
+            };
+            sums.encode(gpu, &mut enc, start, m, &writes);
+        }
+        // The passes run: the wave's, and the terms and sums passes.
+        let run = passes.len() + if sums.is_some() { 2 } else { 0 };
         if let Some(qs) = &timestamps {
-            enc.resolve_query_set(qs, 0..n_queries, &ts_buf, 0);
-            enc.copy_buffer_to_buffer(&ts_buf, 0, &ts_read, 0, ts_bytes);
+            enc.resolve_query_set(qs, 0..2 * run as u32, &ts_buf, 0);
+            enc.copy_buffer_to_buffer(&ts_buf, 0, &ts_read, 0, 16 * run as u64);
         }
         let hb = u64::from(slots) * HIT_WORDS as u64 * 4;
         let db = u64::from(slots) * u64::from(per_slot_draws) * DRAW_WORDS as u64 * 4;
-        enc.copy_buffer_to_buffer(&hits, 0, &hits_r, 0, hb);
-        if depths > 0 {
-            enc.copy_buffer_to_buffer(&draws, 0, &draws_r, 0, db);
+        if let Some((hits_r, draws_r)) = &readbacks {
+            enc.copy_buffer_to_buffer(&hits, 0, hits_r, 0, hb);
+            if depths > 0 {
+                enc.copy_buffer_to_buffer(&draws, 0, draws_r, 0, db);
+            }
         }
         let t0 = Instant::now();
         gpu.queue.submit([enc.finish()]);
-        let hit_data = read_back(gpu, &hits_r, hb)?;
-        let draw_data = if depths > 0 {
-            read_back(gpu, &draws_r, db)?
-        } else {
-            Vec::new()
-        };
+        let (mut hit_data, mut draw_data, mut tally) = (Vec::new(), Vec::new(), None);
+        if let Some((hits_r, draws_r)) = &readbacks {
+            hit_data = read_back(gpu, hits_r, hb)?;
+            if depths > 0 {
+                draw_data = read_back(gpu, draws_r, db)?;
+            }
+        }
+        if let Some(sums) = &sums {
+            tally = Some(sums.tally(gpu, slots)?);
+        }
         let mut passes_time = Duration::ZERO;
         if timestamps.is_some() {
-            let ts = read_back(gpu, &ts_read, ts_bytes)?;
+            let ts = read_back(gpu, &ts_read, 16 * run as u64)?;
             let t: &[u64] = bytemuck::cast_slice(&ts);
-            for (q, &(stage, _, _)) in passes.iter().enumerate() {
+            for q in 0..run {
                 let ns = t[2 * q + 1].saturating_sub(t[2 * q]) as f64 * period;
                 let span = Duration::from_nanos(ns as u64);
                 passes_time += span;
-                match stage {
+                match passes.get(q).map_or(4, |p| p.0) {
                     0 => stats.stages.camera += span,
                     1 => stats.stages.shade += span,
                     2 => stats.stages.shadow += span,
-                    _ => stats.stages.secondary += span,
+                    3 => stats.stages.secondary += span,
+                    _ => stats.stages.accumulate += span,
                 }
             }
         }
         stats.stages.readback += t0.elapsed().saturating_sub(passes_time);
         let t1 = Instant::now();
-        let hv: &[f32] = bytemuck::cast_slice(&hit_data);
-        let dv: &[f32] = bytemuck::cast_slice(&draw_data);
         let data_words = state.data_mut();
+        if let Some(tally) = tally {
+            rays.camera += tally.camera;
+            rays.shadow += tally.shadow;
+            rays.secondary += tally.secondary;
+            for slot in tally.overflow {
+                // The CPU renders the whole sample (its rays counted there), into the
+                // record to which the GPU's sums are added at the end.
+                let pix = slot % pixels;
+                let index = start + slot / pixels;
+                let rec = &mut data_words[pix as usize * stride..(pix as usize + 1) * stride];
+                stats.cpu_fallbacks += 1;
+                acc.cpu_sample(scene, pix % w, pix / w, index, rec, &mut rays);
+            }
+        }
+        // (An empty Vec<u8> need not be aligned for f32.)
+        fn words(v: &[u8]) -> &[f32] {
+            if v.is_empty() {
+                &[]
+            } else {
+                bytemuck::cast_slice(v)
+            }
+        }
+        let (hv, dv) = (words(&hit_data), words(&draw_data));
         let mut pdfs = vec![0.0f64; (depths * n_draws) as usize * t_count];
-        for slot in 0..slots as usize {
+        let cpu_slots = if readbacks.is_some() {
+            slots as usize
+        } else {
+            0
+        };
+        for slot in 0..cpu_slots {
             let pix = slot % pixels as usize;
             let index = start + (slot / pixels as usize) as u32;
             let (x, y) = (pix as u32 % w, pix as u32 / w);
@@ -1329,6 +1463,11 @@ pub fn render_range(
         done += u64::from(slots);
         progress(done, total);
         start += m;
+    }
+    if let Some(sums) = &sums {
+        let t = Instant::now();
+        sums.add_to(gpu, state.data_mut())?;
+        stats.stages.accumulate += t.elapsed();
     }
     let mut enc = d.create_command_encoder(&Default::default());
     enc.copy_buffer_to_buffer(&loops, 0, &loops_r, 0, 16);

@@ -74,6 +74,12 @@ impl Kernel {
         Ok(Kernel { pipeline, inputs })
     }
 
+    /// The compiled pipeline (its bind group 0 as [`Kernel::new`] describes), for
+    /// callers that chain it with other passes.
+    pub(crate) fn pipeline(&self) -> &wgpu::ComputePipeline {
+        &self.pipeline
+    }
+
     /// Runs the kernel on `workgroups` with the given inputs and an output of
     /// `output_words` u32 (zeroed), and reads the output back.
     pub fn run(

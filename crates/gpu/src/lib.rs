@@ -11,7 +11,8 @@
 //! - [`Gpu`]: adapter choice with the features frepray uses (f64, int64, subgroups,
 //!   timestamps), each of which can be forced off ([`GpuOptions`], or the environment
 //!   variables `FREPRAY_GPU_F64=off`, `FREPRAY_GPU_INT64=off`,
-//!   `FREPRAY_GPU_SUBGROUPS=off`), and a clear error, never a panic, where there is no
+//!   `FREPRAY_GPU_SUBGROUPS=off`; `FREPRAY_GPU_SUMS=off` keeps the per-pixel sums on
+//!   the CPU), and a clear error, never a panic, where there is no
 //!   adapter or a device limit is too small;
 //! - [`Kernel`]: one WGSL compute entry point over storage buffers, dispatched and read
 //!   back (with [`Kernel::new_unchecked`], bounds checks off: GPU.md §3.4), for kernel
@@ -38,11 +39,14 @@
 //!   radiance lookup, importance sampling and its pdf, equal bit for bit on lavapipe to
 //!   its CPU f32 twin;
 //! - [`sums`]: per-pixel MIS sums in f64 where the device has `SHADER_F64`, else in
-//!   laundered double-float (GPU.md §3.2, §8), exact on the compensated-sum check (not
-//!   yet used by the integrators, whose sums are the CPU's);
+//!   laundered double-float (GPU.md §3.2, §8), exact on the compensated-sum check;
+//! - [`record`]: each sample's terms of its pixel's record (what the CPU's accumulator
+//!   adds), equal bit for bit on lavapipe to their CPU f32 twin, so that the integrators
+//!   keep the per-pixel sums on the GPU;
 //! - [`direct`]: the scene packed into buffers and the `direct` and `path` integrators
-//!   (camera, shade, shadow and continuation passes per wave), their draws added into a
-//!   `render::RenderState` by the CPU integrator's own bookkeeping.
+//!   (camera, shade, shadow and continuation passes per wave), their samples summed into
+//!   a `render::RenderState` on the GPU (or, for the progressive estimators, by the CPU
+//!   integrator's own bookkeeping).
 //!
 //! On machines without a GPU, tests run on Mesa's lavapipe (`mesa-vulkan-drivers`). They
 //! skip, saying so, where no adapter exists, unless `FREPRAY_REQUIRE_GPU=1` (set by

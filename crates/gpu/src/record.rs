@@ -564,3 +564,269 @@ impl RecordTerms {
         ))
     }
 }
+
+/// The kernels that keep a render's sums on the GPU, compiled once per device.
+pub(crate) struct SumKernels {
+    terms: RecordTerms,
+    /// The double-float sums, and the f64 ones where the device has `SHADER_F64`.
+    df: crate::sums::Accumulate,
+    f64: Option<crate::sums::Accumulate>,
+}
+
+impl SumKernels {
+    fn add(&self, f64: bool) -> &crate::sums::Accumulate {
+        match (f64, &self.f64) {
+            (true, Some(k)) => k,
+            _ => &self.df,
+        }
+    }
+}
+
+fn sum_kernels(gpu: &Gpu) -> Result<std::sync::Arc<SumKernels>, GpuError> {
+    let mut cache = gpu
+        .record
+        .lock()
+        .map_err(|e| GpuError::Run(e.to_string()))?;
+    if let Some(k) = cache.as_ref() {
+        return Ok(k.clone());
+    }
+    let k = std::sync::Arc::new(SumKernels {
+        terms: RecordTerms::new(gpu)?,
+        df: crate::sums::Accumulate::with_f64(gpu, false)?,
+        f64: match gpu.info().f64 {
+            true => Some(crate::sums::Accumulate::with_f64(gpu, true)?),
+            false => None,
+        },
+    });
+    *cache = Some(k.clone());
+    Ok(k)
+}
+
+/// What a wave's tally says: the slots the CPU must render (sorted) and the rays the
+/// others traced.
+pub(crate) struct WaveTally {
+    pub overflow: Vec<u32>,
+    pub camera: u64,
+    pub shadow: u64,
+    pub secondary: u64,
+}
+
+/// A render's per-pixel records kept on the GPU: each wave's terms (`record.wgsl`) added
+/// into the sums (`sums.wgsl` or `sums_f64.wgsl`), which alternate between two buffers
+/// (one read, one written per wave); only the tally is read back per wave, the sums once
+/// at the end.
+pub(crate) struct GpuSums {
+    kernels: std::sync::Arc<SumKernels>,
+    params: RecordParams,
+    params_buf: wgpu::Buffer,
+    add_params: wgpu::Buffer,
+    terms: wgpu::Buffer,
+    tally: wgpu::Buffer,
+    tally_r: wgpu::Buffer,
+    sums: [wgpu::Buffer; 2],
+    terms_group: wgpu::BindGroup,
+    add_groups: [wgpu::BindGroup; 2],
+    /// Which of `sums` holds the sums so far.
+    current: usize,
+    /// Whether the sums are f64 (else double-float).
+    f64: bool,
+    /// Sample indices per wave at most (the sums kernel loops samples × stride times).
+    pub max_samples: u32,
+}
+
+/// The most loop iterations the terms and sums kernels may take per invocation (GPU.md
+/// §3.1, with the margin the other kernels keep).
+const LOOP_BUDGET: u64 = 30_000;
+
+impl GpuSums {
+    /// The sums of a render of `pixels` pixels whose record is `linear`, over the wave
+    /// buffers `hits` and `draws` (waves of at most `max_slots` slots), in f64 if `f64`
+    /// and the device has it, else in double-float; or None where they do not fit the
+    /// device's bindings or the loop budget (the CPU then adds the draws).
+    #[allow(clippy::too_many_arguments)]
+    pub fn new(
+        gpu: &Gpu,
+        linear: &LinearRecord,
+        pixels: u32,
+        max_slots: u32,
+        (n_draws, per_slot, max_depth): (u32, u32, u32),
+        hits: &wgpu::Buffer,
+        draws: &wgpu::Buffer,
+        f64: bool,
+    ) -> Result<Option<Self>, GpuError> {
+        let params = RecordParams::new(linear, n_draws, per_slot, max_depth);
+        let stride = u64::from(params.stride);
+        let max_binding = gpu.info().max_storage_binding;
+        let sums_bytes = u64::from(pixels) * stride * 8;
+        let max_samples = (LOOP_BUDGET / stride)
+            .min(max_binding / (u64::from(pixels) * stride * 4))
+            .min(u64::from(max_slots / pixels)) as u32;
+        if params.loop_bound() >= LOOP_BUDGET || sums_bytes > max_binding || max_samples == 0 {
+            return Ok(None);
+        }
+        let kernels = sum_kernels(gpu)?;
+        let f64 = f64 && kernels.f64.is_some();
+        let d = &gpu.device;
+        let buffer = |label, size: u64, usage| {
+            d.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size,
+                usage,
+                mapped_at_creation: false,
+            })
+        };
+        use wgpu::BufferUsages as U;
+        let params_buf = buffer(
+            "record params",
+            size_of::<RecordParams>() as u64,
+            U::UNIFORM | U::COPY_DST,
+        );
+        let add_params = buffer("sums params", 16, U::STORAGE | U::COPY_DST);
+        let terms_bytes = u64::from(max_samples) * u64::from(pixels) * stride * 4;
+        let terms = buffer("terms", terms_bytes, U::STORAGE | U::COPY_DST);
+        let tally_bytes = (TALLY_LIST as u64 + u64::from(max_samples * pixels)) * 4;
+        let tally = buffer("tally", tally_bytes, U::STORAGE | U::COPY_DST | U::COPY_SRC);
+        let tally_r = buffer("tally readback", tally_bytes, U::MAP_READ | U::COPY_DST);
+        let sum_usage = U::STORAGE | U::COPY_SRC;
+        let sums = [
+            buffer("sums", sums_bytes, sum_usage),
+            buffer("sums", sums_bytes, sum_usage),
+        ];
+        let terms_group = kernels
+            .terms
+            .bind(gpu, [&params_buf, hits, draws, &terms, &tally]);
+        let add_layout = kernels.add(f64).pipeline().get_bind_group_layout(0);
+        let add_group = |prev: &wgpu::Buffer, state: &wgpu::Buffer| {
+            let entries: Vec<wgpu::BindGroupEntry> = [&add_params, &terms, prev, state]
+                .iter()
+                .enumerate()
+                .map(|(k, b)| wgpu::BindGroupEntry {
+                    binding: k as u32,
+                    resource: b.as_entire_binding(),
+                })
+                .collect();
+            d.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("sums"),
+                layout: &add_layout,
+                entries: &entries,
+            })
+        };
+        let add_groups = [add_group(&sums[0], &sums[1]), add_group(&sums[1], &sums[0])];
+        Ok(Some(Self {
+            kernels,
+            params: RecordParams { pixels, ..params },
+            params_buf,
+            add_params,
+            terms,
+            tally,
+            tally_r,
+            sums,
+            terms_group,
+            add_groups,
+            current: 0,
+            f64,
+            max_samples,
+        }))
+    }
+
+    /// Whether the sums are f64 (else double-float).
+    pub fn is_f64(&self) -> bool {
+        self.f64
+    }
+
+    /// Records the wave's two passes (terms, then sums) into `enc`, after the wave's
+    /// own: `samples` sample indices from `start`; `timestamps(k)` gives pass k's
+    /// timestamp writes.
+    pub fn encode<'q>(
+        &mut self,
+        gpu: &Gpu,
+        enc: &mut wgpu::CommandEncoder,
+        start: u32,
+        samples: u32,
+        timestamps: &dyn Fn(u32) -> Option<wgpu::ComputePassTimestampWrites<'q>>,
+    ) {
+        let p = RecordParams {
+            slots: samples * self.params.pixels,
+            samples,
+            start,
+            ..self.params
+        };
+        gpu.queue
+            .write_buffer(&self.params_buf, 0, bytemuck::bytes_of(&p));
+        let add = [0u32, p.pixels, samples, p.stride];
+        gpu.queue
+            .write_buffer(&self.add_params, 0, bytemuck::cast_slice(&add));
+        let terms_bytes = u64::from(p.slots) * u64::from(p.stride) * 4;
+        enc.clear_buffer(&self.terms, 0, Some(terms_bytes));
+        enc.clear_buffer(&self.tally, 0, Some(TALLY_LIST as u64 * 4));
+        let split = |n: u32| {
+            let g = n.div_ceil(64);
+            if g <= 65_535 {
+                (g, 1)
+            } else {
+                (65_535, g.div_ceil(65_535))
+            }
+        };
+        let passes = [
+            (&self.kernels.terms.pipeline, &self.terms_group, p.slots),
+            (
+                self.kernels.add(self.f64).pipeline(),
+                &self.add_groups[self.current],
+                p.pixels,
+            ),
+        ];
+        for (k, (pipeline, group, n)) in passes.into_iter().enumerate() {
+            let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: None,
+                timestamp_writes: timestamps(k as u32),
+            });
+            pass.set_pipeline(pipeline);
+            pass.set_bind_group(0, group, &[]);
+            let (gx, gy) = split(n);
+            pass.dispatch_workgroups(gx, gy, 1);
+        }
+        self.current = 1 - self.current;
+        let tally_bytes = (TALLY_LIST as u64 + u64::from(p.slots)) * 4;
+        enc.copy_buffer_to_buffer(&self.tally, 0, &self.tally_r, 0, tally_bytes);
+    }
+
+    /// The tally of the wave of `slots` slots last submitted.
+    pub fn tally(&self, gpu: &Gpu, slots: u32) -> Result<WaveTally, GpuError> {
+        let bytes = (TALLY_LIST as u64 + u64::from(slots)) * 4;
+        let words = crate::direct::read_back(gpu, &self.tally_r, bytes)?;
+        let t: &[u32] = bytemuck::cast_slice(&words);
+        let mut overflow = t[TALLY_LIST..TALLY_LIST + t[0] as usize].to_vec();
+        // The atomics append in any order: sorted, the CPU adds them in one.
+        overflow.sort_unstable();
+        Ok(WaveTally {
+            overflow,
+            camera: u64::from(t[1]),
+            shadow: u64::from(t[2]),
+            secondary: u64::from(t[3]),
+        })
+    }
+
+    /// Adds the sums to `records` (every pixel's record, `stride` words each).
+    pub fn add_to(&self, gpu: &Gpu, records: &mut [f64]) -> Result<(), GpuError> {
+        let bytes = records.len() as u64 * 8;
+        let staging = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("sums readback"),
+            size: bytes,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let mut enc = gpu.device.create_command_encoder(&Default::default());
+        enc.copy_buffer_to_buffer(&self.sums[self.current], 0, &staging, 0, bytes);
+        gpu.queue.submit([enc.finish()]);
+        let data = crate::direct::read_back(gpu, &staging, bytes)?;
+        let words: &[u32] = bytemuck::cast_slice(&data);
+        for (r, w) in records.iter_mut().zip(words.chunks_exact(2)) {
+            *r += if self.is_f64() {
+                f64::from_bits(u64::from(w[0]) | u64::from(w[1]) << 32)
+            } else {
+                crate::sums::df_value([f32::from_bits(w[0]), f32::from_bits(w[1])])
+            };
+        }
+        Ok(())
+    }
+}

@@ -68,7 +68,12 @@ pub struct Accumulate {
 impl Accumulate {
     /// Compiles the kernel the device's precision calls for.
     pub fn new(gpu: &Gpu) -> Result<Accumulate, GpuError> {
-        let f64 = gpu.info().f64;
+        Self::with_f64(gpu, gpu.info().f64)
+    }
+
+    /// Compiles the f64 kernel if `f64` (the device must have `SHADER_F64`), else the
+    /// double-float one.
+    pub fn with_f64(gpu: &Gpu, f64: bool) -> Result<Accumulate, GpuError> {
         let kernel = if f64 {
             Kernel::new(gpu, SUMS_F64_WGSL, "accumulate_f64", 3)?
         } else {
@@ -80,6 +85,11 @@ impl Accumulate {
     /// Whether the sums are f64.
     pub fn is_f64(&self) -> bool {
         self.f64
+    }
+
+    /// The compiled pipeline (bindings: params, terms, prev, state).
+    pub(crate) fn pipeline(&self) -> &wgpu::ComputePipeline {
+        self.kernel.pipeline()
     }
 
     /// `prev` (S sums per pixel, [`Sums::F64`] or [`Sums::DoubleFloat`] as

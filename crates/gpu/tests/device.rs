@@ -11,10 +11,11 @@ fn features_can_be_forced_off() {
         f64: false,
         int64: false,
         subgroups: false,
+        sums: false,
     };
     let Some(g) = common::gpu(off) else { return };
     let i = g.info();
-    assert!(!i.f64 && !i.int64 && !i.subgroups, "{i}");
+    assert!(!i.f64 && !i.int64 && !i.subgroups && !i.sums, "{i}");
     assert!(i.max_storage_binding >= 128 << 20, "{i}");
     assert!(!i.name.is_empty());
 }

@@ -584,6 +584,92 @@ fn gpu_render_is_deterministic() {
         .all(|(x, y)| x.to_bits() == y.to_bits()));
 }
 
+/// The per-pixel sums kept on the GPU (f64, and double-float as adapters without
+/// `SHADER_F64` keep them) against the CPU's accumulator adding the same GPU draws (the
+/// same render with the sums on the CPU): every record word within 2·10⁻⁶ of its
+/// magnitude (f32 terms, all non-negative, against f64 arithmetic), and the
+/// double-float sums within 10⁻¹² of the f64 ones. Heuristics on `direct` and `path`,
+/// optimal-direct per light with AOVs, optimal-uncorrelated; the progressive estimators
+/// keep their sums on the CPU.
+#[test]
+fn gpu_sums_equal_the_cpu_sums_of_the_same_draws() {
+    use gpu::direct::{render_range_with_sums, SumsOn};
+    use render::integrator::{Aov, IntegratorKind};
+    let Some(g) = device() else { return };
+    let stop = AtomicBool::new(false);
+    let render = |s: &(SceneData, Scene, RenderOptions), on: SumsOn| {
+        let (state, _, gs) =
+            render_range_with_sums(g, &s.0, &s.1, &s.2, 0..4, &stop, &|_, _| {}, on).unwrap();
+        (state, gs.sums)
+    };
+    let cases: [(&str, mis::Method, IntegratorKind, u32); 5] = [
+        ("balance", mis::Method::Balance, IntegratorKind::Direct, 0),
+        ("power, path", mis::Method::Power, IntegratorKind::Path, 0),
+        (
+            "optimal-direct per light",
+            mis::Method::OptimalDirect,
+            IntegratorKind::Direct,
+            3,
+        ),
+        (
+            "optimal-uncorrelated, path",
+            mis::Method::OptimalUncorrelated,
+            IntegratorKind::Path,
+            0,
+        ),
+        (
+            "optimal-progressive",
+            mis::Method::OptimalProgressive,
+            IntegratorKind::Direct,
+            0,
+        ),
+    ];
+    for (label, method, integrator, per_light) in cases {
+        let mut s = load(SCENE);
+        s.2.method = method;
+        s.2.integrator = integrator;
+        s.2.max_depth = 3;
+        s.2.per_light = per_light;
+        if per_light > 0 {
+            s.2.aovs = Aov::ALL.to_vec();
+        }
+        let (cpu, on) = render(&s, SumsOn::Cpu);
+        assert_eq!(on, SumsOn::Cpu, "{label}");
+        let (f64s, on) = render(&s, SumsOn::GpuF64);
+        if method == mis::Method::OptimalProgressive {
+            assert_eq!(on, SumsOn::Cpu, "{label}: α changes at milestones");
+            continue;
+        }
+        let (df, on_df) = render(&s, SumsOn::GpuDoubleFloat);
+        assert_eq!(on_df, SumsOn::GpuDoubleFloat, "{label}");
+        let mut worst = [0f64; 2];
+        for (k, ((a, b), c)) in f64s
+            .data()
+            .iter()
+            .zip(cpu.data())
+            .zip(df.data())
+            .enumerate()
+        {
+            let (e, e_df) = ((a - b).abs() / b.abs(), (c - a).abs() / a.abs());
+            assert!(
+                (a - b).abs() <= 2e-6 * b.abs(),
+                "{label}: word {k}: GPU {a} against the CPU's {b}"
+            );
+            assert!(
+                (c - a).abs() <= 1e-12 * a.abs(),
+                "{label}: word {k}: double-float {c} against f64 {a}"
+            );
+            if b.abs() > 0.0 {
+                worst[0] = worst[0].max(e);
+            }
+            if a.abs() > 0.0 {
+                worst[1] = worst[1].max(e_df);
+            }
+        }
+        eprintln!("{label} (sums {on}): largest relative difference to the CPU's sums {:.1e}, double-float to f64 {:.1e}", worst[0], worst[1]);
+    }
+}
+
 /// What the GPU integrator does not cover is an error naming it, before any work.
 #[test]
 fn unsupported_scenes_are_refused_by_name() {

@@ -30,8 +30,9 @@ fn df_add(acc: vec2<f32>, v: f32) -> vec2<f32> {
 }
 
 @compute @workgroup_size(64)
-fn accumulate_df(@builtin(global_invocation_id) id: vec3<u32>) {
-    let pixel = id.x;
+fn accumulate_df(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    // Dispatches of more than 65 535 workgroups are split over y.
+    let pixel = id.x + id.y * groups.x * 64u;
     let samples = params[2];
     let s = params[3];
     if (pixel >= params[1]) { return; }

@@ -8,8 +8,9 @@
 @group(0) @binding(3) var<storage, read_write> state: array<f64>;
 
 @compute @workgroup_size(64)
-fn accumulate_f64(@builtin(global_invocation_id) id: vec3<u32>) {
-    let pixel = id.x;
+fn accumulate_f64(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    // Dispatches of more than 65 535 workgroups are split over y.
+    let pixel = id.x + id.y * groups.x * 64u;
     let samples = params[2];
     let s = params[3];
     if (pixel >= params[1]) { return; }

@@ -1,7 +1,9 @@
 //! Samples shaded by another back end (the GPU's wavefront kernels), added into the
 //! CPU's per-pixel records by the CPU's own code, so that the two back ends share one
-//! [`crate::RenderState`] and its estimators (GPU.md §8: the sums and the solve stay on
-//! the CPU in this first version).
+//! [`crate::RenderState`] and its estimators (GPU.md §8). A back end that keeps the
+//! per-pixel sums itself forms each sample's terms as [`Accumulator::add`] would
+//! ([`Accumulator::linear`] describes them) and hands over finished records; the
+//! optimal estimators' solves stay the CPU's either way.
 //!
 //! A back end hands over, per pixel sample, what the CPU integrator would have added
 //! (for the AOV integrators only the first hit's AOVs, [`Accumulator::add_aov_sample`]):
