@@ -160,11 +160,13 @@ struct Frame {
     /// The trained selection's table in `tables` (u32::MAX: none), cells per axis, MIS
     /// lights covered.
     trained: [u32; 4],
+    /// Where the live and continuation queues' entries start in `stats` (words).
+    queues: [u32; 4],
 }
 
 const _: () = assert!(size_of::<GpuShape>() == 48);
 const _: () = assert!(size_of::<GpuMaterial>() == 112);
-const _: () = assert!(size_of::<Frame>() == 336);
+const _: () = assert!(size_of::<Frame>() == 352);
 
 /// The scene and options as the kernels read them.
 #[derive(Clone, Debug, Default)]
@@ -1172,7 +1174,9 @@ pub fn render_range_with_sums(
         d.create_buffer(&wgpu::BufferDescriptor {
             label: Some(label),
             size,
-            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            usage: wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::COPY_SRC
+                | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         })
     };
@@ -1185,22 +1189,26 @@ pub fn render_range_with_sums(
         })
     };
     let (hits, draws) = (rw("hits", hit_bytes), rw("draws", draw_bytes));
-    // Loop maxima, the shadow queue's length and indirect arguments, then its entries.
-    let stats_bytes = (16 + max_slots * u64::from(nd1)) * 4;
+    // Loop maxima, the three queues' lengths and indirect arguments, then the shadow
+    // queue's entries (a draw each), the live queue's and the continuation queue's (a
+    // slot each).
+    let live_at = 16 + max_slots * u64::from(nd1);
+    let stats_bytes = (live_at + 2 * max_slots) * 4;
+    pack.frame.queues = [live_at as u32, (live_at + max_slots) as u32, 0, 0];
     gpu.check_binding(stats_bytes)?;
     let loops = d.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("stats and shadow queue"),
+        label: Some("stats and queues"),
         size: stats_bytes,
         usage: wgpu::BufferUsages::STORAGE
             | wgpu::BufferUsages::COPY_SRC
             | wgpu::BufferUsages::COPY_DST,
         mapped_at_creation: false,
     });
-    // The shadow pass's indirect arguments, copied out of `stats` (a buffer bound for
-    // storage cannot also drive a dispatch).
+    // The queued passes' indirect arguments (shadow, shade, continuation at 0, 16, 32),
+    // copied out of `stats` (a buffer bound for storage cannot also drive a dispatch).
     let args = d.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("shadow dispatch"),
-        size: 16,
+        label: Some("queued dispatches"),
+        size: 48,
         usage: wgpu::BufferUsages::INDIRECT | wgpu::BufferUsages::COPY_DST,
         mapped_at_creation: false,
     });
@@ -1307,25 +1315,42 @@ pub fn render_range_with_sums(
                 .write_buffer(f, 0, bytemuck::bytes_of(&pack.frame));
         }
         let mut enc = d.create_command_encoder(&Default::default());
+        // Draw records of slots no shade pass visits stay zero (status 0: no vertex), and
+        // the queues start empty.
+        let db = u64::from(slots) * u64::from(per_slot_draws) * DRAW_WORDS as u64 * 4;
+        if depths > 0 {
+            enc.clear_buffer(&draws, 0, Some(db));
+        }
+        enc.clear_buffer(&loops, 16, Some(48));
         for (q, &(stage, depth, mode)) in passes.iter().enumerate() {
             let group = &groups[3 * depth as usize + mode as usize];
-            let (pipe, n) = match stage {
-                1 => (&p.shade, slots * nd1),
-                2 => (&p.trace, 0),
-                _ => (&p.trace, slots),
-            };
-            if stage == 1 {
-                // An empty shadow queue for this depth's shade pass to fill.
-                enc.clear_buffer(&loops, 16, Some(4));
-            }
-            if stage == 2 {
+            let pipe = if stage == 1 { &p.shade } else { &p.trace };
+            if stage > 0 {
+                // The queued passes: their dispatch from their queue's length. (Byte
+                // offsets in `stats`: the shadow, live and continuation queues' args at
+                // 20, 36 and 52.)
                 {
                     let mut pass = enc.begin_compute_pass(&Default::default());
                     pass.set_pipeline(&p.prepare);
                     pass.set_bind_group(0, group, &[]);
                     pass.dispatch_workgroups(1, 1, 1);
                 }
-                enc.copy_buffer_to_buffer(&loops, 20, &args, 0, 12);
+                let (from, to) = match stage {
+                    1 => (36, 16),
+                    2 => (20, 0),
+                    _ => (52, 32),
+                };
+                enc.copy_buffer_to_buffer(&loops, from, &args, to, 12);
+            }
+            match stage {
+                // Empty shadow and continuation queues for the shade pass to fill.
+                1 => {
+                    enc.clear_buffer(&loops, 16, Some(4));
+                    enc.clear_buffer(&loops, 48, Some(4));
+                }
+                // An empty live queue for the continuations' new vertices.
+                3 => enc.clear_buffer(&loops, 32, Some(4)),
+                _ => {}
             }
             let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: None,
@@ -1339,12 +1364,16 @@ pub fn render_range_with_sums(
             });
             pass.set_pipeline(pipe);
             pass.set_bind_group(0, group, &[]);
-            if stage == 2 {
-                // The shadow rays the shade pass queued, and no other slot.
-                pass.dispatch_workgroups_indirect(&args, 0);
-            } else {
-                let (gx, gy) = groups_for(n);
-                pass.dispatch_workgroups(gx, gy, 1);
+            match stage {
+                0 => {
+                    let (gx, gy) = groups_for(slots);
+                    pass.dispatch_workgroups(gx, gy, 1);
+                }
+                // The live slots' draws, the shadow rays and the continuations queued
+                // by the pass before, and no other.
+                1 => pass.dispatch_workgroups_indirect(&args, 16),
+                2 => pass.dispatch_workgroups_indirect(&args, 0),
+                _ => pass.dispatch_workgroups_indirect(&args, 32),
             }
         }
         if let Some(sums) = sums.as_mut() {
@@ -1367,7 +1396,6 @@ pub fn render_range_with_sums(
             enc.copy_buffer_to_buffer(&ts_buf, 0, &ts_read, 0, 16 * run as u64);
         }
         let hb = u64::from(slots) * HIT_WORDS as u64 * 4;
-        let db = u64::from(slots) * u64::from(per_slot_draws) * DRAW_WORDS as u64 * 4;
         if let Some((hits_r, draws_r)) = &readbacks {
             enc.copy_buffer_to_buffer(&hits, 0, hits_r, 0, hb);
             if depths > 0 {

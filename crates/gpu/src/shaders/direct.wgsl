@@ -1,20 +1,25 @@
 // The wavefront `direct` and `path` integrators (GPU.md §7, first version): kernels over
 // one wave of slots, a slot being one pixel at one sample index, per vertex depth d.
+// Every pass after the camera's runs over a queue the pass before filled (atomics and an
+// indirect dispatch written by `prepare`, GPU.md §7.4), not over every slot:
 //
-//   trace (mode 0)  camera ray → nearest object or area light → hit point, outward normal,
-//                   material; the emitter seen directly goes to the outside-MIS sum.
-//   shade           one invocation per (slot, draw j ≤ Σ n_k): the draw of its technique
-//                   at the vertex (dimensions of render::integrator::dims), every
-//                   technique's pdf in its direction, β·f_s·|cos| and the nearest light's
-//                   emission along it, a shadow ray where both are non-zero. The draw
-//                   that extends the path (the BSDF technique's first, or the extra draw
-//                   j = Σ n_k without one) writes the continuation ray, β after it and
-//                   Russian roulette (render::integrator::path).
-//   trace (mode 1)  one invocation per (slot, draw): the shadow ray's any-hit query.
-//   trace (mode 2)  one invocation per slot: the continuation's nearest hit, which gives
-//                   the extending draw its Li and the path its next vertex.
+//   trace (mode 0)  one invocation per slot: camera ray → nearest object or area light →
+//                   hit point, outward normal, material; the emitter seen directly goes
+//                   to the outside-MIS sum; a slot with a vertex joins the live queue.
+//   shade           one invocation per (live slot, draw j ≤ Σ n_k): the draw of its
+//                   technique at the vertex (dimensions of render::integrator::dims),
+//                   every technique's pdf in its direction, β·f_s·|cos| and the nearest
+//                   light's emission along it, a shadow ray (queued) where both are
+//                   non-zero. The draw that extends the path (the BSDF technique's first,
+//                   or the extra draw j = Σ n_k without one) writes the continuation ray
+//                   (queued), β after it and Russian roulette (render::integrator::path).
+//   trace (mode 1)  one invocation per queued shadow ray: its any-hit query.
+//   trace (mode 2)  one invocation per queued continuation: its nearest hit, which gives
+//                   the extending draw its Li and the path its next vertex (the slot
+//                   joins the next depth's live queue).
 //
-// The CPU adds the wave's draws to its per-pixel records (render::integrator::Accumulator).
+// The wave's draws are then added to the per-pixel records: on the GPU (gpu::record) or
+// by the CPU (render::integrator::Accumulator).
 // Trace is one entry point for both modes so that the costly intersectors compile once.
 // Every loop iteration counts against `loops` (GPU.md §3.1); the maximum per invocation
 // and kernel goes to stats[mode].
@@ -39,6 +44,8 @@ struct Frame {
     // The trained selection's table in sel_buf (0xffffffff: none; lo.xyz, scale.xyz,
     // then res³ pmfs over `z` lights), its cells per axis, the lights it covers.
     trained: vec4<u32>,
+    // Where the live and continuation queues' entries start in `stats` (words).
+    queues: vec4<u32>,
 }
 
 // One scene object: a single leaf (kind 0) or an intersection of plain-quadric leaves
@@ -62,8 +69,11 @@ struct GpuMaterial { bsdf: GpuBsdf, tex_kind: u32, pad0: u32, pad1: u32, pad2: u
 @group(0) @binding(10) var<storage, read_write> hits: array<vec4<f32>>;
 @group(0) @binding(11) var<storage, read_write> draws: array<vec4<f32>>;
 // stats[0..3]: the most loop iterations per invocation (camera and continuation trace,
-// shadow trace, shade); stats[4]: the shadow queue's length; stats[5..8]: its indirect
-// dispatch (x, y, z); stats[16 + q]: queue entry q, a draw index (GPU.md §7.4).
+// shadow trace, shade); then three queues (GPU.md §7.4), each a length and an indirect
+// dispatch (x, y, z): the shadow rays at stats[4..8] (entry q, a draw index, at
+// stats[16 + q]), the live slots at stats[8..12] (the slots with a vertex to shade at
+// this depth; entries from frame.queues.x) and the continuations at stats[12..16] (the
+// slots whose extending draw has a ray; entries from frame.queues.y).
 @group(0) @binding(12) var<storage, read_write> stats: array<atomic<u32>>;
 // CSG nodes of kind-2 shapes in post-order: (op, leaf or part count, 0, 0), op 0 leaf,
 // 1 union, 2 intersection, 3 difference.
@@ -102,6 +112,16 @@ const F_PURE: f32 = 2.0;
 const QUEUE_LEN: u32 = 4u;
 const QUEUE_ARGS: u32 = 5u;
 const QUEUE_ITEMS: u32 = 16u;
+const LIVE_LEN: u32 = 8u;
+const LIVE_ARGS: u32 = 9u;
+const CONT_LEN: u32 = 12u;
+const CONT_ARGS: u32 = 13u;
+
+// Appends `slot` to the queue whose length is at stats[len] and entries at stats[items].
+fn push(len: u32, items: u32, slot: u32) {
+    let q = atomicAdd(&stats[len], 1u);
+    atomicStore(&stats[items + q], slot);
+}
 
 const T_BSDF: u32 = 0u;
 const T_POWER: u32 = 1u;
@@ -654,6 +674,7 @@ fn trace_camera(slot: u32) {
     }
     write_vertex(at, o + h.t * d, h.leaf, -d, vec3<f32>(1.0));
     hits[at + 8u] = vec4<f32>(hits[at + 1u].xyz, h.t);
+    push(LIVE_LEN, frame.queues.x, slot);
 }
 
 // The continuation of a slot's path from vertex `depth`: its nearest hit is the extending
@@ -685,6 +706,7 @@ fn trace_continuation(slot: u32) {
         return;
     }
     write_vertex(at, o + h.t * d, h.leaf, -d, hits[at + 7u].xyz);
+    push(LIVE_LEN, frame.queues.x, slot);
 }
 
 fn trace_shadow(q: u32) {
@@ -725,7 +747,10 @@ fn trace(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
         if (frame.mode == 0u) {
             trace_camera(i);
         } else if (frame.mode == 2u) {
-            trace_continuation(i);
+            // The slots the shade pass queued, and no other.
+            if (i < atomicLoad(&stats[CONT_LEN])) {
+                trace_continuation(atomicLoad(&stats[frame.queues.y + i]));
+            }
         } else {
             probe(i);
         }
@@ -733,16 +758,18 @@ fn trace(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
     atomicMax(&stats[select(0u, 1u, frame.mode == 1u)], loops);
 }
 
-// Draw j of the slot's vertex at this depth: technique k's (j < Σ n_k), or the extra
-// BSDF draw that only extends the path (j = Σ n_k).
+// Draw j of the vertex of the live slot queued at q / nd at this depth: technique k's
+// (j < Σ n_k), or the extra BSDF draw that only extends the path (j = Σ n_k). The draws
+// of slots not queued keep the zeros the wave began with (status 0: no vertex).
 @compute @workgroup_size(64)
 fn shade(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nw: vec3<u32>) {
-    let i = gid.x + gid.y * nw.x * 64u;
+    let q = gid.x + gid.y * nw.x * 64u;
     let nd = frame.per_slot;
-    if (i >= frame.slots * nd) { return; }
+    if (q >= atomicLoad(&stats[LIVE_LEN]) * nd) { return; }
     loops = 0u;
-    let slot = i / nd;
-    let j = i % nd;
+    let slot = atomicLoad(&stats[frame.queues.x + q / nd]);
+    let j = q % nd;
+    let i = slot * nd + j;
     let at = draw_at(slot, j);
     let ha = slot * HIT_WORDS;
     let hp = hits[ha];
@@ -878,6 +905,8 @@ fn shade(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
         hits[ha + 5u] = vec4<f32>(o, select(0.0, 1.0, ok));
         hits[ha + 6u] = vec4<f32>(wi, select(0.0, 1.0, survives));
         hits[ha + 7u] = vec4<f32>(next, 0.0);
+        // Traced for the draw's Li even where roulette ends the path there.
+        if (ok) { push(CONT_LEN, frame.queues.y, slot); }
     }
     if (spec) {
         // A delta lobe: outside MIS, weight·Li/n (n the BSDF technique's draws, 1 for the
@@ -961,10 +990,7 @@ fn write_shadow(i: u32, at: u32, o: vec3<f32>, wi: vec3<f32>, t_max: f32, g: vec
     draws[at] = vec4<f32>(o, t_max);
     draws[at + 1u] = vec4<f32>(wi, select(D_ZERO, D_SHADOW, traced));
     draws[at + 2u] = vec4<f32>(g, flags);
-    if (traced) {
-        let q = atomicAdd(&stats[QUEUE_LEN], 1u);
-        atomicStore(&stats[QUEUE_ITEMS + q], i);
-    }
+    if (traced) { push(QUEUE_LEN, QUEUE_ITEMS, i); }
 }
 
 // The draw that extends the path: Li comes from the continuation's trace (mode 2),
@@ -1019,11 +1045,21 @@ fn shade_delta(i: u32, at: u32, l: u32, p: vec3<f32>, n: vec3<f32>, f: Basis, wo
     write_shadow(i, at, o, wi, dist, beta * fc * radiance, 0.0, true);
 }
 
-// The shadow pass's indirect dispatch from the queue's length (one invocation).
+// An indirect dispatch of n invocations at stats[at..at + 3], split over y where x
+// would pass 65 535 workgroups.
+fn dispatch_args(at: u32, n: u32) {
+    let groups = max((n + 63u) / 64u, 1u);
+    let x = min(groups, 65535u);
+    atomicStore(&stats[at], x);
+    atomicStore(&stats[at + 1u], (groups + x - 1u) / x);
+    atomicStore(&stats[at + 2u], 1u);
+}
+
+// The queued passes' indirect dispatches from their queues' lengths (one invocation):
+// the shadow rays, the live slots' draws, the continuations.
 @compute @workgroup_size(1)
 fn prepare() {
-    let groups = (atomicLoad(&stats[QUEUE_LEN]) + 63u) / 64u;
-    atomicStore(&stats[QUEUE_ARGS], max(groups, 1u));
-    atomicStore(&stats[QUEUE_ARGS + 1u], 1u);
-    atomicStore(&stats[QUEUE_ARGS + 2u], 1u);
+    dispatch_args(QUEUE_ARGS, atomicLoad(&stats[QUEUE_LEN]));
+    dispatch_args(LIVE_ARGS, atomicLoad(&stats[LIVE_LEN]) * frame.per_slot);
+    dispatch_args(CONT_ARGS, atomicLoad(&stats[CONT_LEN]));
 }
