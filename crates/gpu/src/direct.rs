@@ -1325,7 +1325,7 @@ pub fn render_range_with_sums(
         for (q, &(stage, depth, mode)) in passes.iter().enumerate() {
             let group = &groups[3 * depth as usize + mode as usize];
             let pipe = if stage == 1 { &p.shade } else { &p.trace };
-            if stage > 0 {
+            if stage > 1 || (stage == 1 && depth > 0) {
                 // The queued passes: their dispatch from their queue's length. (Byte
                 // offsets in `stats`: the shadow, live and continuation queues' args at
                 // 20, 36 and 52.)
@@ -1367,6 +1367,11 @@ pub fn render_range_with_sums(
             match stage {
                 0 => {
                     let (gx, gy) = groups_for(slots);
+                    pass.dispatch_workgroups(gx, gy, 1);
+                }
+                // Depth 0: every slot's draws, in slot order (coherent rays).
+                1 if depth == 0 => {
+                    let (gx, gy) = groups_for(slots * nd1);
                     pass.dispatch_workgroups(gx, gy, 1);
                 }
                 // The live slots' draws, the shadow rays and the continuations queued

@@ -1,12 +1,14 @@
 // The wavefront `direct` and `path` integrators (GPU.md §7, first version): kernels over
 // one wave of slots, a slot being one pixel at one sample index, per vertex depth d.
-// Every pass after the camera's runs over a queue the pass before filled (atomics and an
-// indirect dispatch written by `prepare`, GPU.md §7.4), not over every slot:
+// Every pass after the camera's and the first shade runs over a queue the pass before
+// filled (atomics and an indirect dispatch written by `prepare`, GPU.md §7.4), not over
+// every slot:
 //
 //   trace (mode 0)  one invocation per slot: camera ray → nearest object or area light →
 //                   hit point, outward normal, material; the emitter seen directly goes
-//                   to the outside-MIS sum; a slot with a vertex joins the live queue.
-//   shade           one invocation per (live slot, draw j ≤ Σ n_k): the draw of its
+//                   to the outside-MIS sum.
+//   shade           one invocation per (slot at depth 0, live slot after it; draw
+//                   j ≤ Σ n_k): the draw of its
 //                   technique at the vertex (dimensions of render::integrator::dims),
 //                   every technique's pdf in its direction, β·f_s·|cos| and the nearest
 //                   light's emission along it, a shadow ray (queued) where both are
@@ -71,8 +73,8 @@ struct GpuMaterial { bsdf: GpuBsdf, tex_kind: u32, pad0: u32, pad1: u32, pad2: u
 // stats[0..3]: the most loop iterations per invocation (camera and continuation trace,
 // shadow trace, shade); then three queues (GPU.md §7.4), each a length and an indirect
 // dispatch (x, y, z): the shadow rays at stats[4..8] (entry q, a draw index, at
-// stats[16 + q]), the live slots at stats[8..12] (the slots with a vertex to shade at
-// this depth; entries from frame.queues.x) and the continuations at stats[12..16] (the
+// stats[16 + q]), the live slots at stats[8..12] (the slots whose continuation met a
+// surface: the next depth's vertices; entries from frame.queues.x) and the continuations at stats[12..16] (the
 // slots whose extending draw has a ray; entries from frame.queues.y).
 @group(0) @binding(12) var<storage, read_write> stats: array<atomic<u32>>;
 // CSG nodes of kind-2 shapes in post-order: (op, leaf or part count, 0, 0), op 0 leaf,
@@ -674,7 +676,6 @@ fn trace_camera(slot: u32) {
     }
     write_vertex(at, o + h.t * d, h.leaf, -d, vec3<f32>(1.0));
     hits[at + 8u] = vec4<f32>(hits[at + 1u].xyz, h.t);
-    push(LIVE_LEN, frame.queues.x, slot);
 }
 
 // The continuation of a slot's path from vertex `depth`: its nearest hit is the extending
@@ -758,16 +759,22 @@ fn trace(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
     atomicMax(&stats[select(0u, 1u, frame.mode == 1u)], loops);
 }
 
-// Draw j of the vertex of the live slot queued at q / nd at this depth: technique k's
-// (j < Σ n_k), or the extra BSDF draw that only extends the path (j = Σ n_k). The draws
-// of slots not queued keep the zeros the wave began with (status 0: no vertex).
+// Draw j of the vertex of slot q / nd at depth 0 (every slot, in slot order: coherent
+// rays), else of the live slot queued at q / nd: technique k's (j < Σ n_k), or the
+// extra BSDF draw that only extends the path (j = Σ n_k). The draws of slots not
+// queued keep the zeros the wave began with (status 0: no vertex).
 @compute @workgroup_size(64)
 fn shade(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nw: vec3<u32>) {
     let q = gid.x + gid.y * nw.x * 64u;
     let nd = frame.per_slot;
-    if (q >= atomicLoad(&stats[LIVE_LEN]) * nd) { return; }
+    var slot = q / nd;
+    if (frame.depth == 0u) {
+        if (q >= frame.slots * nd) { return; }
+    } else {
+        if (q >= atomicLoad(&stats[LIVE_LEN]) * nd) { return; }
+        slot = atomicLoad(&stats[frame.queues.x + q / nd]);
+    }
     loops = 0u;
-    let slot = atomicLoad(&stats[frame.queues.x + q / nd]);
     let j = q % nd;
     let i = slot * nd + j;
     let at = draw_at(slot, j);
