@@ -32,7 +32,8 @@
 //!
 //! **Scope.** Objects that are one perturbed or plain quadric, a CSG tree of plain
 //! quadrics (boxes, capped cylinders, unions, differences: by inside spans along the
-//! ray, the nodes in post-order from the root), or an expression solid (at most one per scene: its tape is compiled into the
+//! ray, the nodes in post-order from the root), or an expression solid (up to
+//! [`MAX_GPU_TAPES`] per scene: their tapes share one interpreter compiled into the
 //! kernels, GPU.md §6.2); diffuse, conductor, dielectric and plastic materials
 //! rough or smooth (delta lobes outside MIS, as the CPU), with constant or point-space checker colours; sphere,
 //! rectangle and disk lights, point and spot lights, a constant or mapped environment
@@ -78,6 +79,10 @@ pub const WAVE_DRAWS: u32 = 1 << 19;
 
 /// Techniques the kernels can hold.
 pub const MAX_GPU_TECHNIQUES: usize = 8;
+
+/// Expression solids a scene may hold on the GPU (their tapes share one interpreter,
+/// GPU.md §6.2).
+pub const MAX_GPU_TAPES: usize = 16;
 
 /// The deepest `path` the GPU renders (a uniform block per depth and pass).
 pub const MAX_GPU_DEPTH: u32 = 16;
@@ -187,9 +192,10 @@ pub struct DirectScene {
     pub materials: Vec<GpuMaterial>,
     /// Area lights.
     pub lights: Vec<GpuAreaLight>,
-    /// The scene's expression solid, if any (at most one: its tape is compiled into
-    /// the kernels).
-    pub tape: Option<TapeSolid>,
+    /// The scene's expression solids (at most [`MAX_GPU_TAPES`]: their tapes are
+    /// compiled into the kernels' source, GPU.md §6.2), in the order of their leaves'
+    /// `first_op`.
+    pub tapes: Vec<TapeSolid>,
     /// CSG nodes of kind-2 shapes, post-order: (op, leaf or part count, 0, 0).
     pub csg: Vec<[u32; 4]>,
     /// Light-selection tables (by power at 0, by area at `frame.area_off`) and plastic
@@ -253,9 +259,9 @@ impl DirectScene {
         name: &str,
         material: u32,
     ) -> Result<(), GpuError> {
-        if self.tape.is_some() {
+        if self.tapes.len() >= MAX_GPU_TAPES {
             return Err(unsupported(format!(
-                "object '{name}' is a second expression solid (one per scene)"
+                "object '{name}': more than {MAX_GPU_TAPES} expression solids"
             )));
         }
         let frep::Leaf::Expr {
@@ -276,30 +282,32 @@ impl DirectScene {
         }
         let solid = TapeSolid::new(tape, &view.bounds);
         let (lo, hi) = (solid.lo, solid.hi);
-        self.tape = Some(solid);
+        self.tapes.push(solid);
         self.leaves.push(GpuObject {
             kind: 2,
             material,
             lo,
             hi,
+            // Which of the scene's tapes (`use_tape`).
+            first_op: self.tapes.len() as u32 - 1,
             ..GpuObject::default()
         });
         Ok(())
     }
 
-    /// The WGSL that defines `trace_tape` and `tape_normal`: the tape tracer with this
-    /// scene's tape, or stubs. The tracer's helpers share names with the perturbed scan's:
-    /// the duplicates go, and its ε becomes `TAPE_EPS`.
+    /// The WGSL that defines `use_tape`, `trace_tape` and `tape_normal`: the tape
+    /// tracer with this scene's tapes, or stubs. The tracer's helpers share names with
+    /// the perturbed scan's: the duplicates go, and its ε becomes `TAPE_EPS`.
     fn tape_wgsl(&self) -> String {
-        let Some(t) = &self.tape else {
+        if self.tapes.is_empty() {
             return "struct TraceResult { status: u32, t: f32 }
+fn use_tape(k: u32) {}
 fn trace_tape(o: vec3<f32>, d: vec3<f32>, t_min: f32, t_max: f32) -> TraceResult { return TraceResult(0u, 0.0); }
 fn tape_normal(p: vec3<f32>) -> vec3<f32> { return vec3<f32>(0.0, 0.0, 1.0); }
 "
             .into();
-        };
-        let src = t
-            .wgsl()
+        }
+        let src = TapeSolid::scene_wgsl(&self.tapes)
             .replacen(FLOAT_WGSL, "", 1)
             .replacen("var<private> loops: u32;", "", 1)
             .replacen(
@@ -838,7 +846,7 @@ fn kernels(gpu: &Gpu, pack: &DirectScene) -> Result<std::sync::Arc<Pipelines>, G
 
 /// The scene's read-only buffers in binding order (1–9, then 14–15: CSG and tape).
 fn scene_buffers(gpu: &Gpu, pack: &DirectScene) -> Result<Vec<wgpu::Buffer>, GpuError> {
-    let tape_words: &[u32] = pack.tape.as_ref().map_or(&[], |t| t.tape.words());
+    let tape_words = TapeSolid::scene_words(&pack.tapes);
     Ok(vec![
         storage(gpu, "shapes", bytemuck::cast_slice(&pack.shapes))?,
         storage(gpu, "objects", bytemuck::cast_slice(&pack.leaves))?,
@@ -854,7 +862,7 @@ fn scene_buffers(gpu: &Gpu, pack: &DirectScene) -> Result<Vec<wgpu::Buffer>, Gpu
         storage(gpu, "lights", bytemuck::cast_slice(&pack.lights))?,
         storage(gpu, "tables", bytemuck::cast_slice(&pack.tables))?,
         storage(gpu, "csg", bytemuck::cast_slice(&pack.csg))?,
-        storage(gpu, "tape", bytemuck::cast_slice(tape_words))?,
+        storage(gpu, "tape", bytemuck::cast_slice(&tape_words))?,
     ])
 }
 

@@ -96,6 +96,25 @@ impl GpuTape {
         &self.words
     }
 
+    /// The words with dead instructions (`const 0 → r0`) in front, to `len`
+    /// instructions: a tape of the interpreter's length `len`, with the same result (a
+    /// register-allocated tape writes every register before reading it).
+    pub fn padded_words(&self, len: usize) -> Vec<u32> {
+        assert!(len >= self.len(), "padding shortens no tape");
+        let dead = [
+            1 | u32::from(frep::bytecode::IMM) << 16 | u32::from(frep::bytecode::IMM) << 24,
+            0,
+        ];
+        let mut w: Vec<u32> = dead.repeat(len - self.len());
+        w.extend_from_slice(&self.words);
+        w
+    }
+
+    /// Registers the tape uses.
+    pub fn registers(&self) -> usize {
+        self.registers
+    }
+
     /// Number of instructions.
     pub fn len(&self) -> usize {
         self.instrs.len()

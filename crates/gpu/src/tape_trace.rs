@@ -127,6 +127,49 @@ impl TapeSolid {
         )
     }
 
+    /// The tracer over several solids in one kernel (a scene's expression solids):
+    /// one interpreter of the longest tape's length (the others padded in front,
+    /// [`GpuTape::padded_words`], so that its loops keep a constant trip count, GPU.md
+    /// §3.4) and `use_tape(k)`, which points `tape_base`, `EPS`, `BLO` and `BHI` at
+    /// solid k before a trace or a normal. The words for the `tape` binding are
+    /// [`Self::scene_words`]'s.
+    pub fn scene_wgsl(solids: &[TapeSolid]) -> String {
+        let len = solids.iter().map(|s| s.tape.len()).max().unwrap_or(1);
+        let regs = solids.iter().map(|s| s.tape.registers()).max().unwrap_or(1);
+        let v = |a: [f32; 3]| format!("vec3<f32>({}, {}, {})", hex(a[0]), hex(a[1]), hex(a[2]));
+        let cases: String = solids
+            .iter()
+            .enumerate()
+            .map(|(k, s)| {
+                format!(
+                    "        case {k}u: {{ tape_base = {}u; EPS = {}; BLO = {}; BHI = {}; }}\n",
+                    2 * k * len,
+                    hex(s.eps),
+                    v(s.lo),
+                    v(s.hi)
+                )
+            })
+            .collect();
+        format!(
+            "const REG_COUNT: u32 = {}u;\nconst TAPE_LEN: u32 = {len}u;\n{}{}\n\
+             var<private> EPS: f32;\nvar<private> BLO: vec3<f32>;\nvar<private> BHI: vec3<f32>;\n\
+             fn use_tape(k: u32) {{\n    switch k {{\n{cases}        default: {{}}\n    }}\n}}\n{TRACE_WGSL}",
+            regs.max(1),
+            crate::FLOAT_WGSL,
+            crate::tape::TAPE_WGSL,
+        )
+    }
+
+    /// The `tape` binding's words for [`Self::scene_wgsl`]: each solid's tape padded to
+    /// the longest, in order.
+    pub fn scene_words(solids: &[TapeSolid]) -> Vec<u32> {
+        let len = solids.iter().map(|s| s.tape.len()).max().unwrap_or(1);
+        solids
+            .iter()
+            .flat_map(|s| s.tape.padded_words(len))
+            .collect()
+    }
+
     /// The twin of the kernel's `trace_tape`.
     pub fn trace(&self, o: Vec3, d: Vec3, t_min: f32, t_max: f32) -> Traced {
         let (mut loops, mut late) = (0u32, false);

@@ -80,8 +80,9 @@ struct GpuMaterial { bsdf: GpuBsdf, tex_kind: u32, pad0: u32, pad1: u32, pad2: u
 // CSG nodes of kind-2 shapes in post-order: (op, leaf or part count, 0, 0), op 0 leaf,
 // 1 union, 2 intersection, 3 difference.
 @group(0) @binding(13) var<storage, read> csg: array<vec4<u32>>;
-// The scene's expression tape (at most one; GpuObject kind 2), run by `trace_tape` and
-// `tape_normal`, which the kernel's source defines per scene (stubs without a tape).
+// The scene's expression tapes (GpuObject kind 2, its first_op the tape's index), each
+// padded to the longest, run by `trace_tape` and `tape_normal` after `use_tape`, which
+// the kernel's source defines per scene (stubs without a tape).
 @group(0) @binding(14) var<storage, read> tape: array<u32>;
 
 // vec4s per slot in `hits`: [p, status], [n, material], [wo, ·], [outside-MIS rgb, ·],
@@ -369,6 +370,7 @@ fn scene_trace(o: vec3<f32>, d: vec3<f32>, t_max: f32, any_hit: bool) -> SceneHi
             t = r.x;
             leaf = bitcast<u32>(r.y);
         } else if (objects[leaf].kind == 2u) {
+            use_tape(objects[leaf].first_op);
             let r = trace_tape(o, d, 0.0, res.t);
             if ((r.status & 3u) == 2u) { return SceneHit(2u, 0.0, 0u); }
             found = (r.status & 3u) == 1u;
@@ -404,7 +406,10 @@ fn leaf_normal(key: u32, p: vec3<f32>) -> vec3<f32> {
     let leaf = key & 0x7fffffffu;
     let sign = select(-1.0, 1.0, (key & 0x80000000u) != 0u);
     let ob = objects[leaf];
-    if (ob.kind == 2u) { return tape_normal(p); }
+    if (ob.kind == 2u) {
+        use_tape(ob.first_op);
+        return tape_normal(p);
+    }
     var g = q_grad(quadrics[ob.first_op].c, p);
     if (ob.kind == 1u) {
         let n = ob.item_count + ob.unbounded;

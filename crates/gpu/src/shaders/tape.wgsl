@@ -10,6 +10,9 @@
 // an evaluation costs EVAL_LOOPS.
 
 var<private> loops: u32;
+// Where the tape starts in `tape` (words): 0, or the scene's tape of the object traced
+// where a kernel holds several (gpu::tape_trace::scene_wgsl).
+var<private> tape_base: u32;
 const EVAL_LOOPS: u32 = (TAPE_LEN + 3u) / 4u;
 
 const MIN_POS: f32 = 0x1p-126f; // f32::MIN_POSITIVE
@@ -97,8 +100,8 @@ var<private> preg: array<f32, REG_COUNT>;
 
 // Instruction k at p (Bytecode::eval_f32's arm); returns its output register.
 fn point_op(k: u32, p: vec3<f32>) -> u32 {
-        let w = tape[2u * k];
-        let imm = bitcast<f32>(tape[2u * k + 1u]);
+        let w = tape[tape_base + 2u * k];
+        let imm = bitcast<f32>(tape[tape_base + 2u * k + 1u]);
         let op = w & 0xffu;
         let o = (w >> 8u) & 0xffu;
         let ia = (w >> 16u) & 0xffu;
@@ -111,7 +114,7 @@ fn point_op(k: u32, p: vec3<f32>) -> u32 {
         switch op {
             case 0u: { v = p[ia]; }
             case 1u: { v = imm; }
-            case 2u: { v = powi(a, tape[2u * k + 1u]); }
+            case 2u: { v = powi(a, tape[tape_base + 2u * k + 1u]); }
             case 16u: { v = -a; }
             case 17u: { v = abs(a); }
             case 18u: { v = sqrt(a); }
@@ -148,8 +151,8 @@ var<private> ireg: array<vec4<f32>, REG_COUNT>;
 // widened by 1 ulp after each op, 4 after `/` and sqrt, 16 after powi (§6.2.3);
 // derivatives by the same interval ops (frep's Dual<Interval, 1>).
 fn interval_op(k: u32, x: vec4<f32>, y: vec4<f32>, z: vec4<f32>) -> u32 {
-        let w = tape[2u * k];
-        let imm = bitcast<f32>(tape[2u * k + 1u]);
+        let w = tape[tape_base + 2u * k];
+        let imm = bitcast<f32>(tape[tape_base + 2u * k + 1u]);
         let op = w & 0xffu;
         let o = (w >> 8u) & 0xffu;
         let ia = (w >> 16u) & 0xffu;
@@ -170,7 +173,7 @@ fn interval_op(k: u32, x: vec4<f32>, y: vec4<f32>, z: vec4<f32>) -> u32 {
             }
             case 1u: { v = vec2<f32>(imm, imm); }
             case 2u: {
-                let n = tape[2u * k + 1u];
+                let n = tape[tape_base + 2u * k + 1u];
                 v = i_powi(a.xy, n);
                 if (n > 0u) {
                     let nf = f32(n);
