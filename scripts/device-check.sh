@@ -1,9 +1,11 @@
 #!/usr/bin/env bash
 # The real-GPU check, run on a lent device machine over .device/ from
-# scripts/device-pack.sh (see there): the adapter, the GPU image tests against the CPU
+# scripts/device-pack.sh (see there): the adapter, the kernel twins and the GPU image
+# tests against the CPU
 # (FREPRAY_REQUIRE_GPU=1: no adapter is a failure), and `frepray bench --backend cpu,gpu`
 # on both paper scenes at 320×240 and 16 spp with the stage plots. Everything goes under
-# $OUT (default out/device): adapter.txt, tests.txt, bench-<scene>.md, stages-<scene>.svg.
+# $OUT (default out/device): adapter.txt, tests-<binary>.txt, bench-<scene>.md,
+# stages-<scene>.svg.
 # `--quick` runs the bench alone at 64×48, 2 spp (a dry run on lavapipe).
 set -uo pipefail
 cd "$(dirname "$0")/.."
@@ -24,8 +26,13 @@ fi
 } > "$OUT/adapter.txt"
 cat "$OUT/adapter.txt"
 if [ "$quick" = 0 ]; then
-    FREPRAY_REQUIRE_GPU=1 ./.device/direct_image --test-threads 1 > "$OUT/tests.txt" 2>&1
-    grep -E 'test result|FAILED|panicked' "$OUT/tests.txt"
+    # The twins first (seconds), then the images (minutes).
+    for t in record_twin sums_twin sampler_twin bsdf_twin light_twin direct_image; do
+        [ -x ".device/$t" ] || continue
+        FREPRAY_REQUIRE_GPU=1 timeout 400 "./.device/$t" --test-threads 1 > "$OUT/tests-$t.txt" 2>&1
+        echo "$t: $(grep -E 'test result' "$OUT/tests-$t.txt" || echo 'no result (timeout?)')"
+        grep -E 'FAILED|panicked' "$OUT/tests-$t.txt" | head -5
+    done
 fi
 size=(--width 320 --height 240 --spp 16)
 [ "$quick" = 1 ] && size=(--width 64 --height 48 --spp 2)

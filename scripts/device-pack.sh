@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Prepares the real-GPU check for a lent device machine (the `device` tool of this
-# workplace): the release `frepray` and the GPU image-test binary, stripped, in .device/
+# workplace): the release `frepray` and the GPU test binaries, stripped, in .device/
 # (git-ignored), with Vulkan's loader packages in .gl/ (the device machine reaches no
 # package registry). Then, in one `run` call carrying .device and .gl:
 #
@@ -11,15 +11,18 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 mkdir -p .device .gl
 cargo build --release -p frepray-cli
-# The test binary cargo builds for the GPU images (its name carries a hash).
-bin=$(cargo test --release -p gpu --test direct_image --no-run --message-format=json 2>/dev/null |
+# The test binaries cargo builds (their names carry a hash): the GPU images against the
+# CPU's, and the kernel twins whose bit-equality lavapipe shows (a real GPU may fuse or
+# reorder: what it does is a finding, not a failure to hide).
+tests=(direct_image record_twin sums_twin bsdf_twin light_twin sampler_twin)
+cargo test --release -p gpu "${tests[@]/#/--test=}" --no-run --message-format=json 2>/dev/null |
     python3 -c 'import json,sys
 for l in sys.stdin:
     m = json.loads(l)
-    if m.get("reason") == "compiler-artifact" and m.get("executable") and m["target"]["name"] == "direct_image":
-        print(m["executable"])')
+    if m.get("reason") == "compiler-artifact" and m.get("executable"):
+        print(m["target"]["name"], m["executable"])' |
+    while read -r name bin; do strip -o ".device/$name" "$bin"; done
 strip -o .device/frepray target/release/frepray
-strip -o .device/direct_image "$bin"
 # The tests read scenes/sky.exr by the path they were built at: device-check.sh links it.
 pwd > .device/root
 if ! ls .gl/*.deb >/dev/null 2>&1; then
