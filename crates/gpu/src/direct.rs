@@ -3,8 +3,10 @@
 //! the techniques' draws with every pdf, shadow rays, the paths' continuation rays), and
 //! the CPU's per-pixel records filled from them (GPU.md §7–§8, first version).
 //!
-//! **Waves.** A wave is m sample indices of every pixel (m × pixels slots, at most
-//! [`WAVE_DRAWS`] draws over all depths). Its passes (the camera trace, then per depth
+//! **Bands and waves.** The image is rendered in bands of consecutive pixels, each
+//! through all its samples before the next, so that the buffers hold one band whatever
+//! the image's size. A wave is m sample indices of every pixel of a band (m × band
+//! slots, at most [`WAVE_DRAWS`] draws over all depths). Its passes (the camera trace, then per depth
 //! shade, shadow rays and, but at the last depth, the continuation trace) run in one
 //! submission without a CPU wait.
 //!
@@ -165,8 +167,9 @@ struct Frame {
     /// The trained selection's table in `tables` (u32::MAX: none), cells per axis, MIS
     /// lights covered.
     trained: [u32; 4],
-    /// Where the live and continuation queues' entries start in `stats` (words).
-    queues: [u32; 4],
+    /// Where the live and continuation queues' entries start in `stats` (words), and
+    /// the first pixel of the wave's band.
+    wave: [u32; 4],
 }
 
 const _: () = assert!(size_of::<GpuShape>() == 48);
@@ -1127,21 +1130,43 @@ pub fn render_range(
     stop: &AtomicBool,
     progress: &dyn Fn(u64, u64),
 ) -> Result<(RenderState, RenderStats, GpuStats), GpuError> {
-    let sums = match (gpu.info().sums, gpu.info().f64) {
-        (false, _) => SumsOn::Cpu,
-        (true, true) => SumsOn::GpuF64,
-        (true, false) => SumsOn::GpuDoubleFloat,
-    };
-    render_range_with_sums(gpu, data, scene, options, samples, stop, progress, sums)
+    let how = WaveOptions::for_device(gpu);
+    render_range_with(gpu, data, scene, options, samples, stop, progress, &how)
 }
 
-/// [`render_range`] with the per-pixel sums where `sums` asks (the device's choice in
-/// [`render_range`]): on the CPU, or on the GPU in f64 (where the device has it, else
-/// double-float) or double-float. The GPU falls back to the CPU's sums for the
-/// progressive estimators and for sums too large for one binding; the returned
-/// [`GpuStats::sums`] says where they were kept.
+/// How [`render_range_with`] runs its waves.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct WaveOptions {
+    /// Where the per-pixel sums are kept: on the CPU, or on the GPU in f64 (where the
+    /// device has it, else double-float) or double-float. The GPU falls back to the
+    /// CPU's sums for the progressive estimators and for sums too large for one binding;
+    /// [`GpuStats::sums`] says where they were kept.
+    pub sums: SumsOn,
+    /// The most pixels a band covers (the image is rendered in bands of consecutive
+    /// pixels, each through all its samples); None: as many as a wave of one sample
+    /// index may hold ([`WAVE_DRAWS`] draws).
+    pub band_pixels: Option<u32>,
+}
+
+impl WaveOptions {
+    /// The device's choice ([`GpuOptions`](crate::GpuOptions)' `f64` and `sums`),
+    /// bands as large as a wave allows.
+    pub fn for_device(gpu: &Gpu) -> Self {
+        let sums = match (gpu.info().sums, gpu.info().f64) {
+            (false, _) => SumsOn::Cpu,
+            (true, true) => SumsOn::GpuF64,
+            (true, false) => SumsOn::GpuDoubleFloat,
+        };
+        Self {
+            sums,
+            band_pixels: None,
+        }
+    }
+}
+
+/// [`render_range`] with the waves run as `how` says.
 #[allow(clippy::too_many_arguments)]
-pub fn render_range_with_sums(
+pub fn render_range_with(
     gpu: &Gpu,
     data: &SceneData,
     scene: &Scene,
@@ -1149,8 +1174,9 @@ pub fn render_range_with_sums(
     samples: Range<u32>,
     stop: &AtomicBool,
     progress: &dyn Fn(u64, u64),
-    sums_on: SumsOn,
+    how: &WaveOptions,
 ) -> Result<(RenderState, RenderStats, GpuStats), GpuError> {
+    let sums_on = how.sums;
     let o = RenderOptions {
         spp: samples.end.saturating_sub(samples.start),
         ..options.clone()
@@ -1171,8 +1197,16 @@ pub fn render_range_with_sums(
     let nd1 = pack.frame.per_slot;
     let depths = pack.frame.max_depth;
     let per_slot_draws = nd1 * depths.max(1);
-    let per_wave = (WAVE_DRAWS / (pixels * per_slot_draws)).max(1);
-    let max_slots = u64::from(per_wave * pixels);
+    // The image in bands of consecutive pixels (raster order), each rendered through all
+    // its samples before the next: the buffers hold one band's waves, whatever the
+    // image's size.
+    let band = how
+        .band_pixels
+        .unwrap_or(u32::MAX)
+        .min((WAVE_DRAWS / per_slot_draws).max(1))
+        .clamp(1, pixels);
+    let per_wave = (WAVE_DRAWS / (band * per_slot_draws)).max(1);
+    let max_slots = u64::from(per_wave * band);
     let d = &gpu.device;
     let buffers = scene_buffers(gpu, &pack)?;
     let hit_bytes = max_slots * HIT_WORDS as u64 * 4;
@@ -1202,7 +1236,7 @@ pub fn render_range_with_sums(
     // slot each).
     let live_at = 16 + max_slots * u64::from(nd1);
     let stats_bytes = (live_at + 2 * max_slots) * 4;
-    pack.frame.queues = [live_at as u32, (live_at + max_slots) as u32, 0, 0];
+    pack.frame.wave = [live_at as u32, (live_at + max_slots) as u32, 0, 0];
     gpu.check_binding(stats_bytes)?;
     let loops = d.create_buffer(&wgpu::BufferDescriptor {
         label: Some("stats and queues"),
@@ -1226,7 +1260,7 @@ pub fn render_range_with_sums(
         Some(linear) => GpuSums::new(
             gpu,
             &linear,
-            pixels,
+            band,
             max_slots as u32,
             (n_draws, nd1, depths),
             &hits,
@@ -1302,7 +1336,6 @@ pub fn render_range_with_sums(
     let total = u64::from(pixels) * u64::from(o.spp);
     let mut done = 0u64;
     let mut rays = RayCounts::default();
-    let mut start = samples.start;
     let groups_for = |n: u32| {
         let g = n.div_ceil(64);
         if g <= 65_535 {
@@ -1311,204 +1344,219 @@ pub fn render_range_with_sums(
             (65_535, g.div_ceil(65_535))
         }
     };
-    while start < samples.end && !stop.load(Ordering::Relaxed) {
-        let m = per_wave.min(samples.end - start);
-        let slots = m * pixels;
-        pack.frame.sample = start;
-        pack.frame.slots = slots;
-        for (k, f) in frames.iter().enumerate() {
-            pack.frame.depth = (k / 3) as u32;
-            pack.frame.mode = (k % 3) as u32;
-            gpu.queue
-                .write_buffer(f, 0, bytemuck::bytes_of(&pack.frame));
-        }
-        let mut enc = d.create_command_encoder(&Default::default());
-        // Draw records of slots no shade pass visits stay zero (status 0: no vertex), and
-        // the queues start empty.
-        let db = u64::from(slots) * u64::from(per_slot_draws) * DRAW_WORDS as u64 * 4;
-        if depths > 0 {
-            enc.clear_buffer(&draws, 0, Some(db));
-        }
-        enc.clear_buffer(&loops, 16, Some(48));
-        for (q, &(stage, depth, mode)) in passes.iter().enumerate() {
-            let group = &groups[3 * depth as usize + mode as usize];
-            let pipe = if stage == 1 { &p.shade } else { &p.trace };
-            if stage > 1 || (stage == 1 && depth > 0) {
-                // The queued passes: their dispatch from their queue's length. (Byte
-                // offsets in `stats`: the shadow, live and continuation queues' args at
-                // 20, 36 and 52.)
-                {
-                    let mut pass = enc.begin_compute_pass(&Default::default());
-                    pass.set_pipeline(&p.prepare);
-                    pass.set_bind_group(0, group, &[]);
-                    pass.dispatch_workgroups(1, 1, 1);
-                }
-                let (from, to) = match stage {
-                    1 => (36, 16),
-                    2 => (20, 0),
-                    _ => (52, 32),
-                };
-                enc.copy_buffer_to_buffer(&loops, from, &args, to, 12);
+    let mut base = 0;
+    while base < pixels {
+        let band_len = band.min(pixels - base);
+        pack.frame.pixels = band_len;
+        pack.frame.wave[2] = base;
+        let mut start = samples.start;
+        while start < samples.end && !stop.load(Ordering::Relaxed) {
+            let m = per_wave.min(samples.end - start);
+            let slots = m * band_len;
+            pack.frame.sample = start;
+            pack.frame.slots = slots;
+            for (k, f) in frames.iter().enumerate() {
+                pack.frame.depth = (k / 3) as u32;
+                pack.frame.mode = (k % 3) as u32;
+                gpu.queue
+                    .write_buffer(f, 0, bytemuck::bytes_of(&pack.frame));
             }
-            match stage {
-                // Empty shadow and continuation queues for the shade pass to fill.
-                1 => {
-                    enc.clear_buffer(&loops, 16, Some(4));
-                    enc.clear_buffer(&loops, 48, Some(4));
-                }
-                // An empty live queue for the continuations' new vertices.
-                3 => enc.clear_buffer(&loops, 32, Some(4)),
-                _ => {}
+            let mut enc = d.create_command_encoder(&Default::default());
+            // Draw records of slots no shade pass visits stay zero (status 0: no vertex), and
+            // the queues start empty.
+            let db = u64::from(slots) * u64::from(per_slot_draws) * DRAW_WORDS as u64 * 4;
+            if depths > 0 {
+                enc.clear_buffer(&draws, 0, Some(db));
             }
-            let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: None,
-                timestamp_writes: timestamps
-                    .as_ref()
-                    .map(|qs| wgpu::ComputePassTimestampWrites {
-                        query_set: qs,
-                        beginning_of_pass_write_index: Some(2 * q as u32),
-                        end_of_pass_write_index: Some(2 * q as u32 + 1),
+            enc.clear_buffer(&loops, 16, Some(48));
+            for (q, &(stage, depth, mode)) in passes.iter().enumerate() {
+                let group = &groups[3 * depth as usize + mode as usize];
+                let pipe = if stage == 1 { &p.shade } else { &p.trace };
+                if stage > 1 || (stage == 1 && depth > 0) {
+                    // The queued passes: their dispatch from their queue's length. (Byte
+                    // offsets in `stats`: the shadow, live and continuation queues' args at
+                    // 20, 36 and 52.)
+                    {
+                        let mut pass = enc.begin_compute_pass(&Default::default());
+                        pass.set_pipeline(&p.prepare);
+                        pass.set_bind_group(0, group, &[]);
+                        pass.dispatch_workgroups(1, 1, 1);
+                    }
+                    let (from, to) = match stage {
+                        1 => (36, 16),
+                        2 => (20, 0),
+                        _ => (52, 32),
+                    };
+                    enc.copy_buffer_to_buffer(&loops, from, &args, to, 12);
+                }
+                match stage {
+                    // Empty shadow and continuation queues for the shade pass to fill.
+                    1 => {
+                        enc.clear_buffer(&loops, 16, Some(4));
+                        enc.clear_buffer(&loops, 48, Some(4));
+                    }
+                    // An empty live queue for the continuations' new vertices.
+                    3 => enc.clear_buffer(&loops, 32, Some(4)),
+                    _ => {}
+                }
+                let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    label: None,
+                    timestamp_writes: timestamps.as_ref().map(|qs| {
+                        wgpu::ComputePassTimestampWrites {
+                            query_set: qs,
+                            beginning_of_pass_write_index: Some(2 * q as u32),
+                            end_of_pass_write_index: Some(2 * q as u32 + 1),
+                        }
                     }),
-            });
-            pass.set_pipeline(pipe);
-            pass.set_bind_group(0, group, &[]);
-            match stage {
-                0 => {
-                    let (gx, gy) = groups_for(slots);
-                    pass.dispatch_workgroups(gx, gy, 1);
+                });
+                pass.set_pipeline(pipe);
+                pass.set_bind_group(0, group, &[]);
+                match stage {
+                    0 => {
+                        let (gx, gy) = groups_for(slots);
+                        pass.dispatch_workgroups(gx, gy, 1);
+                    }
+                    // Depth 0: every slot's draws, in slot order (coherent rays).
+                    1 if depth == 0 => {
+                        let (gx, gy) = groups_for(slots * nd1);
+                        pass.dispatch_workgroups(gx, gy, 1);
+                    }
+                    // The live slots' draws, the shadow rays and the continuations queued
+                    // by the pass before, and no other.
+                    1 => pass.dispatch_workgroups_indirect(&args, 16),
+                    2 => pass.dispatch_workgroups_indirect(&args, 0),
+                    _ => pass.dispatch_workgroups_indirect(&args, 32),
                 }
-                // Depth 0: every slot's draws, in slot order (coherent rays).
-                1 if depth == 0 => {
-                    let (gx, gy) = groups_for(slots * nd1);
-                    pass.dispatch_workgroups(gx, gy, 1);
-                }
-                // The live slots' draws, the shadow rays and the continuations queued
-                // by the pass before, and no other.
-                1 => pass.dispatch_workgroups_indirect(&args, 16),
-                2 => pass.dispatch_workgroups_indirect(&args, 0),
-                _ => pass.dispatch_workgroups_indirect(&args, 32),
             }
+            if let Some(sums) = sums.as_mut() {
+                let at = 2 * passes.len() as u32;
+                let writes = |k: u32| {
+                    timestamps
+                        .as_ref()
+                        .map(|qs| wgpu::ComputePassTimestampWrites {
+                            query_set: qs,
+                            beginning_of_pass_write_index: Some(at + 2 * k),
+                            end_of_pass_write_index: Some(at + 2 * k + 1),
+                        })
+                };
+                sums.encode(gpu, &mut enc, band_len, start, m, &writes);
+            }
+            // The passes run: the wave's, and the terms and sums passes.
+            let run = passes.len() + if sums.is_some() { 2 } else { 0 };
+            if let Some(qs) = &timestamps {
+                enc.resolve_query_set(qs, 0..2 * run as u32, &ts_buf, 0);
+                enc.copy_buffer_to_buffer(&ts_buf, 0, &ts_read, 0, 16 * run as u64);
+            }
+            let hb = u64::from(slots) * HIT_WORDS as u64 * 4;
+            if let Some((hits_r, draws_r)) = &readbacks {
+                enc.copy_buffer_to_buffer(&hits, 0, hits_r, 0, hb);
+                if depths > 0 {
+                    enc.copy_buffer_to_buffer(&draws, 0, draws_r, 0, db);
+                }
+            }
+            let t0 = Instant::now();
+            gpu.queue.submit([enc.finish()]);
+            let (mut hit_data, mut draw_data, mut tally) = (Vec::new(), Vec::new(), None);
+            if let Some((hits_r, draws_r)) = &readbacks {
+                hit_data = read_back(gpu, hits_r, hb)?;
+                if depths > 0 {
+                    draw_data = read_back(gpu, draws_r, db)?;
+                }
+            }
+            if let Some(sums) = &sums {
+                tally = Some(sums.tally(gpu, slots)?);
+            }
+            let mut passes_time = Duration::ZERO;
+            if timestamps.is_some() {
+                let ts = read_back(gpu, &ts_read, 16 * run as u64)?;
+                let t: &[u64] = bytemuck::cast_slice(&ts);
+                for q in 0..run {
+                    let ns = t[2 * q + 1].saturating_sub(t[2 * q]) as f64 * period;
+                    let span = Duration::from_nanos(ns as u64);
+                    passes_time += span;
+                    match passes.get(q).map_or(4, |p| p.0) {
+                        0 => stats.stages.camera += span,
+                        1 => stats.stages.shade += span,
+                        2 => stats.stages.shadow += span,
+                        3 => stats.stages.secondary += span,
+                        _ => stats.stages.accumulate += span,
+                    }
+                }
+            }
+            stats.stages.readback += t0.elapsed().saturating_sub(passes_time);
+            let t1 = Instant::now();
+            let data_words = state.data_mut();
+            if let Some(tally) = tally {
+                rays.camera += tally.camera;
+                rays.shadow += tally.shadow;
+                rays.secondary += tally.secondary;
+                for slot in tally.overflow {
+                    // The CPU renders the whole sample (its rays counted there), into the
+                    // record to which the GPU's sums are added at the end.
+                    let pix = base + slot % band_len;
+                    let index = start + slot / band_len;
+                    let rec = &mut data_words[pix as usize * stride..(pix as usize + 1) * stride];
+                    stats.cpu_fallbacks += 1;
+                    acc.cpu_sample(scene, pix % w, pix / w, index, rec, &mut rays);
+                }
+            }
+            // (An empty Vec<u8> need not be aligned for f32.)
+            fn words(v: &[u8]) -> &[f32] {
+                if v.is_empty() {
+                    &[]
+                } else {
+                    bytemuck::cast_slice(v)
+                }
+            }
+            let (hv, dv) = (words(&hit_data), words(&draw_data));
+            let mut pdfs = vec![0.0f64; (depths * n_draws) as usize * t_count];
+            let cpu_slots = if readbacks.is_some() {
+                slots as usize
+            } else {
+                0
+            };
+            for slot in 0..cpu_slots {
+                let pix = base as usize + slot % band_len as usize;
+                let index = start + slot as u32 / band_len;
+                let (x, y) = (pix as u32 % w, pix as u32 / w);
+                let rec = &mut data_words[pix * stride..(pix + 1) * stride];
+                let hw = &hv[slot * HIT_WORDS..(slot + 1) * HIT_WORDS];
+                // The draws of vertex `depth`, the extra draw last.
+                let vertex = |depth: u32| {
+                    let at = ((depth * slots) as usize + slot) * nd1 as usize * DRAW_WORDS;
+                    &dv[at..at + nd1 as usize * DRAW_WORDS]
+                };
+                let overflow = hw[3] == 2.0
+                    || (0..depths)
+                        .any(|k| vertex(k).chunks_exact(DRAW_WORDS).any(|d| d[7] == 12.0));
+                if overflow {
+                    // The CPU renders the whole sample (its rays counted there).
+                    stats.cpu_fallbacks += 1;
+                    acc.cpu_sample(scene, x, y, index, rec, &mut rays);
+                    continue;
+                }
+                add_slot(
+                    &acc, rec, index, hw, &vertex, n_draws, depths, &mut pdfs, &mut rays,
+                );
+            }
+            stats.stages.accumulate += t1.elapsed();
+            stats.waves += 1;
+            done += u64::from(slots);
+            progress(done, total);
+            start += m;
         }
         if let Some(sums) = sums.as_mut() {
-            let at = 2 * passes.len() as u32;
-            let writes = |k: u32| {
-                timestamps
-                    .as_ref()
-                    .map(|qs| wgpu::ComputePassTimestampWrites {
-                        query_set: qs,
-                        beginning_of_pass_write_index: Some(at + 2 * k),
-                        end_of_pass_write_index: Some(at + 2 * k + 1),
-                    })
-            };
-            sums.encode(gpu, &mut enc, start, m, &writes);
+            // The band's sums into its pixels' records, and zero sums for the next band.
+            let t = Instant::now();
+            let range = base as usize * stride..(base + band_len) as usize * stride;
+            sums.add_to(gpu, &mut state.data_mut()[range])?;
+            sums.reset(gpu);
+            stats.stages.accumulate += t.elapsed();
         }
-        // The passes run: the wave's, and the terms and sums passes.
-        let run = passes.len() + if sums.is_some() { 2 } else { 0 };
-        if let Some(qs) = &timestamps {
-            enc.resolve_query_set(qs, 0..2 * run as u32, &ts_buf, 0);
-            enc.copy_buffer_to_buffer(&ts_buf, 0, &ts_read, 0, 16 * run as u64);
+        if stop.load(Ordering::Relaxed) {
+            break;
         }
-        let hb = u64::from(slots) * HIT_WORDS as u64 * 4;
-        if let Some((hits_r, draws_r)) = &readbacks {
-            enc.copy_buffer_to_buffer(&hits, 0, hits_r, 0, hb);
-            if depths > 0 {
-                enc.copy_buffer_to_buffer(&draws, 0, draws_r, 0, db);
-            }
-        }
-        let t0 = Instant::now();
-        gpu.queue.submit([enc.finish()]);
-        let (mut hit_data, mut draw_data, mut tally) = (Vec::new(), Vec::new(), None);
-        if let Some((hits_r, draws_r)) = &readbacks {
-            hit_data = read_back(gpu, hits_r, hb)?;
-            if depths > 0 {
-                draw_data = read_back(gpu, draws_r, db)?;
-            }
-        }
-        if let Some(sums) = &sums {
-            tally = Some(sums.tally(gpu, slots)?);
-        }
-        let mut passes_time = Duration::ZERO;
-        if timestamps.is_some() {
-            let ts = read_back(gpu, &ts_read, 16 * run as u64)?;
-            let t: &[u64] = bytemuck::cast_slice(&ts);
-            for q in 0..run {
-                let ns = t[2 * q + 1].saturating_sub(t[2 * q]) as f64 * period;
-                let span = Duration::from_nanos(ns as u64);
-                passes_time += span;
-                match passes.get(q).map_or(4, |p| p.0) {
-                    0 => stats.stages.camera += span,
-                    1 => stats.stages.shade += span,
-                    2 => stats.stages.shadow += span,
-                    3 => stats.stages.secondary += span,
-                    _ => stats.stages.accumulate += span,
-                }
-            }
-        }
-        stats.stages.readback += t0.elapsed().saturating_sub(passes_time);
-        let t1 = Instant::now();
-        let data_words = state.data_mut();
-        if let Some(tally) = tally {
-            rays.camera += tally.camera;
-            rays.shadow += tally.shadow;
-            rays.secondary += tally.secondary;
-            for slot in tally.overflow {
-                // The CPU renders the whole sample (its rays counted there), into the
-                // record to which the GPU's sums are added at the end.
-                let pix = slot % pixels;
-                let index = start + slot / pixels;
-                let rec = &mut data_words[pix as usize * stride..(pix as usize + 1) * stride];
-                stats.cpu_fallbacks += 1;
-                acc.cpu_sample(scene, pix % w, pix / w, index, rec, &mut rays);
-            }
-        }
-        // (An empty Vec<u8> need not be aligned for f32.)
-        fn words(v: &[u8]) -> &[f32] {
-            if v.is_empty() {
-                &[]
-            } else {
-                bytemuck::cast_slice(v)
-            }
-        }
-        let (hv, dv) = (words(&hit_data), words(&draw_data));
-        let mut pdfs = vec![0.0f64; (depths * n_draws) as usize * t_count];
-        let cpu_slots = if readbacks.is_some() {
-            slots as usize
-        } else {
-            0
-        };
-        for slot in 0..cpu_slots {
-            let pix = slot % pixels as usize;
-            let index = start + (slot / pixels as usize) as u32;
-            let (x, y) = (pix as u32 % w, pix as u32 / w);
-            let rec = &mut data_words[pix * stride..(pix + 1) * stride];
-            let hw = &hv[slot * HIT_WORDS..(slot + 1) * HIT_WORDS];
-            // The draws of vertex `depth`, the extra draw last.
-            let vertex = |depth: u32| {
-                let at = ((depth * slots) as usize + slot) * nd1 as usize * DRAW_WORDS;
-                &dv[at..at + nd1 as usize * DRAW_WORDS]
-            };
-            let overflow = hw[3] == 2.0
-                || (0..depths).any(|k| vertex(k).chunks_exact(DRAW_WORDS).any(|d| d[7] == 12.0));
-            if overflow {
-                // The CPU renders the whole sample (its rays counted there).
-                stats.cpu_fallbacks += 1;
-                acc.cpu_sample(scene, x, y, index, rec, &mut rays);
-                continue;
-            }
-            add_slot(
-                &acc, rec, index, hw, &vertex, n_draws, depths, &mut pdfs, &mut rays,
-            );
-        }
-        stats.stages.accumulate += t1.elapsed();
-        stats.waves += 1;
-        done += u64::from(slots);
-        progress(done, total);
-        start += m;
-    }
-    if let Some(sums) = &sums {
-        let t = Instant::now();
-        sums.add_to(gpu, state.data_mut())?;
-        stats.stages.accumulate += t.elapsed();
+        base += band_len;
     }
     let mut enc = d.create_command_encoder(&Default::default());
     enc.copy_buffer_to_buffer(&loops, 0, &loops_r, 0, 16);

@@ -687,7 +687,7 @@ impl GpuSums {
         let tally_bytes = (TALLY_LIST as u64 + u64::from(max_samples * pixels)) * 4;
         let tally = buffer("tally", tally_bytes, U::STORAGE | U::COPY_DST | U::COPY_SRC);
         let tally_r = buffer("tally readback", tally_bytes, U::MAP_READ | U::COPY_DST);
-        let sum_usage = U::STORAGE | U::COPY_SRC;
+        let sum_usage = U::STORAGE | U::COPY_SRC | U::COPY_DST;
         let sums = [
             buffer("sums", sums_bytes, sum_usage),
             buffer("sums", sums_bytes, sum_usage),
@@ -735,18 +735,21 @@ impl GpuSums {
     }
 
     /// Records the wave's two passes (terms, then sums) into `enc`, after the wave's
-    /// own: `samples` sample indices from `start`; `timestamps(k)` gives pass k's
-    /// timestamp writes.
+    /// own: `samples` sample indices from `start` of a band of `pixels` pixels (at most
+    /// the `pixels` of [`Self::new`]); `timestamps(k)` gives pass k's timestamp writes.
     pub fn encode<'q>(
         &mut self,
         gpu: &Gpu,
         enc: &mut wgpu::CommandEncoder,
+        pixels: u32,
         start: u32,
         samples: u32,
         timestamps: &dyn Fn(u32) -> Option<wgpu::ComputePassTimestampWrites<'q>>,
     ) {
+        debug_assert!(pixels <= self.params.pixels && samples <= self.max_samples);
         let p = RecordParams {
-            slots: samples * self.params.pixels,
+            slots: samples * pixels,
+            pixels,
             samples,
             start,
             ..self.params
@@ -806,7 +809,7 @@ impl GpuSums {
         })
     }
 
-    /// Adds the sums to `records` (every pixel's record, `stride` words each).
+    /// Adds the sums to `records` (the band's records, `stride` words each).
     pub fn add_to(&self, gpu: &Gpu, records: &mut [f64]) -> Result<(), GpuError> {
         let bytes = records.len() as u64 * 8;
         let staging = gpu.device.create_buffer(&wgpu::BufferDescriptor {
@@ -828,5 +831,15 @@ impl GpuSums {
             };
         }
         Ok(())
+    }
+
+    /// Zero sums, for the next band.
+    pub fn reset(&mut self, gpu: &Gpu) {
+        let mut enc = gpu.device.create_command_encoder(&Default::default());
+        for b in &self.sums {
+            enc.clear_buffer(b, 0, None);
+        }
+        gpu.queue.submit([enc.finish()]);
+        self.current = 0;
     }
 }

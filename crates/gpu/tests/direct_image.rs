@@ -604,13 +604,25 @@ fn gpu_render_is_deterministic() {
 /// keep their sums on the CPU.
 #[test]
 fn gpu_sums_equal_the_cpu_sums_of_the_same_draws() {
-    use gpu::direct::{render_range_with_sums, SumsOn};
+    use gpu::direct::{render_range_with, SumsOn, WaveOptions};
     use render::integrator::{Aov, IntegratorKind};
     let Some(g) = device() else { return };
     let stop = AtomicBool::new(false);
     let render = |s: &(SceneData, Scene, RenderOptions), on: SumsOn| {
-        let (state, _, gs) =
-            render_range_with_sums(g, &s.0, &s.1, &s.2, 0..4, &stop, &|_, _| {}, on).unwrap();
+        let (state, _, gs) = render_range_with(
+            g,
+            &s.0,
+            &s.1,
+            &s.2,
+            0..4,
+            &stop,
+            &|_, _| {},
+            &WaveOptions {
+                sums: on,
+                band_pixels: None,
+            },
+        )
+        .unwrap();
         (state, gs.sums)
     };
     let cases: [(&str, mis::Method, IntegratorKind, u32); 5] = [
@@ -678,6 +690,46 @@ fn gpu_sums_equal_the_cpu_sums_of_the_same_draws() {
             }
         }
         eprintln!("{label} (sums {on}): largest relative difference to the CPU's sums {:.1e}, double-float to f64 {:.1e}", worst[0], worst[1]);
+    }
+}
+
+/// Bands: the image rendered in bands of 100 pixels (18 bands, the last of 28) gives
+/// the records of the one-band render bit for bit, with the sums on the GPU and on the
+/// CPU, for `direct` and `path`.
+#[test]
+fn bands_give_the_same_records() {
+    use gpu::direct::{render_range_with, SumsOn, WaveOptions};
+    use render::integrator::IntegratorKind;
+    let Some(g) = device() else { return };
+    let stop = AtomicBool::new(false);
+    for (integrator, sums) in [
+        (IntegratorKind::Direct, SumsOn::GpuF64),
+        (IntegratorKind::Path, SumsOn::GpuF64),
+        (IntegratorKind::Direct, SumsOn::Cpu),
+    ] {
+        let mut s = load(SCENE);
+        s.2.integrator = integrator;
+        s.2.max_depth = 3;
+        let render = |band_pixels| {
+            let how = WaveOptions { sums, band_pixels };
+            let (state, stats, gs) =
+                render_range_with(g, &s.0, &s.1, &s.2, 0..2, &stop, &|_, _| {}, &how).unwrap();
+            assert_eq!(stats.samples, u64::from(W * H) * 2);
+            (state, gs.waves)
+        };
+        let (one, waves_one) = render(None);
+        let (banded, waves) = render(Some(100));
+        assert_eq!(waves, waves_one * 18, "{integrator:?}: one wave per band");
+        let differ = one
+            .data()
+            .iter()
+            .zip(banded.data())
+            .filter(|(a, b)| a.to_bits() != b.to_bits())
+            .count();
+        assert_eq!(
+            differ, 0,
+            "{integrator:?}, sums on the {sums}: {differ} words differ"
+        );
     }
 }
 

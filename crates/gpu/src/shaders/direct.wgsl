@@ -46,8 +46,9 @@ struct Frame {
     // The trained selection's table in sel_buf (0xffffffff: none; lo.xyz, scale.xyz,
     // then res³ pmfs over `z` lights), its cells per axis, the lights it covers.
     trained: vec4<u32>,
-    // Where the live and continuation queues' entries start in `stats` (words).
-    queues: vec4<u32>,
+    // Where the live and continuation queues' entries start in `stats` (words), and the
+    // first pixel of the band the wave covers (its `pixels` pixels in raster order).
+    wave: vec4<u32>,
 }
 
 // One scene object: a single leaf (kind 0) or an intersection of plain-quadric leaves
@@ -74,8 +75,8 @@ struct GpuMaterial { bsdf: GpuBsdf, tex_kind: u32, pad0: u32, pad1: u32, pad2: u
 // shadow trace, shade); then three queues (GPU.md §7.4), each a length and an indirect
 // dispatch (x, y, z): the shadow rays at stats[4..8] (entry q, a draw index, at
 // stats[16 + q]), the live slots at stats[8..12] (the slots whose continuation met a
-// surface: the next depth's vertices; entries from frame.queues.x) and the continuations at stats[12..16] (the
-// slots whose extending draw has a ray; entries from frame.queues.y).
+// surface: the next depth's vertices; entries from frame.wave.x) and the continuations at stats[12..16] (the
+// slots whose extending draw has a ray; entries from frame.wave.y).
 @group(0) @binding(12) var<storage, read_write> stats: array<atomic<u32>>;
 // CSG nodes of kind-2 shapes in post-order: (op, leaf or part count, 0, 0), op 0 leaf,
 // 1 union, 2 intersection, 3 difference.
@@ -615,7 +616,7 @@ fn tech_light(k: u32) -> u32 { return frame.tech[k / 4u][k % 4u] >> 8u; }
 // --- kernels -------------------------------------------------------------------------
 
 fn slot_pixel(slot: u32) -> vec3<u32> {
-    let pix = slot % frame.pixels;
+    let pix = frame.wave.z + slot % frame.pixels;
     return vec3<u32>(pix % frame.width, pix / frame.width, frame.sample + slot / frame.pixels);
 }
 
@@ -712,7 +713,7 @@ fn trace_continuation(slot: u32) {
         return;
     }
     write_vertex(at, o + h.t * d, h.leaf, -d, hits[at + 7u].xyz);
-    push(LIVE_LEN, frame.queues.x, slot);
+    push(LIVE_LEN, frame.wave.x, slot);
 }
 
 fn trace_shadow(q: u32) {
@@ -755,7 +756,7 @@ fn trace(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
         } else if (frame.mode == 2u) {
             // The slots the shade pass queued, and no other.
             if (i < atomicLoad(&stats[CONT_LEN])) {
-                trace_continuation(atomicLoad(&stats[frame.queues.y + i]));
+                trace_continuation(atomicLoad(&stats[frame.wave.y + i]));
             }
         } else {
             probe(i);
@@ -777,7 +778,7 @@ fn shade(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
         if (q >= frame.slots * nd) { return; }
     } else {
         if (q >= atomicLoad(&stats[LIVE_LEN]) * nd) { return; }
-        slot = atomicLoad(&stats[frame.queues.x + q / nd]);
+        slot = atomicLoad(&stats[frame.wave.x + q / nd]);
     }
     loops = 0u;
     let j = q % nd;
@@ -918,7 +919,7 @@ fn shade(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
         hits[ha + 6u] = vec4<f32>(wi, select(0.0, 1.0, survives));
         hits[ha + 7u] = vec4<f32>(next, 0.0);
         // Traced for the draw's Li even where roulette ends the path there.
-        if (ok) { push(CONT_LEN, frame.queues.y, slot); }
+        if (ok) { push(CONT_LEN, frame.wave.y, slot); }
     }
     if (spec) {
         // A delta lobe: outside MIS, weight·Li/n (n the BSDF technique's draws, 1 for the
