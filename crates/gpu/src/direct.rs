@@ -882,18 +882,7 @@ fn bind(
         .chain(&scene[..9])
         .chain(wave)
         .chain(&scene[9..]);
-    let entries: Vec<wgpu::BindGroupEntry> = all
-        .enumerate()
-        .map(|(k, b)| wgpu::BindGroupEntry {
-            binding: k as u32,
-            resource: b.as_entire_binding(),
-        })
-        .collect();
-    gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some("direct"),
-        layout: &p.layout,
-        entries: &entries,
-    })
+    crate::bind_buffers(gpu, "direct", &p.layout, all)
 }
 
 /// One ray of [`probe`]: what the kernels' nearest-hit query found.

@@ -119,23 +119,13 @@ impl Kernel {
             usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let mut entries: Vec<wgpu::BindGroupEntry> = input_buffers
-            .iter()
-            .enumerate()
-            .map(|(k, b)| wgpu::BindGroupEntry {
-                binding: k as u32,
-                resource: b.as_entire_binding(),
-            })
-            .collect();
-        entries.push(wgpu::BindGroupEntry {
-            binding: self.inputs as u32,
-            resource: output.as_entire_binding(),
-        });
-        let group = d.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("kernel"),
-            layout: &self.pipeline.get_bind_group_layout(0),
-            entries: &entries,
-        });
+        let layout = self.pipeline.get_bind_group_layout(0);
+        let group = crate::bind_buffers(
+            gpu,
+            "kernel",
+            &layout,
+            input_buffers.iter().chain([&output]),
+        );
         let mut encoder = d.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
         {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {

@@ -81,6 +81,28 @@ pub use adapter::{Gpu, GpuError, GpuInfo, GpuOptions};
 pub const FLOAT_WGSL: &str = include_str!("shaders/float.wgsl");
 pub use kernel::Kernel;
 
+/// A bind group of whole buffers at bindings 0, 1, … in order.
+pub(crate) fn bind_buffers<'a>(
+    gpu: &Gpu,
+    label: &str,
+    layout: &wgpu::BindGroupLayout,
+    buffers: impl IntoIterator<Item = &'a wgpu::Buffer>,
+) -> wgpu::BindGroup {
+    let entries: Vec<wgpu::BindGroupEntry> = buffers
+        .into_iter()
+        .enumerate()
+        .map(|(k, b)| wgpu::BindGroupEntry {
+            binding: k as u32,
+            resource: b.as_entire_binding(),
+        })
+        .collect();
+    gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some(label),
+        layout,
+        entries: &entries,
+    })
+}
+
 /// An f64 vector and a fourth word as the kernels' vec4<f32>.
 pub(crate) fn f4(v: [f64; 3], w: f64) -> [f32; 4] {
     [v[0] as f32, v[1] as f32, v[2] as f32, w as f32]

@@ -485,19 +485,8 @@ impl RecordTerms {
 
     /// The bind group over `params` (uniform), `hits`, `draws`, `terms` and `tally`.
     pub(crate) fn bind(&self, gpu: &Gpu, buffers: [&wgpu::Buffer; 5]) -> wgpu::BindGroup {
-        let entries: Vec<wgpu::BindGroupEntry> = buffers
-            .iter()
-            .enumerate()
-            .map(|(k, b)| wgpu::BindGroupEntry {
-                binding: k as u32,
-                resource: b.as_entire_binding(),
-            })
-            .collect();
-        gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("record_terms"),
-            layout: &self.pipeline.get_bind_group_layout(0),
-            entries: &entries,
-        })
+        let layout = self.pipeline.get_bind_group_layout(0);
+        crate::bind_buffers(gpu, "record_terms", &layout, buffers)
     }
 
     /// Runs the kernel over `p.slots` slots of `hits` and `draws` (f32 words) and reads
@@ -697,20 +686,9 @@ impl GpuSums {
             .bind(gpu, [&params_buf, hits, draws, &terms, &tally]);
         let add_layout = kernels.add(f64).pipeline().get_bind_group_layout(0);
         let add_group = |prev: &wgpu::Buffer, state: &wgpu::Buffer| {
-            let entries: Vec<wgpu::BindGroupEntry> = [&add_params, &terms, prev, state]
-                .iter()
-                .enumerate()
-                .map(|(k, b)| wgpu::BindGroupEntry {
-                    binding: k as u32,
-                    resource: b.as_entire_binding(),
-                })
-                .collect();
-            d.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("sums"),
-                layout: &add_layout,
-                entries: &entries,
-            })
+            crate::bind_buffers(gpu, "sums", &add_layout, [&add_params, &terms, prev, state])
         };
+
         let add_groups = [add_group(&sums[0], &sums[1]), add_group(&sums[1], &sums[0])];
         Ok(Some(Self {
             kernels,
