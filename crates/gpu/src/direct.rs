@@ -1165,6 +1165,29 @@ pub fn render_range_with(
     progress: &dyn Fn(u64, u64),
     how: &WaveOptions,
 ) -> Result<(RenderState, RenderStats, GpuStats), GpuError> {
+    // A device error (validation, memory) becomes this render's error, not a panic of
+    // wgpu's default handler.
+    let invalid = gpu.device.push_error_scope(wgpu::ErrorFilter::Validation);
+    let memory = gpu.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
+    let out = render_waves(gpu, data, scene, options, samples, stop, progress, how);
+    let errors = [memory.pop(), invalid.pop()].map(pollster::block_on);
+    match errors.into_iter().flatten().next() {
+        Some(e) => Err(GpuError::Run(e.to_string())),
+        None => out,
+    }
+}
+
+#[allow(clippy::too_many_arguments)]
+fn render_waves(
+    gpu: &Gpu,
+    data: &SceneData,
+    scene: &Scene,
+    options: &RenderOptions,
+    samples: Range<u32>,
+    stop: &AtomicBool,
+    progress: &dyn Fn(u64, u64),
+    how: &WaveOptions,
+) -> Result<(RenderState, RenderStats, GpuStats), GpuError> {
     let sums_on = how.sums;
     let o = RenderOptions {
         spp: samples.end.saturating_sub(samples.start),
