@@ -44,7 +44,9 @@ pub struct RecordParams {
     pub samples: u32,
     /// Words of one record.
     pub stride: u32,
-    /// [`code`].
+    /// How draws enter the record: 0 the AOV integrators, 1 a heuristic into the
+    /// outside sum (`path`), 2 heuristic blocks, 3 optimal-direct, 4
+    /// optimal-uncorrelated.
     pub code: u32,
     /// 0 balance, 1 power, 2 maximum, 3 cutoff.
     pub heuristic: u32,
