@@ -687,7 +687,7 @@ pub struct StageTimes {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum SumsOn {
     /// On the CPU: every draw read back and added by the CPU's accumulator (the
-    /// progressive estimators, `FREPRAY_GPU_SUMS=off`, or sums too large for a binding).
+    /// progressive estimators, `FREPRAY_GPU_SUMS=off`, or terms past the loop budget).
     #[default]
     Cpu,
     /// On the GPU in f64 (`SHADER_F64`).
@@ -1128,7 +1128,8 @@ pub fn render_range(
 pub struct WaveOptions {
     /// Where the per-pixel sums are kept: on the CPU, or on the GPU in f64 (where the
     /// device has it, else double-float) or double-float. The GPU falls back to the
-    /// CPU's sums for the progressive estimators and for sums too large for one binding;
+    /// CPU's sums for the progressive estimators and for records whose terms pass the
+    /// loop budget (bands shrink so that their sums fit one binding);
     /// [`GpuStats::sums`] says where they were kept.
     pub sums: SumsOn,
     /// The most pixels a band covers (the image is rendered in bands of consecutive
@@ -1212,10 +1213,18 @@ fn render_waves(
     // The image in bands of consecutive pixels (raster order), each rendered through all
     // its samples before the next: the buffers hold one band's waves, whatever the
     // image's size.
+    let stride = acc.stride();
+    // Sums on the GPU: a band's (pixels × stride f64 words) within one binding.
+    let sums_fit = if sums_on != SumsOn::Cpu && acc.linear().is_some() {
+        gpu.info().max_storage_binding / (stride as u64 * 8)
+    } else {
+        u64::MAX
+    };
     let band = how
         .band_pixels
         .unwrap_or(u32::MAX)
         .min((WAVE_DRAWS / per_slot_draws).max(1))
+        .min(sums_fit.min(u64::from(u32::MAX)) as u32)
         .clamp(1, pixels);
     let per_wave = (WAVE_DRAWS / (band * per_slot_draws)).max(1);
     let max_slots = u64::from(per_wave * band);
@@ -1343,7 +1352,6 @@ fn render_waves(
     let period = f64::from(gpu.queue.get_timestamp_period());
     stats.stages.setup = started.elapsed();
 
-    let stride = acc.stride();
     let t_count = acc.techniques().len();
     let total = u64::from(pixels) * u64::from(o.spp);
     let mut done = 0u64;
