@@ -1215,7 +1215,8 @@ fn render_waves(
     // image's size.
     let stride = acc.stride();
     // Sums on the GPU: a band's (pixels × stride f64 words) within one binding.
-    let sums_fit = if sums_on != SumsOn::Cpu && acc.linear().is_some() {
+    let linear = acc.linear().filter(|_| sums_on != SumsOn::Cpu);
+    let sums_fit = if linear.is_some() {
         gpu.info().max_storage_binding / (stride as u64 * 8)
     } else {
         u64::MAX
@@ -1277,7 +1278,7 @@ fn render_waves(
     });
     // The per-pixel sums on the GPU where the record is a sum of per-sample terms and
     // fits; else every wave's hits and draws are read back and added by the CPU.
-    let mut sums = match acc.linear().filter(|_| sums_on != SumsOn::Cpu) {
+    let mut sums = match linear {
         Some(linear) => GpuSums::new(
             gpu,
             &linear,
@@ -1356,14 +1357,6 @@ fn render_waves(
     let total = u64::from(pixels) * u64::from(o.spp);
     let mut done = 0u64;
     let mut rays = RayCounts::default();
-    let groups_for = |n: u32| {
-        let g = n.div_ceil(64);
-        if g <= 65_535 {
-            (g, 1)
-        } else {
-            (65_535, g.div_ceil(65_535))
-        }
-    };
     let mut base = 0;
     while base < pixels {
         let band_len = band.min(pixels - base);
@@ -1433,12 +1426,12 @@ fn render_waves(
                 pass.set_bind_group(0, group, &[]);
                 match stage {
                     0 => {
-                        let (gx, gy) = groups_for(slots);
+                        let (gx, gy) = crate::workgroups(slots);
                         pass.dispatch_workgroups(gx, gy, 1);
                     }
                     // Depth 0: every slot's draws, in slot order (coherent rays).
                     1 if depth == 0 => {
-                        let (gx, gy) = groups_for(slots * nd1);
+                        let (gx, gy) = crate::workgroups(slots * nd1);
                         pass.dispatch_workgroups(gx, gy, 1);
                     }
                     // The live slots' draws, the shadow rays and the continuations queued

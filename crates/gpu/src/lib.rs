@@ -81,6 +81,18 @@ pub use adapter::{Gpu, GpuError, GpuInfo, GpuOptions};
 pub const FLOAT_WGSL: &str = include_str!("shaders/float.wgsl");
 pub use kernel::Kernel;
 
+/// Workgroups (x, y) of 64 invocations for `n` invocations of a kernel that reads its
+/// index as `id.x + id.y · groups.x · 64`: split over y past the 65 535 a dimension may
+/// hold.
+pub(crate) fn workgroups(n: u32) -> (u32, u32) {
+    let g = n.div_ceil(64);
+    if g <= 65_535 {
+        (g, 1)
+    } else {
+        (65_535, g.div_ceil(65_535))
+    }
+}
+
 /// A bind group of whole buffers at bindings 0, 1, … in order.
 pub(crate) fn bind_buffers<'a>(
     gpu: &Gpu,

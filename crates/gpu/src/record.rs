@@ -742,14 +742,6 @@ impl GpuSums {
         let terms_bytes = u64::from(p.slots) * u64::from(p.stride) * 4;
         enc.clear_buffer(&self.terms, 0, Some(terms_bytes));
         enc.clear_buffer(&self.tally, 0, Some(TALLY_LIST as u64 * 4));
-        let split = |n: u32| {
-            let g = n.div_ceil(64);
-            if g <= 65_535 {
-                (g, 1)
-            } else {
-                (65_535, g.div_ceil(65_535))
-            }
-        };
         let passes = [
             (&self.kernels.terms.pipeline, &self.terms_group, p.slots),
             (
@@ -765,7 +757,7 @@ impl GpuSums {
             });
             pass.set_pipeline(pipeline);
             pass.set_bind_group(0, group, &[]);
-            let (gx, gy) = split(n);
+            let (gx, gy) = crate::workgroups(n);
             pass.dispatch_workgroups(gx, gy, 1);
         }
         self.current = 1 - self.current;
