@@ -32,9 +32,10 @@
 //! whose CSG spans overflow, is never taken as a miss: the CPU renders that whole sample
 //! instead, and the statistics count it.
 //!
-//! **Scope.** Objects that are one perturbed or plain quadric, a CSG tree of plain
-//! quadrics (boxes, capped cylinders, unions, differences: by inside spans along the
-//! ray, the nodes in post-order from the root), or an expression solid (up to
+//! **Scope.** Objects that are one perturbed or plain quadric, a CSG tree (boxes,
+//! capped cylinders, unions, differences: by inside spans along the ray, the nodes in
+//! post-order from the root; a perturbed or expression part's spans from its crossings
+//! found one by one, as frep's `Solid::combine` finds them), or an expression solid (up to
 //! [`MAX_GPU_TAPES`] per scene: their tapes share one interpreter compiled into the
 //! kernels, GPU.md §6.2); diffuse, conductor, dielectric and plastic materials
 //! rough or smooth (delta lobes outside MIS, as the CPU), with constant or point-space checker colours; sphere,
@@ -381,23 +382,24 @@ fn tape_normal(p: vec3<f32>) -> vec3<f32> {
                 (1, first, flat.parts(root).len() as u32)
             }
             _ => {
-                // Any CSG tree of plain quadrics: its nodes in post-order from the root,
-                // so that each op's parts are the last lists on the kernel's stack (a
-                // part shared by two nodes is emitted under each).
+                // Any other CSG tree: its nodes in post-order from the root, so that
+                // each op's parts are the last lists on the kernel's stack (a part
+                // shared by two nodes is emitted under each). Plain quadrics give their
+                // ends in closed form, perturbed and expression parts by repeated
+                // crossing searches (`general_ends` in the kernel).
                 let first_node = self.csg.len() as u32;
-                let refuse = || {
-                    unsupported(format!(
-                        "object '{}' is a CSG tree with a perturbed or expression part \
-                         (only plain quadrics combine on the GPU)",
-                        obj.name
-                    ))
-                };
                 let mut todo = vec![(root as u32, false)];
                 while let Some((i, expanded)) = todo.pop() {
                     let n = &flat.nodes[i as usize];
                     if n.op == CsgOp::Leaf {
-                        let v = plain(i).ok_or_else(refuse)?;
-                        let leaf = self.pack_leaf(&v, material);
+                        let k = n.operands.first as usize;
+                        let leaf = match flat.leaf(k) {
+                            LeafView::Perturbed(v) => self.pack_leaf(&v, material),
+                            LeafView::Expr(v) => {
+                                self.pack_expr(flat, k, &v, &obj.name, material)?;
+                                self.leaves.len() as u32 - 1
+                            }
+                        };
                         self.csg.push([0, leaf, 0, 0]);
                     } else if expanded {
                         let op = match n.op {

@@ -141,6 +141,17 @@ material = "clay"
 solid = "sphere([-0.2, -0.4, 1.7], 0.3)"
 material = "mirror"
 
+[[objects]]
+# CSG with a perturbed and an expression part (their crossings found one by one): a
+# bumpy ball with a slot cut out, joined to a blob.
+solid = """
+let bumpy = perturb(sphere([0, 0, 0], 0.28), 0.5 * sphere([0.15, -0.15, 0.15], 0.2)^3)
+let blob = blend_union(sphere([0.2, 0, -0.1], 0.12), sphere([0.3, -0.05, 0], 0.1), 0.3, 0.5, 0.5)
+output union(difference(bumpy, box(center = [0, -0.25, 0.1], size = [0.16, 0.3, 0.5])), blob)
+"""
+transform = { translate = [-0.15, -2.45, 0.3] }
+material = "clay"
+
 [[lights]]
 type = "point"
 position = [1.2, -1.8, 1.6]
@@ -745,11 +756,17 @@ fn unsupported_scenes_are_refused_by_name() {
             Ok(_) => panic!("rendered"),
         }
     };
+    let balls: Vec<String> = (0..300)
+        .map(|k| format!("sphere([{}, 2, 0.1], 0.05)", f64::from(k) * 0.01))
+        .collect();
     let e = err(&SCENE.replace(
         "sphere([1.5, 0.0, 0.6], 0.6)",
-        "union(sphere([1.5, 0, 0.6], 0.6), perturb(sphere([1.5, 0, 1.2], 0.3), 0.2 * sphere([1.5, 0, 1.5], 0.1)^3))",
+        &format!("union({})", balls.join(", ")),
     ));
-    assert!(e.contains("CSG") && e.contains("--backend cpu"), "{e}");
+    assert!(
+        e.contains("CSG nodes") && e.contains("--backend cpu"),
+        "{e}"
+    );
     let e = err(&SCENE.replace("scale = 1.0 } }", "scale = 1.0, space = \"uv\" } }"));
     assert!(e.contains("uv"), "{e}");
     let e = err(&SCENE.replace(
@@ -771,9 +788,9 @@ fn unsupported_scenes_are_refused_by_name() {
 /// A ray batch through the render kernels' nearest-hit query (GPU.md §9) against the CPU's
 /// f64 intersection, over the test scene's every object kind: 4096 rays, a third from
 /// random points in random directions, a third aimed at random points of the CSG,
-/// blended and perturbed objects, a third grazing the CSG box's faces. Hit/miss must
-/// agree except on grazing rays (|cos| < 0.02 at the hit that one side found, at most
-/// 1 % of rays); matched hits agree to |Δt| ≤ 2·10⁻⁴·max(1, t); every query stays below
+/// blended and perturbed objects and the CSG of perturbed and expression parts, a third
+/// grazing the CSG box's faces. Hit/miss must agree except on grazing rays (|cos| <
+/// 0.02 at the hit that one side found, at most 1 % of rays); matched hits agree to |Δt| ≤ 2·10⁻⁴·max(1, t); every query stays below
 /// 30 000 loop iterations.
 #[test]
 fn ray_batch_matches_the_cpu_intersection() {
@@ -788,6 +805,7 @@ fn ray_batch_matches_the_cpu_intersection() {
         [-1.5, 0.3, 0.7],
         [0.1, 0.8, 0.9],
         [1.6, -1.5, 0.2],
+        [-0.1, -2.5, 0.3],
     ];
     while rays.len() < 4096 {
         let k = rays.len() % 3;

@@ -238,23 +238,51 @@ fn plain_intersection(sh: GpuShape, o: vec3<f32>, d: vec3<f32>, t_min: f32, t_ma
     return vec3<f32>(best, bitcast<f32>(which), 1.0);
 }
 
-// --- CSG of plain quadrics by inside spans ----------------------------------------------
+// --- CSG by inside spans ------------------------------------------------------------------
 //
-// Each leaf's inside set along the whole ray line is ≤ 2 intervals (positive_set); a
-// node's is the boolean combination of its parts' (a sweep over their sorted ends), so
-// the post-order node list runs on a stack of span lists in a fixed pool. An end keeps
-// the leaf whose root it is, and a flip bit (bit 31) where a difference turns that
-// leaf's outside in (its normal then points the other way, as frep's combine). The
-// crossing is the first end in (t_min, t_max). A pool or stack overflow is reported
-// (status 2), never a miss.
+// Each leaf's inside set along the ray is a sorted list of ends; a node's is the boolean
+// combination of its parts' (a sweep over their sorted ends), so the post-order node list
+// runs on a stack of span lists in a fixed pool. An end keeps the leaf whose root it is,
+// and a flip bit (bit 31) where a difference turns that leaf's outside in (its normal
+// then points the other way, as frep's combine). The crossing is the first end in
+// (t_min, t_max). A pool or stack overflow is reported (status 2), never a miss.
+//
+// A plain quadric's ends are its positive set on the whole line (≤ 2 intervals, closed
+// form). A perturbed or expression part has no closed form: its ends are its crossings
+// found one by one, as frep's combine finds them, from a nudge before its box (where it
+// is outside) to the window's end (the shape's box grown, on (t_min, t_max)), each search
+// starting a nudge past the last end. Those searches are the scene's costly crossing
+// functions, which llvmpipe inlines at every call site (GPU.md, compile time), so the
+// walk is resumable: `csg_run` stops at a general part and asks `scene_trace`, whose one
+// call site runs every search, then `csg_feed` takes each answer.
 
 const SPAN_POOL: u32 = 64u;
 const SPAN_LISTS: u32 = 16u;
+// Past this many loop iterations a CSG walk reports overflow (the CPU renders the
+// sample), so that its repeated searches keep the invocation's budget (GPU.md §3.1).
+const CSG_BUDGET: u32 = 28000u;
 var<private> sp_t: array<f32, SPAN_POOL>;
 var<private> sp_k: array<u32, SPAN_POOL>;
 var<private> tmp_t: array<f32, SPAN_POOL>;
 var<private> tmp_k: array<u32, SPAN_POOL>;
 var<private> ls_at: array<u32, SPAN_LISTS>;
+
+// The walk of one CSG shape: its nodes, the next one, the pool and stack in use, the
+// segment and window, and the general part being searched (from cs_ta to cs_tb).
+var<private> cs_first: u32;
+var<private> cs_count: u32;
+var<private> cs_i: u32;
+var<private> cs_top: u32;
+var<private> cs_nl: u32;
+var<private> cs_tmin: f32;
+var<private> cs_tmax: f32;
+var<private> cs_w: vec2<f32>;
+var<private> cs_general: bool;
+var<private> cs_pending: bool;
+var<private> cs_leaf: u32;
+var<private> cs_ta: f32;
+var<private> cs_tb: f32;
+var<private> cs_nudge: f32;
 
 fn csg_inside(op: u32, first: bool, inside: u32, count: u32) -> bool {
     if (op == 1u) { return inside > 0u; }
@@ -263,13 +291,67 @@ fn csg_inside(op: u32, first: bool, inside: u32, count: u32) -> bool {
     return first && inside == 1u;
 }
 
-// (t, leaf | flip << 31 bits, status) with status 0 miss, 1 hit, 2 overflow.
-fn csg_spans(sh: GpuShape, o: vec3<f32>, d: vec3<f32>, t_min: f32, t_max: f32) -> vec3<f32> {
-    var top = 0u;   // pool entries used
-    var nl = 0u;    // lists on the stack
-    for (var i = 0u; i < sh.count; i++) {
+fn csg_start(sh: GpuShape, o: vec3<f32>, d: vec3<f32>, t_min: f32, t_max: f32) {
+    cs_first = sh.first;
+    cs_count = sh.count;
+    cs_i = 0u;
+    cs_top = 0u;
+    cs_nl = 0u;
+    cs_tmin = t_min;
+    cs_tmax = t_max;
+    let grow = vec3<f32>(1e-5 * length(sh.hi.xyz - sh.lo.xyz));
+    let inv = vec3<f32>(1.0 / d.x, 1.0 / d.y, 1.0 / d.z);
+    cs_w = clip_box(sh.lo.xyz - grow, sh.hi.xyz + grow, o, inv, t_min, t_max);
+    cs_general = false;
+    cs_pending = false;
+}
+
+// Takes a general part's search answer (status 0 none, 1 at t, 2 overflow): 0 when that
+// part has more to search, 1 when it is done, 2 on overflow.
+fn csg_feed(status: u32, t: f32) -> u32 {
+    if (status == 2u || loops > CSG_BUDGET) { return 2u; }
+    if (status == 1u) {
+        if (cs_top == SPAN_POOL) { return 2u; }
+        sp_t[cs_top] = t;
+        sp_k[cs_top] = cs_leaf;
+        cs_top++;
+        cs_ta = t + cs_nudge + 1e-6 * abs(t);
+        if (cs_ta < cs_tb) { return 0u; }
+    }
+    cs_pending = false;
+    return 1u;
+}
+
+// Runs the walk on from node cs_i: (t, leaf | flip << 31 bits, status) with status 0
+// miss, 1 hit, 2 overflow, 3 a general part's search wanted (cs_leaf, cs_ta, cs_tb).
+fn csg_run(o: vec3<f32>, d: vec3<f32>) -> vec3<f32> {
+    var top = cs_top;
+    var nl = cs_nl;
+    for (var i = cs_i; i < cs_count; i++) {
         loops++;
-        let node = csg[sh.first + i];
+        let node = csg[cs_first + i];
+        if (node.x == 0u && objects[node.y].kind != 0u) {
+            if (nl == SPAN_LISTS) { return vec3<f32>(0.0, 0.0, 2.0); }
+            if (!(cs_w.x <= cs_w.y)) { return vec3<f32>(0.0); }
+            ls_at[nl] = top;
+            nl++;
+            cs_general = true;
+            let ob = objects[node.y];
+            let lo = vec3<f32>(ob.lo_x, ob.lo_y, ob.lo_z);
+            let hi = vec3<f32>(ob.hi_x, ob.hi_y, ob.hi_z);
+            let inv = vec3<f32>(1.0 / d.x, 1.0 / d.y, 1.0 / d.z);
+            let c = clip_box(lo, hi, o, inv, -inf(), cs_w.y);
+            if (!(c.x <= c.y)) { continue; }
+            cs_nudge = 8e-6 * length(hi - lo) / length(d);
+            cs_leaf = node.y;
+            cs_ta = c.x - cs_nudge - 1e-6 * abs(c.x);
+            cs_tb = c.y;
+            cs_pending = true;
+            cs_i = i + 1u;
+            cs_top = top;
+            cs_nl = nl;
+            return vec3<f32>(0.0, 0.0, 3.0);
+        }
         if (node.x == 0u) {
             if (nl == SPAN_LISTS || top + 4u > SPAN_POOL) { return vec3<f32>(0.0, 0.0, 2.0); }
             let ps = positive_set(q_local(quadrics[objects[node.y].first_op].c, o, d));
@@ -334,10 +416,13 @@ fn csg_spans(sh: GpuShape, o: vec3<f32>, d: vec3<f32>, t_min: f32, t_max: f32) -
         top = base + n;
         nl = nl - k + 1u;
     }
+    // A general part's ends are known only up to the window's end; before the window
+    // the shape is empty.
     for (var j = 0u; j < top; j++) {
         loops++;
         let t = sp_t[j];
-        if (t > t_min && t < t_max && is_finite(t)) {
+        let in_window = !cs_general || (t > cs_w.x && t <= cs_w.y);
+        if (t > cs_tmin && t < cs_tmax && is_finite(t) && in_window) {
             return vec3<f32>(t, bitcast<f32>(sp_k[j]), 1.0);
         }
     }
@@ -345,49 +430,89 @@ fn csg_spans(sh: GpuShape, o: vec3<f32>, d: vec3<f32>, t_min: f32, t_max: f32) -
 }
 
 // Nearest (or, with `any`, some) object crossing in (0, t_max): (status, t, leaf) with
-// status 0 none, 1 hit, 2 overflow.
+// status 0 none, 1 hit, 2 overflow. One loop over the shapes and the CSG walks' searches,
+// so that each costly search has one call site.
 struct SceneHit { status: u32, t: f32, leaf: u32 }
 
 fn scene_trace(o: vec3<f32>, d: vec3<f32>, t_max: f32, any_hit: bool) -> SceneHit {
     let inv = vec3<f32>(1.0 / d.x, 1.0 / d.y, 1.0 / d.z);
     var res = SceneHit(0u, t_max, 0u);
-    for (var s = 0u; s < frame.n_shapes; s++) {
+    var s = 0u;
+    var in_csg = false;
+    loop {
         loops++;
-        let sh = shapes[s];
-        let c = clip_box(sh.lo.xyz, sh.hi.xyz, o, inv, 0.0, res.t);
-        if (!(c.x <= c.y)) { continue; }
-        var found = false;
-        var t = 0.0;
-        var leaf = sh.first;
-        if (sh.kind == 1u) {
-            let r = plain_intersection(sh, o, d, 0.0, res.t);
-            found = r.z == 1.0;
-            t = r.x;
-            leaf = bitcast<u32>(r.y);
-        } else if (sh.kind == 2u) {
-            let r = csg_spans(sh, o, d, 0.0, res.t);
-            if (r.z == 2.0) { return SceneHit(2u, 0.0, 0u); }
-            found = r.z == 1.0;
-            t = r.x;
-            leaf = bitcast<u32>(r.y);
-        } else if (objects[leaf].kind == 2u) {
-            use_tape(objects[leaf].first_op);
-            let r = trace_tape(o, d, 0.0, res.t);
-            if ((r.status & 3u) == 2u) { return SceneHit(2u, 0.0, 0u); }
-            found = (r.status & 3u) == 1u;
-            t = r.t;
-        } else if (objects[leaf].kind == 0u) {
-            let r = quadric_first_crossing(quadrics[objects[leaf].first_op], o, d, 0.0, res.t);
-            found = r.y == 1.0;
-            t = r.x;
+        var search = false;
+        var leaf = 0u;
+        var ta = 0.0;
+        var tb = res.t;
+        if (in_csg) {
+            search = cs_pending;
+            leaf = cs_leaf;
+            ta = cs_ta;
+            tb = cs_tb;
         } else {
-            let r = perturbed_first_crossing(leaf, o, d, 0.0, res.t);
-            if (r.status == 2u) { return SceneHit(2u, 0.0, 0u); }
-            found = r.status == 1u;
-            t = r.t;
+            if (s >= frame.n_shapes) { break; }
+            let sh = shapes[s];
+            s++;
+            let c = clip_box(sh.lo.xyz, sh.hi.xyz, o, inv, 0.0, res.t);
+            if (!(c.x <= c.y)) { continue; }
+            leaf = sh.first;
+            var found = false;
+            var t = 0.0;
+            if (sh.kind == 1u) {
+                let r = plain_intersection(sh, o, d, 0.0, res.t);
+                found = r.z == 1.0;
+                t = r.x;
+                leaf = bitcast<u32>(r.y);
+            } else if (sh.kind == 2u) {
+                csg_start(sh, o, d, 0.0, res.t);
+                in_csg = true;
+            } else if (objects[leaf].kind == 0u) {
+                let r = quadric_first_crossing(quadrics[objects[leaf].first_op], o, d, 0.0, res.t);
+                found = r.y == 1.0;
+                t = r.x;
+            } else {
+                search = true;
+            }
+            if (found && t < res.t) {
+                res = SceneHit(1u, t, leaf);
+                if (any_hit) { return res; }
+            }
+            if (!search && !in_csg) { continue; }
         }
-        if (found && t < res.t) {
-            res = SceneHit(1u, t, leaf);
+        var status = 0u;
+        var t = 0.0;
+        if (search) {
+            if (objects[leaf].kind == 2u) {
+                use_tape(objects[leaf].first_op);
+                let r = trace_tape(o, d, ta, tb);
+                status = r.status & 3u;
+                t = r.t;
+            } else {
+                let r = perturbed_first_crossing(leaf, o, d, ta, tb);
+                status = r.status;
+                t = r.t;
+            }
+        }
+        if (!in_csg) {
+            if (status == 2u) { return SceneHit(2u, 0.0, 0u); }
+            if (status == 1u && t < res.t) {
+                res = SceneHit(1u, t, leaf);
+                if (any_hit) { return res; }
+            }
+            continue;
+        }
+        if (search) {
+            let f = csg_feed(status, t);
+            if (f == 2u) { return SceneHit(2u, 0.0, 0u); }
+            if (f == 0u) { continue; }
+        }
+        let r = csg_run(o, d);
+        if (r.z == 3.0) { continue; }
+        in_csg = false;
+        if (r.z == 2.0) { return SceneHit(2u, 0.0, 0u); }
+        if (r.z == 1.0 && r.x < res.t) {
+            res = SceneHit(1u, r.x, bitcast<u32>(r.y));
             if (any_hit) { return res; }
         }
     }
