@@ -143,11 +143,13 @@ material = "mirror"
 
 [[objects]]
 # CSG with a perturbed and an expression part (their crossings found one by one): a
-# bumpy ball with a slot cut out, joined to a blob.
+# bumpy ball with a slot and a blended bite cut out (the bite's normals flipped),
+# joined to a small ball.
 solid = """
 let bumpy = perturb(sphere([0, 0, 0], 0.28), 0.5 * sphere([0.15, -0.15, 0.15], 0.2)^3)
-let blob = blend_union(sphere([0.2, 0, -0.1], 0.12), sphere([0.3, -0.05, 0], 0.1), 0.3, 0.5, 0.5)
-output union(difference(bumpy, box(center = [0, -0.25, 0.1], size = [0.16, 0.3, 0.5])), blob)
+let bite = blend_union(sphere([0.1, -0.24, 0.14], 0.09), sphere([0.16, -0.2, 0.2], 0.08), 0.3, 0.5, 0.5)
+output union(difference(bumpy, box(center = [0, -0.25, 0.1], size = [0.16, 0.3, 0.5]), bite),
+             sphere([-0.32, -0.1, -0.18], 0.1))
 """
 transform = { translate = [-0.15, -2.45, 0.3] }
 material = "clay"

@@ -534,7 +534,7 @@ fn leaf_normal(key: u32, p: vec3<f32>) -> vec3<f32> {
     let ob = objects[leaf];
     if (ob.kind == 2u) {
         use_tape(ob.first_op);
-        return tape_normal(p);
+        return -sign * tape_normal(p);
     }
     var g = q_grad(quadrics[ob.first_op].c, p);
     if (ob.kind == 1u) {
