@@ -10,14 +10,14 @@
 //! shade, shadow rays and, but at the last depth, the continuation trace) run in one
 //! submission without a CPU wait.
 //!
-//! **Sums.** Where every word of a pixel's record is a sum of per-sample terms (all
-//! estimators but the progressive ones), two more passes of the same submission keep
-//! the per-pixel sums on the GPU ([`crate::record`]): each slot's f32 terms, then the
-//! sums in f64 (`SHADER_F64`) or double-float, pixel by pixel in sample order; only a
-//! small tally (ray counts, overflowing slots) is read back per wave, and the sums once
-//! at the end, into the same [`RenderState`] as the CPU's. Otherwise (the progressive
-//! estimators, whose α changes at milestones; `FREPRAY_GPU_SUMS=off`; sums too large
-//! for one binding) the hits and draws are read back and added by
+//! **Sums.** Two more passes of the same submission keep the per-pixel sums on the GPU
+//! ([`crate::record`]): each slot's f32 terms, then the sums in f64 (`SHADER_F64`) or
+//! double-float, pixel by pixel in sample order; only a small tally (ray counts,
+//! overflowing slots) is read back per wave, and the sums once at the end, into the
+//! same [`RenderState`] as the CPU's. The progressive estimators' second pass applies
+//! α and stops each pixel where its schedule re-solves α, which the CPU does between
+//! passes ([`crate::progressive`]). Otherwise (`FREPRAY_GPU_SUMS=off`; sums too large
+//! for one binding or the loop budget) the hits and draws are read back and added by
 //! [`render::integrator::Accumulator`], the CPU integrator's own bookkeeping, in f64.
 //! Either way the optimal estimators' solves are the CPU's and a GPU sample range
 //! merges with a CPU one.
@@ -688,8 +688,8 @@ pub struct StageTimes {
 /// Where a GPU render kept its per-pixel sums (GPU.md §8).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum SumsOn {
-    /// On the CPU: every draw read back and added by the CPU's accumulator (the
-    /// progressive estimators, `FREPRAY_GPU_SUMS=off`, or terms past the loop budget).
+    /// On the CPU: every draw read back and added by the CPU's accumulator
+    /// (`FREPRAY_GPU_SUMS=off`, or terms past the loop budget).
     #[default]
     Cpu,
     /// On the GPU in f64 (`SHADER_F64`).
@@ -1130,8 +1130,8 @@ pub fn render_range(
 pub struct WaveOptions {
     /// Where the per-pixel sums are kept: on the CPU, or on the GPU in f64 (where the
     /// device has it, else double-float) or double-float. The GPU falls back to the
-    /// CPU's sums for the progressive estimators and for records whose terms pass the
-    /// loop budget (bands shrink so that their sums fit one binding);
+    /// CPU's sums for records whose terms pass the loop budget (bands shrink so that
+    /// their sums fit one binding);
     /// [`GpuStats::sums`] says where they were kept.
     pub sums: SumsOn,
     /// The most pixels a band covers (the image is rendered in bands of consecutive
@@ -1284,6 +1284,7 @@ fn render_waves(
         Some(linear) => GpuSums::new(
             gpu,
             &linear,
+            acc.kernel(),
             band,
             max_slots as u32,
             (n_draws, nd1, depths),
@@ -1478,8 +1479,12 @@ fn render_waves(
                     draw_data = read_back(gpu, draws_r, db)?;
                 }
             }
-            if let Some(sums) = &sums {
+            if let Some(sums) = sums.as_mut() {
                 tally = Some(sums.tally(gpu, slots)?);
+                // The progressive estimators' solves within the wave.
+                let t = Instant::now();
+                sums.settle(gpu)?;
+                stats.stages.accumulate += t.elapsed();
             }
             let mut passes_time = Duration::ZERO;
             if timestamps.is_some() {

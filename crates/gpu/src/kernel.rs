@@ -43,34 +43,7 @@ impl Kernel {
         inputs: usize,
         unchecked: bool,
     ) -> Result<Kernel, GpuError> {
-        let scope = gpu.device.push_error_scope(wgpu::ErrorFilter::Validation);
-        let desc = wgpu::ShaderModuleDescriptor {
-            label: Some(entry),
-            source: wgpu::ShaderSource::Wgsl(source.into()),
-        };
-        let module = if unchecked {
-            // SAFETY: `new_unchecked`'s caller guarantees in-bounds indexing and finite
-            // loops; wgpu then skips the runtime checks only.
-            unsafe {
-                gpu.device
-                    .create_shader_module_trusted(desc, wgpu::ShaderRuntimeChecks::unchecked())
-            }
-        } else {
-            gpu.device.create_shader_module(desc)
-        };
-        let pipeline = gpu
-            .device
-            .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some(entry),
-                layout: None,
-                module: &module,
-                entry_point: Some(entry),
-                compilation_options: Default::default(),
-                cache: None,
-            });
-        if let Some(e) = pollster::block_on(scope.pop()) {
-            return Err(GpuError::Run(format!("kernel {entry}: {e}")));
-        }
+        let pipeline = compute_pipeline(gpu, source, entry, unchecked)?;
         Ok(Kernel { pipeline, inputs })
     }
 
@@ -157,5 +130,45 @@ impl Kernel {
         drop(view);
         readback.unmap();
         Ok(out)
+    }
+}
+
+/// The compute pipeline of `entry` in the WGSL `source`, its layout taken from the
+/// shader (`unchecked`: without naga's run-time checks, [`Kernel::new_unchecked`]'s
+/// contract); a shader error is returned with naga's message.
+pub(crate) fn compute_pipeline(
+    gpu: &Gpu,
+    source: &str,
+    entry: &str,
+    unchecked: bool,
+) -> Result<wgpu::ComputePipeline, GpuError> {
+    let scope = gpu.device.push_error_scope(wgpu::ErrorFilter::Validation);
+    let desc = wgpu::ShaderModuleDescriptor {
+        label: Some(entry),
+        source: wgpu::ShaderSource::Wgsl(source.into()),
+    };
+    let module = if unchecked {
+        // SAFETY: `new_unchecked`'s caller guarantees in-bounds indexing and finite
+        // loops; wgpu then skips the runtime checks only.
+        unsafe {
+            gpu.device
+                .create_shader_module_trusted(desc, wgpu::ShaderRuntimeChecks::unchecked())
+        }
+    } else {
+        gpu.device.create_shader_module(desc)
+    };
+    let pipeline = gpu
+        .device
+        .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some(entry),
+            layout: None,
+            module: &module,
+            entry_point: Some(entry),
+            compilation_options: Default::default(),
+            cache: None,
+        });
+    match pollster::block_on(scope.pop()) {
+        Some(e) => Err(GpuError::Run(format!("kernel {entry}: {e}"))),
+        None => Ok(pipeline),
     }
 }

@@ -43,10 +43,11 @@
 //! - [`record`]: each sample's terms of its pixel's record (what the CPU's accumulator
 //!   adds), equal bit for bit on lavapipe to their CPU f32 twin, so that the integrators
 //!   keep the per-pixel sums on the GPU;
+//! - [`progressive`]: the progressive optimal estimators' sums, α applied in sample
+//!   order by a pass per pixel that stops where the CPU must re-solve α;
 //! - [`direct`]: the scene packed into buffers and the `direct` and `path` integrators
 //!   (camera, shade, shadow and continuation passes per wave), their samples summed into
-//!   a `render::RenderState` on the GPU (or, for the progressive estimators, by the CPU
-//!   integrator's own bookkeeping).
+//!   a `render::RenderState` on the GPU.
 //!
 //! On machines without a GPU, tests run on Mesa's lavapipe (`mesa-vulkan-drivers`). They
 //! skip, saying so, where no adapter exists, unless `FREPRAY_REQUIRE_GPU=1` (set by
@@ -66,6 +67,7 @@ mod kernel;
 pub mod layout;
 pub mod light;
 pub mod perturbed;
+pub mod progressive;
 pub mod quadric;
 pub mod record;
 pub mod sampler;

@@ -6,13 +6,15 @@
 //! The terms are what `render::integrator::Accumulator::add` adds for the same hits and
 //! draws, for every record that is a plain sum of per-sample terms
 //! ([`render::integrator::LinearRecord`]: the heuristics, optimal-direct and
-//! optimal-uncorrelated, per light too, AOVs and the AOV integrators). The optimal
+//! optimal-uncorrelated, per light too, AOVs and the AOV integrators), and the
+//! progressive estimators' α-free terms, to which [`crate::progressive`] applies α. The optimal
 //! estimators' moments are formed as `Â_ij += r_i r_j` and `b̂_ci += (f_c/s) r_i` with
 //! `r_i = p_i/s ≤ 1/n_i` (Kondapaneni et al. 2019, eqs. 15–16), so no f32 term
 //! overflows where `p_i p_j / s²` would. [`slot_terms`] is the kernel's CPU twin,
 //! operation for operation.
 
 use crate::direct::{DRAW_WORDS, HIT_WORDS};
+use crate::progressive::{Blocks, ProgressiveSums};
 use crate::{Gpu, GpuError};
 use bytemuck::{Pod, Zeroable};
 use render::integrator::{LinearMis, LinearRecord, Record};
@@ -30,6 +32,7 @@ mod code {
     pub const WEIGHTED: u32 = 2;
     pub const DIRECT: u32 = 3;
     pub const UNCORRELATED: u32 = 4;
+    pub const PROGRESSIVE: u32 = 5;
 }
 
 /// The kernel's uniform block (`RecordParams` in record.wgsl).
@@ -46,7 +49,8 @@ pub struct RecordParams {
     pub stride: u32,
     /// How draws enter the record: 0 the AOV integrators, 1 a heuristic into the
     /// outside sum (`path`), 2 heuristic blocks, 3 optimal-direct, 4
-    /// optimal-uncorrelated.
+    /// optimal-uncorrelated, 5 the progressive estimators' α-free terms
+    /// ([`LinearMis::Progressive`]).
     pub code: u32,
     /// 0 balance, 1 power, 2 maximum, 3 cutoff.
     pub heuristic: u32,
@@ -94,6 +98,7 @@ impl RecordParams {
             (None, LinearMis::Weighted(h)) => (code::WEIGHTED, Some(h)),
             (None, LinearMis::Direct) => (code::DIRECT, None),
             (None, LinearMis::Uncorrelated) => (code::UNCORRELATED, None),
+            (None, LinearMis::Progressive(_)) => (code::PROGRESSIVE, None),
         };
         let (heuristic, param) = match h {
             None | Some(mis::Heuristic::Balance) => (0, 0.0),
@@ -132,7 +137,13 @@ impl RecordParams {
     /// llvmpipe's 65 535 (GPU.md §3.1) by the integrator's choice of where sums run.
     pub fn loop_bound(&self) -> u64 {
         let t = u64::from(self.n_tech);
-        let per_draw = u64::from(self.lights) * (t * t + 4 * t);
+        // The progressive terms add G (3) and Q (T) to the moments' T² + 4T.
+        let extra = if self.code == code::PROGRESSIVE {
+            t + 3
+        } else {
+            0
+        };
+        let per_draw = u64::from(self.lights) * (t * t + 4 * t + extra);
         let per_vertex = u64::from(self.per_slot) * 2 + u64::from(self.n_draws) * per_draw;
         u64::from(self.max_depth) * (u64::from(self.per_slot) + per_vertex) + 16
     }
@@ -298,6 +309,22 @@ impl Slot<'_> {
                 }
             }
             code::DIRECT => self.moments_add(b + 1, k, f, at),
+            code::PROGRESSIVE => {
+                let tt = self.p.n_tech;
+                self.moments_add(b + 4 + 3 * tt, k, f, at);
+                let s = self.mixture(at, k);
+                if s < 0.0 {
+                    self.add(b + 4 + k, 1.0 / self.n(k));
+                    return;
+                }
+                for (c, fc) in f.into_iter().enumerate() {
+                    self.add(b + 1 + c as u32, fc / s);
+                }
+                for i in 0..tt {
+                    let r = self.pdf(at, i) / s;
+                    self.add(b + 4 + i, r);
+                }
+            }
             _ => self.moments_add(b + 2 + self.set * self.p.moments, k, f, at),
         }
     }
@@ -305,6 +332,10 @@ impl Slot<'_> {
         match self.p.code {
             code::DIRECT => self.moments_failed(b + 1, k),
             code::UNCORRELATED => self.moments_failed(b + 2 + self.set * self.p.moments, k),
+            code::PROGRESSIVE => {
+                self.moments_failed(b + 4 + 3 * self.p.n_tech, k);
+                self.add(b + 4 + k, 1.0 / self.n(k));
+            }
             _ => {}
         }
     }
@@ -313,6 +344,11 @@ impl Slot<'_> {
             self.add(b + self.set, 1.0);
         } else {
             self.add(b, 1.0);
+        }
+        if self.p.code == code::PROGRESSIVE {
+            for i in 0..self.p.n_tech {
+                self.add(b + 4 + i, -1.0);
+            }
         }
     }
     fn add_draw(&mut self, depth: u32, k: u32, f: [f32; 3], at: usize, light: u32) {
@@ -465,23 +501,8 @@ pub struct RecordTerms {
 impl RecordTerms {
     /// Compiles the kernel.
     pub fn new(gpu: &Gpu) -> Result<Self, GpuError> {
-        let d = &gpu.device;
-        let scope = d.push_error_scope(wgpu::ErrorFilter::Validation);
-        let module = d.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("record_terms"),
-            source: wgpu::ShaderSource::Wgsl([crate::FLOAT_WGSL, RECORD_WGSL].join("\n").into()),
-        });
-        let pipeline = d.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some("record_terms"),
-            layout: None,
-            module: &module,
-            entry_point: Some("record_terms"),
-            compilation_options: Default::default(),
-            cache: None,
-        });
-        if let Some(e) = pollster::block_on(scope.pop()) {
-            return Err(GpuError::Run(format!("kernel record_terms: {e}")));
-        }
+        let source = [crate::FLOAT_WGSL, RECORD_WGSL].join("\n");
+        let pipeline = crate::kernel::compute_pipeline(gpu, &source, "record_terms", false)?;
         Ok(Self { pipeline })
     }
 
@@ -562,6 +583,8 @@ pub(crate) struct SumKernels {
     /// The double-float sums, and the f64 ones where the device has `SHADER_F64`.
     df: crate::sums::Accumulate,
     f64: Option<crate::sums::Accumulate>,
+    /// The progressive estimators' pass.
+    progressive: crate::progressive::Kernels,
 }
 
 impl SumKernels {
@@ -588,6 +611,7 @@ fn sum_kernels(gpu: &Gpu) -> Result<std::sync::Arc<SumKernels>, GpuError> {
             true => Some(crate::sums::Accumulate::with_f64(gpu, true)?),
             false => None,
         },
+        progressive: crate::progressive::Kernels::new(gpu, gpu.info().f64)?,
     });
     *cache = Some(k.clone());
     Ok(k)
@@ -621,6 +645,8 @@ pub(crate) struct GpuSums {
     current: usize,
     /// Whether the sums are f64 (else double-float).
     f64: bool,
+    /// The progressive estimators' pass, which replaces the sums kernel for them.
+    progressive: Option<ProgressiveSums>,
     /// Sample indices per wave at most (the sums kernel loops samples × stride times).
     pub max_samples: u32,
 }
@@ -630,14 +656,16 @@ pub(crate) struct GpuSums {
 const LOOP_BUDGET: u64 = 30_000;
 
 impl GpuSums {
-    /// The sums of a render of `pixels` pixels whose record is `linear`, over the wave
-    /// buffers `hits` and `draws` (waves of at most `max_slots` slots), in f64 if `f64`
-    /// and the device has it, else in double-float; or None where they do not fit the
-    /// device's bindings or the loop budget (the CPU then adds the draws).
+    /// The sums of a render of `pixels` pixels whose record is `linear` (its blocks run
+    /// by `kernel`), over the wave buffers `hits` and `draws` (waves of at most
+    /// `max_slots` slots), in f64 if `f64` and the device has it, else in double-float;
+    /// or None where they do not fit the device's bindings or the loop budget (the CPU
+    /// then adds the draws).
     #[allow(clippy::too_many_arguments)]
     pub fn new(
         gpu: &Gpu,
         linear: &LinearRecord,
+        kernel: Option<&mis::Kernel>,
         pixels: u32,
         max_slots: u32,
         (n_draws, per_slot, max_depth): (u32, u32, u32),
@@ -649,7 +677,23 @@ impl GpuSums {
         let stride = u64::from(params.stride);
         let max_binding = gpu.info().max_storage_binding;
         let sums_bytes = u64::from(pixels) * stride * 8;
-        let max_samples = (LOOP_BUDGET / stride)
+        // The progressive pass also applies 3T α words per block and sample.
+        let blocks = Blocks {
+            first: (Record::AOV + linear.record.aov) as u32,
+            count: linear.record.blocks() as u32,
+            words: linear.record.block as u32,
+            t: params.n_tech,
+        };
+        let progressive = match (params.code, kernel) {
+            (code::PROGRESSIVE, Some(k)) => Some(k.clone()),
+            (code::PROGRESSIVE, None) => return Ok(None),
+            _ => None,
+        };
+        let per_sample = match progressive {
+            Some(_) => stride + 3 * u64::from(blocks.count * blocks.t),
+            None => stride,
+        };
+        let max_samples = (LOOP_BUDGET / per_sample)
             .min(max_binding / (u64::from(pixels) * stride * 4))
             .min(u64::from(max_slots / pixels)) as u32;
         if params.loop_bound() >= LOOP_BUDGET || sums_bytes > max_binding || max_samples == 0 {
@@ -692,6 +736,19 @@ impl GpuSums {
         };
 
         let add_groups = [add_group(&sums[0], &sums[1]), add_group(&sums[1], &sums[0])];
+        let progressive = progressive.map(|k| {
+            ProgressiveSums::new(
+                gpu,
+                &kernels.progressive,
+                k,
+                blocks,
+                params.stride,
+                pixels,
+                &terms,
+                &sums[0],
+                f64,
+            )
+        });
         Ok(Some(Self {
             kernels,
             params: RecordParams { pixels, ..params },
@@ -705,6 +762,7 @@ impl GpuSums {
             add_groups,
             current: 0,
             f64,
+            progressive,
             max_samples,
         }))
     }
@@ -742,6 +800,23 @@ impl GpuSums {
         let terms_bytes = u64::from(p.slots) * u64::from(p.stride) * 4;
         enc.clear_buffer(&self.terms, 0, Some(terms_bytes));
         enc.clear_buffer(&self.tally, 0, Some(TALLY_LIST as u64 * 4));
+        if let Some(prog) = self.progressive.as_mut() {
+            // Terms, then the progressive pass over the sums in place.
+            {
+                let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    label: None,
+                    timestamp_writes: timestamps(0),
+                });
+                pass.set_pipeline(&self.kernels.terms.pipeline);
+                pass.set_bind_group(0, &self.terms_group, &[]);
+                let (gx, gy) = crate::workgroups(p.slots);
+                pass.dispatch_workgroups(gx, gy, 1);
+            }
+            prog.encode(gpu, enc, p.pixels, samples, timestamps(1));
+            let tally_bytes = (TALLY_LIST as u64 + u64::from(p.slots)) * 4;
+            enc.copy_buffer_to_buffer(&self.tally, 0, &self.tally_r, 0, tally_bytes);
+            return;
+        }
         let passes = [
             (&self.kernels.terms.pipeline, &self.terms_group, p.slots),
             (
@@ -781,26 +856,28 @@ impl GpuSums {
         })
     }
 
-    /// Adds the sums to `records` (the band's records, `stride` words each).
+    /// After the wave's submission, for the progressive estimators: the solves their
+    /// schedule asks for within the wave, each followed by the rest of the pass
+    /// ([`ProgressiveSums::settle`]). Returns the extra passes run.
+    pub fn settle(&mut self, gpu: &Gpu) -> Result<u32, GpuError> {
+        let (sums, f64) = (&self.sums[self.current], self.f64);
+        match self.progressive.as_mut() {
+            Some(p) => p.settle(gpu, &|words| read_sums(gpu, sums, f64, words)),
+            None => Ok(0),
+        }
+    }
+
+    /// Adds the sums to `records` (the band's records, `stride` words each; for the
+    /// progressive estimators, [`ProgressiveSums::add_to`]).
     pub fn add_to(&self, gpu: &Gpu, records: &mut [f64]) -> Result<(), GpuError> {
-        let bytes = records.len() as u64 * 8;
-        let staging = gpu.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("sums readback"),
-            size: bytes,
-            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        let mut enc = gpu.device.create_command_encoder(&Default::default());
-        enc.copy_buffer_to_buffer(&self.sums[self.current], 0, &staging, 0, bytes);
-        gpu.queue.submit([enc.finish()]);
-        let data = crate::direct::read_back(gpu, &staging, bytes)?;
-        let words: &[u32] = bytemuck::cast_slice(&data);
-        for (r, w) in records.iter_mut().zip(words.chunks_exact(2)) {
-            *r += if self.is_f64() {
-                f64::from_bits(u64::from(w[0]) | u64::from(w[1]) << 32)
-            } else {
-                crate::sums::df_value([f32::from_bits(w[0]), f32::from_bits(w[1])])
-            };
+        let sums = read_sums(gpu, &self.sums[self.current], self.f64, records.len())?;
+        match &self.progressive {
+            Some(p) => p.add_to(sums, records),
+            None => {
+                for (r, v) in records.iter_mut().zip(sums) {
+                    *r += v;
+                }
+            }
         }
         Ok(())
     }
@@ -813,5 +890,35 @@ impl GpuSums {
         }
         gpu.queue.submit([enc.finish()]);
         self.current = 0;
+        if let Some(p) = self.progressive.as_mut() {
+            p.reset(gpu);
+        }
     }
+}
+
+/// The first `words` sums of `buffer` (f64 if `f64`, else double-float pairs) as f64.
+fn read_sums(
+    gpu: &Gpu,
+    buffer: &wgpu::Buffer,
+    f64: bool,
+    words: usize,
+) -> Result<Vec<f64>, GpuError> {
+    let bytes = words as u64 * 8;
+    let staging = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("sums readback"),
+        size: bytes,
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let mut enc = gpu.device.create_command_encoder(&Default::default());
+    enc.copy_buffer_to_buffer(buffer, 0, &staging, 0, bytes);
+    gpu.queue.submit([enc.finish()]);
+    let data = crate::direct::read_back(gpu, &staging, bytes)?;
+    let w: &[u32] = bytemuck::cast_slice(&data);
+    Ok(w.chunks_exact(2)
+        .map(|w| match f64 {
+            true => f64::from_bits(u64::from(w[0]) | u64::from(w[1]) << 32),
+            false => crate::sums::df_value([f32::from_bits(w[0]), f32::from_bits(w[1])]),
+        })
+        .collect())
 }

@@ -13,8 +13,14 @@
 
 use crate::{Gpu, GpuError, Kernel};
 
+/// Double-float addition (`opaque`, `two_sum`, `df_add`), for kernels that bind
+/// `params: array<u32>` with `params[0] == 0`.
+pub const DF_WGSL: &str = include_str!("shaders/df.wgsl");
 /// The double-float kernel (entry `accumulate_df`).
-pub const SUMS_WGSL: &str = include_str!("shaders/sums.wgsl");
+pub const SUMS_WGSL: &str = concat!(
+    include_str!("shaders/df.wgsl"),
+    include_str!("shaders/sums.wgsl")
+);
 /// The f64 kernel (entry `accumulate_f64`; needs `SHADER_F64`).
 pub const SUMS_F64_WGSL: &str = include_str!("shaders/sums_f64.wgsl");
 

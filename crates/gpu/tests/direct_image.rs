@@ -14,7 +14,7 @@ mod common;
 
 use gpu::direct::render_range;
 use gpu::GpuOptions;
-use render::integrator::RenderOptions;
+use render::integrator::{Record, RenderOptions};
 use render::scene::Scene;
 use render::RenderState;
 use scene::{SceneData, SceneFormat};
@@ -613,8 +613,8 @@ fn gpu_render_is_deterministic() {
 /// same render with the sums on the CPU): every record word within 2·10⁻⁶ of its
 /// magnitude (f32 terms, all non-negative, against f64 arithmetic), and the
 /// double-float sums within 10⁻¹² of the f64 ones. Heuristics on `direct` and `path`,
-/// optimal-direct per light with AOVs, optimal-uncorrelated; the progressive estimators
-/// keep their sums on the CPU.
+/// optimal-direct per light with AOVs, optimal-uncorrelated; optimal-progressive as
+/// [`check_progressive`] says.
 #[test]
 fn gpu_sums_equal_the_cpu_sums_of_the_same_draws() {
     use gpu::direct::{render_range_with, SumsOn, WaveOptions};
@@ -672,12 +672,15 @@ fn gpu_sums_equal_the_cpu_sums_of_the_same_draws() {
         let (cpu, on) = render(&s, SumsOn::Cpu);
         assert_eq!(on, SumsOn::Cpu, "{label}");
         let (f64s, on) = render(&s, SumsOn::GpuF64);
-        if method == mis::Method::OptimalProgressive {
-            assert_eq!(on, SumsOn::Cpu, "{label}: α changes at milestones");
-            continue;
-        }
         let (df, on_df) = render(&s, SumsOn::GpuDoubleFloat);
         assert_eq!(on_df, SumsOn::GpuDoubleFloat, "{label}");
+        if method == mis::Method::OptimalProgressive {
+            assert_eq!(on, SumsOn::GpuF64, "{label}");
+            for (gpu, on) in [(&f64s, on), (&df, on_df)] {
+                check_progressive(&format!("{label}, sums {on}"), &s, gpu, &cpu);
+            }
+            continue;
+        }
         let mut worst = [0f64; 2];
         for (k, ((a, b), c)) in f64s
             .data()
@@ -706,22 +709,108 @@ fn gpu_sums_equal_the_cpu_sums_of_the_same_draws() {
     }
 }
 
+/// The progressive estimators' records with α applied on the GPU (`gpu`) against the
+/// CPU's accumulator adding the same draws (`cpu`): N, the outside and AOV sums and the
+/// moments within 2·10⁻⁶ as for the other estimators; Σ F within 3·10⁻⁵ (α is applied
+/// in f32 on the GPU, and solved from moments that differ in the 7th digit); every
+/// block whose N is a solve point holds exactly the α that the `mis` crate solves from
+/// its moments (so α was solved at that N, from the GPU's own sums); and each block's α
+/// within 10⁻⁵ of its largest |α| of the CPU's (measured: 3.8·10⁻⁷; a single word of α
+/// can differ by 6 % of itself where it is near 0).
+fn check_progressive(
+    label: &str,
+    s: &(SceneData, Scene, RenderOptions),
+    gpu: &RenderState,
+    cpu: &RenderState,
+) {
+    let acc = render::integrator::Accumulator::new(&s.1, &s.2).unwrap();
+    let kernel = acc.kernel().unwrap();
+    let schedule = kernel.schedule().unwrap();
+    let r = cpu.record();
+    let (stride, first) = (r.stride(), Record::AOV + r.aov);
+    let t = acc.techniques().len();
+    let alpha = 4..4 + 3 * t;
+    let mut worst = [0f64; 3];
+    let mut solved = 0;
+    for (g, c) in gpu
+        .data()
+        .chunks_exact(stride)
+        .zip(cpu.data().chunks_exact(stride))
+    {
+        let close = |a: f64, b: f64, tol: f64, what: &str| {
+            assert!(
+                (a - b).abs() <= tol * b.abs(),
+                "{label}: {what}: GPU {a} against the CPU's {b}"
+            );
+            (a - b).abs() / b.abs().max(f64::MIN_POSITIVE)
+        };
+        for k in 0..first {
+            worst[0] = worst[0].max(close(g[k], c[k], 2e-6, "outside or AOV sum"));
+        }
+        for b in 0..r.blocks() {
+            let (gb, cb) = (&g[r.block_range(b)], &c[r.block_range(b)]);
+            for k in (0..r.block).filter(|k| !alpha.contains(k)) {
+                let (tol, i) = if (1..4).contains(&k) {
+                    (3e-5, 1)
+                } else {
+                    (2e-6, 0)
+                };
+                worst[i] = worst[i].max(close(gb[k], cb[k], tol, "block word"));
+            }
+            let scale = cb[alpha.clone()].iter().fold(0f64, |m, a| m.max(a.abs()));
+            for (a, b) in gb[alpha.clone()].iter().zip(&cb[alpha.clone()]) {
+                assert!(
+                    (a - b).abs() <= 1e-5 * scale,
+                    "{label}: α {a} against the CPU's {b} (largest |α| {scale})"
+                );
+                worst[2] = worst[2].max((a - b).abs() / scale);
+            }
+            if schedule.solves_at(gb[0] as u64) {
+                let mut again = gb.to_vec();
+                kernel.resolve(&mut again);
+                assert_eq!(
+                    &again[alpha.clone()],
+                    &gb[alpha.clone()],
+                    "{label}: α at N = {}",
+                    gb[0]
+                );
+                solved += 1;
+            }
+        }
+    }
+    assert!(
+        solved * 2 > gpu.data().len() / stride,
+        "{label}: {solved} blocks at a solve point"
+    );
+    eprintln!(
+        "{label}: largest relative difference to the CPU's sums {:.1e}, Σ F {:.1e}, α {:.1e} of the block's largest; {solved} blocks re-solved to the same α",
+        worst[0], worst[1], worst[2]
+    );
+}
+
 /// Bands: the image rendered in bands of 100 pixels (18 bands, the last of 28) gives
 /// the records of the one-band render bit for bit, with the sums on the GPU and on the
-/// CPU, for `direct` and `path`.
+/// CPU, for `direct` and `path`, and for optimal-progressive on `path` (α solved per
+/// band) in double-float.
 #[test]
 fn bands_give_the_same_records() {
     use gpu::direct::{render_range_with, SumsOn, WaveOptions};
     use render::integrator::IntegratorKind;
     let Some(g) = device() else { return };
     let stop = AtomicBool::new(false);
-    for (integrator, sums) in [
-        (IntegratorKind::Direct, SumsOn::GpuF64),
-        (IntegratorKind::Path, SumsOn::GpuF64),
-        (IntegratorKind::Direct, SumsOn::Cpu),
+    for (integrator, sums, method) in [
+        (IntegratorKind::Direct, SumsOn::GpuF64, mis::Method::Balance),
+        (IntegratorKind::Path, SumsOn::GpuF64, mis::Method::Balance),
+        (IntegratorKind::Direct, SumsOn::Cpu, mis::Method::Balance),
+        (
+            IntegratorKind::Path,
+            SumsOn::GpuDoubleFloat,
+            mis::Method::OptimalProgressive,
+        ),
     ] {
         let mut s = load(SCENE);
         s.2.integrator = integrator;
+        s.2.method = method;
         s.2.max_depth = 3;
         let render = |band_pixels| {
             let how = WaveOptions { sums, band_pixels };

@@ -12,7 +12,7 @@ use common::Rng;
 use gpu::direct::{add_slot, DRAW_WORDS, HIT_WORDS};
 use gpu::record::{slot_terms, RecordParams, RecordTerms, TALLY_LIST};
 use gpu::GpuOptions;
-use render::integrator::{Accumulator, IntegratorKind, RayCounts, RenderOptions};
+use render::integrator::{Accumulator, IntegratorKind, RayCounts, Record, RenderOptions};
 use render::scene::Scene;
 use render::Technique;
 use std::path::Path;
@@ -71,11 +71,20 @@ fn cases() -> Vec<(String, RenderOptions)> {
         mis::Method::Cutoff,
         mis::Method::OptimalDirect,
         mis::Method::OptimalUncorrelated,
+        mis::Method::OptimalProgressive,
+        mis::Method::OptimalFull,
     ] {
         for integrator in [IntegratorKind::Direct, IntegratorKind::Path] {
             let mut o = RenderOptions {
                 method,
                 integrator,
+                // No solve within the test's samples: α stays 0, so that the CPU's Σ F
+                // is the terms' Σ G (the progressive estimators).
+                params: mis::Params {
+                    warmup: 1000,
+                    train: 1000,
+                    ..mis::Params::default()
+                },
                 max_depth: if integrator == IntegratorKind::Path {
                     3
                 } else {
@@ -90,13 +99,21 @@ fn cases() -> Vec<(String, RenderOptions)> {
             }
         }
     }
-    for method in [mis::Method::OptimalDirect, mis::Method::Balance] {
+    for method in [
+        mis::Method::OptimalDirect,
+        mis::Method::Balance,
+        mis::Method::OptimalProgressive,
+    ] {
         out.push((
             format!("{} per light, AOVs", method.name()),
             RenderOptions {
                 method,
                 per_light: 3,
                 aovs: render::integrator::Aov::ALL.to_vec(),
+                params: mis::Params {
+                    warmup: 1000,
+                    ..mis::Params::default()
+                },
                 ..base.clone()
             },
         ));
@@ -316,8 +333,22 @@ fn twin_adds_what_the_cpu_accumulator_adds() {
             "{}: ray counts",
             c.label
         );
+        // The progressive records' α words hold the terms' Q (checked against the CPU's
+        // α in tests/direct_image.rs, where α is applied); the CPU's α is 0 here.
+        let r = c.acc.record();
+        let alpha_word = |k: usize| {
+            let w = k % stride;
+            p.code == 5
+                && w >= Record::AOV + r.aov
+                && (w - Record::AOV - r.aov) % r.block >= 4
+                && (w - Record::AOV - r.aov) % r.block < 4 + 3 * t
+        };
         let mut nonzero = 0;
         for (k, (a, b)) in ours.iter().zip(&cpu).enumerate() {
+            if alpha_word(k) {
+                assert_eq!(*b, 0.0, "{}: α before any solve", c.label);
+                continue;
+            }
             nonzero += usize::from(*b != 0.0);
             assert!(
                 (a - b).abs() <= 2e-6 * b.abs(),

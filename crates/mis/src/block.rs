@@ -185,6 +185,25 @@ impl Kernel {
         }
     }
 
+    /// The re-solve schedule of the progressive estimators (None for the others).
+    pub fn schedule(&self) -> Option<Schedule> {
+        match self.code {
+            Code::Progressive(s) => Some(s),
+            _ => None,
+        }
+    }
+
+    /// Re-solves a progressive block's α from its moments and N, as
+    /// [`Kernel::end_iteration`] does where the schedule says: for a back end that closes
+    /// the iterations itself (adds Σα and counts N, GPU.md §8) and leaves the solves to
+    /// this crate. The solve depends on the moments and N alone, so solving twice at the
+    /// same N gives the same α. Does nothing for the other methods.
+    pub fn resolve(&self, block: &mut [f64]) {
+        if let Code::Progressive(_) = self.code {
+            progressive::resolve_block(&self.layout, self.ridge(), block);
+        }
+    }
+
     /// Completed iterations N of a block.
     pub fn iterations(&self, block: &[f64]) -> u64 {
         match self.code {
@@ -256,5 +275,39 @@ mod tests {
             assert_eq!(e.to_vec(), obj.estimate_vec(), "{m}");
             assert_eq!(k.iterations(&block), 20);
         }
+    }
+
+    /// `resolve` at a milestone gives the α that `end_iteration` solved there, bit for
+    /// bit, and solving again changes nothing.
+    #[test]
+    fn resolve_repeats_the_milestone_solve() {
+        let layout = Layout::new(&[1, 2], 1);
+        let k = Kernel::new(Method::OptimalProgressive, &layout, &Params::default()).unwrap();
+        assert!(k.schedule().unwrap().solves_at(4));
+        let mut block = vec![0.0; k.block_len()];
+        for i in 0..4u64 {
+            let x = (i as f64 + 0.5) / 4.0;
+            k.add_sample(&mut block, i, 0, &[1.0 + x], &[1.0, 2.0 * x]);
+            for j in 0..2 {
+                let y = (x + 0.3 * j as f64) % 1.0;
+                k.add_sample(&mut block, i, 1, &[1.0 + y], &[1.0, 2.0 * y]);
+            }
+            k.end_iteration(&mut block, i);
+        }
+        let solved = block.clone();
+        // α as it was, then re-solved.
+        let t = &mut block[2..4];
+        t.fill(0.0);
+        k.resolve(&mut block);
+        assert_eq!(block, solved);
+        assert_ne!(&solved[2..4], &[0.0, 0.0]);
+        k.resolve(&mut block);
+        assert_eq!(block, solved);
+        assert_eq!(
+            Kernel::new(Method::OptimalDirect, &layout, &Params::default())
+                .unwrap()
+                .schedule(),
+            None
+        );
     }
 }

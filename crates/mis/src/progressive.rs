@@ -151,6 +151,11 @@ fn resolve(layout: &Layout, ridge: f64, p: &mut Parts) {
     );
 }
 
+/// Re-solves a block's α from its moments and N ([`crate::Kernel::resolve`]).
+pub(crate) fn resolve_block(layout: &Layout, ridge: f64, block: &mut [f64]) {
+    resolve(layout, ridge, &mut parts(layout, block));
+}
+
 /// Closes an iteration: adds Σα, counts it, re-solves where the schedule says.
 pub(crate) fn end_iteration(layout: &Layout, ridge: f64, schedule: Schedule, block: &mut [f64]) {
     let t = layout.techniques();

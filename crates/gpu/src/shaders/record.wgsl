@@ -12,7 +12,8 @@
 // Record words (render::integrator::Record): [N | outside rgb | 7 AOVs, if kept | blocks],
 // block (d, l) of depth d and light l at 4 + aov + (d · lights + l) · block; the blocks
 // are mis::block's: heuristic [N | Σ rgb], optimal-direct [N | Â packed, b̂], uncorrelated
-// [N_A, N_B | Â, b̂ of A | of B].
+// [N_A, N_B | Â, b̂ of A | of B], progressive [N | Σ F (3) | α (3T) | Â, b̂], whose terms are
+// α-free: G in the Σ F words and Q in the first T α words (progressive.wgsl applies α).
 //
 // Needs FLOAT_WGSL before it.
 
@@ -42,6 +43,7 @@ const C_OUTSIDE: u32 = 1u;
 const C_WEIGHTED: u32 = 2u;
 const C_DIRECT: u32 = 3u;
 const C_UNCORRELATED: u32 = 4u;
+const C_PROGRESSIVE: u32 = 5u;
 // Heuristics (mis::Heuristic).
 const H_BALANCE: u32 = 0u;
 const H_POWER: u32 = 1u;
@@ -149,6 +151,17 @@ fn block_sample(b: u32, k: u32, f: vec3<f32>, at: u32) {
         if (w != 0.0) { add3(b + 1u, f * w); }
     } else if (rp.code == C_DIRECT) {
         moments_add(b + 1u, k, f, at);
+    } else if (rp.code == C_PROGRESSIVE) {
+        // The α-free terms (render::integrator::LinearMis::Progressive): G_c = f_c / s in
+        // the Σ F words, Q_i = p_i / s in the first T α words; a failed draw 1/n_k in Q_k.
+        moments_add(b + 4u + 3u * rp.n_tech, k, f, at);
+        let s = mixture(at, k);
+        if (s < 0.0) {
+            add(b + 4u + k, 1.0 / n(k));
+            return;
+        }
+        for (var c = 0u; c < 3u; c++) { add(b + 1u + c, f[c] / s); }
+        for (var i = 0u; i < rp.n_tech; i++) { add(b + 4u + i, pdf(at, i) / s); }
     } else {
         moments_add(b + 2u + half * rp.moments, k, f, at);
     }
@@ -158,10 +171,17 @@ fn block_failed(b: u32, k: u32) {
         moments_failed(b + 1u, k);
     } else if (rp.code == C_UNCORRELATED) {
         moments_failed(b + 2u + half * rp.moments, k);
+    } else if (rp.code == C_PROGRESSIVE) {
+        moments_failed(b + 4u + 3u * rp.n_tech, k);
+        add(b + 4u + k, 1.0 / n(k));
     }
 }
 fn block_end(b: u32) {
     if (rp.code == C_UNCORRELATED) { add(b + half, 1.0); } else { add(b, 1.0); }
+    if (rp.code == C_PROGRESSIVE) {
+        // Q_i − 1: the iteration's Σ_i α_ci.
+        for (var i = 0u; i < rp.n_tech; i++) { add(b + 4u + i, -1.0); }
+    }
 }
 
 // render::integrator::Pixel::add_draw: `light` is the per-light block the draw feeds

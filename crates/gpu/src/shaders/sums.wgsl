@@ -2,7 +2,7 @@
 // (hi, lo) of f32 with hi = fl(hi + lo), grown by TwoSum (Knuth, TAOCP vol. 2 §4.2.2;
 // Møller 1965) and renormalised by a second TwoSum. WGSL lets the compiler reassociate,
 // which erases the compensation on lavapipe, so each intermediate is laundered through
-// an XOR with a zero read at run time (`params[0]`). The twin is gpu::sums::df_add.
+// an XOR with a zero read at run time (`params[0]`, df.wgsl). The twin is gpu::sums::df_add.
 //
 // Bindings: params = [zero, pixels, samples, sums per pixel S]; terms[(pixel · samples
 // + sample) · S + k]; prev and state: S pairs per pixel. state = prev + Σ_samples terms,
@@ -12,22 +12,6 @@
 @group(0) @binding(1) var<storage, read> terms: array<f32>;
 @group(0) @binding(2) var<storage, read> prev: array<vec2<f32>>;
 @group(0) @binding(3) var<storage, read_write> state: array<vec2<f32>>;
-
-// x, through a bit pattern the compiler cannot see (params[0] == 0).
-fn opaque(x: f32) -> f32 { return bitcast<f32>(bitcast<u32>(x) ^ params[0]); }
-
-// s + e = a + b exactly, s = fl(a + b) (TwoSum, 6 flops, no branch).
-fn two_sum(a: f32, b: f32) -> vec2<f32> {
-    let s = opaque(a + b);
-    let bb = opaque(s - a);
-    return vec2<f32>(s, (a - opaque(s - bb)) + (b - bb));
-}
-
-// (hi, lo) + v, renormalised.
-fn df_add(acc: vec2<f32>, v: f32) -> vec2<f32> {
-    let p = two_sum(acc.x, v);
-    return two_sum(p.x, opaque(p.y + acc.y));
-}
 
 @compute @workgroup_size(64)
 fn accumulate_df(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {

@@ -66,10 +66,19 @@ pub enum LinearMis {
     /// An optimal-uncorrelated block per depth: `[N_A, N_B | Â, b̂ of set A | of set B]`,
     /// a sample with global index i going to set `i mod 2`.
     Uncorrelated,
+    /// An optimal-progressive (or -full) block per depth, `[N | Σ F (3) | α (3T) | Â, b̂]`,
+    /// whose Σ F needs the α of earlier samples, so that it is not a plain sum: a
+    /// sample adds its terms to N and the moments as optimal-direct does, and to Σ F_c
+    /// `G_c − Σ_i α_ci Q_i` with the α-free `G_c = Σ f_c/s` over its valid draws and
+    /// `Q_i = Σ p_i/s` over them `+ Σ 1/n_t` over the failed draws of technique `t = i`
+    /// `− 1` per closed iteration (`mis::progressive`'s `F_k` regrouped). A back end
+    /// keeps `G` in the Σ F words and `Q` in the first T α words of its terms, applies
+    /// α itself, and has α re-solved ([`mis::Kernel::resolve`]) where the schedule says.
+    Progressive(mis::Schedule),
 }
 
 /// What one sample adds to a pixel's record when every word is a sum of per-sample
-/// terms (all estimators but the progressive ones, whose α changes at milestones):
+/// terms (the progressive estimators' Σ F with α applied, [`LinearMis::Progressive`]):
 /// enough for another back end to keep the per-pixel sums itself (GPU.md §8) and hand
 /// over only the finished record.
 #[derive(Clone, Debug, PartialEq)]
@@ -132,15 +141,15 @@ impl Accumulator {
         self.it.record
     }
 
-    /// The record as sums of per-sample terms ([`LinearRecord`]), or None where it is
-    /// not (the progressive optimal estimators).
+    /// The record as sums of per-sample terms ([`LinearRecord`]).
     pub fn linear(&self) -> Option<LinearRecord> {
         let mis = match &self.it.combine {
             Combine::Heuristic(h) => LinearMis::Outside(*h),
-            Combine::Estimator(k) => match k.method() {
-                mis::Method::OptimalDirect => LinearMis::Direct,
-                mis::Method::OptimalUncorrelated => LinearMis::Uncorrelated,
-                m => LinearMis::Weighted(m.heuristic(k.params())?),
+            Combine::Estimator(k) => match (k.method(), k.schedule()) {
+                (_, Some(s)) => LinearMis::Progressive(s),
+                (mis::Method::OptimalDirect, _) => LinearMis::Direct,
+                (mis::Method::OptimalUncorrelated, _) => LinearMis::Uncorrelated,
+                (m, _) => LinearMis::Weighted(m.heuristic(k.params())?),
             },
         };
         Some(LinearRecord {
@@ -155,6 +164,11 @@ impl Accumulator {
                 IntegratorKind::Albedo => Some(2),
             },
         })
+    }
+
+    /// The estimator kernel of the per-depth blocks, if the record has blocks.
+    pub fn kernel(&self) -> Option<&mis::Kernel> {
+        self.it.kernel()
     }
 
     /// Whether the render keeps AOVs beside its image ([`RenderOptions::aovs`]).
