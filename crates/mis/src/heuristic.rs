@@ -52,10 +52,11 @@ impl Heuristic {
             return 0.0;
         }
         match *self {
-            Heuristic::Balance => qt / (0..pdfs.len()).map(q).sum::<f64>(),
+            Heuristic::Balance => qt / counts.iter().zip(pdfs).map(|(n, p)| n * p).sum::<f64>(),
             Heuristic::Power { beta } => {
                 // Normalise by the largest q so that q^β neither overflows nor underflows.
-                let max = (0..pdfs.len()).map(q).fold(0.0, f64::max);
+                let qs = counts.iter().zip(pdfs).map(|(n, p)| n * p);
+                let max = qs.clone().fold(0.0, f64::max);
                 let pow = |x: f64| {
                     if beta == 2.0 {
                         x * x
@@ -63,7 +64,7 @@ impl Heuristic {
                         x.powf(beta)
                     }
                 };
-                pow(qt / max) / (0..pdfs.len()).map(|k| pow(q(k) / max)).sum::<f64>()
+                pow(qt / max) / qs.map(|q| pow(q / max)).sum::<f64>()
             }
             Heuristic::Maximum => {
                 let first_max = (0..pdfs.len()).all(|k| if k < t { q(k) < qt } else { q(k) <= qt });
