@@ -277,35 +277,13 @@ impl ProgressiveSums {
     /// their α, added to `records` (which hold the CPU's samples, if any, of the same
     /// pixels): copied where a record is empty, else merged as two states merge
     /// ([`mis::Kernel::merge`]).
-    pub fn add_to(&self, mut sums: Vec<f64>, records: &mut [f64]) {
-        let (s, b) = (self.stride as usize, self.blocks);
-        for (p, (g, rec)) in sums
-            .chunks_exact_mut(s)
-            .zip(records.chunks_exact_mut(s))
-            .enumerate()
-        {
-            for k in 0..b.count as usize {
-                let w = (b.first + k as u32 * b.words) as usize;
-                let alpha = (p * b.count as usize + k) * b.alpha();
-                g[w + 4..w + 4 + b.alpha()]
-                    .copy_from_slice(&self.alpha64[alpha..alpha + b.alpha()]);
-            }
-            if rec.iter().all(|&x| x == 0.0) {
-                rec.copy_from_slice(g);
-                continue;
-            }
-            for (x, y) in rec[..b.first as usize]
-                .iter_mut()
-                .zip(&g[..b.first as usize])
-            {
-                *x += y;
-            }
-            for k in 0..b.count as usize {
-                let w = (b.first + k as u32 * b.words) as usize;
-                let r = w..w + b.words as usize;
-                self.kernel.merge(&mut rec[r.clone()], &g[r]);
-            }
-        }
+    pub fn add_to(&self, sums: Vec<f64>, records: &mut [f64]) {
+        let band = Band {
+            kernel: &self.kernel,
+            blocks: self.blocks,
+            stride: self.stride as usize,
+        };
+        band.add_to(sums, &self.alpha64, records);
     }
 
     /// α back to zero, for the next band.
@@ -314,5 +292,114 @@ impl ProgressiveSums {
         let mut enc = gpu.device.create_command_encoder(&Default::default());
         enc.clear_buffer(&self.alpha, 0, None);
         gpu.queue.submit([enc.finish()]);
+    }
+}
+
+/// A band's records as [`ProgressiveSums::add_to`] builds them from its sums.
+struct Band<'a> {
+    kernel: &'a mis::Kernel,
+    blocks: Blocks,
+    stride: usize,
+}
+
+impl Band<'_> {
+    /// `sums` (`stride` words per pixel, α words unset) with α from `alpha` (3T words
+    /// per block, pixel by pixel), added to `records`: copied where a record is empty,
+    /// else merged as two states merge.
+    fn add_to(&self, mut sums: Vec<f64>, alpha: &[f64], records: &mut [f64]) {
+        let (s, b) = (self.stride, self.blocks);
+        let block = |k: usize| {
+            let w = (b.first + k as u32 * b.words) as usize;
+            w..w + b.words as usize
+        };
+        for (p, (g, rec)) in sums
+            .chunks_exact_mut(s)
+            .zip(records.chunks_exact_mut(s))
+            .enumerate()
+        {
+            for k in 0..b.count as usize {
+                let a = (p * b.count as usize + k) * b.alpha();
+                let w = block(k).start + 4;
+                g[w..w + b.alpha()].copy_from_slice(&alpha[a..a + b.alpha()]);
+            }
+            if rec.iter().all(|&x| x == 0.0) {
+                rec.copy_from_slice(g);
+                continue;
+            }
+            let first = b.first as usize;
+            for (x, y) in rec[..first].iter_mut().zip(&g[..first]) {
+                *x += y;
+            }
+            for k in 0..b.count as usize {
+                self.kernel.merge(&mut rec[block(k)], &g[block(k)]);
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::sync::Arc;
+
+    /// A band's record is the GPU's sums with their α where the CPU rendered nothing of
+    /// the pixel, and the merge of the two states where it rendered samples after an
+    /// overflow: every sum added, α re-solved from the merged moments.
+    #[test]
+    fn band_records_take_alpha_and_merge_the_cpu_samples() {
+        let layout = Arc::new(mis::Layout::new(&[1, 1], 3));
+        let kernel = mis::Kernel::new(
+            mis::Method::OptimalProgressive,
+            &layout,
+            &mis::Params::default(),
+        )
+        .unwrap();
+        let words = kernel.block_len();
+        let blocks = Blocks {
+            first: 4,
+            count: 1,
+            words: words as u32,
+            t: 2,
+        };
+        let stride = 4 + words;
+        // A record of samples `from..to`: the outside sums, then the block.
+        let record = |from: u64, to: u64| {
+            let mut r = vec![0.0; stride];
+            for i in from..to {
+                let x = (i as f64 + 0.5) / 8.0;
+                r[0] += 1.0;
+                r[1] += x;
+                let b = &mut r[4..];
+                kernel.add_sample(b, i, 0, &[1.0 + x, x, 2.0], &[1.0, 2.0 * x]);
+                kernel.add_sample(b, i, 1, &[1.0 + x * x, x, 1.0], &[1.0, 2.0 * x]);
+                kernel.end_iteration(b, i);
+            }
+            r
+        };
+        let band = Band {
+            kernel: &kernel,
+            blocks,
+            stride,
+        };
+        let gpu = record(0, 6);
+        let alpha = gpu[8..8 + 6].to_vec();
+        assert!(alpha.iter().any(|&a| a != 0.0), "α solved by N = 4");
+        let mut sums = gpu.clone();
+        sums[8..8 + 6].fill(0.0);
+        // No CPU sample: the GPU's record, α included.
+        let mut out = vec![0.0; stride];
+        band.add_to(sums.clone(), &alpha, &mut out);
+        assert_eq!(out, gpu);
+        // Two CPU samples: the two states merged.
+        let cpu = record(6, 8);
+        let mut out = cpu.clone();
+        band.add_to(sums, &alpha, &mut out);
+        let mut want = cpu.clone();
+        for k in 0..4 {
+            want[k] += gpu[k];
+        }
+        kernel.merge(&mut want[4..], &gpu[4..]);
+        assert_eq!(out, want);
+        assert_eq!(kernel.iterations(&out[4..]), 8);
     }
 }
