@@ -95,6 +95,25 @@ pub(crate) fn workgroups(n: u32) -> (u32, u32) {
     }
 }
 
+/// One compute pass of `pipeline` over `n` invocations (bind group 0: `group`), with
+/// the pass's timestamp writes if any.
+pub(crate) fn dispatch(
+    enc: &mut wgpu::CommandEncoder,
+    timestamps: Option<wgpu::ComputePassTimestampWrites>,
+    pipeline: &wgpu::ComputePipeline,
+    group: &wgpu::BindGroup,
+    n: u32,
+) {
+    let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+        label: None,
+        timestamp_writes: timestamps,
+    });
+    pass.set_pipeline(pipeline);
+    pass.set_bind_group(0, group, &[]);
+    let (gx, gy) = workgroups(n);
+    pass.dispatch_workgroups(gx, gy, 1);
+}
+
 /// A bind group of whole buffers at bindings 0, 1, … in order.
 pub(crate) fn bind_buffers<'a>(
     gpu: &Gpu,

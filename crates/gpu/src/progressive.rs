@@ -57,6 +57,9 @@ impl Kernels {
     }
 }
 
+/// Where α starts in a progressive block: after N and Σ F (3 channels).
+const ALPHA_AT: usize = 4;
+
 /// `schedule` as the pass's (kind, W).
 fn schedule_words(schedule: mis::Schedule) -> [u32; 2] {
     let w = |n: u64| n.min(u64::from(u32::MAX)) as u32;
@@ -202,14 +205,7 @@ impl ProgressiveSums {
         enc: &mut wgpu::CommandEncoder,
         timestamps: Option<wgpu::ComputePassTimestampWrites>,
     ) {
-        let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some("progressive"),
-            timestamp_writes: timestamps,
-        });
-        pass.set_pipeline(&self.pipeline);
-        pass.set_bind_group(0, &self.group, &[]);
-        let (gx, gy) = crate::workgroups(self.wave.0);
-        pass.dispatch_workgroups(gx, gy, 1);
+        crate::dispatch(enc, timestamps, &self.pipeline, &self.group, self.wave.0);
     }
 
     /// After the wave's submission: while pixels stopped at a solve, reads back their
@@ -240,7 +236,6 @@ impl ProgressiveSums {
             let pending = cursor[..np].iter().any(|&j| j < samples);
             let sums = read_sums(np * self.stride as usize)?;
             let mut block = vec![0.0; b.words as usize];
-            let a_at = 4; // α after N and Σ F (3 channels)
             for p in stopped {
                 for k in 0..b.count as usize {
                     let w = p * self.stride as usize + (b.first + k as u32 * b.words) as usize;
@@ -251,9 +246,9 @@ impl ProgressiveSums {
                     let alpha = (p * b.count as usize + k) * b.alpha();
                     let alpha = &mut self.alpha64[alpha..alpha + b.alpha()];
                     block.copy_from_slice(&sums[w..w + b.words as usize]);
-                    block[a_at..a_at + b.alpha()].copy_from_slice(alpha);
+                    block[ALPHA_AT..ALPHA_AT + b.alpha()].copy_from_slice(alpha);
                     self.kernel.resolve(&mut block);
-                    alpha.copy_from_slice(&block[a_at..a_at + b.alpha()]);
+                    alpha.copy_from_slice(&block[ALPHA_AT..ALPHA_AT + b.alpha()]);
                 }
             }
             let a32: Vec<f32> = self.alpha64.iter().map(|&a| a as f32).collect();
@@ -319,7 +314,7 @@ impl Band<'_> {
         {
             for k in 0..b.count as usize {
                 let a = (p * b.count as usize + k) * b.alpha();
-                let w = block(k).start + 4;
+                let w = block(k).start + ALPHA_AT;
                 g[w..w + b.alpha()].copy_from_slice(&alpha[a..a + b.alpha()]);
             }
             if rec.iter().all(|&x| x == 0.0) {

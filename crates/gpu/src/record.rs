@@ -794,48 +794,24 @@ impl GpuSums {
         };
         gpu.queue
             .write_buffer(&self.params_buf, 0, bytemuck::bytes_of(&p));
-        let add = [0u32, p.pixels, samples, p.stride];
-        gpu.queue
-            .write_buffer(&self.add_params, 0, bytemuck::cast_slice(&add));
         let terms_bytes = u64::from(p.slots) * u64::from(p.stride) * 4;
         enc.clear_buffer(&self.terms, 0, Some(terms_bytes));
         enc.clear_buffer(&self.tally, 0, Some(TALLY_LIST as u64 * 4));
-        if let Some(prog) = self.progressive.as_mut() {
-            // Terms, then the progressive pass over the sums in place.
-            {
-                let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                    label: None,
-                    timestamp_writes: timestamps(0),
-                });
-                pass.set_pipeline(&self.kernels.terms.pipeline);
-                pass.set_bind_group(0, &self.terms_group, &[]);
-                let (gx, gy) = crate::workgroups(p.slots);
-                pass.dispatch_workgroups(gx, gy, 1);
+        let terms = &self.kernels.terms.pipeline;
+        crate::dispatch(enc, timestamps(0), terms, &self.terms_group, p.slots);
+        match self.progressive.as_mut() {
+            // The progressive pass over the sums in place.
+            Some(prog) => prog.encode(gpu, enc, p.pixels, samples, timestamps(1)),
+            None => {
+                let add = [0u32, p.pixels, samples, p.stride];
+                gpu.queue
+                    .write_buffer(&self.add_params, 0, bytemuck::cast_slice(&add));
+                let pipeline = self.kernels.add(self.f64).pipeline();
+                let group = &self.add_groups[self.current];
+                crate::dispatch(enc, timestamps(1), pipeline, group, p.pixels);
+                self.current = 1 - self.current;
             }
-            prog.encode(gpu, enc, p.pixels, samples, timestamps(1));
-            let tally_bytes = (TALLY_LIST as u64 + u64::from(p.slots)) * 4;
-            enc.copy_buffer_to_buffer(&self.tally, 0, &self.tally_r, 0, tally_bytes);
-            return;
         }
-        let passes = [
-            (&self.kernels.terms.pipeline, &self.terms_group, p.slots),
-            (
-                self.kernels.add(self.f64).pipeline(),
-                &self.add_groups[self.current],
-                p.pixels,
-            ),
-        ];
-        for (k, (pipeline, group, n)) in passes.into_iter().enumerate() {
-            let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: None,
-                timestamp_writes: timestamps(k as u32),
-            });
-            pass.set_pipeline(pipeline);
-            pass.set_bind_group(0, group, &[]);
-            let (gx, gy) = crate::workgroups(n);
-            pass.dispatch_workgroups(gx, gy, 1);
-        }
-        self.current = 1 - self.current;
         let tally_bytes = (TALLY_LIST as u64 + u64::from(p.slots)) * 4;
         enc.copy_buffer_to_buffer(&self.tally, 0, &self.tally_r, 0, tally_bytes);
     }
