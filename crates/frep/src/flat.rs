@@ -118,6 +118,8 @@ pub enum Leaf {
         cell_tapes: Span,
         /// Its grid's cells per axis (0: no grid).
         grid_n: u32,
+        /// Its degree as a polynomial of low degree ([`crate::poly_trace::degree`]).
+        degree: Option<u8>,
     },
 }
 
@@ -215,6 +217,7 @@ impl Flat {
             grid_cells: Span::since(gc0, self.grid_cells.len()),
             cell_tapes: Span::since(ct0, self.cell_tapes.len()),
             grid_n: v.grid.n as u32,
+            degree: v.degree,
         });
         Ok(self.leaves.len() as u32 - 1)
     }
@@ -249,6 +252,7 @@ impl Flat {
                 grid_cells,
                 cell_tapes,
                 grid_n,
+                degree,
                 ..
             } => LeafView::Expr(ExprView {
                 tape: &self.tapes[tape.range()],
@@ -260,6 +264,7 @@ impl Flat {
                     nodes: &self.cell_tapes[cell_tapes.range()],
                     n: grid_n as usize,
                 },
+                degree,
             }),
         }
     }

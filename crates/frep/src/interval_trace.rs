@@ -25,6 +25,7 @@ use crate::dual::Dual;
 use crate::expr::{eval_choices_nodes, eval_nodes, simplify_into, Choice, Expr, Node};
 use crate::interval::Interval;
 use crate::occupancy::{self, GridView};
+use crate::poly_trace;
 use crate::ray::{Aabb, Ray};
 use crate::surface::{outward, Surface};
 use glam::DVec3;
@@ -50,6 +51,7 @@ pub struct ExprSurface {
     bounds: Aabb,
     eps: f64,
     grid: Arc<occupancy::Grid>,
+    degree: Option<u8>,
 }
 
 /// An expression solid over a borrowed tape (root last): what [`ExprSurface`] and the
@@ -66,6 +68,10 @@ pub struct ExprView<'a> {
     /// cell ([`crate::occupancy`]; [`GridView::NONE`]: none, every ray searches its
     /// whole segment with the whole tape).
     pub grid: GridView<'a>,
+    /// The tape's degree when it is a polynomial of low degree
+    /// ([`crate::poly_trace::degree`]): rays then search it in Bernstein form, not by
+    /// intervals, and the grid is not used. None: by intervals.
+    pub degree: Option<u8>,
 }
 
 thread_local! {
@@ -104,12 +110,20 @@ impl ExprSurface {
     /// A solid whose every point with F ≥ 0 lies in `bounds` (see [`crate::bounds`]).
     pub fn new(expr: Expr, bounds: Aabb) -> Self {
         let eps = resolution(&bounds);
-        let grid = Arc::new(occupancy::build(expr.nodes(), &grown(&bounds, eps)));
+        // A polynomial tape has no min/max for a cell to drop, and its rays do not search
+        // by cells: it gets no grid.
+        let degree = poly_trace::degree(expr.nodes()).map(|d| d as u8);
+        let grid = match degree {
+            Some(_) => occupancy::Grid::default(),
+            None => occupancy::build(expr.nodes(), &grown(&bounds, eps)),
+        };
+        let grid = Arc::new(grid);
         Self {
             expr: Arc::new(expr),
             bounds,
             eps,
             grid,
+            degree,
         }
     }
 
@@ -125,6 +139,7 @@ impl ExprSurface {
             bounds: self.bounds,
             eps: self.eps,
             grid: self.grid.view(),
+            degree: self.degree,
         }
     }
 }
@@ -185,7 +200,14 @@ fn gradient_by(tape: &[Node], p: DVec3) -> DVec3 {
 /// Finds the crossing in [a, b], where the inside predicate differs at the ends:
 /// safeguarded Newton on F(t) (a Newton step that leaves the bracket becomes a
 /// bisection), stopping when the bracket or the step is below `tol`.
-fn refine(tape: &[Node], ray: &Ray, mut a: f64, mut b: f64, inside_a: bool, tol: f64) -> f64 {
+pub(crate) fn refine(
+    tape: &[Node],
+    ray: &Ray,
+    mut a: f64,
+    mut b: f64,
+    inside_a: bool,
+    tol: f64,
+) -> f64 {
     let mut x = 0.5 * (a + b);
     for _ in 0..100 {
         let p = ray.at(x);
@@ -228,6 +250,7 @@ fn reserve(n: usize) {
     SCRATCH_D.with_borrow_mut(|s| at_least(s, n));
     SCRATCH_G.with_borrow_mut(|s| at_least(s, n));
     SCRATCH_T.with_borrow_mut(|s| at_least(s, n));
+    crate::poly_trace::reserve(n);
     TRACE.with_borrow_mut(|tr| {
         at_least(&mut tr.choices, n);
         at_least(&mut tr.arena, 2 * n);
@@ -295,6 +318,21 @@ impl ExprView<'_> {
             normal,
         };
         reserve(root.len());
+        if let Some(deg) = self.degree {
+            let found =
+                poly_trace::first_crossing(root, deg as usize, ray, (t0, t1), (ia, ib), eps_t, tol);
+            return match found {
+                None if t1 < t_max && ib => cap(t1),
+                None => None,
+                Some(t) => Some((
+                    t,
+                    match normal {
+                        true => outward(gradient_by(root, ray.at(t))),
+                        false => DVec3::Z,
+                    },
+                )),
+            };
+        }
         let inner = TRACE.with_borrow_mut(|tr| {
             let mut visits = 0u32;
             if !self.grid.is_some() {

@@ -32,6 +32,7 @@ pub mod interval_trace;
 pub mod occupancy;
 pub mod perturbed;
 pub mod poly;
+pub mod poly_trace;
 pub mod quadric;
 pub mod ray;
 pub mod read;

@@ -58,7 +58,6 @@ fn the_grid_changes_no_hit() {
         "models/canonical/s5_twist.hf",
         "models/examples/smooth_blob.frep",
         "models/examples/machined_part.frep",
-        "../shared/models/fidget/tanglecube.vm",
         "../shared/models/fidget/quarter.vm",
     ];
     let mut total = (0, 0, 0);

@@ -1,0 +1,133 @@
+//! Polynomial tapes searched in Bernstein form ([`frep::poly_trace`]) find what the
+//! interval search finds: on Fidget's tanglecube.vm and on hand-written quartics and
+//! sextics (a torus, a heart, nested spheres whose rays cross four times), every
+//! crossing along rays from several eyes, grazing rays and rays from inside is the same
+//! with the polynomial search as with the interval search.
+
+use frep::interval_trace::{ExprSurface, ExprView};
+use frep::read::read_file;
+use frep::solid::Solid;
+use frep::tree::Tree;
+use frep::{Aabb, Expr, LeafView, Ray};
+use glam::DVec3;
+use rand::{Rng, SeedableRng};
+use std::path::PathBuf;
+
+/// Walks every crossing along `rays` with both searches; returns how many it compared.
+fn compare(name: &str, v: ExprView<'_>, rays: &[Ray]) -> usize {
+    assert!(v.degree.is_some(), "{name}: not taken as a polynomial");
+    let interval = ExprView { degree: None, ..v };
+    let r = 0.5 * v.bounds.extent().length();
+    let mut hits = 0;
+    for ray in rays {
+        let mut t = 0.0;
+        for _ in 0..16 {
+            let (p, i) = (
+                v.trace(ray, t, 1e3, true),
+                interval.trace(ray, t, 1e3, true),
+            );
+            match (p, i) {
+                (Some(p), Some(i)) => {
+                    assert!(
+                        (p.0 - i.0).abs() <= 1e-9 * r,
+                        "{name} {ray:?} from {t}: {p:?} vs {i:?}"
+                    );
+                    assert!(p.1.dot(i.1) > 1.0 - 1e-9, "{name}: normals {p:?} {i:?}");
+                    hits += 1;
+                    t = p.0 + v.eps;
+                }
+                (None, None) => break,
+                _ => panic!("{name} {ray:?} from {t}: polynomial {p:?} vs intervals {i:?}"),
+            }
+        }
+    }
+    hits
+}
+
+/// Rays at the box: from three eyes through a 24² grid, grazing rays through random
+/// points on a sphere around it, and rays from random points inside.
+fn rays(b: &Aabb, seed: u64) -> Vec<Ray> {
+    let (c, r) = (b.center(), 0.5 * b.extent().length());
+    let mut rays = Vec::new();
+    for eye in [
+        DVec3::new(0.6, -3.0, 1.2),
+        DVec3::new(-2.0, 1.0, -0.5),
+        DVec3::new(0.1, 0.2, 3.0),
+    ] {
+        let eye = c + eye * r;
+        let fwd = (c - eye).normalize();
+        let right = fwd.cross(DVec3::new(0.1, 0.2, 1.0)).normalize();
+        let up = right.cross(fwd);
+        for j in 0..24 {
+            for i in 0..24 {
+                let x = (i as f64 + 0.5) / 12.0 - 1.0;
+                let y = (j as f64 + 0.5) / 12.0 - 1.0;
+                rays.push(Ray::new(eye, fwd + 0.6 * (x * right + y * up)));
+            }
+        }
+    }
+    let mut rng = rand_pcg::Pcg64::seed_from_u64(seed);
+    let mut point =
+        |s: f64| c + s * r * DVec3::from_array([(); 3].map(|_| rng.gen_range(-1.0..1.0)));
+    for _ in 0..400 {
+        let (o, at) = (point(2.0), point(0.8));
+        rays.push(Ray::new(o, at - o));
+        let (o, at) = (point(0.5), point(1.0));
+        rays.push(Ray::new(o, at - o));
+    }
+    rays
+}
+
+#[test]
+fn tanglecube_crossings_are_the_interval_searchs() {
+    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../../shared/models/fidget/tanglecube.vm");
+    let model = read_file(&p).unwrap_or_else(|e| panic!("{e}"));
+    let solid = Solid::build(&model.shape).unwrap();
+    let mut n = 0;
+    for k in 0..solid.flat().leaves.len() {
+        if let LeafView::Expr(v) = solid.flat().leaf(k) {
+            assert_eq!(v.degree, Some(4), "tanglecube is a quartic");
+            n += compare("tanglecube.vm", v, &rays(&v.bounds, 1));
+        }
+    }
+    assert!(n > 1500, "{n} crossings");
+}
+
+#[test]
+fn quartic_and_sextic_crossings_are_the_interval_searchs() {
+    let (x, y, z) = (Tree::x(), Tree::y(), Tree::z());
+    let (x2, y2, z2) = (x.square(), y.square(), z.square());
+    let r2 = x2.clone() + y2.clone() + z2.clone();
+    // A torus (R = 1, r = 0.35), F ≥ 0 inside: 4R²(x² + y²) − (|p|² + R² − r²)².
+    let torus = 4.0 * (x2.clone() + y2.clone()) - (r2.clone() + (1.0 - 0.35 * 0.35)).square();
+    // A heart (Taubin), negated: x²z³ + 9/80·y²z³ − (x² + 9/4·y² + z² − 1)³.
+    let heart = x2.clone() * z.powi(3) + 9.0 / 80.0 * y2.clone() * z.powi(3)
+        - (x2.clone() + 2.25 * y2.clone() + z2.clone() - 1.0).powi(3);
+    // Between spheres of radius 0.5 and 1 (a shell): rays through the middle cross it
+    // four times; −(|p|² − 0.25)(|p|² − 1) ≥ 0.
+    let shell = -((r2.clone() - 0.25) * (r2.clone() - 1.0));
+    let cases = [
+        (
+            "torus",
+            torus,
+            Aabb::new(DVec3::new(-1.4, -1.4, -0.4), DVec3::new(1.4, 1.4, 0.4)),
+        ),
+        (
+            "heart",
+            heart,
+            Aabb::new(DVec3::splat(-1.5), DVec3::splat(1.5)),
+        ),
+        (
+            "shell",
+            shell,
+            Aabb::new(DVec3::splat(-1.05), DVec3::splat(1.05)),
+        ),
+    ];
+    for (k, (name, tree, bounds)) in cases.into_iter().enumerate() {
+        let s = ExprSurface::new(Expr::new(&tree), bounds);
+        let n = compare(name, s.view(), &rays(&bounds, 2 + k as u64));
+        println!("{name}: {n} crossings");
+        assert!(n > 500, "{name}: {n} crossings");
+    }
+}
