@@ -66,20 +66,20 @@ pub fn degree(tape: &[Node]) -> Option<usize> {
     deg.last().copied()
 }
 
-/// Coefficients of a polynomial in u, lowest power first; those above the tape's degree
-/// stay zero, so every product can be truncated at [`MAX_DEGREE`] and still be exact.
-type Coeffs = [f64; MAX_DEGREE + 1];
+/// Coefficients of a polynomial in u, lowest power first, and its nominal degree (the
+/// coefficients above it are zero).
+type Coeffs = ([f64; MAX_DEGREE + 1], usize);
 
-/// p·q truncated at degree [`MAX_DEGREE`]: exact for the tapes [`degree`] accepts.
+/// p·q; the degrees add up to at most [`MAX_DEGREE`] in the tapes [`degree`] accepts.
 #[inline(always)]
-fn mul(p: &Coeffs, q: &Coeffs) -> Coeffs {
+fn mul((p, m): Coeffs, (q, n): Coeffs) -> Coeffs {
     let mut r = [0.0; MAX_DEGREE + 1];
-    for i in 0..=MAX_DEGREE {
-        for j in 0..=MAX_DEGREE - i {
+    for i in 0..=m {
+        for j in 0..=n {
             r[i + j] += p[i] * q[j];
         }
     }
-    r
+    (r, m + n)
 }
 
 /// F(p + u·dp) as a polynomial in u, for a tape that [`degree`] accepts.
@@ -88,8 +88,11 @@ fn along(tape: &[Node], p: DVec3, dp: DVec3, scratch: &mut Vec<Coeffs>) -> Coeff
     for &n in tape {
         let s = |i: u32| scratch[i as usize];
         let mut v = [0.0; MAX_DEGREE + 1];
-        match n {
-            Node::Const(b) => v[0] = f64::from_bits(b),
+        let v = match n {
+            Node::Const(b) => {
+                v[0] = f64::from_bits(b);
+                (v, 0)
+            }
             Node::Var(x) => {
                 let k = match x {
                     Var::X => 0,
@@ -97,30 +100,36 @@ fn along(tape: &[Node], p: DVec3, dp: DVec3, scratch: &mut Vec<Coeffs>) -> Coeff
                     Var::Z => 2,
                 };
                 (v[0], v[1]) = (p[k], dp[k]);
+                (v, 1)
             }
-            Node::Unary(UnaryOp::Neg, a) => v = s(a).map(|c| -c),
-            Node::Unary(UnaryOp::Square, a) => v = mul(&s(a), &s(a)),
-            Node::Binary(BinaryOp::Add, a, b) => {
-                let (a, b) = (s(a), s(b));
-                v = std::array::from_fn(|k| a[k] + b[k]);
+            Node::Unary(UnaryOp::Neg, a) => {
+                let (a, m) = s(a);
+                (a.map(|c| -c), m)
             }
-            Node::Binary(BinaryOp::Sub, a, b) => {
-                let (a, b) = (s(a), s(b));
-                v = std::array::from_fn(|k| a[k] - b[k]);
+            Node::Unary(UnaryOp::Square, a) => mul(s(a), s(a)),
+            Node::Binary(op @ (BinaryOp::Add | BinaryOp::Sub), a, b) => {
+                let ((a, m), (b, n)) = (s(a), s(b));
+                let v = match op {
+                    BinaryOp::Add => std::array::from_fn(|k| a[k] + b[k]),
+                    _ => std::array::from_fn(|k| a[k] - b[k]),
+                };
+                (v, m.max(n))
             }
-            Node::Binary(BinaryOp::Mul, a, b) => v = mul(&s(a), &s(b)),
+            Node::Binary(BinaryOp::Mul, a, b) => mul(s(a), s(b)),
             Node::Binary(BinaryOp::Div, a, b) => {
-                let d = s(b)[0];
-                v = s(a).map(|c| c / d);
+                let ((a, m), d) = (s(a), s(b).0[0]);
+                (a.map(|c| c / d), m)
             }
             Node::PowI(a, k) => {
                 v[0] = 1.0;
+                let mut r = (v, 0);
                 for _ in 0..k {
-                    v = mul(&v, &s(a));
+                    r = mul(r, s(a));
                 }
+                r
             }
             _ => unreachable!("a tape `degree` accepted"),
-        }
+        };
         scratch.push(v);
     }
     *scratch.last().expect("an expression has a root")
@@ -216,7 +225,7 @@ pub(crate) fn first_crossing(
     tol: f64,
 ) -> Option<f64> {
     let h = t1 - t0;
-    let c = SCRATCH.with_borrow_mut(|s| along(tape, ray.at(t0), ray.d * h, s));
+    let (c, _) = SCRATCH.with_borrow_mut(|s| along(tape, ray.at(t0), ray.d * h, s));
     let p = Poly::new(&c[..=deg]);
     let mut search = Search {
         p,
@@ -284,7 +293,9 @@ mod tests {
         let nodes = tape(&t);
         assert_eq!(degree(&nodes), Some(4));
         let (p, dp) = (DVec3::new(0.3, -1.2, 0.7), DVec3::new(-0.4, 2.1, 0.9));
-        let poly = Poly::new(&along(&nodes, p, dp, &mut Vec::new())[..=4]);
+        let (c, n) = along(&nodes, p, dp, &mut Vec::new());
+        assert_eq!(n, 4);
+        let poly = Poly::new(&c[..=n]);
         for k in 0..=10 {
             let u = k as f64 / 10.0;
             let q = p + u * dp;
