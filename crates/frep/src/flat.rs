@@ -110,7 +110,8 @@ pub enum Leaf {
         bounds: Aabb,
         /// Resolution along rays ([`crate::interval_trace::resolution`]).
         eps: f64,
-        /// Its occupancy grid in [`Flat::grids`] (empty: none).
+        /// Its occupancy grid in [`Flat::grids`]: the occupancy bits, then as many
+        /// words of the empty cells' signs (empty: none).
         grid: Span,
         /// Its cells' tape ranges in [`Flat::grid_cells`] (relative to `cell_tapes`).
         grid_cells: Span,
@@ -158,7 +159,8 @@ pub struct Flat {
     pub tapes: Vec<Node>,
     /// Register bytecode of the tapes ([`crate::bytecode::Bytecode::words`]).
     pub bytecode: Vec<u32>,
-    /// Expression leaves' occupancy grids ([`crate::occupancy`]), one bitset each.
+    /// Expression leaves' occupancy grids ([`crate::occupancy`]), two bitsets each
+    /// (occupied cells, then the empty cells' signs).
     pub grids: Vec<u64>,
     /// Per cell of each occupancy grid, its tape's range in the leaf's `cell_tapes`.
     pub grid_cells: Vec<[u32; 2]>,
@@ -202,7 +204,9 @@ impl Flat {
         let c0 = self.bytecode.len();
         self.bytecode.extend_from_slice(code.words());
         let g0 = self.grids.len();
+        // The occupancy bits, then the signs of the empty cells.
         self.grids.extend_from_slice(v.grid.words);
+        self.grids.extend_from_slice(v.grid.inside);
         let gc0 = self.grid_cells.len();
         self.grid_cells.extend_from_slice(v.grid.cells);
         let ct0 = self.cell_tapes.len();
@@ -254,18 +258,23 @@ impl Flat {
                 grid_n,
                 degree,
                 ..
-            } => LeafView::Expr(ExprView {
-                tape: &self.tapes[tape.range()],
-                bounds,
-                eps,
-                grid: GridView {
-                    words: &self.grids[grid.range()],
-                    cells: &self.grid_cells[grid_cells.range()],
-                    nodes: &self.cell_tapes[cell_tapes.range()],
-                    n: grid_n as usize,
-                },
-                degree,
-            }),
+            } => {
+                let words = &self.grids[grid.range()];
+                let words_and_signs = words.split_at(words.len() / 2);
+                LeafView::Expr(ExprView {
+                    tape: &self.tapes[tape.range()],
+                    bounds,
+                    eps,
+                    grid: GridView {
+                        words: words_and_signs.0,
+                        inside: words_and_signs.1,
+                        cells: &self.grid_cells[grid_cells.range()],
+                        nodes: &self.cell_tapes[cell_tapes.range()],
+                        n: grid_n as usize,
+                    },
+                    degree,
+                })
+            }
         }
     }
 

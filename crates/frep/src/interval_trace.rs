@@ -299,7 +299,14 @@ impl ExprView<'_> {
         // enters the bounds inside the solid crosses there; one that leaves them inside
         // it crosses there unless F crosses first. (The segments below carry the true
         // signs of F at the ends, so that a crossing inside is found between them.)
-        let (ia, ib) = (self.value(ray.at(t0)) >= 0.0, self.value(ray.at(t1)) >= 0.0);
+        // (From the grid where the ends lie in empty cells, whose signs it knows.)
+        let inside = |t: f64| {
+            let p = ray.at(t);
+            self.grid
+                .known_inside(&grown, p)
+                .unwrap_or_else(|| self.value(p) >= 0.0)
+        };
+        let (ia, ib) = (inside(t0), inside(t1));
         let cap = |t: f64| {
             let n = match normal {
                 true => face_normal(&grown, ray.at(t)),
@@ -339,23 +346,27 @@ impl ExprView<'_> {
                 return search.run(tr, (t0, t1), (ia, ib), &mut visits);
             }
             // Only runs of occupied cells can hold a crossing; F keeps its sign between.
-            // Each run is searched with its cells' tape, which equals F there.
+            // Each run is searched with its cells' tape, which equals F there. The signs
+            // at a run's ends come from the empty cells beside it, or from the run
+            // before where two meet (both tapes equal F there), else from its tape.
             let mut found = None;
-            occupancy::runs(self.grid, &grown, ray, t0, t1, |a, b, tape| {
+            let mut last_end = (t0, ia);
+            occupancy::runs(self.grid, &grown, ray, t0, t1, |a, b, tape, known| {
                 let search = Search {
                     root: tape.unwrap_or(root),
                     ..search
                 };
-                let ia = if a == t0 {
-                    ia
-                } else {
-                    inside_at(search.root, ray, a)
+                let ia = match known[0] {
+                    Some(s) => s,
+                    None if a == last_end.0 => last_end.1,
+                    None => inside_at(search.root, ray, a),
                 };
-                let ib = if b == t1 {
-                    ib
-                } else {
-                    inside_at(search.root, ray, b)
+                let ib = match known[1] {
+                    Some(s) => s,
+                    None if b == t1 => ib,
+                    None => inside_at(search.root, ray, b),
                 };
+                last_end = (b, ib);
                 found = search.run(tr, (a, b), (ia, ib), &mut visits);
                 found.is_some()
             });

@@ -55,6 +55,10 @@ pub const MARGIN: f64 = 1e-4;
 pub struct Grid {
     /// One bit per cell ([`GRID_WORDS`] words; empty: no grid).
     pub words: Vec<u64>,
+    /// One bit per cell, as `words`: set where the cell is empty and F > 0 all over it
+    /// (inside the solid), clear where it is empty and F < 0, or occupied. A ray's run
+    /// of occupied cells takes the sign at its ends from the empty cells beside it.
+    pub inside: Vec<u64>,
     /// Per cell, its tape as a range of `nodes` (empty: no cell tapes).
     pub cells: Vec<[u32; 2]>,
     /// The cell tapes, each root last; the first is the whole tape.
@@ -68,6 +72,8 @@ pub struct Grid {
 pub struct GridView<'a> {
     /// See [`Grid::words`].
     pub words: &'a [u64],
+    /// See [`Grid::inside`].
+    pub inside: &'a [u64],
     /// See [`Grid::cells`].
     pub cells: &'a [[u32; 2]],
     /// See [`Grid::nodes`].
@@ -81,6 +87,7 @@ impl Grid {
     pub fn view(&self) -> GridView<'_> {
         GridView {
             words: &self.words,
+            inside: &self.inside,
             cells: &self.cells,
             nodes: &self.nodes,
             n: self.n,
@@ -92,6 +99,7 @@ impl<'a> GridView<'a> {
     /// No grid: rays search their whole segment with the whole tape.
     pub const NONE: GridView<'static> = GridView {
         words: &[],
+        inside: &[],
         cells: &[],
         nodes: &[],
         n: 0,
@@ -100,7 +108,25 @@ impl<'a> GridView<'a> {
     /// Whether there is an occupancy bitset.
     #[inline]
     pub fn is_some(&self) -> bool {
-        self.n > 0 && self.words.len() == self.n * self.n * self.n / 64
+        let w = self.n * self.n * self.n / 64;
+        self.n > 0 && self.words.len() == w && self.inside.len() == w
+    }
+
+    /// Whether a point in the cell holding `p` is inside (F ≥ 0) when that cell is
+    /// empty, for a grid over `b` (`p` in `b`); None where it is occupied or there is
+    /// no grid. Sound within [`MARGIN`] of the cell, as the emptiness itself.
+    #[inline]
+    pub fn known_inside(&self, b: &Aabb, p: DVec3) -> Option<bool> {
+        if !self.is_some() {
+            return None;
+        }
+        let n = self.n;
+        let c = ((p - b.lo) / (b.hi - b.lo) * n as f64)
+            .floor()
+            .clamp(DVec3::ZERO, DVec3::splat(n as f64 - 1.0));
+        let k = bit(n, c.x as usize, c.y as usize, c.z as usize);
+        let get = |w: &[u64]| w[k / 64] >> (k % 64) & 1 == 1;
+        (!get(self.words)).then(|| get(self.inside))
     }
 
     /// The tape of the cell holding `p`, for a grid over `b`; None when `p` lies
@@ -147,6 +173,7 @@ pub fn build(tape: &[Node], b: &Aabb) -> Grid {
 /// budget.
 fn build_n(tape: &[Node], b: &Aabb, n: usize) -> Option<(Grid, usize)> {
     let mut occupied = vec![false; n * n * n];
+    let mut inside = vec![false; n * n * n];
     let mut cells = vec![[0u32; 2]; n * n * n];
     let mut nodes = tape.to_vec();
     let mut scratch = Vec::new();
@@ -179,6 +206,7 @@ fn build_n(tape: &[Node], b: &Aabb, n: usize) -> Option<(Grid, usize)> {
             &mut choices,
         );
         let mut excluded = v.lo > 0.0 || v.hi < 0.0;
+        let mut positive = v.lo > 0.0;
         // The tape over this box: the one it was given, simplified where it can be (an
         // empty box's tape only serves the sign at run ends: worth it when long).
         let mut own = span;
@@ -191,13 +219,16 @@ fn build_n(tape: &[Node], b: &Aabb, n: usize) -> Option<(Grid, usize)> {
         if !excluded && size <= MEAN_VALUE_SIZE {
             let tape = &nodes[own[0] as usize..own[1] as usize];
             spent += 4 * tape.len();
-            excluded = mean_value_excludes(tape, lo - m, hi.max(lo) + m, &mut duals);
+            if let Some(sign) = mean_value_sign(tape, lo - m, hi.max(lo) + m, &mut duals) {
+                (excluded, positive) = (true, sign);
+            }
         }
         if excluded || size == 1 {
             for z in c[2]..c[2] + size {
                 for y in c[1]..c[1] + size {
                     for x in c[0]..c[0] + size {
                         cells[bit(n, x, y, z)] = own;
+                        inside[bit(n, x, y, z)] = excluded && positive;
                     }
                 }
             }
@@ -212,13 +243,17 @@ fn build_n(tape: &[Node], b: &Aabb, n: usize) -> Option<(Grid, usize)> {
             stack.push(([c[0] + d[0], c[1] + d[1], c[2] + d[2]], h, own));
         }
     }
-    let mut words = vec![0u64; n * n * n / 64];
-    for (n, _) in occupied.iter().enumerate().filter(|(_, o)| **o) {
-        words[n / 64] |= 1 << (n % 64);
-    }
+    let bits = |set: &[bool]| {
+        let mut words = vec![0u64; n * n * n / 64];
+        for (n, _) in set.iter().enumerate().filter(|(_, o)| **o) {
+            words[n / 64] |= 1 << (n % 64);
+        }
+        words
+    };
     Some((
         Grid {
-            words,
+            words: bits(&occupied),
+            inside: bits(&inside),
             cells,
             nodes,
             n,
@@ -230,16 +265,17 @@ fn build_n(tape: &[Node], b: &Aabb, n: usize) -> Option<(Grid, usize)> {
 /// Boxes this many cells wide or less are also bounded by the mean-value form.
 const MEAN_VALUE_SIZE: usize = 4;
 
-/// Whether the mean-value form F(c) + ∇F(box)·(box − c) (Moore 1966, §6), c the box's
-/// centre, excludes 0 over [lo, hi]. Where F is smooth it is far tighter than the plain
-/// interval on small boxes, which overestimates sums like x⁴ − 5x² by their whole
-/// range (the dependency problem); both are enclosures, so either may exclude.
-fn mean_value_excludes(
+/// The sign of F over [lo, hi] (true: positive) where the mean-value form F(c) +
+/// ∇F(box)·(box − c) (Moore 1966, §6), c the box's centre, excludes 0; None where it
+/// does not. Where F is smooth it is far tighter than the plain interval on small
+/// boxes, which overestimates sums like x⁴ − 5x² by their whole range (the dependency
+/// problem); both are enclosures, so either may exclude.
+fn mean_value_sign(
     tape: &[Node],
     lo: DVec3,
     hi: DVec3,
     scratch: &mut Vec<Dual<Interval, 3>>,
-) -> bool {
+) -> Option<bool> {
     let c = 0.5 * (lo + hi);
     let at = |k: usize| Dual::new(Interval::point(c[k]), [Interval::point(0.0); 3]);
     let fc = eval_nodes(tape, at(0), at(1), at(2), scratch).v;
@@ -252,22 +288,25 @@ fn mean_value_excludes(
     let mv = (0..3).fold(fc, |acc, k| {
         acc + g[k] * (Interval::new(lo[k], hi[k]) - Interval::point(c[k]))
     });
-    mv.lo > 0.0 || mv.hi < 0.0
+    (mv.lo > 0.0 || mv.hi < 0.0).then_some(mv.lo > 0.0)
 }
 
-/// Calls `visit(a, b, tape)` for each maximal run [a, b] of occupied cells with one
-/// tape (None: no cell tapes) that the segment [t0, t1] of `ray` (inside `b`) crosses,
-/// in order, until `visit` returns true.
+/// Calls `visit(a, b, tape, known)` for each maximal run [a, b] of occupied cells with
+/// one tape (None: no cell tapes) that the segment [t0, t1] of `ray` (inside `b`)
+/// crosses, in order, until `visit` returns true. `known` holds whether F ≥ 0 at a and
+/// at b where an empty cell borders the run there (its sign, [`Grid::inside`]), else
+/// None.
 pub fn runs<'g>(
     grid: GridView<'g>,
     b: &Aabb,
     ray: &Ray,
     t0: f64,
     t1: f64,
-    mut visit: impl FnMut(f64, f64, Option<&'g [Node]>) -> bool,
+    mut visit: impl FnMut(f64, f64, Option<&'g [Node]>, [Option<bool>; 2]) -> bool,
 ) {
-    let words = grid.words;
+    let (words, inside) = (grid.words, grid.inside);
     let occupied = |n: usize| words[n / 64] >> (n % 64) & 1 == 1;
+    let positive = |n: usize| inside[n / 64] >> (n % 64) & 1 == 1;
     let span = |n: usize| grid.cells.get(n).copied();
     let g = grid.n;
     let size = (b.hi - b.lo) / g as f64;
@@ -288,29 +327,33 @@ pub fn runs<'g>(
         }
     }
     let tape = |s: Option<[u32; 2]>| s.map(|[s, e]| &grid.nodes[s as usize..e as usize]);
-    // The open run: where it starts and its cell tape.
-    let mut start: Option<(f64, Option<[u32; 2]>)> = None;
+    // The open run: where it starts, its cell tape and the sign known at its start.
+    let mut start: Option<(f64, Option<[u32; 2]>, Option<bool>)> = None;
+    // The sign of the last cell walked, when it was empty.
+    let mut before = None;
     let mut t = t0;
     loop {
         let k = (0..3).fold(0, |m, k| if next[k] < next[m] { k } else { m });
         let exit = next[k].min(t1);
         let n = bit(g, c[0] as usize, c[1] as usize, c[2] as usize);
-        match (occupied(n), start) {
-            (true, None) => start = Some((t, span(n))),
-            (true, Some((a, s))) if s != span(n) => {
-                if visit(a, t, tape(s)) {
+        let here = (!occupied(n)).then(|| positive(n));
+        match (here, start) {
+            (None, None) => start = Some((t, span(n), before)),
+            (None, Some((a, s, ka))) if s != span(n) => {
+                if visit(a, t, tape(s), [ka, None]) {
                     return;
                 }
-                start = Some((t, span(n)));
+                start = Some((t, span(n), None));
             }
-            (false, Some((a, s))) => {
-                if visit(a, t, tape(s)) {
+            (Some(sign), Some((a, s, ka))) => {
+                if visit(a, t, tape(s), [ka, Some(sign)]) {
                     return;
                 }
                 start = None;
             }
             _ => {}
         }
+        before = here;
         if exit >= t1 {
             break;
         }
@@ -321,7 +364,7 @@ pub fn runs<'g>(
         next[k] += delta[k];
         t = exit.max(t);
     }
-    if let Some((a, s)) = start {
-        visit(a, t1, tape(s));
+    if let Some((a, s, ka)) = start {
+        visit(a, t1, tape(s), [ka, None]);
     }
 }

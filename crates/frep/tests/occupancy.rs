@@ -129,8 +129,8 @@ fn the_grid_changes_no_hit() {
 }
 
 /// Each cell's tape equals the whole tape at every point of the cell (bit for bit: a
-/// decided min/max returns the operand it was proven to return), and `inside` is F ≥ 0
-/// within the model's bounds.
+/// decided min/max returns the operand it was proven to return), an empty cell's sign
+/// is F's sign all over it, and `inside` is F ≥ 0 within the model's bounds.
 #[test]
 fn cell_tapes_equal_the_whole_tape() {
     use frep::expr::eval_nodes;
@@ -150,7 +150,7 @@ fn cell_tapes_equal_the_whole_tape() {
             let n = v.grid.n;
             assert_eq!(cells, n * n * n, "{m}: no cell tapes");
             let g = Aabb::new(v.bounds.lo - v.eps, v.bounds.hi + v.eps);
-            let (mut shorter, mut scratch) = (0, Vec::new());
+            let (mut shorter, mut scratch, mut known) = (0, Vec::new(), [0, 0]);
             for _ in 0..20_000 {
                 let u = DVec3::new(rng.gen(), rng.gen(), rng.gen());
                 // Points in the box and a little around it.
@@ -161,11 +161,20 @@ fn cell_tapes_equal_the_whole_tape() {
                 let by_cell = eval_nodes(tape, p.x, p.y, p.z, &mut scratch);
                 assert_eq!(exact.to_bits(), by_cell.to_bits(), "{m} at {p:?}");
                 assert_eq!(v.value(p).to_bits(), exact.to_bits(), "{m} at {p:?}");
+                // An empty cell's sign is F's sign at every point of it.
+                if g.contains(p) {
+                    if let Some(inside) = v.grid.known_inside(&g, p) {
+                        assert_eq!(inside, exact >= 0.0, "{m}: empty cell's sign at {p:?}");
+                        known[usize::from(inside)] += 1;
+                    }
+                }
                 // A model's domain caps it, for `inside` as for rays.
                 let within = frep::Surface::bounds(&solid).contains(p);
                 assert_eq!(solid.inside(p), exact >= 0.0 && within, "{m} at {p:?}");
             }
             println!("{m}: {shorter} of 20000 points on a shorter tape than {whole} nodes");
+            println!("{m}: {known:?} points in empty cells known outside, inside");
+            assert!(known[0] > 1000, "{m}: few points in empty cells outside");
             assert!(shorter > 2_000, "{m}: cell tapes simplify almost nothing");
         }
     }
