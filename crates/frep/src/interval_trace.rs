@@ -325,9 +325,10 @@ impl ExprView<'_> {
             normal,
         };
         reserve(root.len());
-        if let Some(deg) = self.degree {
-            let found =
-                poly_trace::first_crossing(root, deg as usize, ray, (t0, t1), (ia, ib), eps_t, tol);
+        let poly = self.degree.and_then(|deg| {
+            poly_trace::first_crossing(root, deg as usize, ray, (t0, t1), (ia, ib), eps_t, tol)
+        });
+        if let Some(found) = poly {
             return match found {
                 None if t1 < t_max && ib => cap(t1),
                 None => None,

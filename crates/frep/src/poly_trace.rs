@@ -157,12 +157,7 @@ impl Search {
     ) -> Option<f64> {
         self.visits += 1;
         let c = b.coeffs();
-        let (lo, hi) = c
-            .iter()
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &v| {
-                (l.min(v), h.max(v))
-            });
-        if lo > 0.0 || hi < 0.0 {
+        if c.iter().all(|&v| v > 0.0) || c.iter().all(|&v| v < 0.0) {
             return None;
         }
         let rising = c.windows(2).all(|w| w[1] > w[0]);
@@ -214,7 +209,9 @@ impl Search {
 
 /// The first crossing in [t0, t1] of a tape whose [`degree`] is `deg`, whose ends are
 /// inside as (ia, ib) by the tape; `eps_t` the resolution and `tol` the tolerance along
-/// the ray, as in [`crate::interval_trace`].
+/// the ray, as in [`crate::interval_trace`]. None where a coefficient is not finite
+/// (`x/0`, overflow): the polynomial says nothing there, and the interval search, which
+/// evaluates the tape itself, takes the ray.
 pub(crate) fn first_crossing(
     tape: &[Node],
     deg: usize,
@@ -223,9 +220,12 @@ pub(crate) fn first_crossing(
     (ia, ib): (bool, bool),
     eps_t: f64,
     tol: f64,
-) -> Option<f64> {
+) -> Option<Option<f64>> {
     let h = t1 - t0;
     let (c, _) = SCRATCH.with_borrow_mut(|s| along(tape, ray.at(t0), ray.d * h, s));
+    if !c.iter().all(|v| v.is_finite()) {
+        return None;
+    }
     let p = Poly::new(&c[..=deg]);
     let mut search = Search {
         p,
@@ -235,8 +235,8 @@ pub(crate) fn first_crossing(
         tol_u: tol / h,
         visits: 0,
     };
-    let u = search.run(&p.to_bernstein(), (0.0, 1.0), (ia, ib), 0)?;
-    Some(t0 + search.h * u)
+    let u = search.run(&p.to_bernstein(), (0.0, 1.0), (ia, ib), 0);
+    Some(u.map(|u| t0 + search.h * u))
 }
 
 /// Grows this thread's scratch to a tape of `n` nodes (nothing allocates once warm).

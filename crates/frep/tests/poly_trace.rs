@@ -131,3 +131,20 @@ fn quartic_and_sextic_crossings_are_the_interval_searchs() {
         assert!(n > 500, "{name}: {n} crossings");
     }
 }
+
+/// x/0 is a polynomial by its operations, but its coefficients are infinite: the ray
+/// is left to the interval search, which finds the sign change at x = 0 (the
+/// polynomial's hull, all infinities and NaN, would have missed it).
+#[test]
+fn polynomials_with_infinite_coefficients_are_left_to_intervals() {
+    let tree = Tree::x() / 0.0;
+    let bounds = Aabb::new(DVec3::splat(-2.0), DVec3::splat(2.0));
+    let s = ExprSurface::new(Expr::new(&tree), bounds);
+    let v = s.view();
+    assert_eq!(v.degree, Some(1));
+    let ray = Ray::new(DVec3::new(-3.0, 0.1, 0.2), DVec3::new(1.0, 0.05, 0.0));
+    let (t, _) = v
+        .trace(&ray, 0.0, 1e3, false)
+        .expect("the sign change at x = 0");
+    assert!(ray.at(t).x.abs() <= 1e-6, "crossing at {:?}", ray.at(t));
+}
