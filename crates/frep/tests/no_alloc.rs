@@ -1,7 +1,7 @@
 //! No allocation per ray: a counting global allocator (this test binary only) watches a
 //! batch of rays through a perturbed quadric with many perturbations, expression solids
-//! read from models/ (one large enough for per-segment tape simplification), and a CSG
-//! of both. After one warm-up batch (different rays) has grown each thread's scratch,
+//! read from models/ (one large enough for per-segment tape simplification), Fidget's
+//! tanglecube (a quartic, searched in Bernstein form) and a CSG of both kinds. After one warm-up batch (different rays) has grown each thread's scratch,
 //! intersecting, testing inside and taking normals must not allocate at all.
 
 use frep::perturbed::PerturbedQuadric;
@@ -135,6 +135,8 @@ fn a_batch_of_rays_allocates_nothing() {
         ("blob", blob),
         ("gyroid", gyroid),
         ("csg", csg),
+        // A quartic, searched in Bernstein form (frep::poly_trace).
+        ("tanglecube", model("../shared/models/fidget/tanglecube.vm")),
     ] {
         let s = Solid::build(&shape).unwrap();
         let trace = |rays: &[Ray]| {
