@@ -197,23 +197,32 @@ fn gradient_by(tape: &[Node], p: DVec3) -> DVec3 {
     DVec3::from_array(r.d)
 }
 
-/// Finds the crossing in [a, b], where the inside predicate differs at the ends:
-/// safeguarded Newton on F(t) (a Newton step that leaves the bracket becomes a
-/// bisection), stopping when the bracket or the step is below `tol`.
-pub(crate) fn refine(
-    tape: &[Node],
-    ray: &Ray,
+/// Finds the crossing in [a, b], where the inside predicate differs at the ends, by
+/// [`newton_in`] on the tape.
+fn refine(tape: &[Node], ray: &Ray, a: f64, b: f64, inside_a: bool, tol: f64) -> f64 {
+    newton_in(a, b, inside_a, tol, |x| {
+        let p = ray.at(x);
+        let c = |k: usize| Dual::<f64, 1>::new(p[k], [ray.d[k]]);
+        let r = SCRATCH_T.with_borrow_mut(|s| eval_nodes(tape, c(0), c(1), c(2), s));
+        (r.v, r.d[0])
+    })
+}
+
+/// The crossing in [a, b] of a function whose inside predicate (value ≥ 0) differs at
+/// the ends, given its value and derivative `f(x)`: safeguarded Newton (a step that
+/// leaves the bracket becomes a bisection), stopping when the bracket or the step is
+/// below `tol`.
+pub(crate) fn newton_in(
     mut a: f64,
     mut b: f64,
     inside_a: bool,
     tol: f64,
+    mut f: impl FnMut(f64) -> (f64, f64),
 ) -> f64 {
     let mut x = 0.5 * (a + b);
     for _ in 0..100 {
-        let p = ray.at(x);
-        let c = |k: usize| Dual::<f64, 1>::new(p[k], [ray.d[k]]);
-        let r = SCRATCH_T.with_borrow_mut(|s| eval_nodes(tape, c(0), c(1), c(2), s));
-        if (r.v >= 0.0) == inside_a {
+        let (v, dv) = f(x);
+        if (v >= 0.0) == inside_a {
             a = x;
         } else {
             b = x;
@@ -221,7 +230,7 @@ pub(crate) fn refine(
         if b - a <= tol {
             return b;
         }
-        let step = r.v / r.d[0];
+        let step = v / dv;
         let newton = x - step;
         // A step below the tolerance ends the search even when it lands on an end of
         // the bracket (x itself, just made an end): a bisection there would throw away

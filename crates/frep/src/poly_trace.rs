@@ -25,7 +25,7 @@
 //! (crates/frep/tests/poly_trace.rs).
 
 use crate::expr::Node;
-use crate::interval_trace::MAX_SEGMENTS;
+use crate::interval_trace::{newton_in, MAX_SEGMENTS};
 use crate::poly::{Bernstein, Poly, MAX_DEGREE};
 use crate::ray::Ray;
 use crate::tree::{BinaryOp, UnaryOp, Var};
@@ -178,32 +178,11 @@ impl Search {
     }
 
     /// The crossing in [a, b], where the inside predicate differs at the ends: the
-    /// safeguarded Newton of [`crate::interval_trace`]'s `refine`, on the polynomial.
-    fn refine(&self, mut a: f64, mut b: f64, inside_a: bool) -> f64 {
-        let tol = self.tol_u;
-        let mut x = 0.5 * (a + b);
-        for _ in 0..100 {
-            let v = self.p.eval(x);
-            if (v >= 0.0) == inside_a {
-                a = x;
-            } else {
-                b = x;
-            }
-            if b - a <= tol {
-                return b;
-            }
-            let step = v / self.dp.eval(x);
-            let newton = x - step;
-            if step.is_finite() && step.abs() <= tol && newton >= a && newton <= b {
-                return newton;
-            }
-            x = if step.is_finite() && newton > a && newton < b {
-                newton
-            } else {
-                0.5 * (a + b)
-            };
-        }
-        b
+    /// safeguarded Newton of the interval search, on the polynomial.
+    fn refine(&self, a: f64, b: f64, inside_a: bool) -> f64 {
+        newton_in(a, b, inside_a, self.tol_u, |x| {
+            (self.p.eval(x), self.dp.eval(x))
+        })
     }
 }
 

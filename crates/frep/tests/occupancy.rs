@@ -3,11 +3,13 @@
 //! grazing rays give the same hits with the grid as without it, and the grid is sound:
 //! every crossing of a dense march lies in an occupied cell.
 
+mod common;
+
 use frep::interval_trace::ExprView;
 use frep::occupancy::{FINE_GRID, GRID, MARGIN};
 use frep::read::read_file;
 use frep::solid::Solid;
-use frep::{Aabb, LeafView, Ray};
+use frep::{Aabb, LeafView};
 use glam::DVec3;
 use std::path::PathBuf;
 
@@ -74,25 +76,8 @@ fn the_grid_changes_no_hit() {
                 ..v
             };
             let b = v.bounds;
-            let (c, r) = (b.center(), 0.5 * b.extent().length());
-            let mut rays = Vec::new();
-            for eye in [
-                DVec3::new(0.6, -3.0, 1.2),
-                DVec3::new(-2.0, 1.0, -0.5),
-                DVec3::new(0.1, 0.2, 3.0),
-            ] {
-                let eye = c + eye * r;
-                let fwd = (c - eye).normalize();
-                let right = fwd.cross(DVec3::new(0.1, 0.2, 1.0)).normalize();
-                let up = right.cross(fwd);
-                for j in 0..24 {
-                    for i in 0..24 {
-                        let x = (i as f64 + 0.5) / 12.0 - 1.0;
-                        let y = (j as f64 + 0.5) / 12.0 - 1.0;
-                        rays.push(Ray::new(eye, fwd + 0.6 * (x * right + y * up)));
-                    }
-                }
-            }
+            let r = 0.5 * b.extent().length();
+            let rays = common::eye_rays(&b);
             let mut hits = 0;
             for ray in &rays {
                 // Walk every crossing along the ray, from each hit on.

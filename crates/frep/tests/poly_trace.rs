@@ -4,6 +4,8 @@
 //! crossing along rays from several eyes, grazing rays and rays from inside is the same
 //! with the polynomial search as with the interval search.
 
+mod common;
+
 use frep::interval_trace::{ExprSurface, ExprView};
 use frep::read::read_file;
 use frep::solid::Solid;
@@ -48,24 +50,7 @@ fn compare(name: &str, v: ExprView<'_>, rays: &[Ray]) -> usize {
 /// points on a sphere around it, and rays from random points inside.
 fn rays(b: &Aabb, seed: u64) -> Vec<Ray> {
     let (c, r) = (b.center(), 0.5 * b.extent().length());
-    let mut rays = Vec::new();
-    for eye in [
-        DVec3::new(0.6, -3.0, 1.2),
-        DVec3::new(-2.0, 1.0, -0.5),
-        DVec3::new(0.1, 0.2, 3.0),
-    ] {
-        let eye = c + eye * r;
-        let fwd = (c - eye).normalize();
-        let right = fwd.cross(DVec3::new(0.1, 0.2, 1.0)).normalize();
-        let up = right.cross(fwd);
-        for j in 0..24 {
-            for i in 0..24 {
-                let x = (i as f64 + 0.5) / 12.0 - 1.0;
-                let y = (j as f64 + 0.5) / 12.0 - 1.0;
-                rays.push(Ray::new(eye, fwd + 0.6 * (x * right + y * up)));
-            }
-        }
-    }
+    let mut rays = common::eye_rays(b);
     let mut rng = rand_pcg::Pcg64::seed_from_u64(seed);
     let mut point =
         |s: f64| c + s * r * DVec3::from_array([(); 3].map(|_| rng.gen_range(-1.0..1.0)));

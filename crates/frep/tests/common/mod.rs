@@ -1,4 +1,4 @@
-//! Helpers shared by the reader tests.
+//! Helpers shared by the reader and ray tests.
 #![allow(dead_code, unused_imports)]
 
 pub use frep::read::{read_file, read_str, write_vm, Format, Model, ReadError};
@@ -73,4 +73,30 @@ pub fn check_errors(format: Format, cases: &[(&str, usize, usize, &str)]) {
 
 pub fn norm(p: [f64; 3]) -> f64 {
     (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt()
+}
+
+/// Rays at a box from three eyes around it, each through a 24² grid spanning the box:
+/// the views the ray tests walk crossing by crossing.
+pub fn eye_rays(b: &frep::Aabb) -> Vec<frep::Ray> {
+    use glam::DVec3;
+    let (c, r) = (b.center(), 0.5 * b.extent().length());
+    let mut rays = Vec::new();
+    for eye in [
+        DVec3::new(0.6, -3.0, 1.2),
+        DVec3::new(-2.0, 1.0, -0.5),
+        DVec3::new(0.1, 0.2, 3.0),
+    ] {
+        let eye = c + eye * r;
+        let fwd = (c - eye).normalize();
+        let right = fwd.cross(DVec3::new(0.1, 0.2, 1.0)).normalize();
+        let up = right.cross(fwd);
+        for j in 0..24 {
+            for i in 0..24 {
+                let x = (i as f64 + 0.5) / 12.0 - 1.0;
+                let y = (j as f64 + 0.5) / 12.0 - 1.0;
+                rays.push(frep::Ray::new(eye, fwd + 0.6 * (x * right + y * up)));
+            }
+        }
+    }
+    rays
 }
