@@ -90,6 +90,27 @@ fn model(file: &Path) -> Result<(), String> {
         expr.len()
     );
     out!("perturbed quadrics: {quadrics}, perturbations: {perts}");
+    // How rays search its expression solids: a polynomial of low degree in Bernstein
+    // form, anything else by interval arithmetic.
+    let flat = solid.flat();
+    let degrees: Vec<Option<u8>> = (0..flat.leaves.len())
+        .filter_map(|k| match flat.leaf(k) {
+            frep::LeafView::Expr(v) => Some(v.degree),
+            frep::LeafView::Perturbed(_) => None,
+        })
+        .collect();
+    if !degrees.is_empty() {
+        let poly: Vec<String> = degrees.iter().flatten().map(|d| d.to_string()).collect();
+        let intervals = degrees.len() - poly.len();
+        out!(
+            "expression solids: {} polynomial (Bernstein search{}), {intervals} by intervals",
+            poly.len(),
+            match poly.is_empty() {
+                true => String::new(),
+                false => format!(", degree {}", poly.join(", ")),
+            }
+        );
+    }
     if b.is_empty() {
         out!("bounds:        empty (F < 0 everywhere in the search domain)");
     } else {

@@ -137,6 +137,26 @@ fn check_summarises_a_model() {
         "{text}"
     );
     assert!(text.contains("bounds:"), "{text}");
+    // Which search its rays take: tanglecube is a quartic, colonnade is not a polynomial.
+    for (m, want) in [
+        (
+            "tanglecube",
+            "expression solids: 1 polynomial (Bernstein search, degree 4), 0 by intervals",
+        ),
+        (
+            "colonnade",
+            "expression solids: 0 polynomial (Bernstein search), 1 by intervals",
+        ),
+    ] {
+        let st = frepray()
+            .arg("check")
+            .arg(root().join(format!("../shared/models/fidget/{m}.vm")))
+            .output()
+            .unwrap();
+        assert!(st.status.success());
+        let text = String::from_utf8_lossy(&st.stdout);
+        assert!(text.contains(want), "{m}: {text}");
+    }
 }
 
 /// A malformed model names file, line and column, exits non-zero, writes nothing.

@@ -308,14 +308,22 @@ impl ExprView<'_> {
         // enters the bounds inside the solid crosses there; one that leaves them inside
         // it crosses there unless F crosses first. (The segments below carry the true
         // signs of F at the ends, so that a crossing inside is found between them.)
-        // (From the grid where the ends lie in empty cells, whose signs it knows.)
+        // (From the grid where the ends lie in empty cells, whose signs it knows; from
+        // the polynomial along the segment where the tape is one, which it computes.)
+        reserve(root.len());
+        let along = self
+            .degree
+            .and_then(|deg| poly_trace::Along::new(root, deg as usize, ray, t0, t1));
         let inside = |t: f64| {
             let p = ray.at(t);
             self.grid
                 .known_inside(&grown, p)
                 .unwrap_or_else(|| self.value(p) >= 0.0)
         };
-        let (ia, ib) = (inside(t0), inside(t1));
+        let (ia, ib) = match &along {
+            Some(along) => along.end_signs(),
+            None => (inside(t0), inside(t1)),
+        };
         let cap = |t: f64| {
             let n = match normal {
                 true => face_normal(&grown, ray.at(t)),
@@ -333,12 +341,8 @@ impl ExprView<'_> {
             tol,
             normal,
         };
-        reserve(root.len());
-        let poly = self.degree.and_then(|deg| {
-            poly_trace::first_crossing(root, deg as usize, ray, (t0, t1), (ia, ib), eps_t, tol)
-        });
-        if let Some(found) = poly {
-            return match found {
+        if let Some(along) = along {
+            return match along.first_crossing((ia, ib), eps_t, tol) {
                 None if t1 < t_max && ib => cap(t1),
                 None => None,
                 Some(t) => Some((

@@ -18,8 +18,9 @@
 //! crossing; one on which F is monotonic, or shorter than the resolution, is decided by
 //! the signs at its ends, and a crossing found is refined by the same safeguarded
 //! Newton, on the polynomial (Horner's rule, not the tape), to the same tolerance. The
-//! ends of the whole range take their signs from the tape; the split points from the
-//! polynomial (its value there, free from de Casteljau). The polynomial is F up to the
+//! signs at the ends of the range and at the split points are the polynomial's (its
+//! constant term is the tape's value at the start, by the same operations; the split
+//! points' values are free from de Casteljau). The polynomial is F up to the
 //! rounding of its coefficients, of the order of the tape's own rounding, so the
 //! crossings agree with the interval search's far within its tolerance
 //! (crates/frep/tests/poly_trace.rs).
@@ -72,10 +73,10 @@ type Coeffs = ([f64; MAX_DEGREE + 1], usize);
 
 /// p·q; the degrees add up to at most [`MAX_DEGREE`] in the tapes [`degree`] accepts.
 #[inline(always)]
-fn mul((p, m): Coeffs, (q, n): Coeffs) -> Coeffs {
+fn mul((p, m): &Coeffs, (q, n): &Coeffs) -> Coeffs {
     let mut r = [0.0; MAX_DEGREE + 1];
-    for i in 0..=m {
-        for j in 0..=n {
+    for i in 0..=*m {
+        for j in 0..=*n {
             r[i + j] += p[i] * q[j];
         }
     }
@@ -86,7 +87,7 @@ fn mul((p, m): Coeffs, (q, n): Coeffs) -> Coeffs {
 fn along(tape: &[Node], p: DVec3, dp: DVec3, scratch: &mut Vec<Coeffs>) -> Coeffs {
     scratch.clear();
     for &n in tape {
-        let s = |i: u32| scratch[i as usize];
+        let s = |i: u32| &scratch[i as usize];
         let mut v = [0.0; MAX_DEGREE + 1];
         let v = match n {
             Node::Const(b) => {
@@ -104,7 +105,7 @@ fn along(tape: &[Node], p: DVec3, dp: DVec3, scratch: &mut Vec<Coeffs>) -> Coeff
             }
             Node::Unary(UnaryOp::Neg, a) => {
                 let (a, m) = s(a);
-                (a.map(|c| -c), m)
+                (a.map(|c| -c), *m)
             }
             Node::Unary(UnaryOp::Square, a) => mul(s(a), s(a)),
             Node::Binary(op @ (BinaryOp::Add | BinaryOp::Sub), a, b) => {
@@ -113,18 +114,18 @@ fn along(tape: &[Node], p: DVec3, dp: DVec3, scratch: &mut Vec<Coeffs>) -> Coeff
                     BinaryOp::Add => std::array::from_fn(|k| a[k] + b[k]),
                     _ => std::array::from_fn(|k| a[k] - b[k]),
                 };
-                (v, m.max(n))
+                (v, *m.max(n))
             }
             Node::Binary(BinaryOp::Mul, a, b) => mul(s(a), s(b)),
             Node::Binary(BinaryOp::Div, a, b) => {
                 let ((a, m), d) = (s(a), s(b).0[0]);
-                (a.map(|c| c / d), m)
+                (a.map(|c| c / d), *m)
             }
             Node::PowI(a, k) => {
                 v[0] = 1.0;
                 let mut r = (v, 0);
                 for _ in 0..k {
-                    r = mul(r, s(a));
+                    r = mul(&r, s(a));
                 }
                 r
             }
@@ -139,7 +140,6 @@ fn along(tape: &[Node], p: DVec3, dp: DVec3, scratch: &mut Vec<Coeffs>) -> Coeff
 struct Search {
     p: Poly<f64>,
     dp: Poly<f64>,
-    h: f64,
     eps_u: f64,
     tol_u: f64,
     visits: u32,
@@ -186,36 +186,52 @@ impl Search {
     }
 }
 
-/// The first crossing in [t0, t1] of a tape whose [`degree`] is `deg`, whose ends are
-/// inside as (ia, ib) by the tape; `eps_t` the resolution and `tol` the tolerance along
-/// the ray, as in [`crate::interval_trace`]. None where a coefficient is not finite
-/// (`x/0`, overflow): the polynomial says nothing there, and the interval search, which
-/// evaluates the tape itself, takes the ray.
-pub(crate) fn first_crossing(
-    tape: &[Node],
-    deg: usize,
-    ray: &Ray,
-    (t0, t1): (f64, f64),
-    (ia, ib): (bool, bool),
-    eps_t: f64,
-    tol: f64,
-) -> Option<Option<f64>> {
-    let h = t1 - t0;
-    let (c, _) = SCRATCH.with_borrow_mut(|s| along(tape, ray.at(t0), ray.d * h, s));
-    if !c.iter().all(|v| v.is_finite()) {
-        return None;
+/// F along one ray's segment [t0, t1] of a polynomial tape: F(t0 + h·u) = `p`(u).
+pub(crate) struct Along {
+    p: Poly<f64>,
+    t0: f64,
+    h: f64,
+}
+
+impl Along {
+    /// F along [t0, t1] for a tape whose [`degree`] is `deg`. None where a coefficient
+    /// is not finite (`x/0`, overflow): the polynomial says nothing there, and the
+    /// interval search, which evaluates the tape itself, takes the ray.
+    pub(crate) fn new(tape: &[Node], deg: usize, ray: &Ray, t0: f64, t1: f64) -> Option<Self> {
+        let h = t1 - t0;
+        let (c, _) = SCRATCH.with_borrow_mut(|s| along(tape, ray.at(t0), ray.d * h, s));
+        c.iter().all(|v| v.is_finite()).then(|| Self {
+            p: Poly::new(&c[..=deg]),
+            t0,
+            h,
+        })
     }
-    let p = Poly::new(&c[..=deg]);
-    let mut search = Search {
-        p,
-        dp: p.derivative(),
-        h,
-        eps_u: eps_t / h,
-        tol_u: tol / h,
-        visits: 0,
-    };
-    let u = search.run(&p.to_bernstein(), (0.0, 1.0), (ia, ib), 0);
-    Some(u.map(|u| t0 + search.h * u))
+
+    /// Whether F ≥ 0 at t0 and at t1: the constant term is F(t0) by the tape's own
+    /// operations (integer powers aside, which it multiplies out), p(1) is F(t1) to
+    /// rounding.
+    pub(crate) fn end_signs(&self) -> (bool, bool) {
+        (self.p.coeffs()[0] >= 0.0, self.p.eval(1.0) >= 0.0)
+    }
+
+    /// The first crossing in [t0, t1], whose ends are inside as (ia, ib); `eps_t` the
+    /// resolution and `tol` the tolerance along the ray, as in [`crate::interval_trace`].
+    pub(crate) fn first_crossing(
+        &self,
+        (ia, ib): (bool, bool),
+        eps_t: f64,
+        tol: f64,
+    ) -> Option<f64> {
+        let mut search = Search {
+            p: self.p,
+            dp: self.p.derivative(),
+            eps_u: eps_t / self.h,
+            tol_u: tol / self.h,
+            visits: 0,
+        };
+        let u = search.run(&self.p.to_bernstein(), (0.0, 1.0), (ia, ib), 0)?;
+        Some(self.t0 + self.h * u)
+    }
 }
 
 /// Grows this thread's scratch to a tape of `n` nodes (nothing allocates once warm).
