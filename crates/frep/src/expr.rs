@@ -174,17 +174,48 @@ fn eval_binary(op: BinaryOp, a: f64, b: f64) -> f64 {
     apply_binary(op, a, b)
 }
 
-/// One node's value from its operands' values in `scratch`.
+/// Writes node `n`'s value (narrowed where it is an R-function) to `scratch[i]`; the
+/// slots before it hold its operands' values. Each operation stores its own result
+/// into a slot sized beforehand ([`slots`]): joined into one value and pushed (which
+/// may call the allocator), a wide scalar (`Dual<Interval, 1>` is 32 bytes) was
+/// spilled to the stack in halves and reloaded whole, a store-forwarding stall on
+/// every node.
 #[inline(always)]
-fn eval_node<S: Scalar>(n: Node, scratch: &[S], x: S, y: S, z: S) -> S {
+fn set_node<S: Scalar>(nodes: &[Node], i: usize, n: Node, scratch: &mut [S], x: S, y: S, z: S) {
+    macro_rules! put {
+        ($v:expr) => {{
+            let v = $v;
+            scratch[i] = v
+        }};
+    }
     match n {
-        Node::Const(b) => S::constant(f64::from_bits(b)),
-        Node::Var(Var::X) => x,
-        Node::Var(Var::Y) => y,
-        Node::Var(Var::Z) => z,
-        Node::Unary(op, a) => apply_unary(op, scratch[a as usize]),
-        Node::Binary(op, a, b) => apply_binary(op, scratch[a as usize], scratch[b as usize]),
-        Node::PowI(a, k) => scratch[a as usize].powi(k),
+        Node::Const(b) => put!(S::constant(f64::from_bits(b))),
+        Node::Var(Var::X) => put!(x),
+        Node::Var(Var::Y) => put!(y),
+        Node::Var(Var::Z) => put!(z),
+        Node::PowI(a, k) => put!(scratch[a as usize].powi(k)),
+        Node::Unary(op, a) => {
+            let a = scratch[a as usize];
+            match op {
+                UnaryOp::Neg => put!(-a),
+                UnaryOp::Abs => put!(a.abs()),
+                UnaryOp::Sqrt => put!(a.sqrt()),
+                UnaryOp::Square => put!(a.square()),
+                op => put!(apply_unary(op, a)),
+            }
+        }
+        Node::Binary(op, a, b) => {
+            let (u, w) = (scratch[a as usize], scratch[b as usize]);
+            match op {
+                BinaryOp::Add => put!(r_narrowed(nodes, n, u + w, scratch)),
+                BinaryOp::Sub => put!(r_narrowed(nodes, n, u - w, scratch)),
+                BinaryOp::Mul => put!(u * w),
+                BinaryOp::Div => put!(u / w),
+                BinaryOp::Min => put!(u.min(w)),
+                BinaryOp::Max => put!(u.max(w)),
+                op => put!(apply_binary(op, u, w)),
+            }
+        }
     }
 }
 
@@ -408,12 +439,21 @@ impl Expr {
 /// node values: [`Expr::eval_with`] over a borrowed tape.
 #[inline]
 pub fn eval_nodes<S: Scalar>(nodes: &[Node], x: S, y: S, z: S, scratch: &mut Vec<S>) -> S {
-    scratch.clear();
-    for n in nodes {
-        let v = r_narrowed(nodes, *n, eval_node(*n, scratch, x, y, z), scratch);
-        scratch.push(v);
+    let scratch = slots(scratch, nodes.len());
+    for (i, n) in nodes.iter().enumerate() {
+        set_node(nodes, i, *n, scratch, x, y, z);
     }
     *scratch.last().expect("an expression has a root")
+}
+
+/// The first `n` values of `scratch`, grown to hold them (grown once per thread in
+/// practice). What they held before is never read: a node's operands precede it.
+#[inline]
+fn slots<S: Scalar>(scratch: &mut Vec<S>, n: usize) -> &mut [S] {
+    if scratch.len() < n {
+        scratch.resize(n, S::constant(0.0));
+    }
+    &mut scratch[..n]
 }
 
 /// [`Expr::eval_choices`] over a borrowed tape.
@@ -425,11 +465,11 @@ pub fn eval_choices_nodes<S: Scalar>(
     scratch: &mut Vec<S>,
     choices: &mut Vec<Choice>,
 ) -> S {
-    scratch.clear();
+    let scratch = slots(scratch, nodes.len());
     choices.clear();
-    for n in nodes {
+    for (i, n) in nodes.iter().enumerate() {
         let mut choice = Choice::Both;
-        let v = match *n {
+        match *n {
             Node::Binary(op @ (BinaryOp::Min | BinaryOp::Max), a, b) => {
                 let (u, w) = (scratch[a as usize], scratch[b as usize]);
                 let a_low = u.less(w) == Some(true);
@@ -440,14 +480,13 @@ pub fn eval_choices_nodes<S: Scalar>(
                     _ => Choice::Both,
                 };
                 match choice {
-                    Choice::Left => u,
-                    Choice::Right => w,
-                    Choice::Both => apply_binary(op, u, w),
+                    Choice::Left => scratch[i] = u,
+                    Choice::Right => scratch[i] = w,
+                    Choice::Both => scratch[i] = apply_binary(op, u, w),
                 }
             }
-            node => r_narrowed(nodes, node, eval_node(node, scratch, x, y, z), scratch),
-        };
-        scratch.push(v);
+            node => set_node(nodes, i, node, scratch, x, y, z),
+        }
         choices.push(choice);
     }
     *scratch.last().expect("an expression has a root")

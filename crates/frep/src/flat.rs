@@ -110,8 +110,8 @@ pub enum Leaf {
         bounds: Aabb,
         /// Resolution along rays ([`crate::interval_trace::resolution`]).
         eps: f64,
-        /// Its occupancy grid in [`Flat::grids`]: the occupancy bits, then as many
-        /// words of the empty cells' signs (empty: none).
+        /// Its occupancy grid in [`Flat::grids`]: the occupancy bits, as many words
+        /// of the empty cells' signs, then the block bits (empty: none).
         grid: Span,
         /// Its cells' tape ranges in [`Flat::grid_cells`] (relative to `cell_tapes`).
         grid_cells: Span,
@@ -159,8 +159,8 @@ pub struct Flat {
     pub tapes: Vec<Node>,
     /// Register bytecode of the tapes ([`crate::bytecode::Bytecode::words`]).
     pub bytecode: Vec<u32>,
-    /// Expression leaves' occupancy grids ([`crate::occupancy`]), two bitsets each
-    /// (occupied cells, then the empty cells' signs).
+    /// Expression leaves' occupancy grids ([`crate::occupancy`]), three bitsets each
+    /// (occupied cells, the empty cells' signs, the blocks holding occupied cells).
     pub grids: Vec<u64>,
     /// Per cell of each occupancy grid, its tape's range in the leaf's `cell_tapes`.
     pub grid_cells: Vec<[u32; 2]>,
@@ -204,9 +204,10 @@ impl Flat {
         let c0 = self.bytecode.len();
         self.bytecode.extend_from_slice(code.words());
         let g0 = self.grids.len();
-        // The occupancy bits, then the signs of the empty cells.
+        // The occupancy bits, the signs of the empty cells, the clear blocks.
         self.grids.extend_from_slice(v.grid.words);
         self.grids.extend_from_slice(v.grid.inside);
+        self.grids.extend_from_slice(v.grid.blocks);
         let gc0 = self.grid_cells.len();
         self.grid_cells.extend_from_slice(v.grid.cells);
         let ct0 = self.cell_tapes.len();
@@ -259,15 +260,19 @@ impl Flat {
                 degree,
                 ..
             } => {
+                // The occupancy bits, the signs (as many words) and the blocks.
                 let words = &self.grids[grid.range()];
-                let words_and_signs = words.split_at(words.len() / 2);
+                let w = (grid_n as usize).pow(3) / 64;
+                let (occupied, rest) = words.split_at(w.min(words.len()));
+                let (signs, blocks) = rest.split_at(w.min(rest.len()));
                 LeafView::Expr(ExprView {
                     tape: &self.tapes[tape.range()],
                     bounds,
                     eps,
                     grid: GridView {
-                        words: words_and_signs.0,
-                        inside: words_and_signs.1,
+                        words: occupied,
+                        inside: signs,
+                        blocks,
                         cells: &self.grid_cells[grid_cells.range()],
                         nodes: &self.cell_tapes[cell_tapes.range()],
                         n: grid_n as usize,

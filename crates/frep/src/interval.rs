@@ -1,7 +1,7 @@
 //! Interval arithmetic: guaranteed bounds of an expression over a box.
 //!
 //! Every operation returns an interval that contains the exact result for every point of
-//! its operands (Moore, "Interval Analysis", 1966), widened outward by one ulp so that
+//! its operands (Moore, "Interval Analysis", 1966), widened outward by one or two ulps so that
 //! floating-point rounding can never make a bound too tight. An empty or undefined result
 //! (√ of a wholly negative interval, 0·∞) is NaN, which callers read as "unknown".
 
@@ -18,22 +18,34 @@ pub struct Interval {
     pub hi: f64,
 }
 
+/// The least subnormal: the widening of a zero bound.
+const TINY: f64 = f64::from_bits(1);
+
+/// The widening of a bound `v`: |v|·2⁻⁵², at least one ulp of v (and at most two), plus
+/// the least subnormal so that zero and subnormals widen too; capped at `f64::MAX` so
+/// that an infinite bound stays infinite (∞ − MAX = ∞). NaN stays NaN. Branch-free,
+/// where `next_down`/`next_up` branch on the bit pattern.
 #[inline]
-fn down(v: f64) -> f64 {
-    if v.is_finite() {
-        v.next_down()
+fn ulp_above(v: f64) -> f64 {
+    let d = v.abs() * f64::EPSILON + TINY;
+    if d < f64::MAX {
+        d
     } else {
-        v
+        f64::MAX
     }
 }
 
+/// A value below `v` by at least one ulp (round to nearest: v − d with d ≥ ulp(v) is
+/// below v even after rounding); infinities and NaN unchanged.
+#[inline]
+fn down(v: f64) -> f64 {
+    v - ulp_above(v)
+}
+
+/// A value above `v` by at least one ulp, as [`down`].
 #[inline]
 fn up(v: f64) -> f64 {
-    if v.is_finite() {
-        v.next_up()
-    } else {
-        v
-    }
+    v + ulp_above(v)
 }
 
 impl Interval {
@@ -52,7 +64,7 @@ impl Interval {
     /// The "unknown / empty" interval.
     pub const NAN: Self = Self::new(f64::NAN, f64::NAN);
 
-    /// Bounds widened outward by one ulp each.
+    /// Bounds widened outward by one or two ulps each.
     #[inline]
     fn widened(lo: f64, hi: f64) -> Self {
         if lo.is_nan() || hi.is_nan() {
@@ -402,6 +414,50 @@ mod tests {
     use rand::{Rng, SeedableRng};
 
     /// Every unary operation's interval contains the point results of random points in it.
+    /// Outward rounding moves every finite bound by one or two ulps, zero and
+    /// subnormals included, and keeps infinities and NaN.
+    #[test]
+    fn widening_is_one_or_two_ulps() {
+        let tiny = f64::from_bits(1);
+        let mut values = vec![
+            0.0,
+            -0.0,
+            tiny,
+            3.0 * tiny,
+            f64::MIN_POSITIVE,
+            1.0,
+            1.5,
+            0.1,
+        ];
+        values.extend([
+            1e-300,
+            3e7,
+            2f64.powi(52),
+            1.0 - f64::EPSILON / 2.0,
+            f64::MAX / 4.0,
+        ]);
+        for v in values.clone() {
+            values.push(-v);
+        }
+        for v in values {
+            let (d, u) = (down(v), up(v));
+            assert!(
+                d <= v.next_down() && d >= v.next_down().next_down(),
+                "down {v:e}: {d:e}"
+            );
+            assert!(
+                u >= v.next_up() && u <= v.next_up().next_up(),
+                "up {v:e}: {u:e}"
+            );
+        }
+        assert_eq!(up(f64::MAX), f64::INFINITY);
+        assert_eq!(down(-f64::MAX), f64::NEG_INFINITY);
+        for inf in [f64::INFINITY, f64::NEG_INFINITY] {
+            assert_eq!((down(inf), up(inf)), (inf, inf));
+        }
+        assert!(down(f64::NAN).is_nan() && up(f64::NAN).is_nan());
+    }
+
     #[test]
     fn unary_ops_enclose_samples() {
         let mut rng = rand_pcg::Pcg64::seed_from_u64(7);

@@ -32,6 +32,10 @@ pub const GRID_WORDS: usize = GRID * GRID * GRID / 64;
 /// grid, and rays search their whole segment as before.
 const BUILD_BUDGET: usize = 1 << 25;
 
+/// Cells per axis of a block: the walk along a ray crosses a block with no occupied
+/// cell in one step ([`Grid::blocks`]).
+pub const BLOCK: usize = 4;
+
 /// The bit of cell (x, y, z) of a grid of `n` cells per axis.
 #[inline]
 fn bit(n: usize, x: usize, y: usize, z: usize) -> usize {
@@ -59,6 +63,11 @@ pub struct Grid {
     /// (inside the solid), clear where it is empty and F < 0, or occupied. A ray's run
     /// of occupied cells takes the sign at its ends from the empty cells beside it.
     pub inside: Vec<u64>,
+    /// One bit per block of [`BLOCK`]³ cells (the block (x, y, z) at
+    /// `bit(n / BLOCK, x, y, z)`): set where any of its cells is occupied. Across a
+    /// clear block F keeps one sign (its cells are empty and share faces), so a ray
+    /// crosses it in one step.
+    pub blocks: Vec<u64>,
     /// Per cell, its tape as a range of `nodes` (empty: no cell tapes).
     pub cells: Vec<[u32; 2]>,
     /// The cell tapes, each root last; the first is the whole tape.
@@ -74,6 +83,8 @@ pub struct GridView<'a> {
     pub words: &'a [u64],
     /// See [`Grid::inside`].
     pub inside: &'a [u64],
+    /// See [`Grid::blocks`].
+    pub blocks: &'a [u64],
     /// See [`Grid::cells`].
     pub cells: &'a [[u32; 2]],
     /// See [`Grid::nodes`].
@@ -88,6 +99,7 @@ impl Grid {
         GridView {
             words: &self.words,
             inside: &self.inside,
+            blocks: &self.blocks,
             cells: &self.cells,
             nodes: &self.nodes,
             n: self.n,
@@ -100,6 +112,7 @@ impl<'a> GridView<'a> {
     pub const NONE: GridView<'static> = GridView {
         words: &[],
         inside: &[],
+        blocks: &[],
         cells: &[],
         nodes: &[],
         n: 0,
@@ -109,7 +122,20 @@ impl<'a> GridView<'a> {
     #[inline]
     pub fn is_some(&self) -> bool {
         let w = self.n * self.n * self.n / 64;
-        self.n > 0 && self.words.len() == w && self.inside.len() == w
+        self.n > 0
+            && self.words.len() == w
+            && self.inside.len() == w
+            && self.blocks.len() == block_words(self.n)
+    }
+
+    /// The cell holding `p` (clamped to the grid), for a grid over `b`.
+    #[inline]
+    fn cell_of(&self, b: &Aabb, p: DVec3) -> usize {
+        let n = self.n;
+        let c = ((p - b.lo) / (b.hi - b.lo) * n as f64)
+            .floor()
+            .clamp(DVec3::ZERO, DVec3::splat(n as f64 - 1.0));
+        bit(n, c.x as usize, c.y as usize, c.z as usize)
     }
 
     /// Whether a point in the cell holding `p` is inside (F ≥ 0) when that cell is
@@ -120,11 +146,7 @@ impl<'a> GridView<'a> {
         if !self.is_some() {
             return None;
         }
-        let n = self.n;
-        let c = ((p - b.lo) / (b.hi - b.lo) * n as f64)
-            .floor()
-            .clamp(DVec3::ZERO, DVec3::splat(n as f64 - 1.0));
-        let k = bit(n, c.x as usize, c.y as usize, c.z as usize);
+        let k = self.cell_of(b, p);
         let get = |w: &[u64]| w[k / 64] >> (k % 64) & 1 == 1;
         (!get(self.words)).then(|| get(self.inside))
     }
@@ -139,10 +161,7 @@ impl<'a> GridView<'a> {
         if n == 0 || self.cells.len() != n * n * n || !Aabb::new(b.lo - m, b.hi + m).contains(p) {
             return None;
         }
-        let c = ((p - b.lo) / (b.hi - b.lo) * n as f64)
-            .floor()
-            .clamp(DVec3::ZERO, DVec3::splat(n as f64 - 1.0));
-        let [s, e] = self.cells[bit(n, c.x as usize, c.y as usize, c.z as usize)];
+        let [s, e] = self.cells[self.cell_of(b, p)];
         Some(&self.nodes[s as usize..e as usize])
     }
 }
@@ -250,16 +269,34 @@ fn build_n(tape: &[Node], b: &Aabb, n: usize) -> Option<(Grid, usize)> {
         }
         words
     };
+    let m = n / BLOCK;
+    let mut blocks = vec![0u64; block_words(n)];
+    for z in 0..n {
+        for y in 0..n {
+            for x in 0..n {
+                if occupied[bit(n, x, y, z)] {
+                    let k = bit(m, x / BLOCK, y / BLOCK, z / BLOCK);
+                    blocks[k / 64] |= 1 << (k % 64);
+                }
+            }
+        }
+    }
     Some((
         Grid {
             words: bits(&occupied),
             inside: bits(&inside),
+            blocks,
             cells,
             nodes,
             n,
         },
         spent,
     ))
+}
+
+/// Words of the block bitset of a grid of `n` cells per axis.
+pub fn block_words(n: usize) -> usize {
+    (n / BLOCK).pow(3).div_ceil(64)
 }
 
 /// Boxes this many cells wide or less are also bounded by the mean-value form.
@@ -332,11 +369,35 @@ pub fn runs<'g>(
     // The sign of the last cell walked, when it was empty.
     let mut before = None;
     let mut t = t0;
+    let argmin = |f: &[f64; 3]| (0..3).fold(0, |m, k| if f[k] < f[m] { k } else { m });
+    let m = g / BLOCK;
+    let clear = |c: &[i64; 3]| {
+        let [x, y, z] = c.map(|v| v as usize / BLOCK);
+        let k = bit(m, x, y, z);
+        grid.blocks[k / 64] >> (k % 64) & 1 == 0
+    };
     loop {
-        let k = (0..3).fold(0, |m, k| if next[k] < next[m] { k } else { m });
-        let exit = next[k].min(t1);
         let n = bit(g, c[0] as usize, c[1] as usize, c[2] as usize);
-        let here = (!occupied(n)).then(|| positive(n));
+        // In a clear block the walk steps to the block's exit at once: its cells are
+        // all empty, with this cell's sign. `far` holds, per axis, the face where the
+        // walk would leave the block, by the same additions as cell by cell.
+        let skip = clear(&c);
+        let here = (skip || !occupied(n)).then(|| positive(n));
+        let mut far = next;
+        let mut rest = [0i64; 3];
+        if skip {
+            for j in 0..3 {
+                if step[j] != 0 {
+                    let r = c[j] % BLOCK as i64;
+                    rest[j] = if step[j] > 0 { BLOCK as i64 - 1 - r } else { r };
+                    for _ in 0..rest[j] {
+                        far[j] += delta[j];
+                    }
+                }
+            }
+        }
+        let k = argmin(&far);
+        let exit = far[k].min(t1);
         match (here, start) {
             (None, None) => start = Some((t, span(n), before)),
             (None, Some((a, s, ka))) if s != span(n) => {
@@ -356,6 +417,19 @@ pub fn runs<'g>(
         before = here;
         if exit >= t1 {
             break;
+        }
+        if skip {
+            // The other axes step over the faces they cross before the exit (within
+            // the block: their own exits lie at or past it), and axis k to the
+            // block's last cell.
+            for j in (0..3).filter(|&j| j != k) {
+                while next[j] < far[k] {
+                    c[j] += step[j];
+                    next[j] += delta[j];
+                }
+            }
+            c[k] += rest[k] * step[k];
+            next[k] = far[k];
         }
         c[k] += step[k];
         if !(0..=last).contains(&c[k]) {

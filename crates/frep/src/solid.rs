@@ -221,12 +221,19 @@ impl Solid {
     /// nothing is evaluated: F < 0 there, or the bounds are a model's domain, which caps
     /// the solid for ray queries too ([`crate::interval_trace`]).
     pub fn inside(&self, p: DVec3) -> bool {
-        let b = Surface::bounds(self);
+        self.inside_node(self.root(), p)
+    }
+
+    /// Whether p is inside node i, as [`Self::inside`]: outside the node's bounds
+    /// nothing is evaluated (a CSG walk asks every part's state where the ray enters,
+    /// and most parts lie far from there).
+    fn inside_node(&self, i: usize, p: DVec3) -> bool {
+        let b = self.flat.nodes[i].bounds;
         let pad = 1e-9 * (1.0 + b.extent().max_element());
         if !Aabb::new(b.lo - pad, b.hi + pad).contains(p) {
             return false;
         }
-        Surface::value(self, p) >= 0.0
+        self.value_node(i, p) >= 0.0
     }
 
     fn intersect_node(&self, i: usize, ray: &Ray, t_min: f64, t_max: f64) -> Option<Hit> {
@@ -286,7 +293,7 @@ impl Solid {
         let mut state = [false; MAX_PARTS];
         let mut next: [Option<Hit>; MAX_PARTS] = [None; MAX_PARTS];
         for (k, &p) in parts.iter().enumerate() {
-            state[k] = self.value_node(p as usize, start) >= 0.0;
+            state[k] = self.inside_node(p as usize, start);
             next[k] = self.intersect_node(p as usize, ray, lo, hi);
         }
         let mut combined = rule.apply(&state[..n]);

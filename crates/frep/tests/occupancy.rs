@@ -164,3 +164,92 @@ fn cell_tapes_equal_the_whole_tape() {
         }
     }
 }
+
+/// The walk crosses a block with no occupied cell in one step ([`frep::occupancy::BLOCK`]):
+/// it reports the same runs, with the same tapes and end signs, as the cell-by-cell
+/// walk (every block marked occupied), on perspective rays from three eyes, rays along
+/// the axes (the heightmap's) and along the diagonals; and a block is marked exactly
+/// where one of its cells is occupied.
+#[test]
+fn clear_blocks_change_no_run() {
+    use frep::occupancy::{runs, BLOCK};
+    use frep::Ray;
+    for m in [
+        "models/canonical/s2_csg.hf",
+        "models/canonical/s4_gyroid.hf",
+        "models/examples/machined_part.frep",
+        "../shared/models/fidget/colonnade.vm",
+    ] {
+        let model = read_file(&path(m)).unwrap_or_else(|e| panic!("{m}: {e}"));
+        let solid = Solid::build(&model.shape).unwrap();
+        for v in leaf_views(&solid) {
+            let (n, k) = (v.grid.n, v.grid.n / BLOCK);
+            let mut clear = 0;
+            for (x, y, z) in (0..k * k * k).map(|i| (i % k, i / k % k, i / (k * k))) {
+                let any = (0..BLOCK * BLOCK * BLOCK).any(|j| {
+                    let c = [x, y, z].map(|c| c * BLOCK);
+                    let (cx, cy, cz) = (c[0] + j % BLOCK, c[1] + j / BLOCK % BLOCK, c[2] + j / 16);
+                    let i = (cz * n + cy) * n + cx;
+                    v.grid.words[i / 64] >> (i % 64) & 1 == 1
+                });
+                let i = (z * k + y) * k + x;
+                assert_eq!(
+                    v.grid.blocks[i / 64] >> (i % 64) & 1 == 1,
+                    any,
+                    "{m}: block"
+                );
+                clear += usize::from(!any);
+            }
+            let every = vec![u64::MAX; v.grid.blocks.len()];
+            let walked = frep::occupancy::GridView {
+                blocks: &every,
+                ..v.grid
+            };
+            let g = Aabb::new(v.bounds.lo - v.eps, v.bounds.hi + v.eps);
+            let (c, r) = (g.center(), 0.5 * g.extent().length());
+            let mut rays = common::eye_rays(&g);
+            for i in 0..40 {
+                for j in 0..40 {
+                    let (u, w) = (
+                        (i as f64 + 0.37) / 20.0 - 1.0,
+                        (j as f64 + 0.61) / 20.0 - 1.0,
+                    );
+                    for (o, d) in [
+                        (DVec3::new(u, w, 2.0), -DVec3::Z),
+                        (DVec3::new(-2.0, u, w), DVec3::X),
+                        (DVec3::new(u, -2.0, w), DVec3::Y),
+                        (DVec3::new(u, w, -2.0), DVec3::ONE),
+                    ] {
+                        rays.push(Ray::new(c + o * r, d));
+                    }
+                }
+            }
+            let (mut total, mut runs_seen) = (0, 0);
+            for ray in &rays {
+                let Some((t0, t1)) = g.clip(ray, 0.0, f64::INFINITY) else {
+                    continue;
+                };
+                let record = |grid| {
+                    let mut out = Vec::new();
+                    runs(grid, &g, ray, t0, t1, |a, b, tape, known| {
+                        out.push((a, b, tape.map(|t: &[frep::Node]| t.as_ptr()), known));
+                        false
+                    });
+                    out
+                };
+                let (fast, slow) = (record(v.grid), record(walked));
+                assert_eq!(fast, slow, "{m}: {ray:?}");
+                total += 1;
+                runs_seen += fast.len();
+            }
+            println!(
+                "{m}: {clear} of {} blocks clear; {total} rays, {runs_seen} runs",
+                k * k * k
+            );
+            assert!(
+                clear > 0 && runs_seen > 1000,
+                "{m}: {clear} clear, {runs_seen} runs"
+            );
+        }
+    }
+}
