@@ -140,12 +140,16 @@ impl<S: Scalar, const N: usize> Scalar for Dual<S, N> {
         let neg = self.v.less(S::constant(0.0));
         Self::select(neg, -self, self, self.v.abs())
     }
+    #[inline]
     fn sqrt(self) -> Self {
         let r = self.v.sqrt();
         self.chain(r, S::constant(0.5) / r)
     }
+    #[inline]
     fn square(self) -> Self {
-        self.chain(self.v.square(), S::constant(2.0) * self.v)
+        // 2v as v + v: the same value (doubling is exact), an addition instead of a
+        // product (four, for an interval).
+        self.chain(self.v.square(), self.v + self.v)
     }
     fn powi(self, n: i32) -> Self {
         match n {
