@@ -466,15 +466,16 @@ pub fn eval_choices_nodes<S: Scalar>(
     choices: &mut Vec<Choice>,
 ) -> S {
     let scratch = slots(scratch, nodes.len());
+    // Every node but a decided min/max keeps `Both`: filled at once, not pushed per node.
     choices.clear();
+    choices.resize(nodes.len(), Choice::Both);
     for (i, n) in nodes.iter().enumerate() {
-        let mut choice = Choice::Both;
         match *n {
             Node::Binary(op @ (BinaryOp::Min | BinaryOp::Max), a, b) => {
                 let (u, w) = (scratch[a as usize], scratch[b as usize]);
                 let a_low = u.less(w) == Some(true);
                 let b_low = w.less(u) == Some(true);
-                choice = match (op, a_low, b_low) {
+                let choice = match (op, a_low, b_low) {
                     (BinaryOp::Min, true, _) | (BinaryOp::Max, _, true) => Choice::Left,
                     (BinaryOp::Min, _, true) | (BinaryOp::Max, true, _) => Choice::Right,
                     _ => Choice::Both,
@@ -484,10 +485,10 @@ pub fn eval_choices_nodes<S: Scalar>(
                     Choice::Right => scratch[i] = w,
                     Choice::Both => scratch[i] = apply_binary(op, u, w),
                 }
+                choices[i] = choice;
             }
             node => set_node(nodes, i, node, scratch, x, y, z),
         }
-        choices.push(choice);
     }
     *scratch.last().expect("an expression has a root")
 }
