@@ -292,6 +292,24 @@ impl ExprView<'_> {
     /// (from the tape simplified for the hit's segment: same values there, a fraction of
     /// the nodes; else +z). Allocates nothing once this thread's scratch has grown.
     pub fn trace(&self, ray: &Ray, t_min: f64, t_max: f64, normal: bool) -> Option<(f64, DVec3)> {
+        let want = match normal {
+            true => Want::Normal,
+            false => Want::Crossing,
+        };
+        self.search(ray, t_min, t_max, want)
+    }
+
+    /// Whether [`Self::trace`] finds a crossing in (t_min, t_max) (a shadow ray's
+    /// question): the same search, stopped where it would refine the crossing, so the
+    /// answer is the same without the Newton steps and the normal.
+    pub fn crosses(&self, ray: &Ray, t_min: f64, t_max: f64) -> bool {
+        self.search(ray, t_min, t_max, Want::Any).is_some()
+    }
+
+    /// [`Self::trace`] for `want`; with [`Want::Any`] the t returned is only somewhere in
+    /// the segment that holds the first crossing.
+    fn search(&self, ray: &Ray, t_min: f64, t_max: f64, want: Want) -> Option<(f64, DVec3)> {
+        let normal = want == Want::Normal;
         // Outside the bounds F < 0, so crossings lie inside them; widen a little so that
         // a surface on the box face is not clipped away.
         let grown = grown(&self.bounds, self.eps);
@@ -339,7 +357,7 @@ impl ExprView<'_> {
             ray,
             eps_t,
             tol,
-            normal,
+            want,
         };
         if let Some(along) = along {
             return match along.first_crossing((ia, ib), eps_t, tol) {
@@ -393,13 +411,22 @@ impl ExprView<'_> {
     }
 }
 
+/// What a search returns: the first crossing, with or without its normal, or only
+/// whether there is one.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Want {
+    Crossing,
+    Normal,
+    Any,
+}
+
 /// One ray's search of a segment by subdivision (the loop of [`ExprView::trace`]).
 struct Search<'a> {
     root: &'a [Node],
     ray: &'a Ray,
     eps_t: f64,
     tol: f64,
-    normal: bool,
+    want: Want,
 }
 
 impl Search<'_> {
@@ -417,7 +444,7 @@ impl Search<'_> {
             ray,
             eps_t,
             tol,
-            normal,
+            want,
         } = *self;
         let Trace {
             stack,
@@ -448,10 +475,13 @@ impl Search<'_> {
                 // Monotonic (at most one crossing), below resolution or past the
                 // budget: decided by the signs at the ends.
                 if ia != ib {
+                    if want == Want::Any {
+                        return Some((a, DVec3::Z));
+                    }
                     let t = refine(nodes, ray, a, b, ia, tol);
-                    let n = match normal {
-                        true => outward(gradient_by(nodes, ray.at(t))),
-                        false => DVec3::Z,
+                    let n = match want {
+                        Want::Normal => outward(gradient_by(nodes, ray.at(t))),
+                        _ => DVec3::Z,
                     };
                     return Some((t, n));
                 }

@@ -217,6 +217,20 @@ impl Solid {
         self.intersect_node(self.root(), ray, t_min, t_max)
     }
 
+    /// Whether there is a crossing in (t_min, t_max): `intersect(..).is_some()` (a
+    /// shadow ray's question), which a solid of one leaf answers without refining the
+    /// crossing or computing its normal.
+    pub fn occludes(&self, ray: &Ray, t_min: f64, t_max: f64) -> bool {
+        let node = &self.flat.nodes[self.root()];
+        if !matches!(node.op, CsgOp::Leaf) {
+            return self.intersect(ray, t_min, t_max).is_some();
+        }
+        match self.flat.leaf(node.operands.first as usize) {
+            LeafView::Perturbed(ref s) => s.first_crossing(ray, t_min, t_max).is_some(),
+            LeafView::Expr(ref s) => s.crosses(ray, t_min, t_max),
+        }
+    }
+
     /// Whether p is inside: F ≥ 0 within the bounds (grown by rounding). Outside them
     /// nothing is evaluated: F < 0 there, or the bounds are a model's domain, which caps
     /// the solid for ray queries too ([`crate::interval_trace`]).

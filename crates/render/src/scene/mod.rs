@@ -184,7 +184,7 @@ impl Scene {
     /// Whether any object surface lies in (t_min, t_max) (shadow rays).
     pub fn occluded(&self, ray: &Ray, t_min: f64, t_max: f64) -> bool {
         self.bvh.any_hit(ray, t_min, t_max, |i| {
-            self.objects[i].solid.intersect(ray, t_min, t_max).is_some()
+            self.objects[i].solid.occludes(ray, t_min, t_max)
         })
     }
 }
