@@ -71,28 +71,35 @@ pub fn degree(tape: &[Node]) -> Option<usize> {
 /// coefficients above it are zero).
 type Coeffs = ([f64; MAX_DEGREE + 1], usize);
 
-/// p·q; the degrees add up to at most [`MAX_DEGREE`] in the tapes [`degree`] accepts.
+/// p·q into `out`; the degrees add up to at most [`MAX_DEGREE`] in the tapes [`degree`]
+/// accepts. Accumulated in place: a product built on the stack and copied out was
+/// reloaded in 16-byte halves of its 8-byte stores (a store-forwarding stall).
 #[inline(always)]
-fn mul((p, m): &Coeffs, (q, n): &Coeffs) -> Coeffs {
-    let mut r = [0.0; MAX_DEGREE + 1];
-    for i in 0..=*m {
-        for j in 0..=*n {
-            r[i + j] += p[i] * q[j];
+fn mul_into(out: &mut Coeffs, (p, m): &Coeffs, (q, n): &Coeffs) {
+    out.0 = [0.0; MAX_DEGREE + 1];
+    for (i, a) in p.iter().enumerate().take(m + 1) {
+        for (j, b) in q.iter().enumerate().take(n + 1) {
+            out.0[i + j] += a * b;
         }
     }
-    (r, m + n)
+    out.1 = m + n;
 }
 
-/// F(p + u·dp) as a polynomial in u, for a tape that [`degree`] accepts.
+/// F(p + u·dp) as a polynomial in u, for a tape that [`degree`] accepts. Each node's
+/// coefficients are computed in their own slot (sized beforehand), not on the stack and
+/// copied: see [`mul_into`].
 fn along(tape: &[Node], p: DVec3, dp: DVec3, scratch: &mut Vec<Coeffs>) -> Coeffs {
-    scratch.clear();
-    for &n in tape {
-        let s = |i: u32| &scratch[i as usize];
-        let mut v = [0.0; MAX_DEGREE + 1];
-        let v = match n {
+    if scratch.len() < tape.len() {
+        scratch.resize(tape.len(), ([0.0; MAX_DEGREE + 1], 0));
+    }
+    for (i, &n) in tape.iter().enumerate() {
+        let (done, rest) = scratch.split_at_mut(i);
+        let (s, out) = (|i: u32| &done[i as usize], &mut rest[0]);
+        match n {
             Node::Const(b) => {
-                v[0] = f64::from_bits(b);
-                (v, 0)
+                out.0 = [0.0; MAX_DEGREE + 1];
+                out.0[0] = f64::from_bits(b);
+                out.1 = 0;
             }
             Node::Var(x) => {
                 let k = match x {
@@ -100,40 +107,41 @@ fn along(tape: &[Node], p: DVec3, dp: DVec3, scratch: &mut Vec<Coeffs>) -> Coeff
                     Var::Y => 1,
                     Var::Z => 2,
                 };
-                (v[0], v[1]) = (p[k], dp[k]);
-                (v, 1)
+                out.0 = [0.0; MAX_DEGREE + 1];
+                (out.0[0], out.0[1]) = (p[k], dp[k]);
+                out.1 = 1;
             }
             Node::Unary(UnaryOp::Neg, a) => {
                 let (a, m) = s(a);
-                (a.map(|c| -c), *m)
+                *out = (a.map(|c| -c), *m);
             }
-            Node::Unary(UnaryOp::Square, a) => mul(s(a), s(a)),
+            Node::Unary(UnaryOp::Square, a) => mul_into(out, s(a), s(a)),
             Node::Binary(op @ (BinaryOp::Add | BinaryOp::Sub), a, b) => {
                 let ((a, m), (b, n)) = (s(a), s(b));
-                let v = match op {
+                out.0 = match op {
                     BinaryOp::Add => std::array::from_fn(|k| a[k] + b[k]),
                     _ => std::array::from_fn(|k| a[k] - b[k]),
                 };
-                (v, *m.max(n))
+                out.1 = *m.max(n);
             }
-            Node::Binary(BinaryOp::Mul, a, b) => mul(s(a), s(b)),
+            Node::Binary(BinaryOp::Mul, a, b) => mul_into(out, s(a), s(b)),
             Node::Binary(BinaryOp::Div, a, b) => {
                 let ((a, m), d) = (s(a), s(b).0[0]);
-                (a.map(|c| c / d), *m)
+                *out = (a.map(|c| c / d), *m);
             }
             Node::PowI(a, k) => {
-                v[0] = 1.0;
-                let mut r = (v, 0);
+                let mut r = [0.0; MAX_DEGREE + 1];
+                r[0] = 1.0;
+                *out = (r, 0);
                 for _ in 0..k {
-                    r = mul(&r, s(a));
+                    let prev = *out;
+                    mul_into(out, &prev, s(a));
                 }
-                r
             }
             _ => unreachable!("a tape `degree` accepted"),
-        };
-        scratch.push(v);
+        }
     }
-    *scratch.last().expect("an expression has a root")
+    scratch[tape.len() - 1]
 }
 
 /// One ray's search of [t0, t1] over a polynomial tape: F(t0 + h·u) = `p`(u).
