@@ -523,14 +523,15 @@ fn significant_sign_changes<T: Float>(b: &[T], e: &[T]) -> usize {
 /// the stack that made the search's next reads of the halves stall.
 #[inline]
 fn split_half<T: Float>(b: &[T; N1], n: usize) -> ([T; N1], [T; N1]) {
+    debug_assert!(n <= MAX_DEGREE);
     match n {
+        0 => split_half_fixed::<T, 0>(b),
         1 => split_half_fixed::<T, 1>(b),
         2 => split_half_fixed::<T, 2>(b),
         3 => split_half_fixed::<T, 3>(b),
         4 => split_half_fixed::<T, 4>(b),
         5 => split_half_fixed::<T, 5>(b),
-        6 => split_half_fixed::<T, 6>(b),
-        _ => split_half_any(b, n),
+        _ => split_half_fixed::<T, MAX_DEGREE>(b),
     }
 }
 
@@ -549,24 +550,6 @@ fn split_half_fixed<T: Float, const N: usize>(b: &[T; N1]) -> ([T; N1], [T; N1])
         }
         l[k] = w[0];
         r[N - k] = w[N - k];
-    }
-    (l, r)
-}
-
-/// [`split_half`] for any degree n ≤ [`MAX_DEGREE`].
-fn split_half_any<T: Float>(b: &[T; N1], n: usize) -> ([T; N1], [T; N1]) {
-    let half = cst::<T>(0.5);
-    let mut w = *b;
-    let mut l = [T::zero(); N1];
-    let mut r = [T::zero(); N1];
-    l[0] = w[0];
-    r[n] = w[n];
-    for k in 1..=n {
-        for j in 0..=n - k {
-            w[j] = (w[j] + w[j + 1]) * half;
-        }
-        l[k] = w[0];
-        r[n - k] = w[n - k];
     }
     (l, r)
 }
