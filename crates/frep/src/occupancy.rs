@@ -369,7 +369,16 @@ pub fn runs<'g>(
     // The sign of the last cell walked, when it was empty.
     let mut before = None;
     let mut t = t0;
-    let argmin = |f: &[f64; 3]| (0..3).fold(0, |m, k| if f[k] < f[m] { k } else { m });
+    // The axis whose face comes first (the lowest on ties) and that face, by value: an
+    // index found first and then loaded with waits on the comparisons.
+    let first = |f: &[f64; 3]| {
+        let (k, v) = if f[1] < f[0] { (1, f[1]) } else { (0, f[0]) };
+        if f[2] < v {
+            (2, f[2])
+        } else {
+            (k, v)
+        }
+    };
     let m = g / BLOCK;
     let clear = |c: &[i64; 3]| {
         let [x, y, z] = c.map(|v| v as usize / BLOCK);
@@ -396,8 +405,8 @@ pub fn runs<'g>(
                 }
             }
         }
-        let k = argmin(&far);
-        let exit = far[k].min(t1);
+        let (k, face) = first(&far);
+        let exit = face.min(t1);
         match (here, start) {
             (None, None) => start = Some((t, span(n), before)),
             (None, Some((a, s, ka))) if s != span(n) => {
@@ -423,13 +432,13 @@ pub fn runs<'g>(
             // the block: their own exits lie at or past it), and axis k to the
             // block's last cell.
             for j in (0..3).filter(|&j| j != k) {
-                while next[j] < far[k] {
+                while next[j] < face {
                     c[j] += step[j];
                     next[j] += delta[j];
                 }
             }
             c[k] += rest[k] * step[k];
-            next[k] = far[k];
+            next[k] = face;
         }
         c[k] += step[k];
         if !(0..=last).contains(&c[k]) {
