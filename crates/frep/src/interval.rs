@@ -1,9 +1,9 @@
 //! Interval arithmetic: guaranteed bounds of an expression over a box.
 //!
 //! Every operation returns an interval that contains the exact result for every point of
-//! its operands (Moore, "Interval Analysis", 1966), widened outward by one or two ulps so that
-//! floating-point rounding can never make a bound too tight. An empty or undefined result
-//! (√ of a wholly negative interval, 0·∞) is NaN, which callers read as "unknown".
+//! its operands (Moore, "Interval Analysis", 1966), widened outward by one or two ulps so
+//! that floating-point rounding can never make a bound too tight. An empty or undefined
+//! result (√ of a wholly negative interval, 0·∞) is NaN, which callers read as "unknown".
 
 use crate::scalar::{Scalar, Zero};
 use std::f64::consts::{FRAC_PI_2, PI, TAU};
@@ -413,7 +413,6 @@ mod tests {
     use super::*;
     use rand::{Rng, SeedableRng};
 
-    /// Every unary operation's interval contains the point results of random points in it.
     /// Outward rounding moves every finite bound by one or two ulps, zero and
     /// subnormals included, and keeps infinities and NaN.
     #[test]
@@ -458,6 +457,7 @@ mod tests {
         assert!(down(f64::NAN).is_nan() && up(f64::NAN).is_nan());
     }
 
+    /// Every unary operation's interval contains the point results of random points in it.
     #[test]
     fn unary_ops_enclose_samples() {
         let mut rng = rand_pcg::Pcg64::seed_from_u64(7);
