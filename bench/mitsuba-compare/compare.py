@@ -16,7 +16,11 @@ disagrees if the image means differ by more than 1 % (and 3 standard errors) in 
 channel, or if |z| > 4 is more than twice as common as in the control (plus 0.1 % of
 pixels, 1 % of blocks). Throughput is the median over the seeds (Mitsuba's scene loading
 and LLVM kernel compilation untimed, as frepray's statistics leave out its loading);
-MRays/s is frepray's own count (Mitsuba does not report rays).
+MRays/s is frepray's own count (Mitsuba does not report rays). Every timed render starts
+after a pause (--settle, 0.1 s): Dr.Jit's worker threads keep spinning for a few
+milliseconds after a Mitsuba render returns, and a render started at once shares the
+cores with them (frepray measured right after `llvm_ad_rgb` ran 15–27 % slower than
+after a 20 ms pause; docs/benchmarks.md).
 
 Mean images and |z| maps (0 black, 8 and above white) are written to --out.
 `--g2 correlated` gives Mitsuba's rough conductors frepray's height-correlated G2 (g2.py);
@@ -130,6 +134,9 @@ def main():
                     help="Mitsuba's rough conductors with their own G2 (separable) or "
                     "frepray's (height-correlated, g2.py: a Python plugin, slow in scalar_rgb)")
     ap.add_argument("--threads", type=int, default=os.cpu_count())
+    ap.add_argument("--settle", type=float, default=0.1,
+                    help="seconds to wait before each timed render, so that the last "
+                    "renderer's spinning worker threads are idle (module docs)")
     ap.add_argument("--frepray", default=ROOT / "target/release/frepray")
     ap.add_argument("--out", default=HERE / "out", type=Path)
     args = ap.parse_args()
@@ -167,11 +174,13 @@ def main():
             imgs = {r: [] for r in RENDERERS}
             for seed in range(args.seeds):
                 exr = args.out / f"{name}-{kind}-frepray-{seed}.exr"
+                time.sleep(args.settle)
                 img, ms, mr = run_frepray(args.frepray, toml, kind, args.spp, seed,
                                           args.threads, w, h, exr)
                 imgs["frepray"].append(img)
                 perf.setdefault((name, kind, "frepray"), []).append((ms, mr))
                 for v in VARIANTS:
+                    time.sleep(args.settle)
                     img, ms = run_mitsuba(v, loaded[v], integ[v], args.spp, seed)
                     imgs[v].append(img)
                     perf.setdefault((name, kind, v), []).append((ms, None))
@@ -189,6 +198,7 @@ def main():
     load1 = os.getloadavg()
 
     print(f"\n{args.seeds} seeds × {args.spp} spp per renderer, {args.threads} threads, "
+          f"{args.settle} s pause before each, "
           f"{time.time() - t0:.0f} s; load average before {load0[0]:.2f} "
           f"({load0[1]:.2f}, {load0[2]:.2f}), after {load1[0]:.2f} "
           f"({load1[1]:.2f}, {load1[2]:.2f})\n")
