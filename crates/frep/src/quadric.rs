@@ -24,6 +24,24 @@ impl Quadric {
         Self { c }
     }
 
+    /// Whether the inside F ≥ 0 is an ellipsoid (or empty): the quadratic part's matrix
+    /// A is negative definite, so F is strictly concave and its superlevel sets are
+    /// convex and bounded. Decided by −A's leading principal minors (Sylvester), each
+    /// asked to exceed 1e-9 of the product of its diagonal entries, so that rounding
+    /// never calls a nearly degenerate quadric (a long cylinder, a flat hyperboloid)
+    /// convex: only false "no"s are possible.
+    pub fn inside_is_convex(&self) -> bool {
+        let c = &self.c;
+        // −A, symmetric: diagonal −c0, −c1, −c2; off-diagonal −c3/2 (xy), −c4/2 (yz),
+        // −c5/2 (xz).
+        let (a, b, e) = (-c[0], -c[1], -c[2]);
+        let (xy, yz, xz) = (-c[3] / 2.0, -c[4] / 2.0, -c[5] / 2.0);
+        let m2 = a * b - xy * xy;
+        let m3 = a * (b * e - yz * yz) - xy * (xy * e - yz * xz) + xz * (xy * yz - b * xz);
+        let tol = 1e-9;
+        a > 0.0 && b > 0.0 && e > 0.0 && m2 > tol * a * b && m3 > tol * a * b * e
+    }
+
     /// Ball of radius r: 1 − |x − c|²/r² (normalised: 1 at the centre, whatever r).
     pub fn sphere(center: DVec3, r: f64) -> Self {
         Self::ellipsoid(center, DVec3::splat(r))

@@ -217,6 +217,24 @@ impl Solid {
         self.intersect_node(self.root(), ray, t_min, t_max)
     }
 
+    /// Whether the solid is convex as built: an intersection of planes (a box, a slab
+    /// stack, any convex polytope) or one quadric without perturbations whose inside is
+    /// an ellipsoid ([`Quadric::inside_is_convex`]). A ray leaving a convex solid's
+    /// surface outward (d · n > 0, n the outward normal where it starts) never meets it
+    /// again, so a renderer need not ask (false only means "not known to be convex").
+    pub fn is_convex(&self) -> bool {
+        let root = self.root();
+        if self.polytopes.spans[root].count > 0 {
+            return true;
+        }
+        let node = &self.flat.nodes[root];
+        node.op == CsgOp::Leaf
+            && matches!(
+                self.flat.leaf(node.operands.first as usize),
+                LeafView::Perturbed(v) if v.perturbations.is_empty() && v.base.inside_is_convex()
+            )
+    }
+
     /// Whether there is a crossing in (t_min, t_max): `intersect(..).is_some()` (a
     /// shadow ray's question), which a solid of one leaf answers without refining the
     /// crossing or computing its normal.
@@ -632,6 +650,89 @@ mod tests {
     fn ball(c: DVec3, r: f64) -> Shape {
         let (x, y, z) = (Tree::x(), Tree::y(), Tree::z());
         Shape::function(r * r - ((x - c.x).square() + (y - c.y).square() + (z - c.z).square()))
+    }
+
+    /// Which solids call themselves convex: polytopes and ellipsoids (moved, rotated,
+    /// scaled) do; cylinders, cones, hyperboloids, perturbed spheres, unions, differences
+    /// and expressions do not. Every convex one is checked: 3000 rays from points on its
+    /// surface, leaving outward (d · n > 0), never meet it again.
+    #[test]
+    fn convex_solids_are_never_met_again_by_rays_leaving_them() {
+        use crate::perturbed::PerturbedQuadric;
+        use rand::{Rng, SeedableRng};
+        let q = |q: Quadric| Shape::Perturbed(PerturbedQuadric::new(q));
+        let plane = |n: DVec3, d: f64| q(Quadric::plane(n.normalize(), d));
+        let cube: Vec<Shape> = [DVec3::X, DVec3::Y, DVec3::Z]
+            .into_iter()
+            .flat_map(|n| [plane(n, 0.5), plane(-n, 0.5)])
+            .collect();
+        let moved = Affine::scale(DVec3::new(2.0, 0.5, 1.0))
+            .then(&Affine::rotate(DVec3::new(1.0, 2.0, 3.0).normalize(), 0.7))
+            .then(&Affine::translate(DVec3::new(0.3, -0.2, 0.1)));
+        let ball = q(Quadric::sphere(DVec3::new(0.1, 0.2, -0.3), 0.8));
+        let convex = [
+            Shape::Intersection(cube.clone()),
+            Shape::Transformed(moved, Box::new(Shape::Intersection(cube.clone()))),
+            ball.clone(),
+            q(Quadric::ellipsoid(DVec3::ZERO, DVec3::new(1.0, 0.2, 3.0))),
+            Shape::Transformed(moved, Box::new(ball.clone())),
+        ];
+        let (x, y, z) = (Tree::x(), Tree::y(), Tree::z());
+        let not_convex = [
+            q(Quadric::cylinder(DVec3::ZERO, DVec3::Z, 0.5)),
+            q(Quadric::cone(DVec3::ZERO, DVec3::Z, 0.4)),
+            q(Quadric::new([
+                1.0, 1.0, -1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -1.0,
+            ])),
+            Shape::Perturbed(
+                PerturbedQuadric::new(Quadric::sphere(DVec3::ZERO, 1.0))
+                    .with(0.5, Quadric::sphere(DVec3::X, 0.3)),
+            ),
+            Shape::Union(vec![ball.clone(), Shape::Intersection(cube.clone())]),
+            Shape::Difference(Box::new(Shape::Intersection(cube)), Box::new(ball)),
+            Shape::function(1.0 - (x.clone().square() + y.square() + z.square())),
+        ];
+        for shape in &not_convex {
+            assert!(!Solid::build(shape).unwrap().is_convex(), "{shape:?}");
+        }
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(3);
+        for shape in &convex {
+            let s = Solid::build(shape).unwrap();
+            assert!(s.is_convex(), "{shape:?}");
+            let mut left = 0;
+            while left < 3000 {
+                // A surface point: the first hit of a ray from outside at the centre.
+                let c = s.bounds().center();
+                let dir = DVec3::new(
+                    rng.gen_range(-1.0..1.0),
+                    rng.gen_range(-1.0..1.0),
+                    rng.gen_range(-1.0..1.0),
+                );
+                let Some(dir) = dir.try_normalize() else {
+                    continue;
+                };
+                let ray = Ray::new(c - dir * 20.0, dir);
+                let Some(hit) = s.intersect(&ray, 0.0, f64::INFINITY) else {
+                    continue;
+                };
+                let p = ray.at(hit.t);
+                let d = DVec3::new(
+                    rng.gen_range(-1.0..1.0),
+                    rng.gen_range(-1.0..1.0),
+                    rng.gen_range(-1.0..1.0),
+                );
+                let Some(d) = d.try_normalize().filter(|d| d.dot(hit.normal) > 1e-3) else {
+                    continue;
+                };
+                let scale = 1.0 + p.abs().max_element();
+                let leaving = Ray::new(p + hit.normal * (1e-7 * scale), d);
+                assert!(
+                    s.intersect(&leaving, 0.0, f64::INFINITY).is_none(),
+                    "{shape:?}: {leaving:?} leaves and meets the solid again"
+                );
+                left += 1;
+            }
+        }
     }
 
     /// The planes-only path gives the general closed form's hits bit for bit (t and

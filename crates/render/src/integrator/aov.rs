@@ -114,7 +114,7 @@ impl Integrator {
         let ray = self.camera_ray(scene, x, y, rng);
         rays.end(RayKind::Generate);
         rays.begin(RayKind::Camera);
-        let t = trace(scene, &ray);
+        let t = trace(scene, &ray, None);
         rays.end(RayKind::Camera);
         let a = first_hit(scene, &t, &ray, rng);
         px.add(match self.kind {

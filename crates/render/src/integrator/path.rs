@@ -65,7 +65,7 @@ impl Integrator {
         let ray = self.camera_ray(scene, x, y, rng);
         rays.end(RayKind::Generate);
         rays.begin(RayKind::Camera);
-        let first = trace(scene, &ray);
+        let first = trace(scene, &ray, None);
         rays.end(RayKind::Camera);
         if self.aovs {
             self.add_aovs(scene, &first, &ray, rng, px);

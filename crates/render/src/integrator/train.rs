@@ -71,7 +71,12 @@ impl Integrator {
                             if luminance(fc) <= 0.0 {
                                 return 0.0;
                             }
-                            let li = incident(scene, &spawn(v.p, v.n, s.wi), &mut rays);
+                            let li = incident(
+                                scene,
+                                &spawn(v.p, v.n, s.wi),
+                                v.left_behind(scene, s.wi),
+                                &mut rays,
+                            );
                             lights as f64 * luminance(fc * li) / s.pdf
                         });
                     draws.push((v.p, k, value));

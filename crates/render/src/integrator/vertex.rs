@@ -27,9 +27,10 @@ pub(crate) enum Trace {
     Escape,
 }
 
-/// The nearest of objects and area lights along `ray` (a nearest-hit query).
-pub(crate) fn trace(scene: &Scene, ray: &Ray) -> Trace {
-    let hit = scene.intersect(ray, 0.0, f64::INFINITY);
+/// The nearest of objects and area lights along `ray` (a nearest-hit query), object
+/// `skip` left out ([`Scene::left_behind`]).
+pub(crate) fn trace(scene: &Scene, ray: &Ray, skip: Option<usize>) -> Trace {
+    let hit = scene.intersect_skipping(ray, 0.0, f64::INFINITY, skip);
     let t_max = hit.map_or(f64::INFINITY, |h| h.t);
     if let Some(l) = scene.lights.intersect(ray, 0.0, t_max) {
         return Trace::Light(l);
@@ -38,8 +39,8 @@ pub(crate) fn trace(scene: &Scene, ray: &Ray) -> Trace {
 }
 
 /// [`trace`] with the lights along the ray already found ([`Lights::along`]).
-fn trace_along(scene: &Scene, ray: &Ray, along: &Along) -> Trace {
-    let hit = scene.intersect(ray, 0.0, f64::INFINITY);
+fn trace_along(scene: &Scene, ray: &Ray, along: &Along, skip: Option<usize>) -> Trace {
+    let hit = scene.intersect_skipping(ray, 0.0, f64::INFINITY, skip);
     let t_max = hit.map_or(f64::INFINITY, |h| h.t);
     if let Some(l) = along.nearest.filter(|l| l.t < t_max) {
         return Trace::Light(l);
@@ -66,18 +67,31 @@ pub(crate) fn spawn(p: DVec3, n: DVec3, wi: DVec3) -> Ray {
 }
 
 /// `Li(ω)` by one shadow ray: the nearest area light along the ray (or the environment)
-/// if no object lies before it. No ray is traced when there is nothing to see.
-pub(crate) fn incident(scene: &Scene, ray: &Ray, rays: &mut impl RayLog) -> Rgb {
+/// if no object lies before it (object `skip` left out: [`Scene::left_behind`]). No ray
+/// is traced when there is nothing to see.
+pub(crate) fn incident(
+    scene: &Scene,
+    ray: &Ray,
+    skip: Option<usize>,
+    rays: &mut impl RayLog,
+) -> Rgb {
     incident_from(
         scene,
         ray,
         scene.lights.intersect(ray, 0.0, f64::INFINITY),
+        skip,
         rays,
     )
 }
 
 /// [`incident`] with the nearest area light along the ray already found.
-fn incident_from(scene: &Scene, ray: &Ray, light: Option<LightHit>, rays: &mut impl RayLog) -> Rgb {
+fn incident_from(
+    scene: &Scene,
+    ray: &Ray,
+    light: Option<LightHit>,
+    skip: Option<usize>,
+    rays: &mut impl RayLog,
+) -> Rgb {
     let (t_max, le) = match light {
         Some(h) => (h.t, h.radiance),
         None => (f64::INFINITY, scene.lights.environment_radiance(ray.d)),
@@ -86,7 +100,7 @@ fn incident_from(scene: &Scene, ray: &Ray, light: Option<LightHit>, rays: &mut i
         return Rgb::ZERO;
     }
     rays.begin(RayKind::Shadow);
-    let occluded = scene.occluded(ray, 0.0, t_max);
+    let occluded = scene.occluded_skipping(ray, 0.0, t_max, skip);
     rays.end(RayKind::Shadow);
     if occluded {
         Rgb::ZERO
@@ -115,6 +129,8 @@ pub(crate) struct Vertex<'s> {
     pub n: DVec3,
     pub wo: DVec3,
     pub bsdf: Bsdf<'s>,
+    /// The object hit.
+    pub object: usize,
 }
 
 impl<'s> Vertex<'s> {
@@ -125,7 +141,13 @@ impl<'s> Vertex<'s> {
             n: hit.n,
             wo,
             bsdf,
+            object: hit.object,
         }
+    }
+
+    /// The object a ray leaving here along `wi` need not test ([`Scene::left_behind`]).
+    pub fn left_behind(&self, scene: &Scene, wi: DVec3) -> Option<usize> {
+        scene.left_behind(self.object, self.n, wi)
     }
 }
 
@@ -155,7 +177,7 @@ impl Integrator {
                 continue;
             }
             rays.begin(RayKind::Shadow);
-            let occluded = scene.occluded(&ray, 0.0, dist);
+            let occluded = scene.occluded_skipping(&ray, 0.0, dist, v.left_behind(scene, ls.wi));
             rays.end(RayKind::Shadow);
             if !occluded {
                 sum += fc * ls.radiance;
@@ -180,11 +202,12 @@ impl Integrator {
         rays: &mut impl RayLog,
     ) -> Rgb {
         let ray = spawn(v.p, v.n, s.wi);
+        let skip = v.left_behind(scene, s.wi);
         if extends {
             rays.begin(RayKind::Secondary);
             let t = match along {
-                Some(a) => trace_along(scene, &ray, a),
-                None => trace(scene, &ray),
+                Some(a) => trace_along(scene, &ray, a, skip),
+                None => trace(scene, &ray, skip),
             };
             rays.end(RayKind::Secondary);
             let li = emitted(scene, &t, s.wi);
@@ -196,8 +219,8 @@ impl Integrator {
             li
         } else if needed {
             match along {
-                Some(a) => incident_from(scene, &ray, a.nearest, rays),
-                None => incident(scene, &ray, rays),
+                Some(a) => incident_from(scene, &ray, a.nearest, skip, rays),
+                None => incident(scene, &ray, skip, rays),
             }
         } else {
             Rgb::ZERO
@@ -302,7 +325,9 @@ impl Integrator {
                         &mut next,
                         rays,
                     ),
-                    _ if fc != Rgb::ZERO => incident_from(scene, &ray, along.nearest, rays),
+                    _ if fc != Rgb::ZERO => {
+                        incident_from(scene, &ray, along.nearest, v.left_behind(scene, s.wi), rays)
+                    }
                     _ => Rgb::ZERO,
                 };
                 let light = if self.record.lights > 1 {

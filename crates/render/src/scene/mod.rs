@@ -125,6 +125,8 @@ pub struct Scene {
     pub lights: Lights,
     bvh: Bvh,
     bounds: Aabb,
+    /// Per object, whether its solid is convex ([`Solid::is_convex`]).
+    convex: Vec<bool>,
 }
 
 impl Scene {
@@ -141,6 +143,7 @@ impl Scene {
             .iter()
             .filter(|b| b.is_finite())
             .fold(Aabb::EMPTY, |a, b| a.union(b));
+        let convex = objects.iter().map(|o| o.solid.is_convex()).collect();
         Self {
             camera,
             materials,
@@ -148,6 +151,7 @@ impl Scene {
             lights,
             bvh,
             bounds,
+            convex,
         }
     }
 
@@ -162,10 +166,34 @@ impl Scene {
         self.bounds
     }
 
+    /// The object a ray from a point of object `object`'s surface (outward normal `n`)
+    /// along `wi` cannot meet again: that object, when it is convex and the ray leaves
+    /// it outward (`wi · n > 0`; the ray's origin moved off the surface along n, as
+    /// secondary rays' are); else None. Queries may skip it
+    /// ([`Self::intersect_skipping`], [`Self::occluded_skipping`]): a diffuse floor's
+    /// shadow rays no longer test the floor.
+    pub fn left_behind(&self, object: usize, n: DVec3, wi: DVec3) -> Option<usize> {
+        (self.convex[object] && wi.dot(n) > 0.0).then_some(object)
+    }
+
     /// The nearest object surface in (t_min, t_max).
     pub fn intersect(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<SurfaceHit> {
+        self.intersect_skipping(ray, t_min, t_max, None)
+    }
+
+    /// [`Self::intersect`] without object `skip` ([`Self::left_behind`]).
+    pub fn intersect_skipping(
+        &self,
+        ray: &Ray,
+        t_min: f64,
+        t_max: f64,
+        skip: Option<usize>,
+    ) -> Option<SurfaceHit> {
         let mut normal = DVec3::ZERO;
         let (k, t) = self.bvh.nearest(ray, t_min, t_max, |i, t_max| {
+            if Some(i) == skip {
+                return None;
+            }
             let h = self.objects[i].solid.intersect(ray, t_min, t_max)?;
             normal = h.normal;
             Some(h.t)
@@ -183,8 +211,19 @@ impl Scene {
 
     /// Whether any object surface lies in (t_min, t_max) (shadow rays).
     pub fn occluded(&self, ray: &Ray, t_min: f64, t_max: f64) -> bool {
+        self.occluded_skipping(ray, t_min, t_max, None)
+    }
+
+    /// [`Self::occluded`] without object `skip` ([`Self::left_behind`]).
+    pub fn occluded_skipping(
+        &self,
+        ray: &Ray,
+        t_min: f64,
+        t_max: f64,
+        skip: Option<usize>,
+    ) -> bool {
         self.bvh.any_hit(ray, t_min, t_max, |i| {
-            self.objects[i].solid.occludes(ray, t_min, t_max)
+            Some(i) != skip && self.objects[i].solid.occludes(ray, t_min, t_max)
         })
     }
 }
