@@ -279,6 +279,7 @@ impl Integrator {
         };
         let t_count = self.techniques.len();
         let mut pdfs = [0.0; MAX_TECHNIQUES];
+        let mut along = Along::default();
         for (k, (&tech, &n_k)) in self.techniques.iter().zip(&self.counts).enumerate() {
             for j in 0..n_k {
                 let d = self.dims.technique(rng, depth, k, j);
@@ -300,7 +301,7 @@ impl Integrator {
                 // One walk of the light BVH along the draw's ray gives the light its Li
                 // needs and every light's pdf there (taken from the ray's origin).
                 let ray = spawn(v.p, v.n, s.wi);
-                let along = scene.lights.along(&ray, self.area_pdfs);
+                scene.lights.along_into(&ray, self.area_pdfs, &mut along);
                 crate::technique::pdfs(
                     &self.techniques,
                     &ctx,

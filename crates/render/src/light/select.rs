@@ -373,9 +373,9 @@ impl Lights {
     /// light technique's density at `wi` needs, found once for them all. None past
     /// [`Crossed::CAPACITY`] lights.
     pub fn crossed(&self, p: DVec3, wi: DVec3, area: bool) -> Option<Crossed> {
-        self.walk_crossed(&Ray::new(p, wi), area, false)
-            .crossed()
-            .copied()
+        let mut out = Along::default();
+        self.walk_crossed(&Ray::new(p, wi), area, false, &mut out);
+        out.crossed().copied()
     }
 
     /// What a ray from a shading point (unit direction) meets among the area lights,
@@ -384,19 +384,26 @@ impl Lights {
     /// from the ray's origin (as [`Self::crossed`] finds them), each light's crossings
     /// computed once for both.
     pub fn along(&self, ray: &Ray, area: bool) -> Along {
-        self.walk_crossed(ray, area, true)
+        let mut out = Along::default();
+        self.along_into(ray, area, &mut out);
+        out
     }
 
-    /// [`Self::along`]; without `nearest`, only the lights crossed and their pdfs.
+    /// [`Self::along`] written over `out`: a caller that keeps one [`Along`] for all
+    /// its draws copies nothing (returned by value, the list of a few hundred bytes was
+    /// built on the callee's stack and copied out on every draw: 3.8 % of the diffuse
+    /// scene's time, docs/benchmarks.md).
+    pub fn along_into(&self, ray: &Ray, area: bool, out: &mut Along) {
+        self.walk_crossed(ray, area, true, out)
+    }
+
+    /// [`Self::along_into`]; without `nearest`, only the lights crossed and their pdfs.
     #[inline]
-    fn walk_crossed(&self, ray: &Ray, area: bool, nearest: bool) -> Along {
+    fn walk_crossed(&self, ray: &Ray, area: bool, nearest: bool, out: &mut Along) {
         let (p, wi) = (ray.o, ray.d);
-        // Built in place: the list is the larger part of what is returned.
-        let mut out = Along {
-            nearest: None,
-            all: Crossed::default(),
-            over: false,
-        };
+        // Only the count is reset: entries past it are never read.
+        out.all.n = 0;
+        out.over = false;
         let (c, over) = (&mut out.all, &mut out.over);
         let mut best: Option<(usize, super::Crossing)> = None;
         self.bvh.for_each_hit(ray, 0.0, f64::INFINITY, |k| {
@@ -434,12 +441,11 @@ impl Lights {
             n: h.n,
             radiance: self.area[light].emitted(h.n, -wi),
         });
-        out
     }
 }
 
 /// The area lights along one ray ([`Lights::along`]).
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, Default)]
 pub struct Along {
     /// The nearest light crossed (t > 0).
     pub nearest: Option<LightHit>,
