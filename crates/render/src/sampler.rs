@@ -32,7 +32,57 @@ fn mulhilo(a: u32, b: u32) -> (u32, u32) {
 
 /// Philox4x32-10: ten rounds of the Philox S-box on counter `c` under key `k`.
 #[inline]
-pub fn philox4x32_10(mut c: [u32; 4], mut k: [u32; 2]) -> [u32; 4] {
+pub fn philox4x32_10(c: [u32; 4], k: [u32; 2]) -> [u32; 4] {
+    #[cfg(target_arch = "x86_64")]
+    {
+        philox_sse2(c, k)
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        philox_scalar(c, k)
+    }
+}
+
+/// [`philox4x32_10`] with the four words in one SSE2 register (part of every x86-64):
+/// one `pmuludq` gives both products of a round, a shift and a shuffle place the words.
+/// The same integer operations as [`philox_scalar`], so the same bits
+/// (`sse2_philox_equals_the_scalar_one`), at about half the instructions.
+#[cfg(target_arch = "x86_64")]
+#[inline]
+fn philox_sse2(c: [u32; 4], k: [u32; 2]) -> [u32; 4] {
+    use std::arch::x86_64::{
+        __m128i, _mm_add_epi32, _mm_loadu_si128, _mm_mul_epu32, _mm_set_epi32, _mm_shuffle_epi32,
+        _mm_srli_epi64, _mm_storeu_si128, _mm_xor_si128,
+    };
+    // SAFETY: SSE2 is part of the x86-64 baseline; the loads and stores are unaligned
+    // ones of 16-byte arrays.
+    unsafe {
+        let mut x = _mm_loadu_si128(c.as_ptr().cast::<__m128i>());
+        // Lanes 0 and 2 carry the multipliers and the key words (1 and 3 are unused).
+        let m = _mm_set_epi32(0, M1 as i32, 0, M0 as i32);
+        let w = _mm_set_epi32(0, W1 as i32, 0, W0 as i32);
+        let mut key = _mm_set_epi32(0, k[1] as i32, 0, k[0] as i32);
+        for round in 0..10 {
+            if round > 0 {
+                key = _mm_add_epi32(key, w);
+            }
+            // [lo0, hi0, lo1, hi1]: the products c0·M0 and c2·M1.
+            let p = _mm_mul_epu32(x, m);
+            // [c1 ^ k0, 0, c3 ^ k1, 0].
+            let odd = _mm_xor_si128(_mm_srli_epi64(x, 32), key);
+            // [hi1, lo1, hi0, lo0] ^ odd.
+            x = _mm_xor_si128(_mm_shuffle_epi32(p, 0b00_01_10_11), odd);
+        }
+        let mut out = [0u32; 4];
+        _mm_storeu_si128(out.as_mut_ptr().cast::<__m128i>(), x);
+        out
+    }
+}
+
+/// [`philox4x32_10`] word by word.
+#[cfg_attr(target_arch = "x86_64", allow(dead_code))]
+#[inline]
+fn philox_scalar(mut c: [u32; 4], mut k: [u32; 2]) -> [u32; 4] {
     for round in 0..10 {
         if round > 0 {
             k = [k[0].wrapping_add(W0), k[1].wrapping_add(W1)];
@@ -127,6 +177,29 @@ mod tests {
         let e = n as f64 / counts.len() as f64;
         let s = counts.iter().map(|&c| (c as f64 - e).powi(2) / e).sum();
         (s, counts.len() - 1)
+    }
+
+    /// The SSE2 rounds give the scalar rounds' words bit for bit, on 100 000 random
+    /// counters and keys and on the extremes.
+    #[cfg(target_arch = "x86_64")]
+    #[test]
+    fn sse2_philox_equals_the_scalar_one() {
+        // splitmix64 (Steele et al. 2014) as the source of test words.
+        let mut state = 4u64;
+        let mut word = || {
+            state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
+            let mut z = state;
+            z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+            z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+            (z ^ (z >> 31)) as u32
+        };
+        let mut cases = vec![([0; 4], [0; 2]), ([u32::MAX; 4], [u32::MAX; 2])];
+        for _ in 0..100_000 {
+            cases.push(([word(), word(), word(), word()], [word(), word()]));
+        }
+        for (c, k) in cases {
+            assert_eq!(philox_sse2(c, k), philox_scalar(c, k), "{c:x?} {k:x?}");
+        }
     }
 
     /// Random123's known-answer vectors for Philox4x32-10 (its `kat_vectors`).
