@@ -652,6 +652,27 @@ mod tests {
         Shape::function(r * r - ((x - c.x).square() + (y - c.y).square() + (z - c.z).square()))
     }
 
+    /// The half-space n · x ≤ d (n unit) as a plain plane part.
+    fn plane(n: DVec3, d: f64) -> Shape {
+        use crate::perturbed::PerturbedQuadric;
+        Shape::Perturbed(PerturbedQuadric::new(Quadric::plane(n, d)))
+    }
+
+    /// The six planes of the cube [−½, ½]³.
+    fn unit_cube_planes() -> Vec<Shape> {
+        [DVec3::X, DVec3::Y, DVec3::Z]
+            .into_iter()
+            .flat_map(|n| [plane(n, 0.5), plane(-n, 0.5)])
+            .collect()
+    }
+
+    /// A scale, a rotation and a translation, none trivial.
+    fn scaled_rotated_moved() -> Affine {
+        Affine::scale(DVec3::new(2.0, 0.5, 1.0))
+            .then(&Affine::rotate(DVec3::new(1.0, 2.0, 3.0).normalize(), 0.7))
+            .then(&Affine::translate(DVec3::new(0.3, -0.2, 0.1)))
+    }
+
     /// Which solids call themselves convex: polytopes and ellipsoids (moved, rotated,
     /// scaled) do; cylinders, cones, hyperboloids, perturbed spheres, unions, differences
     /// and expressions do not. Every convex one is checked: 3000 rays from points on its
@@ -661,14 +682,7 @@ mod tests {
         use crate::perturbed::PerturbedQuadric;
         use rand::{Rng, SeedableRng};
         let q = |q: Quadric| Shape::Perturbed(PerturbedQuadric::new(q));
-        let plane = |n: DVec3, d: f64| q(Quadric::plane(n.normalize(), d));
-        let cube: Vec<Shape> = [DVec3::X, DVec3::Y, DVec3::Z]
-            .into_iter()
-            .flat_map(|n| [plane(n, 0.5), plane(-n, 0.5)])
-            .collect();
-        let moved = Affine::scale(DVec3::new(2.0, 0.5, 1.0))
-            .then(&Affine::rotate(DVec3::new(1.0, 2.0, 3.0).normalize(), 0.7))
-            .then(&Affine::translate(DVec3::new(0.3, -0.2, 0.1)));
+        let (cube, moved) = (unit_cube_planes(), scaled_rotated_moved());
         let ball = q(Quadric::sphere(DVec3::new(0.1, 0.2, -0.3), 0.8));
         let convex = [
             Shape::Intersection(cube.clone()),
@@ -740,17 +754,8 @@ mod tests {
     /// tilted planes (unbounded), on rays from outside, from inside and along faces.
     #[test]
     fn polytopes_equal_the_general_closed_form() {
-        use crate::perturbed::PerturbedQuadric;
         use rand::{Rng, SeedableRng};
-        let plane =
-            |n: DVec3, d: f64| Shape::Perturbed(PerturbedQuadric::new(Quadric::plane(n, d)));
-        let cube: Vec<Shape> = [DVec3::X, DVec3::Y, DVec3::Z]
-            .into_iter()
-            .flat_map(|n| [plane(n, 0.5), plane(-n, 0.5)])
-            .collect();
-        let moved = Affine::scale(DVec3::new(2.0, 0.5, 1.0))
-            .then(&Affine::rotate(DVec3::new(1.0, 2.0, 3.0).normalize(), 0.7))
-            .then(&Affine::translate(DVec3::new(0.3, -0.2, 0.1)));
+        let (cube, moved) = (unit_cube_planes(), scaled_rotated_moved());
         let wedge = vec![
             plane(DVec3::new(1.0, 1.0, 0.0).normalize(), 0.4),
             plane(DVec3::new(-1.0, 0.5, 0.2).normalize(), 0.3),
