@@ -19,7 +19,7 @@ and LLVM kernel compilation untimed, as frepray's statistics leave out its loadi
 MRays/s is frepray's own count (Mitsuba does not report rays). Every timed render starts
 after a pause (--settle, 0.1 s): Dr.Jit's worker threads keep spinning for a few
 milliseconds after a Mitsuba render returns, and a render started at once shares the
-cores with them (frepray measured right after `llvm_ad_rgb` ran 15–27 % slower than
+cores with them (frepray measured right after `llvm_ad_rgb` ran up to a quarter slower than
 after a 20 ms pause: settle.py; docs/benchmarks.md).
 
 Mean images and |z| maps (0 black, 8 and above white) are written to --out.
