@@ -283,8 +283,15 @@ impl Quadric {
         Some(Self::from_matrix(sym, b2, k2))
     }
 
-    /// The quadric as an expression tree.
+    /// The quadric as an expression tree. Without cross terms it is written with its
+    /// squares completed, K + Σ a_k·(x_k − h_k)², so that each coordinate appears once:
+    /// interval arithmetic then bounds each term exactly (the monomial form's a·x² + b·x
+    /// counts x twice and widens with |x|·width; Moore 1966, the dependency problem),
+    /// and a point far from the origin is not evaluated by cancelling large terms.
     pub fn to_tree(&self) -> Tree {
+        if self.c[3..6].iter().all(|&c| c == 0.0) {
+            return self.completed_tree();
+        }
         let (x, y, z) = (Tree::x(), Tree::y(), Tree::z());
         let terms = [
             x.square(),
@@ -302,6 +309,46 @@ impl Quadric {
             if self.c[k] != 0.0 {
                 e = e + self.c[k] * t;
             }
+        }
+        e
+    }
+}
+
+impl Quadric {
+    /// [`Quadric::to_tree`] for a quadric without cross terms: a_k·x_k² + b_k·x_k is
+    /// a_k·(x_k − h_k)² − a_k·h_k² with h_k = −b_k / (2·a_k); equal a_k (a sphere, a
+    /// circular cylinder) share one product.
+    fn completed_tree(&self) -> Tree {
+        let c = &self.c;
+        let vars = [Tree::x(), Tree::y(), Tree::z()];
+        let mut k = c[9];
+        // Squares grouped by their coefficient, in axis order; linear terms apart.
+        let mut groups: Vec<(f64, Tree)> = Vec::new();
+        let mut linear: Vec<Tree> = Vec::new();
+        for (i, v) in vars.iter().enumerate() {
+            let (a, b) = (c[i], c[6 + i]);
+            if a != 0.0 {
+                let h = -b / (2.0 * a);
+                k -= a * h * h;
+                let sq = if h == 0.0 {
+                    v.square()
+                } else {
+                    (v - h).square()
+                };
+                match groups.iter_mut().find(|(g, _)| *g == a) {
+                    Some((_, t)) => *t = &*t + &sq,
+                    None => groups.push((a, sq)),
+                }
+            } else if b != 0.0 {
+                linear.push(b * v);
+            }
+        }
+        let mut e = Tree::constant(k);
+        for (a, t) in groups {
+            e = e + a * t;
+        }
+        for t in linear {
+            e = e + t;
         }
         e
     }
@@ -567,5 +614,62 @@ mod tests {
             Quadric::sphere(DVec3::ZERO, 1.0).transformed(&singular),
             None
         );
+    }
+
+    /// Without cross terms the tree completes its squares: its value is the quadric's
+    /// to rounding, and its interval over a box is the quadric's exact range there (the
+    /// sum of one univariate quadratic per coordinate, whose extremes lie at the box's
+    /// ends or the vertex: 27 candidate points). The monomial form fails the second on
+    /// boxes away from the origin, where a·x² + b·x cancels wide intervals.
+    #[test]
+    fn axis_aligned_trees_bound_boxes_exactly() {
+        let mut rng = Pcg64::seed_from_u64(12);
+        let mut v = |lo: f64, hi: f64| rng.gen_range(lo..hi);
+        for k in 0..400 {
+            let c = DVec3::new(v(-5.0, 5.0), v(-5.0, 5.0), v(-5.0, 5.0));
+            let q = match k % 4 {
+                0 => Quadric::sphere(c, v(0.05, 2.0)),
+                1 => Quadric::ellipsoid(c, DVec3::new(v(0.1, 2.0), v(0.1, 2.0), v(0.1, 2.0))),
+                2 => Quadric::cylinder(c, DVec3::Z, v(0.05, 2.0)),
+                _ => Quadric::paraboloid(c, DVec3::Y, v(0.1, 3.0)),
+            };
+            let e = crate::Expr::new(&q.to_tree());
+            let scale = 1.0 + q.c.iter().map(|x| x.abs()).sum::<f64>() * 100.0;
+            let lo = c + DVec3::new(v(-2.0, 1.0), v(-2.0, 1.0), v(-2.0, 1.0));
+            let hi = lo + DVec3::new(v(0.0, 1.0), v(0.0, 1.0), v(0.0, 1.0));
+            for _ in 0..20 {
+                let p = lo + (hi - lo) * DVec3::new(v(0.0, 1.0), v(0.0, 1.0), v(0.0, 1.0));
+                let (got, want) = (e.eval(p.to_array()), q.eval(p));
+                assert!(
+                    (got - want).abs() <= 1e-13 * scale,
+                    "case {k}: {got} vs {want}"
+                );
+            }
+            // Each coordinate's candidates: the box's ends and the vertex −b/(2a) within.
+            let cand = |i: usize| {
+                let (a, b) = (q.c[i], q.c[6 + i]);
+                let h = if a != 0.0 { -b / (2.0 * a) } else { lo[i] };
+                [lo[i], hi[i], h.clamp(lo[i], hi[i])]
+            };
+            let (mut min, mut max) = (f64::INFINITY, f64::NEG_INFINITY);
+            for x in cand(0) {
+                for y in cand(1) {
+                    for z in cand(2) {
+                        let f = q.eval(DVec3::new(x, y, z));
+                        (min, max) = (min.min(f), max.max(f));
+                    }
+                }
+            }
+            let r = e.eval_interval(lo.to_array(), hi.to_array());
+            let tol = 1e-12 * scale;
+            assert!(
+                r.lo <= min + tol && r.hi >= max - tol,
+                "case {k}: {r:?} misses [{min}, {max}]"
+            );
+            assert!(
+                r.lo >= min - tol && r.hi <= max + tol,
+                "case {k}: {r:?} wider than [{min}, {max}]"
+            );
+        }
     }
 }
