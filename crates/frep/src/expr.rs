@@ -106,6 +106,11 @@ impl Builder {
         if a == b && matches!(op, BinaryOp::Min | BinaryOp::Max) {
             return a;
         }
+        // a·a is a², the same value at a point (x·x both ways), but bounded over an
+        // interval as a square ([−1, 2]² = [0, 4], where [−1, 2]·[−1, 2] = [−2, 4]).
+        if a == b && op == BinaryOp::Mul {
+            return self.unary(UnaryOp::Square, a);
+        }
         // Commutative operations get a canonical operand order so that a+b and b+a merge.
         let (a, b) = match op {
             BinaryOp::Add | BinaryOp::Mul | BinaryOp::Min | BinaryOp::Max if b < a => (b, a),
@@ -575,6 +580,17 @@ mod tests {
 
     fn sphere() -> Tree {
         1.0 - (Tree::x().square() + Tree::y().square() + Tree::z().square())
+    }
+
+    /// A product of a value with itself is that value's square: one node, and bounded
+    /// as a square over an interval.
+    #[test]
+    fn self_products_are_squares() {
+        let d = Tree::x() - 0.5;
+        let (prod, sq) = (Expr::new(&(&d * &d)), Expr::new(&d.square()));
+        assert_eq!(prod.nodes(), sq.nodes());
+        let r = prod.eval_interval([-0.5, 0.0, 0.0], [2.5, 0.0, 0.0]);
+        assert!(r.lo == 0.0 && r.hi >= 4.0 && r.hi < 4.0 + 1e-12, "{r:?}");
     }
 
     #[test]

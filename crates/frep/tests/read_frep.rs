@@ -328,3 +328,82 @@ fn deep_recursion_through_nested_bodies_is_an_error() {
         assert!(e.message.contains("nested at most 1000 deep in all"), "{e}");
     }
 }
+
+/// `torus` is r² − (ρ − R)² − h², ρ the distance from its axis and h the height along
+/// it, at every point and for any axis; about a coordinate axis each coordinate appears
+/// once, so its interval over a box is the exact range (ρ's and h's ranges over the box
+/// are exact, and F is monotone in each of (ρ − R)² and h²).
+#[test]
+fn torus_is_bounded_exactly_about_a_coordinate_axis() {
+    use glam::DVec3;
+    let (big, r) = (0.8, 0.25);
+    for (axis, a) in [
+        ("z", DVec3::Z),
+        ("x", DVec3::X),
+        ("[0, -1, 0]", -DVec3::Y),
+        ("[1, 2, 2]", DVec3::new(1.0, 2.0, 2.0) / 3.0),
+    ] {
+        let c = DVec3::new(0.1, -0.2, 0.3);
+        let m = frep(&format!(
+            "output torus({big}, {r}, center = [0.1, -0.2, 0.3], axis = {axis})"
+        ));
+        agree(
+            &m,
+            |p| {
+                let d = DVec3::from_array(p) - c;
+                let h = d.dot(a);
+                let rho = (d - h * a).length();
+                r * r - (rho - big).powi(2) - h * h
+            },
+            1.5,
+            axis,
+        );
+    }
+    let m = frep(&format!("output torus({big}, {r})"));
+    let e = expr(&m);
+    let mut rng = rand_pcg::Pcg64::new(0xcafe, 0xf00d);
+    use rand::Rng;
+    for k in 0..500 {
+        let lo = DVec3::new(
+            rng.gen_range(-1.2..1.0),
+            rng.gen_range(-1.2..1.0),
+            rng.gen_range(-0.5..0.4),
+        );
+        let hi = lo
+            + DVec3::new(
+                rng.gen_range(0.0..0.4),
+                rng.gen_range(0.0..0.4),
+                rng.gen_range(0.0..0.3),
+            );
+        // ρ over the box's (x, y) rectangle: nearest and farthest points from the axis.
+        let near = |l: f64, h: f64| {
+            if l <= 0.0 && h >= 0.0 {
+                0.0
+            } else {
+                l.abs().min(h.abs())
+            }
+        };
+        let far = |l: f64, h: f64| l.abs().max(h.abs());
+        let (rho_lo, rho_hi) = (
+            near(lo.x, hi.x).hypot(near(lo.y, hi.y)),
+            far(lo.x, hi.x).hypot(far(lo.y, hi.y)),
+        );
+        let ring_hi = (rho_lo - big).abs().max((rho_hi - big).abs());
+        let ring_lo = if rho_lo <= big && big <= rho_hi {
+            0.0
+        } else {
+            (rho_lo - big).abs().min((rho_hi - big).abs())
+        };
+        let (h_lo, h_hi) = (near(lo.z, hi.z), far(lo.z, hi.z));
+        let (min, max) = (
+            r * r - ring_hi * ring_hi - h_hi * h_hi,
+            r * r - ring_lo * ring_lo - h_lo * h_lo,
+        );
+        let got = e.eval_interval(lo.to_array(), hi.to_array());
+        let tol = 1e-12;
+        assert!(
+            (got.lo - min).abs() <= tol && (got.hi - max).abs() <= tol,
+            "box {k} {lo} – {hi}: {got:?}, exact [{min}, {max}]"
+        );
+    }
+}

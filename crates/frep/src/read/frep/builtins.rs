@@ -243,10 +243,14 @@ pub(crate) fn call(name: &str, a: &Args) -> R<V> {
                 Some(_) => a.with(3, axis)?,
                 None => DVec3::Z,
             };
+            // The squared distance from the axis as (u·d)² + (v·d)² over a frame (u, v)
+            // perpendicular to it, not |d|² − (a·d)²: that difference counts every
+            // coordinate twice, and interval arithmetic does not cancel it (an axis
+            // along z leaves dz² − dz², as wide as dz²'s range, in every box's bound).
             let d = [Tree::x() - c.x, Tree::y() - c.y, Tree::z() - c.z];
-            let along = ax.x * &d[0] + ax.y * &d[1] + ax.z * &d[2];
-            let r2 = d[0].square() + d[1].square() + d[2].square();
-            let ring = (&r2 - along.square()).sqrt() - big;
+            let (u, v) = perpendicular_pair(ax);
+            let along = linear(ax, &d);
+            let ring = (linear(u, &d).square() + linear(v, &d).square()).sqrt() - big;
             V::Field(r * r - ring.square() - along.square())
         }
         "perturb" => {
@@ -371,4 +375,26 @@ pub(crate) fn call(name: &str, a: &Args) -> R<V> {
             ))
         }
     })
+}
+
+/// w·d without the terms whose weight is 0 (0·x is not folded: it is NaN at infinity),
+/// and with ±d_k itself for a weight of ±1: an axis-aligned w gives one coordinate.
+fn linear(w: DVec3, d: &[Tree; 3]) -> Tree {
+    let mut terms = (0..3).filter(|&k| w[k] != 0.0).map(|k| match w[k] {
+        1.0 => d[k].clone(),
+        -1.0 => -&d[k],
+        wk => wk * &d[k],
+    });
+    let first = terms.next().unwrap_or_else(|| Tree::constant(0.0));
+    terms.fold(first, |acc, t| acc + t)
+}
+
+/// Two unit vectors perpendicular to the unit `axis` and to each other: the other two
+/// coordinate axes when `axis` is one of them.
+fn perpendicular_pair(axis: DVec3) -> (DVec3, DVec3) {
+    let units = [DVec3::X, DVec3::Y, DVec3::Z];
+    match units.iter().position(|&e| axis == e || axis == -e) {
+        Some(k) => (units[(k + 1) % 3], units[(k + 2) % 3]),
+        None => axis.any_orthonormal_pair(),
+    }
 }
