@@ -375,30 +375,10 @@ fn torus_is_bounded_exactly_about_a_coordinate_axis() {
                 rng.gen_range(0.0..0.4),
                 rng.gen_range(0.0..0.3),
             );
-        // ρ over the box's (x, y) rectangle: nearest and farthest points from the axis.
-        let near = |l: f64, h: f64| {
-            if l <= 0.0 && h >= 0.0 {
-                0.0
-            } else {
-                l.abs().min(h.abs())
-            }
-        };
-        let far = |l: f64, h: f64| l.abs().max(h.abs());
-        let (rho_lo, rho_hi) = (
-            near(lo.x, hi.x).hypot(near(lo.y, hi.y)),
-            far(lo.x, hi.x).hypot(far(lo.y, hi.y)),
-        );
-        let ring_hi = (rho_lo - big).abs().max((rho_hi - big).abs());
-        let ring_lo = if rho_lo <= big && big <= rho_hi {
-            0.0
-        } else {
-            (rho_lo - big).abs().min((rho_hi - big).abs())
-        };
-        let (h_lo, h_hi) = (near(lo.z, hi.z), far(lo.z, hi.z));
-        let (min, max) = (
-            r * r - ring_hi * ring_hi - h_hi * h_hi,
-            r * r - ring_lo * ring_lo - h_lo * h_lo,
-        );
+        // ρ over the box's (x, y) rectangle, then (ρ − R)² and z².
+        let rho = rho_range((lo.x, hi.x), (lo.y, hi.y));
+        let (ring, h) = (sq_range(rho.0, rho.1, big), sq_range(lo.z, hi.z, 0.0));
+        let (min, max) = (r * r - ring.1 - h.1, r * r - ring.0 - h.0);
         let got = e.eval_interval(lo.to_array(), hi.to_array());
         let tol = 1e-12;
         assert!(

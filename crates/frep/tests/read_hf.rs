@@ -453,3 +453,51 @@ fn arrays_made_or_copied_are_bounded() {
     // A million-element array with a branch outside any loop is fine.
     hf("m(x[3], a[1])\n{\n  array b[1000000];\n  m = x[1];\n  if x[2] > 0 then m = x[2]; endif;\n}\n");
 }
+
+/// hfTorusZ and hfBlock are written so that each coordinate appears once: their interval
+/// over a box is the exact range. The torus is r0² − d_z² − (ρ − R)², separable in ρ
+/// and d_z; the block (α = 0) is the R-intersection, non-decreasing in each operand, of
+/// three slabs (e/2)² − (p − v − e/2)², one per coordinate: its range runs from its
+/// value at the slabs' least values to that at their greatest.
+#[test]
+fn torus_and_block_are_bounded_exactly() {
+    let torus = hf_model(
+        "array c[3]; c = [0.1, -0.2, 0.3];",
+        "hfTorusZ(x, c, 0.7, 0.2)",
+    );
+    let block = hf_model(
+        "array c[3]; c = [0.1, -0.2, 0.3];",
+        "hfBlock(x, c, 0.5, 0.6, 0.7)",
+    );
+    let (te, be) = (expr(&torus), expr(&block));
+    let c = [0.1, -0.2, 0.3];
+    let mut rng = rand_pcg::Pcg64::seed_from_u64(31);
+    let r = |f: f64, g: f64| f + g - (f * f + g * g).sqrt();
+    for k in 0..500 {
+        let lo: [f64; 3] = std::array::from_fn(|i| c[i] + rng.gen_range(-1.0..0.8));
+        let hi: [f64; 3] = std::array::from_fn(|i| lo[i] + rng.gen_range(0.0..0.4));
+        // Torus: ρ over the (x, y) rectangle about c, then (ρ − R)² and d_z².
+        let d = |i: usize| (lo[i] - c[i], hi[i] - c[i]);
+        let rho = rho_range(d(0), d(1));
+        let (ring, h) = (sq_range(rho.0, rho.1, 0.7), sq_range(d(2).0, d(2).1, 0.0));
+        let want = (0.04 - ring.1 - h.1, 0.04 - ring.0 - h.0);
+        let got = te.eval_interval(lo, hi);
+        assert!(
+            (got.lo - want.0).abs() <= 1e-12 && (got.hi - want.1).abs() <= 1e-12,
+            "torus, box {k}: {got:?} against {want:?}"
+        );
+        // Block: each slab's range, then the R-intersections at both ends.
+        let e = [0.5, 0.6, 0.7];
+        let slab = |i: usize| {
+            let (a, b) = sq_range(lo[i], hi[i], c[i] + e[i] / 2.0);
+            (e[i] * e[i] / 4.0 - b, e[i] * e[i] / 4.0 - a)
+        };
+        let (s0, s1, s2) = (slab(0), slab(1), slab(2));
+        let want = (r(r(s0.0, s1.0), s2.0), r(r(s0.1, s1.1), s2.1));
+        let got = be.eval_interval(lo, hi);
+        assert!(
+            (got.lo - want.0).abs() <= 1e-12 && (got.hi - want.1).abs() <= 1e-12,
+            "block, box {k}: {got:?} against {want:?}"
+        );
+    }
+}

@@ -100,3 +100,22 @@ pub fn eye_rays(b: &frep::Aabb) -> Vec<frep::Ray> {
     }
     rays
 }
+
+/// The range of |w − m| for w over [a, b].
+pub fn dist_range(a: f64, b: f64, m: f64) -> (f64, f64) {
+    let (da, db) = ((a - m).abs(), (b - m).abs());
+    let lo = if a <= m && m <= b { 0.0 } else { da.min(db) };
+    (lo, da.max(db))
+}
+
+/// The range of (w − m)² for w over [a, b].
+pub fn sq_range(a: f64, b: f64, m: f64) -> (f64, f64) {
+    let (lo, hi) = dist_range(a, b, m);
+    (lo * lo, hi * hi)
+}
+
+/// The range of the distance from the z axis over the rectangle [x0, x1] × [y0, y1].
+pub fn rho_range((x0, x1): (f64, f64), (y0, y1): (f64, f64)) -> (f64, f64) {
+    let (x, y) = (dist_range(x0, x1, 0.0), dist_range(y0, y1, 0.0));
+    (x.0.hypot(y.0), x.1.hypot(y.1))
+}

@@ -173,10 +173,10 @@ pub(crate) fn call(name: &str, args: &[Arg], alpha: f64) -> Result<Outcome, Stri
             let (u, v) = ((k + 1) % 3, (k + 2) % 3);
             let (big, r0) = (a.t(2), a.t(3));
             let ring = (sq(d[u].clone()) + sq(d[v].clone())).sqrt();
-            a.value(
-                r0.square() - sq(d[k].clone()) - sq(d[u].clone()) - sq(d[v].clone()) - big.square()
-                    + 2.0 * big * ring,
-            )
+            // HyperFun's r0² − |d|² − R² + 2R·ρ is r0² − d_k² − (ρ − R)²: written so,
+            // each of d_u, d_v appears once (inside ρ), and intervals bound it exactly
+            // where the library's form counts them twice.
+            a.value(r0.square() - sq(d[k].clone()) - sq(ring - big))
         }
         "hfblock" => {
             let (p, v) = (a.vec3(0, "x")?, a.vec3(1, "the vertex")?);
@@ -185,14 +185,22 @@ pub(crate) fn call(name: &str, args: &[Arg], alpha: f64) -> Result<Outcome, Stri
                     (e < 0.0).then(|| format!("expected non-negative edge lengths, found {e}"))
                 })?;
             }
+            // HyperFun's (p − v)·(v + e − p) as (e/2)² − (p − v − e/2)²: the same
+            // quadratic with p once, so that intervals bound each slab exactly.
             let s: Vec<Tree> = (0..3)
-                .map(|i| (&p[i] - &v[i]) * (&v[i] + a.t(2 + i) - &p[i]))
+                .map(|i| {
+                    let h = a.t(2 + i) * 0.5;
+                    h.square() - sq(&p[i] - &v[i] - &h)
+                })
                 .collect();
             let f = if alpha == 1.0 {
                 s[0].min(&s[1]).min(&s[2])
             } else {
-                let r = |f: &Tree, g: &Tree| {
-                    f + g - (f.square() + g.square() - 2.0 * alpha * (f * g)).sqrt()
+                // Without its zero term at α = 0, the form the R-function bound
+                // recognises (a + b − √(a² + b²)).
+                let r = |f: &Tree, g: &Tree| match alpha {
+                    0.0 => f + g - (f.square() + g.square()).sqrt(),
+                    _ => f + g - (f.square() + g.square() - 2.0 * alpha * (f * g)).sqrt(),
                 };
                 r(&r(&s[0], &s[1]), &s[2])
             };
