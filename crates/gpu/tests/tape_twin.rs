@@ -10,8 +10,9 @@ mod common;
 use common::Rng;
 
 use frep::bytecode::Bytecode;
+use frep::expr::eval_nodes;
 use frep::read::read_file;
-use frep::{Aabb, Expr, ExprSurface, Ray};
+use frep::{Aabb, Dual, Expr, ExprSurface, Node, Ray};
 use glam::{DVec3, Vec3};
 use gpu::tape::GpuTape;
 use gpu::tape_trace::{TapeHit, TapeSolid, Traced, BUDGET};
@@ -145,9 +146,27 @@ fn box_interval(t: &GpuTape, &(lo, hi, d): &TestBox) -> [f32; 4] {
     t.eval_interval(c(0), c(1), c(2))
 }
 
+/// ∇F at p in f64 for F with its constants rounded to f32, as the twin holds them: the
+/// function whose derivative the twin's intervals enclose. (F's own derivative differs
+/// by the constants' rounding, which an exact bound, such as a completed square's at a
+/// box corner, does not cover.)
+fn gradient_f32_constants(e: &Expr, p: [f64; 3]) -> [f64; 3] {
+    let nodes: Vec<Node> = e
+        .nodes()
+        .iter()
+        .map(|n| match *n {
+            Node::Const(b) => Node::Const(f64::from(f64::from_bits(b) as f32).to_bits()),
+            n => n,
+        })
+        .collect();
+    let v = |k: usize| Dual::<f64, 3>::var(p[k], k);
+    eval_nodes(&nodes, v(0), v(1), v(2), &mut Vec::new()).d
+}
+
 /// The twins without a GPU: point values equal `Bytecode::eval_f32` bit for bit, and every
 /// f32 point value in a box (its 8 corners and 8 random points) lies in the box's
-/// interval, as does the f64 directional derivative dF/dt there.
+/// interval, as does the directional derivative dF/dt there (in f64, of F with the
+/// twin's f32 constants).
 #[test]
 fn twin_equals_eval_f32_and_is_sound() {
     let mut rng = Rng(7);
@@ -181,7 +200,7 @@ fn twin_equals_eval_f32_and_is_sound() {
                     );
                     values += 1;
                 }
-                let (_, grad) = m.expr.gradient(p.map(f64::from));
+                let grad = gradient_f32_constants(&m.expr, p.map(f64::from));
                 let dv = grad[0] * d.x as f64 + grad[1] * d.y as f64 + grad[2] * d.z as f64;
                 if dv.is_finite() && !iv[2].is_nan() {
                     assert!(
@@ -336,9 +355,40 @@ fn rays(m: &Model, rng: &mut Rng) -> Vec<TestRay> {
     out
 }
 
+/// The largest |F| over the sliver (a, b) of the ray (63 samples, f64) in units of
+/// ε₃₂·S(p), S the scale of the f32 evaluation's rounding at p: the ray point's own
+/// rounding (|∇F|·(|o| + |t|·|d|)) plus every tape operation's (Σ |v| over the nodes, each
+/// rounded by at most ε₃₂·|v|). Where this stays small the sliver lies within f32
+/// rounding of F = 0: a near-tangent ray, which GPU.md §9 lets the f32 and f64 tracers
+/// answer differently.
+fn relative_peak(m: &Model, o: DVec3, d: DVec3, a: f64, b: f64) -> f64 {
+    let n = m.expr.nodes().len();
+    let mut scratch = Vec::new();
+    (1..64)
+        .map(|k| {
+            let t = a + (b - a) * k as f64 / 64.0;
+            let p = o + t * d;
+            let v = eval_nodes(m.expr.nodes(), p.x, p.y, p.z, &mut scratch);
+            let ops: f64 = scratch[..n].iter().map(|v| v.abs()).sum();
+            let grad = DVec3::from_array(m.expr.gradient(p.to_array()).1).length();
+            let scale = grad * (o.length() + t.abs() * d.length()) + ops;
+            v.abs() / (f64::from(f32::EPSILON) * scale)
+        })
+        .fold(0.0, f64::max)
+}
+
+/// How far from F = 0, in units of [`relative_peak`]'s rounding scale, a sliver one
+/// tracer skips and the other reports may reach and still count as near-tangent: within
+/// one rounding scale. (Measured: the one such ray, bumpy_ball's ray 2319, grazes the
+/// surface with |F| ≤ 1.0e-2 ε₃₂·S over a sliver 5.5e-6 long.)
+const NEAR_TANGENT: f64 = 1.0;
+
 /// Per model, 4 096 rays through the twin against frep's f64 tracer (same bounds and
 /// f64 resolution): the same hit or miss on every ray the twin decides within its soft
-/// budget, none undecided, |Δt| within [`TOLERANCE`], loop counts below 30 000.
+/// budget but near-tangent ones (the sliver between one tracer's crossing and its next
+/// crossing, which the other skips, within [`NEAR_TANGENT`] × f32 rounding of F = 0:
+/// [`relative_peak`]), none undecided, |Δt| within [`TOLERANCE`], loop counts below
+/// 30 000.
 #[test]
 fn twin_traces_like_frep() {
     let mut rng = Rng(21);
@@ -350,7 +400,7 @@ fn twin_traces_like_frep() {
         let view = surface.view();
         let size = m.bounds.extent().length();
         let (mut hits, mut undecided, mut flips, mut max_dt, mut max_loops) = (0, 0, 0, 0f64, 0);
-        let (mut late, mut late_flips) = (0, 0);
+        let (mut late, mut late_flips, mut near, mut max_peak) = (0, 0, 0, 0f64);
         for (i, r) in rs.iter().enumerate() {
             let (o, d) = (Vec3::new(r[0], r[1], r[2]), Vec3::new(r[3], r[4], r[5]));
             let twin = solid.trace(o, d, r[6], r[7]);
@@ -368,16 +418,39 @@ fn twin_traces_like_frep() {
                 }
                 (TapeHit::Miss, None) => {}
                 (got, want) => {
-                    match twin.late {
-                        true => late_flips += 1,
-                        false => flips += 1,
+                    // The sliver one tracer reports and the other skips: from its crossing
+                    // to that tracer's next.
+                    let (o64, d64) = (o.as_dvec3(), d.as_dvec3());
+                    let (a, b) = match (got, want) {
+                        (TapeHit::Hit(a), _) => {
+                            let next = match solid.trace(o, d, a, r[7]).hit {
+                                TapeHit::Hit(n) => n,
+                                _ => r[7].min(a + size as f32),
+                            };
+                            (f64::from(a), f64::from(next))
+                        }
+                        (_, Some(b)) => {
+                            let next = view.trace(&ray, b, r[7] as f64, false);
+                            (b, next.map_or((r[7] as f64).min(b + size), |h| h.0))
+                        }
+                        _ => unreachable!("an agreeing pair"),
+                    };
+                    let peak = relative_peak(&m, o64, d64, a, b);
+                    match (twin.late, peak <= NEAR_TANGENT) {
+                        (true, _) => late_flips += 1,
+                        (false, true) => near += 1,
+                        (false, false) => flips += 1,
                     }
-                    eprintln!("{}: ray {i} {r:?}: twin {got:?}, frep {want:?}", m.name);
+                    max_peak = max_peak.max(peak);
+                    eprintln!(
+                        "{}: ray {i} {r:?}: twin {got:?}, frep {want:?}; |F| up to {peak:.2e} ε₃₂·S over ({a}, {b})",
+                        m.name
+                    );
                 }
             }
         }
         eprintln!(
-            "{}: {} rays, {hits} hits, {flips} flips against f64, {late} late ({late_flips} of them flipped), {undecided} undecided, max |Δt|/max(size, t) {max_dt:.2e}, max loops {max_loops}",
+            "{}: {} rays, {hits} hits, {flips} flips against f64 and {near} near-tangent (|F| up to {max_peak:.2e} ε₃₂·S), {late} late ({late_flips} of them flipped), {undecided} undecided, max |Δt|/max(size, t) {max_dt:.2e}, max loops {max_loops}",
             m.name,
             rs.len()
         );
