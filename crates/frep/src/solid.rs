@@ -105,6 +105,16 @@ impl Rule {
     }
 }
 
+/// The range a CSG walk over a node with these bounds covers: (t_min, t_max) clipped to
+/// the bounds grown by 10⁻⁹ (None where the ray misses them).
+fn walk_range(bounds: &Aabb, ray: &Ray, t_min: f64, t_max: f64) -> Option<(f64, f64)> {
+    if bounds.is_finite() {
+        Aabb::new(bounds.lo - 1e-9, bounds.hi + 1e-9).clip(ray, t_min, t_max)
+    } else {
+        Some((t_min, t_max))
+    }
+}
+
 impl Solid {
     /// Builds a solid from a shape. Expression leaves are bounded inside their declared
     /// domain, else inside ±[`DEFAULT_DOMAIN`]. Errors for a singular transform, an
@@ -239,13 +249,49 @@ impl Solid {
     /// shadow ray's question), which a solid of one leaf answers without refining the
     /// crossing or computing its normal.
     pub fn occludes(&self, ray: &Ray, t_min: f64, t_max: f64) -> bool {
-        let node = &self.flat.nodes[self.root()];
-        if !matches!(node.op, CsgOp::Leaf) {
-            return self.intersect(ray, t_min, t_max).is_some();
-        }
-        match self.flat.leaf(node.operands.first as usize) {
-            LeafView::Perturbed(ref s) => s.first_crossing(ray, t_min, t_max).is_some(),
-            LeafView::Expr(ref s) => s.crosses(ray, t_min, t_max),
+        self.occludes_node(self.root(), ray, t_min, t_max)
+    }
+
+    /// `intersect_node(i, ..).is_some()`, answered with less work where the CSG walk's
+    /// outcome is known early. A union whose parts are all outside where its walk
+    /// starts is crossed iff some part is (its first crossing enters it): the parts are
+    /// asked in turn, without normals, until one says yes. A difference whose first part
+    /// starts outside and is never crossed stays outside. Otherwise the walk runs.
+    fn occludes_node(&self, i: usize, ray: &Ray, t_min: f64, t_max: f64) -> bool {
+        let node = &self.flat.nodes[i];
+        let all_outside = |parts: &[u32], start: DVec3| {
+            parts.iter().all(|&p| !self.inside_node(p as usize, start))
+        };
+        match node.op {
+            CsgOp::Leaf => match self.flat.leaf(node.operands.first as usize) {
+                LeafView::Perturbed(ref s) => s.first_crossing(ray, t_min, t_max).is_some(),
+                LeafView::Expr(ref s) => s.crosses(ray, t_min, t_max),
+            },
+            CsgOp::Union => {
+                let Some((lo, hi)) = walk_range(&node.bounds, ray, t_min, t_max) else {
+                    return false;
+                };
+                let parts = self.flat.parts(i);
+                if all_outside(parts, ray.at(lo)) {
+                    return parts
+                        .iter()
+                        .any(|&p| self.occludes_node(p as usize, ray, lo, hi));
+                }
+                self.intersect_node(i, ray, t_min, t_max).is_some()
+            }
+            CsgOp::Difference => {
+                let Some((lo, hi)) = walk_range(&node.bounds, ray, t_min, t_max) else {
+                    return false;
+                };
+                let first = &self.flat.parts(i)[..1];
+                if all_outside(first, ray.at(lo))
+                    && !self.occludes_node(first[0] as usize, ray, lo, hi)
+                {
+                    return false;
+                }
+                self.intersect_node(i, ray, t_min, t_max).is_some()
+            }
+            CsgOp::Intersection => self.intersect_node(i, ray, t_min, t_max).is_some(),
         }
     }
 
@@ -311,12 +357,7 @@ impl Solid {
         t_min: f64,
         t_max: f64,
     ) -> Option<Hit> {
-        let (lo, hi) = if bounds.is_finite() {
-            let grown = Aabb::new(bounds.lo - 1e-9, bounds.hi + 1e-9);
-            grown.clip(ray, t_min, t_max)?
-        } else {
-            (t_min, t_max)
-        };
+        let (lo, hi) = walk_range(bounds, ray, t_min, t_max)?;
         let nudge = 1e-10 * bounds.extent().length().clamp(1.0, 1e12) / ray.d.length();
         // Each part's state at the start of the clipped range: a part may well be inside
         // there even though the combination is not.
