@@ -317,7 +317,8 @@ impl Quadric {
 impl Quadric {
     /// [`Quadric::to_tree`] for a quadric without cross terms: a_k·x_k² + b_k·x_k is
     /// a_k·(x_k − h_k)² − a_k·h_k² with h_k = −b_k / (2·a_k); equal a_k (a sphere, a
-    /// circular cylinder) share one product.
+    /// circular cylinder) share one product. A coordinate whose vertex lies so far out
+    /// that a_k·h_k² dwarfs the coefficients keeps its monomials.
     fn completed_tree(&self) -> Tree {
         let c = &self.c;
         let vars = [Tree::x(), Tree::y(), Tree::z()];
@@ -327,8 +328,14 @@ impl Quadric {
         let mut linear: Vec<Tree> = Vec::new();
         for (i, v) in vars.iter().enumerate() {
             let (a, b) = (c[i], c[6 + i]);
+            let h = -b / (2.0 * a);
+            // A vertex far out (a nearly flat parabola: a tiny next to b) would make K'
+            // and a·(x − h)² huge and cancelling; such a coordinate keeps a·x² + b·x.
+            if a != 0.0 && (a * h * h).abs() > 1e6 * (c[9].abs() + a.abs() + b.abs()) {
+                linear.push(a * v.square() + b * v);
+                continue;
+            }
             if a != 0.0 {
-                let h = -b / (2.0 * a);
                 k -= a * h * h;
                 let sq = if h == 0.0 {
                     v.square()
@@ -635,6 +642,11 @@ mod tests {
             };
             let e = crate::Expr::new(&q.to_tree());
             let scale = 1.0 + q.c.iter().map(|x| x.abs()).sum::<f64>() * 100.0;
+            // A nearly flat parabola in x (vertex at −5·10¹²) keeps its value.
+            let flat = Quadric::new([1e-13, -1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.5, 2.0, 0.3]);
+            let p = c.to_array();
+            let (got, want) = (crate::Expr::new(&flat.to_tree()).eval(p), flat.eval(c));
+            assert!((got - want).abs() <= 1e-13 * scale, "flat: {got} vs {want}");
             let lo = c + DVec3::new(v(-2.0, 1.0), v(-2.0, 1.0), v(-2.0, 1.0));
             let hi = lo + DVec3::new(v(0.0, 1.0), v(0.0, 1.0), v(0.0, 1.0));
             for _ in 0..20 {
