@@ -253,15 +253,15 @@ impl Solid {
     }
 
     /// `intersect_node(i, ..).is_some()`, answered with less work where the CSG walk's
-    /// outcome is known early. A union whose parts are all outside where its walk
-    /// starts is crossed iff some part is (its first crossing enters it): the parts are
-    /// asked in turn, without normals, until one says yes. A difference whose first part
-    /// starts outside and is never crossed stays outside. Otherwise the walk runs.
+    /// outcome is known early. A node's state changes only where a part is crossed, so a
+    /// node none of whose parts is crossed is not crossed either. A union crossed by
+    /// some part is crossed when every part starts outside (its first crossing then
+    /// enters). A difference whose first part is not crossed is crossed iff it starts
+    /// inside the first part and the second part is crossed. Otherwise the walk runs.
+    /// Parts are asked in turn, without normals; start states only where needed.
     fn occludes_node(&self, i: usize, ray: &Ray, t_min: f64, t_max: f64) -> bool {
         let node = &self.flat.nodes[i];
-        let all_outside = |parts: &[u32], start: DVec3| {
-            parts.iter().all(|&p| !self.inside_node(p as usize, start))
-        };
+        let crossed = |p: u32, lo: f64, hi: f64| self.occludes_node(p as usize, ray, lo, hi);
         match node.op {
             CsgOp::Leaf => match self.flat.leaf(node.operands.first as usize) {
                 LeafView::Perturbed(ref s) => s.first_crossing(ray, t_min, t_max).is_some(),
@@ -272,10 +272,12 @@ impl Solid {
                     return false;
                 };
                 let parts = self.flat.parts(i);
-                if all_outside(parts, ray.at(lo)) {
-                    return parts
-                        .iter()
-                        .any(|&p| self.occludes_node(p as usize, ray, lo, hi));
+                if !parts.iter().any(|&p| crossed(p, lo, hi)) {
+                    return false;
+                }
+                let start = ray.at(lo);
+                if parts.iter().all(|&p| !self.inside_node(p as usize, start)) {
+                    return true;
                 }
                 self.intersect_node(i, ray, t_min, t_max).is_some()
             }
@@ -283,11 +285,9 @@ impl Solid {
                 let Some((lo, hi)) = walk_range(&node.bounds, ray, t_min, t_max) else {
                     return false;
                 };
-                let first = &self.flat.parts(i)[..1];
-                if all_outside(first, ray.at(lo))
-                    && !self.occludes_node(first[0] as usize, ray, lo, hi)
-                {
-                    return false;
+                let (first, second) = (self.flat.parts(i)[0], self.flat.parts(i)[1]);
+                if !crossed(first, lo, hi) {
+                    return self.inside_node(first as usize, ray.at(lo)) && crossed(second, lo, hi);
                 }
                 self.intersect_node(i, ray, t_min, t_max).is_some()
             }
