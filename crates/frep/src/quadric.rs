@@ -312,9 +312,7 @@ impl Quadric {
         }
         e
     }
-}
 
-impl Quadric {
     /// [`Quadric::to_tree`] for a quadric without cross terms: a_k·x_k² + b_k·x_k is
     /// a_k·(x_k − h_k)² − a_k·h_k² with h_k = −b_k / (2·a_k); equal a_k (a sphere, a
     /// circular cylinder) share one product. A coordinate whose vertex lies so far out
@@ -328,26 +326,28 @@ impl Quadric {
         let mut linear: Vec<Tree> = Vec::new();
         for (i, v) in vars.iter().enumerate() {
             let (a, b) = (c[i], c[6 + i]);
+            if a == 0.0 {
+                if b != 0.0 {
+                    linear.push(b * v);
+                }
+                continue;
+            }
             let h = -b / (2.0 * a);
             // A vertex far out (a nearly flat parabola: a tiny next to b) would make K'
             // and a·(x − h)² huge and cancelling; such a coordinate keeps a·x² + b·x.
-            if a != 0.0 && (a * h * h).abs() > 1e6 * (c[9].abs() + a.abs() + b.abs()) {
+            if (a * h * h).abs() > 1e6 * (c[9].abs() + a.abs() + b.abs()) {
                 linear.push(a * v.square() + b * v);
                 continue;
             }
-            if a != 0.0 {
-                k -= a * h * h;
-                let sq = if h == 0.0 {
-                    v.square()
-                } else {
-                    (v - h).square()
-                };
-                match groups.iter_mut().find(|(g, _)| *g == a) {
-                    Some((_, t)) => *t = &*t + &sq,
-                    None => groups.push((a, sq)),
-                }
-            } else if b != 0.0 {
-                linear.push(b * v);
+            k -= a * h * h;
+            let sq = if h == 0.0 {
+                v.square()
+            } else {
+                (v - h).square()
+            };
+            match groups.iter_mut().find(|(g, _)| *g == a) {
+                Some((_, t)) => *t = &*t + &sq,
+                None => groups.push((a, sq)),
             }
         }
         let mut e = Tree::constant(k);
@@ -632,6 +632,9 @@ mod tests {
     fn axis_aligned_trees_bound_boxes_exactly() {
         let mut rng = Pcg64::seed_from_u64(12);
         let mut v = |lo: f64, hi: f64| rng.gen_range(lo..hi);
+        // A nearly flat parabola in x (vertex at −5·10¹²) keeps its value.
+        let flat = Quadric::new([1e-13, -1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.5, 2.0, 0.3]);
+        let flat_tree = crate::Expr::new(&flat.to_tree());
         for k in 0..400 {
             let c = DVec3::new(v(-5.0, 5.0), v(-5.0, 5.0), v(-5.0, 5.0));
             let q = match k % 4 {
@@ -642,10 +645,7 @@ mod tests {
             };
             let e = crate::Expr::new(&q.to_tree());
             let scale = 1.0 + q.c.iter().map(|x| x.abs()).sum::<f64>() * 100.0;
-            // A nearly flat parabola in x (vertex at −5·10¹²) keeps its value.
-            let flat = Quadric::new([1e-13, -1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.5, 2.0, 0.3]);
-            let p = c.to_array();
-            let (got, want) = (crate::Expr::new(&flat.to_tree()).eval(p), flat.eval(c));
+            let (got, want) = (flat_tree.eval(c.to_array()), flat.eval(c));
             assert!((got - want).abs() <= 1e-13 * scale, "flat: {got} vs {want}");
             let lo = c + DVec3::new(v(-2.0, 1.0), v(-2.0, 1.0), v(-2.0, 1.0));
             let hi = lo + DVec3::new(v(0.0, 1.0), v(0.0, 1.0), v(0.0, 1.0));

@@ -285,7 +285,8 @@ impl Solid {
                 let Some((lo, hi)) = walk_range(&node.bounds, ray, t_min, t_max) else {
                     return false;
                 };
-                let (first, second) = (self.flat.parts(i)[0], self.flat.parts(i)[1]);
+                let parts = self.flat.parts(i);
+                let (first, second) = (parts[0], parts[1]);
                 if !crossed(first, lo, hi) {
                     return self.inside_node(first as usize, ray.at(lo)) && crossed(second, lo, hi);
                 }

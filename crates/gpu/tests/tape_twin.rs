@@ -146,21 +146,24 @@ fn box_interval(t: &GpuTape, &(lo, hi, d): &TestBox) -> [f32; 4] {
     t.eval_interval(c(0), c(1), c(2))
 }
 
-/// ∇F at p in f64 for F with its constants rounded to f32, as the twin holds them: the
-/// function whose derivative the twin's intervals enclose. (F's own derivative differs
-/// by the constants' rounding, which an exact bound, such as a completed square's at a
-/// box corner, does not cover.)
-fn gradient_f32_constants(e: &Expr, p: [f64; 3]) -> [f64; 3] {
-    let nodes: Vec<Node> = e
-        .nodes()
+/// F's tape with its constants rounded to f32, as the twin holds them: the function
+/// whose derivative the twin's intervals enclose. (F's own derivative differs by the
+/// constants' rounding, which an exact bound, such as a completed square's at a box
+/// corner, does not cover.)
+fn f32_constants(e: &Expr) -> Vec<Node> {
+    e.nodes()
         .iter()
         .map(|n| match *n {
             Node::Const(b) => Node::Const(f64::from(f64::from_bits(b) as f32).to_bits()),
             n => n,
         })
-        .collect();
+        .collect()
+}
+
+/// ∇F at p in f64 by `nodes`.
+fn gradient(nodes: &[Node], p: [f64; 3], scratch: &mut Vec<Dual<f64, 3>>) -> [f64; 3] {
     let v = |k: usize| Dual::<f64, 3>::var(p[k], k);
-    eval_nodes(&nodes, v(0), v(1), v(2), &mut Vec::new()).d
+    eval_nodes(nodes, v(0), v(1), v(2), scratch).d
 }
 
 /// The twins without a GPU: point values equal `Bytecode::eval_f32` bit for bit, and every
@@ -183,6 +186,7 @@ fn twin_equals_eval_f32_and_is_sound() {
             );
         }
         let (mut values, mut derivs) = (0, 0);
+        let (nodes32, mut duals) = (f32_constants(&m.expr), Vec::new());
         for b in &boxes {
             let (lo, hi, d) = *b;
             let iv = box_interval(&t, b);
@@ -200,7 +204,7 @@ fn twin_equals_eval_f32_and_is_sound() {
                     );
                     values += 1;
                 }
-                let grad = gradient_f32_constants(&m.expr, p.map(f64::from));
+                let grad = gradient(&nodes32, p.map(f64::from), &mut duals);
                 let dv = grad[0] * d.x as f64 + grad[1] * d.y as f64 + grad[2] * d.z as f64;
                 if dv.is_finite() && !iv[2].is_nan() {
                     assert!(

@@ -377,14 +377,10 @@ pub(crate) fn call(name: &str, a: &Args) -> R<V> {
     })
 }
 
-/// w·d without the terms whose weight is 0 (0·x is not folded: it is NaN at infinity),
-/// and with ±d_k itself for a weight of ±1: an axis-aligned w gives one coordinate.
+/// w·d without the terms whose weight is 0 (0·x is not folded: it is NaN at infinity;
+/// the expression builder folds weights of ±1): an axis-aligned w gives one coordinate.
 fn linear(w: DVec3, d: &[Tree; 3]) -> Tree {
-    let mut terms = (0..3).filter(|&k| w[k] != 0.0).map(|k| match w[k] {
-        1.0 => d[k].clone(),
-        -1.0 => -&d[k],
-        wk => wk * &d[k],
-    });
+    let mut terms = (0..3).filter(|&k| w[k] != 0.0).map(|k| w[k] * &d[k]);
     let first = terms.next().unwrap_or_else(|| Tree::constant(0.0));
     terms.fold(first, |acc, t| acc + t)
 }
