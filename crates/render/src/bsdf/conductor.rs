@@ -53,6 +53,30 @@ impl ConductorBxdf {
         let f = self.f(wo, wi);
         (pdf > 0.0).then(|| BsdfSample::new(wi, f, pdf, false, 1.0))
     }
+    /// [`Self::f`] and [`Self::pdf`] at once, bit for bit: the half vector, D(ωm) and
+    /// Λ(ωo) are computed once (D, a function of ωm's squared components, and |ωo·ωm|
+    /// are the same at ±ωm, so the pdf's ωm flipped to +z changes neither).
+    pub fn f_pdf(&self, wo: DVec3, wi: DVec3) -> (Rgb, f64) {
+        if !same_hemisphere(wo, wi) || self.distrib.effectively_smooth() {
+            return (Rgb::ZERO, 0.0);
+        }
+        let wm = wo + wi;
+        if wm.length_squared() == 0.0 {
+            return (Rgb::ZERO, 0.0);
+        }
+        // Both z are non-zero here (their product is positive), so `f`'s zero-cosine
+        // exit cannot apply.
+        let (co, ci) = (wo.z.abs(), wi.z.abs());
+        let wm = wm.normalize();
+        let dist = &self.distrib;
+        let (d, lo) = (dist.d(wm), dist.lambda(wo));
+        let dot = wo.dot(wm).abs();
+        let fr = fr_conductor(dot, self.eta, self.k);
+        let f = fr * (d * (1.0 / (1.0 + lo + dist.lambda(wi))) / (4.0 * co * ci));
+        let up = if wm.z < 0.0 { -wm } else { wm };
+        let pdf = dist.d_visible_with(wo, up, d, lo) / (4.0 * dot);
+        (f, pdf)
+    }
     /// D_ωo(ωm) / (4 |ωo·ωm|).
     pub fn pdf(&self, wo: DVec3, wi: DVec3) -> f64 {
         if !same_hemisphere(wo, wi) || self.distrib.effectively_smooth() {

@@ -81,11 +81,15 @@ impl TrowbridgeReitz {
     /// The density of visible normals D_ω(ωm) = G1(ω) max(0, ω·ωm) D(ωm) / cos θ,
     /// for ω turned to the upper hemisphere (as [`Self::sample_wm`] does).
     pub fn d_visible(&self, w: DVec3, wm: DVec3) -> f64 {
+        self.d_visible_with(w, wm, self.d(wm), self.lambda(w))
+    }
+    /// [`Self::d_visible`] with D(ωm) and Λ(ω) already computed, bit for bit.
+    pub fn d_visible_with(&self, w: DVec3, wm: DVec3, d: f64, lambda: f64) -> f64 {
         let c = w.z.abs();
         if c == 0.0 {
             return 0.0;
         }
-        self.g1(w) / c * self.d(wm) * (w.dot(wm) * w.z.signum()).max(0.0)
+        1.0 / (1.0 + lambda) / c * d * (w.dot(wm) * w.z.signum()).max(0.0)
     }
     /// The density of [`Self::sample_wm`] (the visible-normal density).
     pub fn pdf(&self, w: DVec3, wm: DVec3) -> f64 {

@@ -109,6 +109,50 @@ fn sampling_matches_pdf() {
     }
 }
 
+/// `f_pdf` is `f` and `pdf` bit for bit, over the whole sphere of incident directions
+/// (both hemispheres, grazing ones, and the mirror direction where ωo + ωi vanishes
+/// for transmission), for every BSDF and outgoing direction, in the local frame and
+/// through a [`Bsdf`]'s frame.
+#[test]
+fn f_pdf_is_f_and_pdf_bit_for_bit() {
+    let t = tables();
+    let s = Sampler::new(11);
+    let bits = |(f, p): (Rgb, f64)| (f.to_array().map(f64::to_bits), p.to_bits());
+    for (name, b) in configs(&t, Rgb::new(0.8, 0.4, 0.1)) {
+        let n = DVec3::new(0.3, -0.5, 0.8).normalize();
+        let bsdf = Bsdf::new(n, b);
+        // Reflective BSDFs are two-sided: from below as well.
+        let wos = outgoing(&b).into_iter().flat_map(|w| [w, -w]);
+        for wo in wos {
+            let mut wis: Vec<DVec3> = (0..4000)
+                .map(|i| {
+                    let st = s.stream(7, 0, i);
+                    uniform_sphere(DVec2::new(st.get(0), st.get(1)))
+                })
+                .collect();
+            wis.extend([
+                -wo,
+                DVec3::new(wo.x, wo.y, -wo.z),
+                DVec3::new(1.0, 0.0, 0.0),
+            ]);
+            wis.push(DVec3::new(0.6, 0.8, 1e-12).normalize());
+            for wi in wis {
+                assert_eq!(
+                    bits(b.f_pdf(wo, wi)),
+                    bits((b.f(wo, wi), b.pdf(wo, wi))),
+                    "{name}"
+                );
+                let (wo_w, wi_w) = (bsdf.frame.from_local(wo), bsdf.frame.from_local(wi));
+                assert_eq!(
+                    bits(bsdf.f_pdf(wo_w, wi_w)),
+                    bits((bsdf.f(wo_w, wi_w), bsdf.pdf(wo_w, wi_w))),
+                    "{name}"
+                );
+            }
+        }
+    }
+}
+
 /// A sample's f and pdf equal f(wo, wi) and pdf(wo, wi) (relative 1e-9), and its
 /// weight is f |cos θi| / pdf; specular samples have pdf(wo, wi) = 0 for pure
 /// delta BSDFs.

@@ -302,11 +302,19 @@ impl Integrator {
                 // needs and every light's pdf there (taken from the ray's origin).
                 let ray = spawn(v.p, v.n, s.wi);
                 scene.lights.along_into(&ray, self.area_pdfs, &mut along);
+                // f and, where a technique samples the BSDF, its pdf in one evaluation.
+                let (f, bsdf_pdf) = if self.bsdf_index.is_some() {
+                    let (f, p) = v.bsdf.f_pdf(v.wo, s.wi);
+                    (f, Some(p))
+                } else {
+                    (v.bsdf.f(v.wo, s.wi), None)
+                };
                 crate::technique::pdfs(
                     &self.techniques,
                     &ctx,
                     s.wi,
                     along.crossed(),
+                    bsdf_pdf,
                     &mut pdfs[..t_count],
                 );
                 if s.pdf.is_nan() && !(pdfs[k] > 0.0 && pdfs[k].is_finite()) {
@@ -314,7 +322,7 @@ impl Integrator {
                     px.add_failed(self, depth, k);
                     continue;
                 }
-                let fc = v.bsdf.f(v.wo, s.wi) * s.wi.dot(v.n).abs();
+                let fc = f * s.wi.dot(v.n).abs();
                 let li = match &s.bsdf {
                     Some(bs) if carries => self.li_of_bsdf_draw(
                         scene,

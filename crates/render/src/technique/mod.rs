@@ -241,7 +241,8 @@ impl Technique {
 }
 
 /// Fills `out[k]` with `techniques[k].pdf(ctx, wi)`, the light mixtures' over the lights
-/// `crossed` lists where the caller found them ([`Lights::along`]). Otherwise, where
+/// `crossed` lists where the caller found them ([`Lights::along`]), and the BSDF's
+/// `bsdf_pdf` where the caller has it ([`crate::bsdf::Bsdf::f_pdf`]). Otherwise, where
 /// two or more techniques mix over the lights the direction crosses, those lights and
 /// their pdfs are found once ([`Lights::crossed`]) instead of once per technique.
 pub fn pdfs(
@@ -249,13 +250,19 @@ pub fn pdfs(
     ctx: &ShadingPoint,
     wi: DVec3,
     crossed: Option<&Crossed>,
+    bsdf_pdf: Option<f64>,
     out: &mut [f64],
 ) {
-    if crossed.is_some() {
-        for (o, t) in out.iter_mut().zip(techniques) {
-            *o = t.pdf_over(ctx, wi, crossed);
+    let fill = |out: &mut [f64], crossed: Option<&Crossed>| {
+        for (o, &t) in out.iter_mut().zip(techniques) {
+            *o = match (t, bsdf_pdf) {
+                (Technique::Bsdf, Some(p)) => p,
+                _ => t.pdf_over(ctx, wi, crossed),
+            };
         }
-        return;
+    };
+    if crossed.is_some() {
+        return fill(out, crossed);
     }
     let mixes = |t: &&Technique| {
         matches!(
@@ -270,15 +277,10 @@ pub fn pdfs(
     if techniques.iter().filter(mixes).count() >= 2 {
         let area = techniques.contains(&Technique::LightArea);
         if let Some(c) = ctx.lights.crossed(ctx.p, wi, area) {
-            for (o, t) in out.iter_mut().zip(techniques) {
-                *o = t.pdf_over(ctx, wi, Some(&c));
-            }
-            return;
+            return fill(out, Some(&c));
         }
     }
-    for (o, t) in out.iter_mut().zip(techniques) {
-        *o = t.pdf(ctx, wi);
-    }
+    fill(out, None)
 }
 
 #[cfg(test)]

@@ -306,7 +306,7 @@ fn shared_crossings_give_each_techniques_own_pdf() {
             let Some(d) = t.sample(&ctx, r.get(0), r.get_2d(1)) else {
                 continue;
             };
-            pdfs(&all, &ctx, d.wi, None, &mut out);
+            pdfs(&all, &ctx, d.wi, None, None, &mut out);
             for (k, t) in all.iter().enumerate() {
                 assert_eq!(out[k].to_bits(), t.pdf(&ctx, d.wi).to_bits(), "{t:?}");
             }
@@ -315,7 +315,7 @@ fn shared_crossings_give_each_techniques_own_pdf() {
             let ray = Ray::new(ctx.p, d.wi);
             let along = lights.along(&ray, true);
             let mut shared = [0.0; 9];
-            pdfs(&all, &ctx, d.wi, along.crossed(), &mut shared);
+            pdfs(&all, &ctx, d.wi, along.crossed(), None, &mut shared);
             assert_eq!(shared.map(f64::to_bits), out.map(f64::to_bits));
             assert_eq!(along.nearest, lights.intersect(&ray, 0.0, f64::INFINITY));
             total += 1;
