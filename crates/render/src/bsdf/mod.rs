@@ -134,7 +134,6 @@ impl Bxdf<'_> {
             Bxdf::Plastic(b) => b.pdf(wo, wi),
         }
     }
-    /// Whether the BSDF has a delta lobe (samples flagged `specular`).
     /// `(f(wo, wi), pdf(wo, wi))` bit for bit, sharing what the two have in common.
     pub fn f_pdf(&self, wo: DVec3, wi: DVec3) -> (Rgb, f64) {
         match self {
@@ -144,6 +143,7 @@ impl Bxdf<'_> {
             Bxdf::Plastic(b) => (b.f(wo, wi), b.pdf(wo, wi)),
         }
     }
+    /// Whether the BSDF has a delta lobe (samples flagged `specular`).
     pub fn has_specular(&self) -> bool {
         match self {
             Bxdf::Diffuse(_) => false,
@@ -188,13 +188,13 @@ impl<'a> Bsdf<'a> {
         self.bxdf
             .pdf(self.frame.to_local(wo), self.frame.to_local(wi))
     }
-    /// Draws an incident direction (world space).
     /// `(self.f(wo, wi), self.pdf(wo, wi))` bit for bit, the directions taken to the
     /// local frame once (an integrator needs both at every MIS draw).
     pub fn f_pdf(&self, wo: DVec3, wi: DVec3) -> (Rgb, f64) {
         self.bxdf
             .f_pdf(self.frame.to_local(wo), self.frame.to_local(wi))
     }
+    /// Draws an incident direction (world space).
     pub fn sample_f(&self, wo: DVec3, uc: f64, u: DVec2) -> Option<BsdfSample> {
         let wo_l = self.frame.to_local(wo);
         if wo_l.z == 0.0 {
