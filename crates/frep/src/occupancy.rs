@@ -12,7 +12,7 @@
 //! set was dilated by one cell instead, which searched three times the cells.)
 
 use crate::dual::Dual;
-use crate::expr::{eval_choices_nodes, eval_nodes, simplify_into, Node};
+use crate::expr::{eval_choices_nodes, eval_nodes, simplify_into, Choice, Node};
 use crate::interval::Interval;
 use crate::ray::{Aabb, Ray};
 use glam::DVec3;
@@ -190,77 +190,86 @@ pub fn build(tape: &[Node], b: &Aabb) -> Grid {
 
 /// [`build`] at `n` cells per axis, with the node evaluations it spent; None past the
 /// budget.
+///
+/// The octree's top [`SPLIT_LEVELS`] levels are evaluated here; the subtrees below them
+/// are built in parallel (rayon's current pool), each into its own node arena starting
+/// with the tape it inherits, and joined in a fixed order. Every octree box sees the
+/// same tape as in a sequential walk, so the cells and their tapes do not depend on the
+/// number of threads. Each subtree may add [`TAPE_BUDGET`] / its count nodes.
 fn build_n(tape: &[Node], b: &Aabb, n: usize) -> Option<(Grid, usize)> {
+    use rayon::prelude::*;
+    let geometry = Octree {
+        lo: b.lo,
+        hi: b.hi,
+        cell: (b.hi - b.lo) / n as f64,
+        n,
+    };
+    // The top levels, breadth first: what they split becomes the parallel subtrees.
+    let mut top = Builder::new(tape.to_vec(), usize::MAX);
+    let mut frontier = vec![([0usize; 3], n, [0u32, tape.len() as u32])];
+    for _ in 0..SPLIT_LEVELS {
+        let mut next = Vec::new();
+        for (c, size, span) in frontier {
+            if let Some(own) = top.node(&geometry, c, size, span) {
+                next.extend(children(c, size, own));
+            }
+        }
+        frontier = next;
+        if top.spent > BUILD_BUDGET {
+            return None;
+        }
+    }
+    let share = TAPE_BUDGET.saturating_sub(top.nodes.len()) / frontier.len().max(1);
+    let subtrees: Vec<Builder> = frontier
+        .par_iter()
+        .map(|&(c, size, span)| {
+            let inherited = top.nodes[span[0] as usize..span[1] as usize].to_vec();
+            let len = inherited.len() as u32;
+            let mut sub = Builder::new(inherited, share);
+            sub.walk(&geometry, c, size, [0, len], BUILD_BUDGET - top.spent);
+            sub
+        })
+        .collect();
+    let spent = subtrees
+        .iter()
+        .fold(top.spent, |a, s| a.saturating_add(s.spent));
+    if spent > BUILD_BUDGET {
+        return None;
+    }
     let mut occupied = vec![false; n * n * n];
     let mut inside = vec![false; n * n * n];
     let mut cells = vec![[0u32; 2]; n * n * n];
-    let mut nodes = tape.to_vec();
-    let mut scratch = Vec::new();
-    let mut choices = Vec::new();
-    let mut duals = Vec::new();
-    let mut spent = 0usize;
-    let cell = (b.hi - b.lo) / n as f64;
-    // Octree nodes: (corner cell, size in cells, the tape that holds over them).
-    let mut stack = vec![([0usize; 3], n, [0u32, tape.len() as u32])];
-    while let Some((c, size, span)) = stack.pop() {
-        let (s, e) = (span[0] as usize, span[1] as usize);
-        spent += e - s;
-        if spent > BUILD_BUDGET {
-            return None;
-        }
-        let lo = b.lo + DVec3::new(c[0] as f64, c[1] as f64, c[2] as f64) * cell;
-        let hi = if c.iter().all(|&k| k + size == n) {
-            b.hi
-        } else {
-            lo + cell * size as f64
-        };
-        let m = cell * (size as f64 * MARGIN);
-        let iv = |k: usize| Interval::new(lo[k] - m[k], hi[k].max(lo[k]) + m[k]);
-        let v = eval_choices_nodes(
-            &nodes[s..e],
-            iv(0),
-            iv(1),
-            iv(2),
-            &mut scratch,
-            &mut choices,
-        );
-        let mut excluded = v.lo > 0.0 || v.hi < 0.0;
-        let mut positive = v.lo > 0.0;
-        // The tape over this box: the one it was given, simplified where it can be (an
-        // empty box's tape only serves the sign at run ends: worth it when long).
-        let mut own = span;
-        if (!excluded || e - s > SHORT_TAPE) && nodes.len() < TAPE_BUDGET {
-            let start = nodes.len();
-            if simplify_into(&[], Some(s..e), &choices, &mut nodes) {
-                own = [start as u32, nodes.len() as u32];
-            }
-        }
-        if !excluded && size <= MEAN_VALUE_SIZE {
-            let tape = &nodes[own[0] as usize..own[1] as usize];
-            spent += 4 * tape.len();
-            if let Some(sign) = mean_value_sign(tape, lo - m, hi.max(lo) + m, &mut duals) {
-                (excluded, positive) = (true, sign);
-            }
-        }
-        if excluded || size == 1 {
+    let mut leaves = |builder: &Builder, rebase: &dyn Fn([u32; 2]) -> [u32; 2]| {
+        for leaf in &builder.leaves {
+            let (c, size) = (leaf.corner, leaf.size);
             for z in c[2]..c[2] + size {
                 for y in c[1]..c[1] + size {
                     for x in c[0]..c[0] + size {
-                        cells[bit(n, x, y, z)] = own;
-                        inside[bit(n, x, y, z)] = excluded && positive;
+                        cells[bit(n, x, y, z)] = rebase(leaf.span);
+                        inside[bit(n, x, y, z)] = leaf.excluded && leaf.positive;
                     }
                 }
             }
-            if !excluded {
+            if !leaf.excluded {
                 occupied[bit(n, c[0], c[1], c[2])] = true;
             }
-            continue;
         }
-        let h = size / 2;
-        for k in 0..8 {
-            let d = [(k & 1) * h, (k >> 1 & 1) * h, (k >> 2 & 1) * h];
-            stack.push(([c[0] + d[0], c[1] + d[1], c[2] + d[2]], h, own));
-        }
+    };
+    leaves(&top, &|span| span);
+    let mut nodes = std::mem::take(&mut top.nodes);
+    for (sub, &(_, _, from)) in subtrees.iter().zip(&frontier) {
+        // Spans into the inherited tape point to the parent's copy; the rest move to
+        // where this arena's own nodes land.
+        let (len, offset) = (from[1] - from[0], nodes.len() as u32);
+        let rebase = |s: [u32; 2]| {
+            if s[1] <= len {
+                [from[0] + s[0], from[0] + s[1]]
+            } else {
+                [offset + s[0] - len, offset + s[1] - len]
+            }
+        };
+        leaves(sub, &rebase);
+        nodes.extend_from_slice(&sub.nodes[len as usize..]);
     }
     let bits = |set: &[bool]| {
         let mut words = vec![0u64; n * n * n / 64];
@@ -292,6 +301,135 @@ fn build_n(tape: &[Node], b: &Aabb, n: usize) -> Option<(Grid, usize)> {
         },
         spent,
     ))
+}
+
+/// Octree levels evaluated before the subtrees are built in parallel: up to 64
+/// subtrees, enough to balance a few cores when the surface fills few of them.
+const SPLIT_LEVELS: usize = 2;
+
+/// The grid's box and cells.
+struct Octree {
+    lo: DVec3,
+    hi: DVec3,
+    cell: DVec3,
+    n: usize,
+}
+
+/// The eight children of the octree box at corner cell `c`, `size` cells wide, all
+/// given the tape `own`; in the order a stack pops them (the last first).
+fn children(c: [usize; 3], size: usize, own: [u32; 2]) -> impl DoubleEndedIterator<Item = Node3> {
+    let h = size / 2;
+    (0..8).rev().map(move |k| {
+        let d = [(k & 1) * h, (k >> 1 & 1) * h, (k >> 2 & 1) * h];
+        ([c[0] + d[0], c[1] + d[1], c[2] + d[2]], h, own)
+    })
+}
+
+/// An octree box to evaluate: corner cell, size in cells, the tape that holds over it.
+type Node3 = ([usize; 3], usize, [u32; 2]);
+
+/// An octree box that is not split: empty (`excluded`, with F's sign) or a finest cell.
+struct Leaf {
+    corner: [usize; 3],
+    size: usize,
+    span: [u32; 2],
+    excluded: bool,
+    positive: bool,
+}
+
+/// One sequential walk over part of the octree, with its node arena and scratch.
+struct Builder {
+    nodes: Vec<Node>,
+    /// Nodes this walk may add to its arena.
+    tape_cap: usize,
+    start: usize,
+    scratch: Vec<Interval>,
+    choices: Vec<Choice>,
+    duals: Vec<Dual<Interval, 3>>,
+    spent: usize,
+    leaves: Vec<Leaf>,
+}
+
+impl Builder {
+    fn new(nodes: Vec<Node>, tape_cap: usize) -> Self {
+        Self {
+            start: nodes.len(),
+            nodes,
+            tape_cap,
+            scratch: Vec::new(),
+            choices: Vec::new(),
+            duals: Vec::new(),
+            spent: 0,
+            leaves: Vec::new(),
+        }
+    }
+
+    /// Depth first below box `c` until every box is a leaf, or until more than
+    /// `budget` evaluations are spent.
+    fn walk(&mut self, g: &Octree, c: [usize; 3], size: usize, span: [u32; 2], budget: usize) {
+        let mut stack = vec![(c, size, span)];
+        while let Some((c, size, span)) = stack.pop() {
+            if let Some(own) = self.node(g, c, size, span) {
+                stack.extend(children(c, size, own).rev());
+            }
+            if self.spent > budget {
+                return;
+            }
+        }
+    }
+
+    /// Evaluates one box: records it as a leaf (None) or returns the tape its children
+    /// inherit.
+    fn node(&mut self, g: &Octree, c: [usize; 3], size: usize, span: [u32; 2]) -> Option<[u32; 2]> {
+        let (s, e) = (span[0] as usize, span[1] as usize);
+        self.spent = self.spent.saturating_add(e - s);
+        let lo = g.lo + DVec3::new(c[0] as f64, c[1] as f64, c[2] as f64) * g.cell;
+        let hi = if c.iter().all(|&k| k + size == g.n) {
+            g.hi
+        } else {
+            lo + g.cell * size as f64
+        };
+        let m = g.cell * (size as f64 * MARGIN);
+        let iv = |k: usize| Interval::new(lo[k] - m[k], hi[k].max(lo[k]) + m[k]);
+        let v = eval_choices_nodes(
+            &self.nodes[s..e],
+            iv(0),
+            iv(1),
+            iv(2),
+            &mut self.scratch,
+            &mut self.choices,
+        );
+        let mut excluded = v.lo > 0.0 || v.hi < 0.0;
+        let mut positive = v.lo > 0.0;
+        // The tape over this box: the one it was given, simplified where it can be (an
+        // empty box's tape only serves the sign at run ends: worth it when long).
+        let mut own = span;
+        let added = self.nodes.len() - self.start;
+        if (!excluded || e - s > SHORT_TAPE) && added < self.tape_cap.min(TAPE_BUDGET) {
+            let start = self.nodes.len();
+            if simplify_into(&[], Some(s..e), &self.choices, &mut self.nodes) {
+                own = [start as u32, self.nodes.len() as u32];
+            }
+        }
+        if !excluded && size <= MEAN_VALUE_SIZE {
+            let tape = &self.nodes[own[0] as usize..own[1] as usize];
+            self.spent = self.spent.saturating_add(4 * tape.len());
+            if let Some(sign) = mean_value_sign(tape, lo - m, hi.max(lo) + m, &mut self.duals) {
+                (excluded, positive) = (true, sign);
+            }
+        }
+        if excluded || size == 1 {
+            self.leaves.push(Leaf {
+                corner: c,
+                size,
+                span: own,
+                excluded,
+                positive,
+            });
+            return None;
+        }
+        Some(own)
+    }
 }
 
 /// Words of the block bitset of a grid of `n` cells per axis.

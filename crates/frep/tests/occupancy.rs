@@ -253,3 +253,45 @@ fn clear_blocks_change_no_run() {
         }
     }
 }
+
+/// The grid is built in parallel (its octree's subtrees in rayon's current pool) and is
+/// the same, arena layout included, at any number of threads.
+#[test]
+fn the_grid_is_the_same_at_any_thread_count() {
+    for m in [
+        "models/canonical/s2_csg.hf",
+        "models/examples/smooth_blob.frep",
+        "models/canonical/s4_gyroid.hf",
+        "../shared/models/fidget/colonnade.vm",
+    ] {
+        let model = read_file(&path(m)).unwrap_or_else(|e| panic!("{m}: {e}"));
+        let build = |threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            pool.install(|| Solid::build(&model.shape).unwrap())
+        };
+        let one = build(1);
+        let grids = |s: &Solid| -> Vec<frep::occupancy::Grid> {
+            leaf_views(s)
+                .iter()
+                .map(|v| frep::occupancy::Grid {
+                    words: v.grid.words.to_vec(),
+                    inside: v.grid.inside.to_vec(),
+                    blocks: v.grid.blocks.to_vec(),
+                    cells: v.grid.cells.to_vec(),
+                    nodes: v.grid.nodes.to_vec(),
+                    n: v.grid.n,
+                })
+                .collect()
+        };
+        assert!(grids(&one).iter().any(|g| g.n > 0), "{m}: no grid");
+        for threads in [2, 3] {
+            assert!(
+                grids(&build(threads)) == grids(&one),
+                "{m}: {threads} threads"
+            );
+        }
+    }
+}
