@@ -446,6 +446,12 @@ impl Search<'_> {
             tol,
             want,
         } = *self;
+        if want == Want::Any && ia != ib {
+            // F changes sign over [a, b]: the subdivision below would find a crossing
+            // (a half with unequal end signs is never excluded, and is decided by its
+            // signs once monotone, at the resolution or past the budget).
+            return Some((a, DVec3::Z));
+        }
         let Trace {
             stack,
             arena,
