@@ -17,6 +17,15 @@ thread_local! {
     static SIMPLIFY: RefCell<(Vec<bool>, Vec<u32>)> = const { RefCell::new((Vec::new(), Vec::new())) };
 }
 
+/// Grows this thread's [`simplify_into`] buffers to a tape of `n` nodes, so that a
+/// caller that reserves before its first query allocates nothing later.
+pub(crate) fn reserve_simplify(n: usize) {
+    SIMPLIFY.with_borrow_mut(|(live, remap)| {
+        live.reserve(n.saturating_sub(live.len()));
+        remap.reserve(n.saturating_sub(remap.len()));
+    });
+}
+
 /// One node of an [`Expr`]; operands are indices of earlier nodes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize))]

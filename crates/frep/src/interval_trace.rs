@@ -260,6 +260,7 @@ fn reserve(n: usize) {
     SCRATCH_G.with_borrow_mut(|s| at_least(s, n));
     SCRATCH_T.with_borrow_mut(|s| at_least(s, n));
     crate::poly_trace::reserve(n);
+    crate::expr::reserve_simplify(n);
     TRACE.with_borrow_mut(|tr| {
         at_least(&mut tr.choices, n);
         at_least(&mut tr.arena, 2 * n);
