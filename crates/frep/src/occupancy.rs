@@ -195,8 +195,15 @@ pub fn build(tape: &[Node], b: &Aabb) -> Grid {
 /// are built in parallel (rayon's current pool), each into its own node arena starting
 /// with the tape it inherits, and joined in a fixed order. Every octree box sees the
 /// same tape as in a sequential walk, so the cells and their tapes do not depend on the
-/// number of threads. Each subtree may add [`TAPE_BUDGET`] / its count nodes.
+/// number of threads; so do the subtrees' shares of [`TAPE_BUDGET`] (in batches of
+/// [`BATCH`], each an equal share of what the batches before it left).
 fn build_n(tape: &[Node], b: &Aabb, n: usize) -> Option<(Grid, usize)> {
+    build_split(tape, b, n, SPLIT_LEVELS)
+}
+
+/// [`build_n`] with its top `levels` levels evaluated before the parallel subtrees (0:
+/// one subtree, the whole octree on one thread).
+fn build_split(tape: &[Node], b: &Aabb, n: usize, levels: usize) -> Option<(Grid, usize)> {
     use rayon::prelude::*;
     let geometry = Octree {
         lo: b.lo,
@@ -207,7 +214,7 @@ fn build_n(tape: &[Node], b: &Aabb, n: usize) -> Option<(Grid, usize)> {
     // The top levels, breadth first: what they split becomes the parallel subtrees.
     let mut top = Builder::new(tape.to_vec(), usize::MAX);
     let mut frontier = vec![([0usize; 3], n, [0u32, tape.len() as u32])];
-    for _ in 0..SPLIT_LEVELS {
+    for _ in 0..levels {
         let mut next = Vec::new();
         for (c, size, span) in frontier {
             if let Some(own) = top.node(&geometry, c, size, span) {
@@ -219,22 +226,32 @@ fn build_n(tape: &[Node], b: &Aabb, n: usize) -> Option<(Grid, usize)> {
             return None;
         }
     }
-    let share = TAPE_BUDGET.saturating_sub(top.nodes.len()) / frontier.len().max(1);
-    let subtrees: Vec<Builder> = frontier
-        .par_iter()
-        .map(|&(c, size, span)| {
-            let inherited = top.nodes[span[0] as usize..span[1] as usize].to_vec();
-            let len = inherited.len() as u32;
-            let mut sub = Builder::new(inherited, share);
-            sub.walk(&geometry, c, size, [0, len], BUILD_BUDGET - top.spent);
-            sub
-        })
-        .collect();
-    let spent = subtrees
-        .iter()
-        .fold(top.spent, |a, s| a.saturating_add(s.spent));
-    if spent > BUILD_BUDGET {
-        return None;
+    // The subtrees run in batches of a fixed size, in order: each of a batch may add an
+    // equal share of the tape budget left after the batches before it, so the arenas
+    // hold at most the budget in all, and the shares do not depend on the threads.
+    let mut subtrees: Vec<Builder> = Vec::with_capacity(frontier.len());
+    let (mut used, mut spent) = (top.nodes.len(), top.spent);
+    for batch in frontier.chunks(BATCH) {
+        let share = TAPE_BUDGET.saturating_sub(used) / batch.len();
+        let budget = BUILD_BUDGET.saturating_sub(spent);
+        let done: Vec<Builder> = batch
+            .par_iter()
+            .map(|&(c, size, span)| {
+                let inherited = top.nodes[span[0] as usize..span[1] as usize].to_vec();
+                let len = inherited.len() as u32;
+                let mut sub = Builder::new(inherited, share);
+                sub.walk(&geometry, c, size, [0, len], budget);
+                sub
+            })
+            .collect();
+        for sub in &done {
+            used += sub.nodes.len() - sub.start;
+            spent = spent.saturating_add(sub.spent);
+        }
+        if spent > BUILD_BUDGET {
+            return None;
+        }
+        subtrees.extend(done);
     }
     let mut occupied = vec![false; n * n * n];
     let mut inside = vec![false; n * n * n];
@@ -306,6 +323,9 @@ fn build_n(tape: &[Node], b: &Aabb, n: usize) -> Option<(Grid, usize)> {
 /// Octree levels evaluated before the subtrees are built in parallel: up to 64
 /// subtrees, enough to balance a few cores when the surface fills few of them.
 const SPLIT_LEVELS: usize = 2;
+
+/// Subtrees built at once, sharing what is left of [`TAPE_BUDGET`].
+const BATCH: usize = 8;
 
 /// The grid's box and cells.
 struct Octree {
@@ -587,5 +607,49 @@ pub fn runs<'g>(
     }
     if let Some((a, s, ka)) = start {
         visit(a, t1, tape(s), [ka, None]);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::read::read_file;
+
+    /// Splitting the octree into parallel subtrees changes no cell: on colonnade.vm
+    /// (whose fine grid's subtrees add up to 46 000 nodes each) and a HyperFun blend, the
+    /// occupancy, signs, blocks and every cell's tape are those of the octree walked as
+    /// one subtree, and so is the evaluation count.
+    #[test]
+    fn parallel_subtrees_give_the_one_thread_grid() {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+        for m in [
+            "../shared/models/fidget/colonnade.vm",
+            "models/canonical/s3_blend.hf",
+        ] {
+            let model = read_file(&root.join(m)).unwrap_or_else(|e| panic!("{m}: {e}"));
+            let crate::Shape::Function { tree, .. } = &model.shape else {
+                panic!("{m}: not one expression");
+            };
+            let expr = crate::expr::Expr::new(tree);
+            let b =
+                crate::bounds::expr_bounds(&expr, Aabb::new(DVec3::splat(-2.0), DVec3::splat(2.0)));
+            for n in [GRID, FINE_GRID] {
+                let (one, spent_one) = build_split(expr.nodes(), &b, n, 0).unwrap();
+                let (split, spent_split) = build_split(expr.nodes(), &b, n, SPLIT_LEVELS).unwrap();
+                assert_eq!(spent_one, spent_split, "{m} {n}");
+                assert_eq!(
+                    (&one.words, &one.inside, &one.blocks),
+                    (&split.words, &split.inside, &split.blocks),
+                    "{m} {n}"
+                );
+                let tape = |g: &Grid, k: usize| {
+                    let [s, e] = g.cells[k];
+                    g.nodes[s as usize..e as usize].to_vec()
+                };
+                for k in 0..n * n * n {
+                    assert!(tape(&one, k) == tape(&split, k), "{m} {n}: cell {k}");
+                }
+            }
+        }
     }
 }
