@@ -212,7 +212,7 @@ fn build_split(tape: &[Node], b: &Aabb, n: usize, levels: usize) -> Option<(Grid
         n,
     };
     // The top levels, breadth first: what they split becomes the parallel subtrees.
-    let mut top = Builder::new(tape.to_vec(), usize::MAX);
+    let mut top = Builder::new(tape.to_vec(), TAPE_BUDGET);
     let mut frontier = vec![([0usize; 3], n, [0u32, tape.len() as u32])];
     for _ in 0..levels {
         let mut next = Vec::new();
@@ -336,17 +336,17 @@ struct Octree {
 }
 
 /// The eight children of the octree box at corner cell `c`, `size` cells wide, all
-/// given the tape `own`; in the order a stack pops them (the last first).
-fn children(c: [usize; 3], size: usize, own: [u32; 2]) -> impl DoubleEndedIterator<Item = Node3> {
+/// given the tape `own`.
+fn children(c: [usize; 3], size: usize, own: [u32; 2]) -> impl Iterator<Item = OctBox> {
     let h = size / 2;
-    (0..8).rev().map(move |k| {
+    (0..8).map(move |k| {
         let d = [(k & 1) * h, (k >> 1 & 1) * h, (k >> 2 & 1) * h];
         ([c[0] + d[0], c[1] + d[1], c[2] + d[2]], h, own)
     })
 }
 
 /// An octree box to evaluate: corner cell, size in cells, the tape that holds over it.
-type Node3 = ([usize; 3], usize, [u32; 2]);
+type OctBox = ([usize; 3], usize, [u32; 2]);
 
 /// An octree box that is not split: empty (`excluded`, with F's sign) or a finest cell.
 struct Leaf {
@@ -390,7 +390,7 @@ impl Builder {
         let mut stack = vec![(c, size, span)];
         while let Some((c, size, span)) = stack.pop() {
             if let Some(own) = self.node(g, c, size, span) {
-                stack.extend(children(c, size, own).rev());
+                stack.extend(children(c, size, own));
             }
             if self.spent > budget {
                 return;
@@ -425,7 +425,7 @@ impl Builder {
         // empty box's tape only serves the sign at run ends: worth it when long).
         let mut own = span;
         let added = self.nodes.len() - self.start;
-        if (!excluded || e - s > SHORT_TAPE) && added < self.tape_cap.min(TAPE_BUDGET) {
+        if (!excluded || e - s > SHORT_TAPE) && added < self.tape_cap {
             let start = self.nodes.len();
             if simplify_into(&[], Some(s..e), &self.choices, &mut self.nodes) {
                 own = [start as u32, self.nodes.len() as u32];
