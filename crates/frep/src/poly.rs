@@ -600,7 +600,13 @@ fn eval_d_any<T: Float>(b: &[T; N1], n: usize, u: T) -> (T, T) {
 
 /// The root in [lo, hi] where p goes from ≥ 0 at lo to < 0 at hi, by Newton's method
 /// safeguarded by bisection (Press et al., Numerical Recipes, `rtsafe`).
-fn refine<T: Float>(b: &[T; N1], n: usize, mut lo: T, mut hi: T) -> T {
+fn refine<T: Float>(b: &[T; N1], n: usize, lo: T, hi: T) -> T {
+    refine_counted(b, n, lo, hi).0
+}
+
+/// [`refine`] and the number of Newton or bisection steps it took.
+#[inline]
+fn refine_counted<T: Float>(b: &[T; N1], n: usize, mut lo: T, mut hi: T) -> (T, usize) {
     let tol = T::epsilon() * cst(2.0);
     let half = cst::<T>(0.5);
     let (glo, ghi) = (eval_d(b, n, lo).0, eval_d(b, n, hi).0);
@@ -610,10 +616,10 @@ fn refine<T: Float>(b: &[T; N1], n: usize, mut lo: T, mut hi: T) -> T {
         x = (lo + hi) * half;
     }
     let mut step_old = hi - lo;
-    for _ in 0..100 {
+    for steps in 1..=100 {
         let (g, dg) = eval_d(b, n, x);
         if g == T::zero() {
-            return x;
+            return (x, steps);
         }
         if g > T::zero() {
             lo = x;
@@ -621,18 +627,35 @@ fn refine<T: Float>(b: &[T; N1], n: usize, mut lo: T, mut hi: T) -> T {
             hi = x;
         }
         let newton = x - g / dg;
+        let close = tol * x.abs().max(T::one());
         let next = if newton > lo && newton < hi && (g + g).abs() <= (step_old * dg).abs() {
             newton
+        } else if dg < T::zero() && (newton - x).abs() <= close {
+            // Converged: p falls through the bracketed root and Newton's step is under
+            // an ulp, so it lands on the bracket's end just moved to x. Bisecting from
+            // there would walk ~50 halvings back to x (rtsafe tests the step before the
+            // bracket). Answer on the far side of the root as that walk would: x where p
+            // is already negative, else one tolerance past x, so that a search restarted
+            // there does not meet this root again. (Where p rises at x, Newton heads
+            // for another root outside the bracket: bisect.)
+            return (
+                if g < T::zero() {
+                    x
+                } else {
+                    (x + close).min(hi)
+                },
+                steps,
+            );
         } else {
             (lo + hi) * half
         };
         step_old = (next - x).abs();
         x = next;
         if step_old <= tol * x.abs().max(T::one()) || hi - lo <= tol {
-            break;
+            return (x, steps);
         }
     }
-    x
+    (x, 100)
 }
 
 #[cfg(test)]

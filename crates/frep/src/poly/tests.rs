@@ -231,3 +231,45 @@ fn scaling_keeps_zero_coefficients_where_the_power_overflows() {
     let b = s.to_bernstein();
     assert!(b.coeffs().iter().all(|v| v.is_finite()), "{b:?}");
 }
+
+/// The root refinement stops once Newton's step is under the tolerance, also where that
+/// step lands on the bracket's end (it once bisected ~50 times back to the root from
+/// there), and still answers within the conditioning tolerance on the far side of the
+/// root: random polynomials of degree 2 to 6 falling through one simple root in (0, 1),
+/// the other roots outside [0, 1], in Bernstein form.
+#[test]
+fn refinement_stops_at_convergence() {
+    let mut rng = Pcg64::seed_from_u64(41);
+    let mut worst = 0;
+    for k in 0..20_000 {
+        let n = 2 + k % 5;
+        let w: f64 = rng.gen_range(0.01..0.99);
+        let mut roots = vec![w];
+        for _ in 1..n {
+            let r: f64 = rng.gen_range(1.05..3.0);
+            roots.push(if rng.gen_bool(0.5) { r } else { 1.0 - r });
+        }
+        let p = from_roots(1.0, &roots);
+        // Falling through w: positive at 0.
+        let p = p.scale(p.eval(0.0).signum() * rng.gen_range(0.01..100.0));
+        let b = p.to_bernstein();
+        let (u, steps) = refine_counted(&b.b, n, 0.0, 1.0);
+        assert!(
+            (u - w).abs() <= conditioning_tolerance(&roots, w),
+            "degree {n}, root {w}: {u}"
+        );
+        worst = worst.max(steps);
+    }
+    assert!(worst <= 12, "{worst} steps");
+    // The case that bisected 46 times (a perturbed ellipsoid's piece, 2026-12-01).
+    let b = Bernstein::new(&[
+        0.020160946359353393,
+        -0.01812259884988346,
+        -0.00697730659552015,
+    ]);
+    let (u, steps) = refine_counted(&b.b, 2, 0.0, 1.0);
+    assert!(
+        (u - 0.33633973260234107).abs() <= 1e-15 && steps <= 8,
+        "{u} in {steps} steps"
+    );
+}

@@ -472,8 +472,15 @@ fn refine(b: array<f32, 7>, n: u32, lo0: f32, hi0: f32) -> f32 {
         if (g == 0.0) { return x; }
         if (g > 0.0) { lo = x; } else { hi = x; }
         let newton = x - g / dg;
+        let close = tol * rmax(abs(x), 1.0);
         var next = (lo + hi) * 0.5;
-        if (newton > lo && newton < hi && abs(g + g) <= abs(step_old * dg)) { next = newton; }
+        if (newton > lo && newton < hi && abs(g + g) <= abs(step_old * dg)) {
+            next = newton;
+        } else if (dg < 0.0 && abs(newton - x) <= close) {
+            // Converged on the bracket's end: the far side of the root (see poly.rs).
+            if (g < 0.0) { return x; }
+            return rmin(x + close, hi);
+        }
         step_old = abs(next - x);
         x = next;
         if (step_old <= tol * rmax(abs(x), 1.0) || hi - lo <= tol) { break; }
