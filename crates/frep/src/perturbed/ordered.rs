@@ -43,7 +43,7 @@ const MARGIN: f64 = 1e-9;
 #[derive(Clone, Copy)]
 struct Known {
     active: Active<f64>,
-    along: [f64; 3],
+    along: Quadratic,
     mag: f64,
 }
 
@@ -54,27 +54,53 @@ impl Actives<f64> for [Known] {
     }
 }
 
-/// The least and greatest value of the quadratic a0 + a1·t + a2·t² on [ta, tb]: at the
-/// ends or at the vertex.
-#[inline]
-fn range_on([a0, a1, a2]: [f64; 3], ta: f64, tb: f64) -> (f64, f64) {
-    let at = |t: f64| a0 + t * (a1 + t * a2);
-    let (va, vb) = (at(ta), at(tb));
-    let (mut lo, mut hi) = (va.min(vb), va.max(vb));
-    if a2 != 0.0 {
-        let tv = -a1 / (2.0 * a2);
-        if tv > ta && tv < tb {
-            let v = at(tv);
-            lo = lo.min(v);
-            hi = hi.max(v);
+/// A quadratic a0 + a1·t + a2·t² along the ray with its vertex found once: the
+/// certain-sign test asks for its range over every piece it spans.
+#[derive(Clone, Copy)]
+struct Quadratic {
+    a: [f64; 3],
+    /// −a1 / (2·a2), NaN when a2 = 0 (so that no piece holds it).
+    vertex: f64,
+    /// The value there.
+    peak: f64,
+}
+
+impl Quadratic {
+    fn new(a: [f64; 3]) -> Self {
+        let mut q = Self {
+            a,
+            vertex: f64::NAN,
+            peak: f64::NAN,
+        };
+        if a[2] != 0.0 {
+            q.vertex = -a[1] / (2.0 * a[2]);
+            q.peak = q.at(q.vertex);
         }
+        q
     }
-    (lo, hi)
+
+    #[inline]
+    fn at(&self, t: f64) -> f64 {
+        let [a0, a1, a2] = self.a;
+        a0 + t * (a1 + t * a2)
+    }
+
+    /// The least and greatest value on [ta, tb]: at the ends or at the vertex.
+    #[inline]
+    fn range(&self, ta: f64, tb: f64) -> (f64, f64) {
+        let (va, vb) = (self.at(ta), self.at(tb));
+        let (mut lo, mut hi) = (va.min(vb), va.max(vb));
+        if self.vertex > ta && self.vertex < tb {
+            lo = lo.min(self.peak);
+            hi = hi.max(self.peak);
+        }
+        (lo, hi)
+    }
 }
 
 /// The base along the ray (about its origin) and the sum of its terms' magnitudes.
 struct Base {
-    along: [f64; 3],
+    along: Quadratic,
     mag: f64,
 }
 
@@ -86,13 +112,13 @@ impl Base {
         let grow = ((1.0 + ta.abs()) * (1.0 + (tb - ta))).powi(2);
         // F' ∈ [lo, hi] on the piece, up to `slack`: F's range plus each term's, f·q³
         // being monotonic in q ≥ 0.
-        let (mut lo, mut hi) = range_on(self.along, ta, tb);
+        let (mut lo, mut hi) = self.along.range(ta, tb);
         let mut slack = MARGIN * self.mag * grow;
         let mid = 0.5 * (ta + tb);
         for k in known {
             if k.active.holds(mid) {
                 let pad = MARGIN * k.mag * grow;
-                let (q0, q1) = range_on(k.along, ta, tb);
+                let (q0, q1) = k.along.range(ta, tb);
                 let (q0, q1) = ((q0 - pad).max(0.0), q1 + pad);
                 let f = k.active.f;
                 let (c0, c1) = (f * q0 * q0 * q0, f * q1 * q1 * q1);
@@ -133,7 +159,7 @@ pub(super) fn first_crossing(
     let (o, d) = (ray.o.to_array(), ray.d.to_array());
     let sum = |m: [f64; 3]| m[0] + m[1] + m[2];
     let f = Base {
-        along: super::along::q_local(base, o, d),
+        along: Quadratic::new(super::along::q_local(base, o, d)),
         mag: sum(q_local_mag(base, o, d)),
     };
     let mut heap = EntryOrder::heap();
@@ -149,6 +175,7 @@ pub(super) fn first_crossing(
             let p = &perturbations[i];
             if let Some((active, along)) = Active::on_along(p.f, &p.q.c, o, d, lo, hi) {
                 let mag = sum(q_local_mag(&p.q.c, o, d));
+                let along = Quadratic::new(along);
                 let k = Known { active, along, mag };
                 if !known.push(k) {
                     // Full: drop the supports left behind, then try again.
