@@ -264,7 +264,7 @@ impl Solid {
         let crossed = |p: u32, lo: f64, hi: f64| self.occludes_node(p as usize, ray, lo, hi);
         match node.op {
             CsgOp::Leaf => match self.flat.leaf(node.operands.first as usize) {
-                LeafView::Perturbed(ref s) => s.first_crossing(ray, t_min, t_max).is_some(),
+                LeafView::Perturbed(ref s) => s.crosses(ray, t_min, t_max),
                 LeafView::Expr(ref s) => s.crosses(ray, t_min, t_max),
             },
             CsgOp::Union => {

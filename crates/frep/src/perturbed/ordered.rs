@@ -141,7 +141,9 @@ impl Base {
 
 /// The first t in (t_min, t_max) where F' changes sign, scanning [lo, hi] ⊂ [t_min,
 /// t_max] in ray order; `sign` as in [`super::scan::first_crossing`]. None when it must
-/// defer (see the module docs), else the answer.
+/// defer (see the module docs), else the answer. With `any` (shadow rays), the answer
+/// says only whether there is a crossing: Some(Some(t)) with t past it, at the end of
+/// the first piece where F' certainly has the other sign ([`Scan::piece_or_any`]).
 #[allow(clippy::too_many_arguments)]
 pub(super) fn first_crossing(
     base: &Coeffs<f64>,
@@ -152,6 +154,7 @@ pub(super) fn first_crossing(
     t_min: f64,
     t_max: f64,
     sign: f64,
+    any: bool,
 ) -> Option<Option<f64>> {
     if !(lo.is_finite() && hi.is_finite() && lo < hi) {
         return None;
@@ -210,7 +213,7 @@ pub(super) fn first_crossing(
                 t_min,
                 t_max,
             };
-            if let Some(found) = scan.piece(ta, tb) {
+            if let Some(found) = scan.piece_or_any(ta, tb, any) {
                 return Some(found);
             }
             s = scan.s;
@@ -371,6 +374,67 @@ mod tests {
                 }
             }
             assert!(hits > 1000, "n {n}: {hits} crossings of {rays} queries");
+        }
+    }
+
+    /// A shadow ray's answer (`crosses`, which stops at the first piece whose far end
+    /// certainly has the other sign) is whether the full scan finds a crossing: rays at
+    /// the solid and from inside its bounds, over their whole length and over stretches
+    /// that start and end anywhere, at 16, 256 and 4096 perturbations.
+    #[test]
+    fn shadow_rays_see_what_the_scan_finds() {
+        let mut rng = Pcg64::seed_from_u64(11);
+        for (n, r) in [(16, 0.3), (256, 0.08), (4096, 0.08)] {
+            let s = bumpy(n, r).surface();
+            let view = s.view();
+            let (mut hits, mut misses) = (0, 0);
+            for k in 0..2000 {
+                let o = if k % 4 == 0 {
+                    DVec3::new(
+                        rng.gen_range(-1.0..1.0),
+                        rng.gen_range(-0.7..0.7),
+                        rng.gen_range(-0.5..0.5),
+                    )
+                } else {
+                    3.0 * DVec3::new(
+                        rng.gen_range(-1.0..1.0),
+                        rng.gen_range(-1.0..1.0),
+                        rng.gen_range(-1.0..1.0),
+                    )
+                    .normalize()
+                };
+                let at = DVec3::new(
+                    rng.gen_range(-1.1..1.1),
+                    rng.gen_range(-0.8..0.8),
+                    rng.gen_range(-0.6..0.6),
+                );
+                let ray = Ray::new(o, at - o);
+                let t0 = if k % 3 == 0 {
+                    0.0
+                } else {
+                    rng.gen_range(0.0..1.5)
+                };
+                let t1 = if k % 5 == 0 {
+                    f64::INFINITY
+                } else {
+                    t0 + rng.gen_range(0.01..1.5)
+                };
+                let want = view.first_crossing(&ray, t0, t1).is_some();
+                assert_eq!(
+                    view.crosses(&ray, t0, t1),
+                    want,
+                    "n {n} ray {k}: {ray:?} in ({t0}, {t1})"
+                );
+                if want {
+                    hits += 1;
+                } else {
+                    misses += 1;
+                }
+            }
+            assert!(
+                hits > 400 && misses > 400,
+                "n {n}: {hits} hits, {misses} misses"
+            );
         }
     }
 }

@@ -475,6 +475,13 @@ impl<T: Float, A: Actives<T> + ?Sized> Scan<'_, T, A> {
 
     /// Scans the finite piece [ta, tb]: Some(answer) when the scan is decided.
     pub(super) fn piece(&mut self, ta: T, tb: T) -> Option<Option<T>> {
+        self.piece_or_any(ta, tb, false)
+    }
+
+    /// [`piece`](Self::piece), or with `any` (a shadow ray, which asks only whether there
+    /// is a crossing) Some(Some(tb)) as soon as F' certainly has the other sign at tb
+    /// (before t_max): there is a crossing in the piece, and where is not asked.
+    pub(super) fn piece_or_any(&mut self, ta: T, tb: T, any: bool) -> Option<Option<T>> {
         let (b, e) = Piece::new(self.base, self.active, self.o, self.d, ta, tb, None).bernstein();
         if !b.coeffs().iter().all(|v| v.is_finite()) {
             // Beyond the range of T (only far along an unbounded piece): give up there.
@@ -485,6 +492,10 @@ impl<T: Float, A: Actives<T> + ?Sized> Scan<'_, T, A> {
             if self.s == T::zero() {
                 return None;
             }
+        }
+        let n = b.degree();
+        if any && tb < self.t_max && self.s * b.coeffs()[n] < -e.coeffs()[n] {
+            return Some(Some(tb));
         }
         let u = b.scale(self.s).first_negative_bounded(&e)?;
         let t = (ta + (tb - ta) * u).max(ta).min(tb);

@@ -199,18 +199,38 @@ impl PerturbedView<'_> {
             self.clip(ray, t_min, t_max)?;
             return quadric_first_crossing(&self.base.c, ray, t_min, t_max);
         }
-        self.scan_first_crossing(ray, t_min, t_max)
+        self.scan_first_crossing(ray, t_min, t_max, false)
+    }
+
+    /// Whether F' changes sign anywhere in (t_min, t_max) (shadow rays): the same as
+    /// `first_crossing(..).is_some()`, without refining where the crossing is.
+    pub fn crosses(&self, ray: &Ray, t_min: f64, t_max: f64) -> bool {
+        if self.perturbations.is_empty() {
+            return self.first_crossing(ray, t_min, t_max).is_some();
+        }
+        self.scan_first_crossing(ray, t_min, t_max, true).is_some()
     }
 
     /// [`Self::first_crossing`] by the scan, whatever the perturbations: in ray order
-    /// ([`ordered`]), or where that defers, over the unordered BVH query.
-    fn scan_first_crossing(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<f64> {
+    /// ([`ordered`]), or where that defers, over the unordered BVH query. With `any`,
+    /// a crossing's t is only somewhere past it ([`ordered::first_crossing`]).
+    fn scan_first_crossing(&self, ray: &Ray, t_min: f64, t_max: f64, any: bool) -> Option<f64> {
         let (lo, hi, sign) = self.clip(ray, t_min, t_max)?;
         let base: &Coeffs<f64> = &self.base.c;
         let (perturbations, bvh) = (self.perturbations, self.bvh);
         let range = (lo, hi);
-        ordered::first_crossing(base, perturbations, bvh, ray, range, t_min, t_max, sign)
-            .unwrap_or_else(|| self.unordered_first_crossing(ray, t_min, t_max))
+        ordered::first_crossing(
+            base,
+            perturbations,
+            bvh,
+            ray,
+            range,
+            t_min,
+            t_max,
+            sign,
+            any,
+        )
+        .unwrap_or_else(|| self.unordered_first_crossing(ray, t_min, t_max))
     }
 
     /// The scan over every support the ray meets in [lo, hi], collected up front: the
@@ -308,6 +328,10 @@ impl Surface for PerturbedSurface {
         self.view().first_crossing(ray, t_min, t_max)
     }
 
+    fn any_crossing(&self, ray: &Ray, t_min: f64, t_max: f64) -> bool {
+        self.view().crosses(ray, t_min, t_max)
+    }
+
     /// The base's support box united with the support boxes of every perturbation that
     /// adds material (f_i > 0): outside them F < 0 and every term f_i·r_i ≤ 0.
     fn bounds(&self) -> Aabb {
@@ -368,7 +392,7 @@ mod tests {
                     let want = quadratic_roots(a, t_min, t_max).first().copied();
                     // The closed form `first_crossing` takes, and the general scan.
                     let got = s.first_crossing(&ray, t_min, t_max);
-                    let scanned = s.view().scan_first_crossing(&ray, t_min, t_max);
+                    let scanned = s.view().scan_first_crossing(&ray, t_min, t_max, false);
                     for (how, got) in [("closed form", got), ("scan", scanned)] {
                         match (got, want) {
                             (Some(g), Some(w)) => {
