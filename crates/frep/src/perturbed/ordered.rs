@@ -320,6 +320,32 @@ mod tests {
         pq
     }
 
+    /// A ray at the benchmark's solid: from a point inside its bounds, or from the sphere
+    /// of radius 3 around it, towards a point of its bounds (so that some graze it).
+    fn random_ray(rng: &mut Pcg64, inside: bool) -> Ray {
+        let o = if inside {
+            DVec3::new(
+                rng.gen_range(-1.0..1.0),
+                rng.gen_range(-0.7..0.7),
+                rng.gen_range(-0.5..0.5),
+            )
+        } else {
+            let a = rng.gen_range(0.0..std::f64::consts::TAU);
+            let z = rng.gen_range(-1.0..1.0f64);
+            3.0 * DVec3::new(
+                (1.0 - z * z).sqrt() * a.cos(),
+                (1.0 - z * z).sqrt() * a.sin(),
+                z,
+            )
+        };
+        let at = DVec3::new(
+            rng.gen_range(-1.1..1.1),
+            rng.gen_range(-0.8..0.8),
+            rng.gen_range(-0.6..0.6),
+        );
+        Ray::new(o, at - o)
+    }
+
     /// The ray-order scan (with its certain-sign skips) finds what the unordered scan
     /// finds, crossing after crossing along each ray: rays from outside at the solid and
     /// grazing it, and rays starting inside its bounds, at 16, 256 and 4096
@@ -333,27 +359,7 @@ mod tests {
             let view = s.view();
             let (mut hits, mut rays) = (0, 0);
             for k in 0..1500 {
-                let o = if k % 4 == 0 {
-                    DVec3::new(
-                        rng.gen_range(-1.0..1.0),
-                        rng.gen_range(-0.7..0.7),
-                        rng.gen_range(-0.5..0.5),
-                    )
-                } else {
-                    let a = rng.gen_range(0.0..std::f64::consts::TAU);
-                    let z = rng.gen_range(-1.0..1.0f64);
-                    3.0 * DVec3::new(
-                        (1.0 - z * z).sqrt() * a.cos(),
-                        (1.0 - z * z).sqrt() * a.sin(),
-                        z,
-                    )
-                };
-                let at = DVec3::new(
-                    rng.gen_range(-1.1..1.1),
-                    rng.gen_range(-0.8..0.8),
-                    rng.gen_range(-0.6..0.6),
-                );
-                let ray = Ray::new(o, at - o);
+                let ray = random_ray(&mut rng, k % 4 == 0);
                 let mut t = 0.0;
                 for step in 0..8 {
                     let got = view.first_crossing(&ray, t, f64::INFINITY);
@@ -389,26 +395,7 @@ mod tests {
             let view = s.view();
             let (mut hits, mut misses) = (0, 0);
             for k in 0..2000 {
-                let o = if k % 4 == 0 {
-                    DVec3::new(
-                        rng.gen_range(-1.0..1.0),
-                        rng.gen_range(-0.7..0.7),
-                        rng.gen_range(-0.5..0.5),
-                    )
-                } else {
-                    3.0 * DVec3::new(
-                        rng.gen_range(-1.0..1.0),
-                        rng.gen_range(-1.0..1.0),
-                        rng.gen_range(-1.0..1.0),
-                    )
-                    .normalize()
-                };
-                let at = DVec3::new(
-                    rng.gen_range(-1.1..1.1),
-                    rng.gen_range(-0.8..0.8),
-                    rng.gen_range(-0.6..0.6),
-                );
-                let ray = Ray::new(o, at - o);
+                let ray = random_ray(&mut rng, k % 4 == 0);
                 let t0 = if k % 3 == 0 {
                     0.0
                 } else {
