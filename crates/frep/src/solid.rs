@@ -816,26 +816,32 @@ mod tests {
         }
     }
 
+    /// An axis-aligned box, a rotated and scaled one, and a wedge of three tilted planes
+    /// (unbounded): the polytopes the tests below walk.
+    fn polytope_shapes() -> [Shape; 3] {
+        let (cube, moved) = (unit_cube_planes(), scaled_rotated_moved());
+        let wedge = vec![
+            plane(DVec3::new(1.0, 1.0, 0.0).normalize(), 0.4),
+            plane(DVec3::new(-1.0, 0.5, 0.2).normalize(), 0.3),
+            plane(DVec3::new(0.1, -0.3, 1.0).normalize(), 0.6),
+        ];
+        [
+            Shape::Intersection(cube.clone()),
+            Shape::Transformed(moved, Box::new(Shape::Intersection(cube))),
+            Shape::Intersection(wedge),
+        ]
+    }
+
     /// A polytope's value from its planes is its parts' minimum bit for bit: a box, a
     /// moved box and a wedge, at random points inside and outside.
     #[test]
     fn polytope_values_are_their_parts_minimum() {
         use rand::{Rng, SeedableRng};
-        let (cube, moved) = (unit_cube_planes(), scaled_rotated_moved());
-        let wedge = vec![
-            plane(DVec3::new(1.0, 1.0, 0.0).normalize(), 0.4),
-            plane(DVec3::new(-1.0, 0.5, 0.2).normalize(), 0.3),
-        ];
-        let shapes = [
-            Shape::Intersection(cube.clone()),
-            Shape::Transformed(moved, Box::new(Shape::Intersection(cube))),
-            Shape::Intersection(wedge),
-        ];
         let mut rng = rand_pcg::Pcg64::seed_from_u64(13);
-        for shape in &shapes {
+        for shape in &polytope_shapes() {
             let s = Solid::build(shape).unwrap();
             let root = s.root();
-            assert!(s.polytopes.spans[root].count >= 2);
+            assert!(s.polytopes.spans[root].count >= 3);
             let mut inside = 0;
             for _ in 0..4000 {
                 let p = DVec3::new(
@@ -860,19 +866,8 @@ mod tests {
     #[test]
     fn polytopes_equal_the_general_closed_form() {
         use rand::{Rng, SeedableRng};
-        let (cube, moved) = (unit_cube_planes(), scaled_rotated_moved());
-        let wedge = vec![
-            plane(DVec3::new(1.0, 1.0, 0.0).normalize(), 0.4),
-            plane(DVec3::new(-1.0, 0.5, 0.2).normalize(), 0.3),
-            plane(DVec3::new(0.1, -0.3, 1.0).normalize(), 0.6),
-        ];
-        let shapes = [
-            Shape::Intersection(cube.clone()),
-            Shape::Transformed(moved, Box::new(Shape::Intersection(cube))),
-            Shape::Intersection(wedge),
-        ];
         let mut rng = rand_pcg::Pcg64::seed_from_u64(12);
-        for shape in &shapes {
+        for shape in &polytope_shapes() {
             let s = Solid::build(shape).unwrap();
             let root = s.root();
             assert!(s.polytopes.spans[root].count >= 3);
