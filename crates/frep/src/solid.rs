@@ -85,6 +85,13 @@ impl Polytopes {
         }
         p
     }
+
+    /// Node i's planes, if it is an intersection of planes.
+    #[inline]
+    fn of(&self, i: usize) -> Option<&[Quadric]> {
+        let span = self.spans[i];
+        (span.count > 0).then(|| &self.planes[span.range()])
+    }
 }
 
 /// How a CSG node combines its parts' inside states.
@@ -234,7 +241,7 @@ impl Solid {
     /// again, so a renderer need not ask (false only means "not known to be convex").
     pub fn is_convex(&self) -> bool {
         let root = self.root();
-        if self.polytopes.spans[root].count > 0 {
+        if self.polytopes.of(root).is_some() {
             return true;
         }
         let node = &self.flat.nodes[root];
@@ -330,10 +337,10 @@ impl Solid {
             }
             CsgOp::Union => Rule::Any,
             CsgOp::Intersection => {
-                let planes = self.polytopes.spans[i];
-                if planes.count > 0 && ray.o.is_finite() && ray.d.is_finite() {
-                    let planes = &self.polytopes.planes[planes.range()];
-                    return polytope_intersection(planes, ray, t_min, t_max);
+                if let Some(planes) = self.polytopes.of(i) {
+                    if ray.o.is_finite() && ray.d.is_finite() {
+                        return polytope_intersection(planes, ray, t_min, t_max);
+                    }
                 }
                 if let Some(hit) = self.plain_intersection(i, ray, t_min, t_max) {
                     return hit;
@@ -501,9 +508,7 @@ impl Solid {
             CsgOp::Intersection => {
                 // A polytope (a box, a slab): its planes' values in part order, the same
                 // minimum as the parts' without a call per part.
-                let span = self.polytopes.spans[i];
-                if span.count > 0 {
-                    let planes = &self.polytopes.planes[span.range()];
+                if let Some(planes) = self.polytopes.of(i) {
                     return planes
                         .iter()
                         .map(|q| q.eval(p))
