@@ -49,6 +49,9 @@ struct Polytopes {
     spans: Vec<Span>,
     /// The planes' quadrics (no quadratic terms), in part order.
     planes: Vec<Quadric>,
+    /// Per CSG node, whether its planes are an axis-aligned box as `box(..)` builds it
+    /// ([`is_axis_box`]), crossed by [`box_intersection`].
+    boxes: Vec<bool>,
 }
 
 impl Polytopes {
@@ -56,6 +59,7 @@ impl Polytopes {
         let mut p = Self {
             spans: vec![Span::default(); flat.nodes.len()],
             planes: Vec::new(),
+            boxes: vec![false; flat.nodes.len()],
         };
         for (i, node) in flat.nodes.iter().enumerate() {
             if node.op != CsgOp::Intersection {
@@ -79,6 +83,7 @@ impl Polytopes {
             let Some(planes) = flat.parts(i).iter().map(plane).collect::<Option<Vec<_>>>() else {
                 continue;
             };
+            p.boxes[i] = is_axis_box(&planes);
             let first = p.planes.len();
             p.planes.extend(planes);
             p.spans[i] = Span::since(first, p.planes.len());
@@ -339,7 +344,11 @@ impl Solid {
             CsgOp::Intersection => {
                 if let Some(planes) = self.polytopes.of(i) {
                     if ray.o.is_finite() && ray.d.is_finite() {
-                        return polytope_intersection(planes, ray, t_min, t_max);
+                        return if self.polytopes.boxes[i] {
+                            box_intersection(planes, ray, t_min, t_max)
+                        } else {
+                            polytope_intersection(planes, ray, t_min, t_max)
+                        };
                     }
                 }
                 if let Some(hit) = self.plain_intersection(i, ray, t_min, t_max) {
@@ -692,6 +701,71 @@ fn polytope_intersection(planes: &[Quadric], ray: &Ray, t_min: f64, t_max: f64) 
     })
 }
 
+/// Whether `planes` are six planes, two per axis in x, y, z order: first x_k ≤ b
+/// (coefficient −1 on axis k), then x_k ≥ b′ (+1), every other coefficient zero. That is
+/// how `box(..)` builds a box, moved or not; the coefficients ±1 make
+/// [`box_intersection`] agree with [`polytope_intersection`] bit for bit.
+fn is_axis_box(planes: &[Quadric]) -> bool {
+    planes.len() == 6
+        && planes.iter().enumerate().all(|(j, q)| {
+            let (axis, a) = (j / 2, if j % 2 == 0 { -1.0 } else { 1.0 });
+            q.c[..6].iter().all(|&c| c == 0.0)
+                && (0..3).all(|k| q.c[6 + k] == if k == axis { a } else { 0.0 })
+        })
+}
+
+/// [`polytope_intersection`] for the planes of an axis-aligned box ([`is_axis_box`]),
+/// as a slab test (Kay and Kajiya 1986): per axis, the sign of the direction says which
+/// plane the ray enters by. With the coefficients ±1 the general loop's plane values
+/// reduce to b − x and x + b′ exactly (the zero terms add nothing), its roots to the
+/// quotients below, and its ties to the same plane indices, so the hits are its own.
+fn box_intersection(planes: &[Quadric], ray: &Ray, t_min: f64, t_max: f64) -> Option<Hit> {
+    let planes: &[Quadric; 6] = planes.try_into().ok()?;
+    let (o, d) = (ray.o.to_array(), ray.d.to_array());
+    let (mut lo, mut hi, mut klo, mut khi) = (f64::NEG_INFINITY, f64::INFINITY, 0, 0);
+    for axis in 0..3 {
+        let (x, u) = (o[axis], d[axis]);
+        let (upper, lower) = (planes[2 * axis].c[9], planes[2 * axis + 1].c[9]);
+        if u == 0.0 {
+            // Parallel to both planes: inside both (strictly) or never crossing.
+            if upper - x > 0.0 && x + lower > 0.0 {
+                continue;
+            }
+            return None;
+        }
+        // The general loop's −a0/a1: −(b − x)/(−u) and −(x + b′)/u.
+        let (t_upper, t_lower) = ((upper - x) / u, -(x + lower) / u);
+        let (enter, k_enter, leave, k_leave) = if u > 0.0 {
+            (t_lower, 2 * axis + 1, t_upper, 2 * axis)
+        } else {
+            (t_upper, 2 * axis, t_lower, 2 * axis + 1)
+        };
+        if enter > lo {
+            (lo, klo) = (enter, k_enter);
+        }
+        if leave < hi {
+            (hi, khi) = (leave, k_leave);
+        }
+    }
+    // lo only grows and hi only shrinks, so one test at the end is the general loop's
+    // test after every plane.
+    if lo >= hi {
+        return None;
+    }
+    let usable = |t: f64| t > t_min && t < t_max && t.is_finite();
+    let (t, k) = if usable(lo) {
+        (lo, klo)
+    } else if usable(hi) {
+        (hi, khi)
+    } else {
+        return None;
+    };
+    Some(Hit {
+        t,
+        normal: outward(planes[k].gradient(ray.at(t))),
+    })
+}
+
 impl Surface for Solid {
     fn value(&self, p: DVec3) -> f64 {
         self.value_node(self.root(), p)
@@ -821,19 +895,28 @@ mod tests {
         }
     }
 
-    /// An axis-aligned box, a rotated and scaled one, and a wedge of three tilted planes
-    /// (unbounded): the polytopes the tests below walk.
-    fn polytope_shapes() -> [Shape; 3] {
+    /// An axis-aligned box, the same box moved, a rotated and scaled one, and a wedge of
+    /// three tilted planes (unbounded): the polytopes the tests below walk, with whether
+    /// each takes the box path ([`box_intersection`]).
+    fn polytope_shapes() -> [(Shape, bool); 4] {
         let (cube, moved) = (unit_cube_planes(), scaled_rotated_moved());
         let wedge = vec![
             plane(DVec3::new(1.0, 1.0, 0.0).normalize(), 0.4),
             plane(DVec3::new(-1.0, 0.5, 0.2).normalize(), 0.3),
             plane(DVec3::new(0.1, -0.3, 1.0).normalize(), 0.6),
         ];
+        let shifted = Affine::translate(DVec3::new(0.17, -0.11, 0.23));
         [
-            Shape::Intersection(cube.clone()),
-            Shape::Transformed(moved, Box::new(Shape::Intersection(cube))),
-            Shape::Intersection(wedge),
+            (Shape::Intersection(cube.clone()), true),
+            (
+                Shape::Transformed(shifted, Box::new(Shape::Intersection(cube.clone()))),
+                true,
+            ),
+            (
+                Shape::Transformed(moved, Box::new(Shape::Intersection(cube))),
+                false,
+            ),
+            (Shape::Intersection(wedge), false),
         ]
     }
 
@@ -843,7 +926,7 @@ mod tests {
     fn polytope_values_are_their_parts_minimum() {
         use rand::{Rng, SeedableRng};
         let mut rng = rand_pcg::Pcg64::seed_from_u64(13);
-        for shape in &polytope_shapes() {
+        for (shape, _) in &polytope_shapes() {
             let s = Solid::build(shape).unwrap();
             let root = s.root();
             assert!(s.polytopes.spans[root].count >= 3);
@@ -872,10 +955,11 @@ mod tests {
     fn polytopes_equal_the_general_closed_form() {
         use rand::{Rng, SeedableRng};
         let mut rng = rand_pcg::Pcg64::seed_from_u64(12);
-        for shape in &polytope_shapes() {
+        for (shape, boxed) in &polytope_shapes() {
             let s = Solid::build(shape).unwrap();
             let root = s.root();
             assert!(s.polytopes.spans[root].count >= 3);
+            assert_eq!(s.polytopes.boxes[root], *boxed);
             let mut hits = 0;
             for k in 0..4000 {
                 let mut o = DVec3::new(
@@ -895,15 +979,24 @@ mod tests {
                     d.x = 0.0; // parallel to the cube's x faces
                     o.x = 0.5;
                 }
+                if k % 11 == 0 {
+                    d.y = 0.0; // parallel to the y faces, between them or not
+                }
+                if k % 13 == 0 {
+                    d.z = 0.0;
+                    o.z = [0.5, -0.5, 1.1, 0.1][k / 13 % 4];
+                }
                 let ray = Ray::new(o, d.normalize());
                 let t_min = if k % 3 == 0 { 0.5 } else { 0.0 };
                 let fast = s.intersect(&ray, t_min, 10.0);
                 let general = s.plain_intersection(root, &ray, t_min, 10.0).unwrap();
-                assert_eq!(
-                    fast.map(|h| (h.t.to_bits(), h.normal.to_array().map(f64::to_bits))),
-                    general.map(|h| (h.t.to_bits(), h.normal.to_array().map(f64::to_bits))),
-                    "ray {k}: {ray:?}"
-                );
+                let bits = |h: Option<Hit>| {
+                    h.map(|h| (h.t.to_bits(), h.normal.to_array().map(f64::to_bits)))
+                };
+                assert_eq!(bits(fast), bits(general), "ray {k}: {ray:?}");
+                let planes = s.polytopes.of(root).unwrap();
+                let looped = polytope_intersection(planes, &ray, t_min, 10.0);
+                assert_eq!(bits(fast), bits(looped), "ray {k}: {ray:?}");
                 hits += usize::from(fast.is_some());
             }
             assert!(hits > 500, "{hits} hits");
