@@ -687,6 +687,21 @@ fn polytope_intersection(planes: &[Quadric], ray: &Ray, t_min: f64, t_max: f64) 
             return None;
         }
     }
+    first_usable_end(planes, ray, t_min, t_max, (lo, klo), (hi, khi))
+}
+
+/// The hit of a convex polytope whose crossing along the ray is the interval (lo, hi),
+/// entered by plane `klo` and left by `khi`: its first end inside (t_min, t_max), with
+/// that plane's outward normal.
+#[inline]
+fn first_usable_end(
+    planes: &[Quadric],
+    ray: &Ray,
+    t_min: f64,
+    t_max: f64,
+    (lo, klo): (f64, usize),
+    (hi, khi): (f64, usize),
+) -> Option<Hit> {
     let usable = |t: f64| t > t_min && t < t_max && t.is_finite();
     let (t, k) = if usable(lo) {
         (lo, klo)
@@ -752,18 +767,7 @@ fn box_intersection(planes: &[Quadric], ray: &Ray, t_min: f64, t_max: f64) -> Op
     if lo >= hi {
         return None;
     }
-    let usable = |t: f64| t > t_min && t < t_max && t.is_finite();
-    let (t, k) = if usable(lo) {
-        (lo, klo)
-    } else if usable(hi) {
-        (hi, khi)
-    } else {
-        return None;
-    };
-    Some(Hit {
-        t,
-        normal: outward(planes[k].gradient(ray.at(t))),
-    })
+    first_usable_end(planes, ray, t_min, t_max, (lo, klo), (hi, khi))
 }
 
 impl Surface for Solid {
