@@ -284,7 +284,10 @@ impl Integrator {
             for j in 0..n_k {
                 let d = self.dims.technique(rng, depth, k, j);
                 // A light technique's draw leaves its pdf to `pdfs` below (NaN here).
-                let Some(s) = tech.draw(&ctx, d.uc, d.u) else {
+                // Read in place: moving the sample out of the Option copied its few
+                // hundred bytes on every light draw.
+                let drawn = tech.draw(&ctx, d.uc, d.u);
+                let Some(s) = drawn.as_ref() else {
                     px.add_failed(self, depth, k);
                     continue;
                 };
@@ -292,9 +295,9 @@ impl Integrator {
                 if s.specular {
                     // A delta lobe: a failed draw for MIS, its own estimate outside.
                     px.add_failed(self, depth, k);
-                    let bs = s.bsdf.expect("specular draws come from the BSDF");
+                    let bs = s.bsdf.as_ref().expect("specular draws come from the BSDF");
                     let li =
-                        self.li_of_bsdf_draw(scene, v, &bs, carries, true, None, &mut next, rays);
+                        self.li_of_bsdf_draw(scene, v, bs, carries, true, None, &mut next, rays);
                     px.add(beta * bs.weight * li / f64::from(n_k));
                     continue;
                 }
