@@ -716,9 +716,9 @@ fn first_usable_end(
     })
 }
 
-/// Whether `planes` are six planes, two per axis in x, y, z order: first x_k ≤ b
-/// (coefficient −1 on axis k), then x_k ≥ b′ (+1), every other coefficient zero. That is
-/// how `box(..)` builds a box, moved or not; the coefficients ±1 make
+/// Whether `planes` are six planes, two per axis in x, y, z order: first b − x_k ≥ 0
+/// (coefficient −1 on axis k), then x_k + b′ ≥ 0 (+1), every other coefficient zero.
+/// That is how `box(..)` builds a box, moved or not; the coefficients ±1 make
 /// [`box_intersection`] agree with [`polytope_intersection`] bit for bit.
 fn is_axis_box(planes: &[Quadric]) -> bool {
     planes.len() == 6
