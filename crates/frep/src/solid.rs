@@ -952,9 +952,10 @@ mod tests {
         }
     }
 
-    /// The planes-only path gives the general closed form's hits bit for bit (t and
-    /// normal): an axis-aligned box, a rotated and scaled one, and a wedge of three
-    /// tilted planes (unbounded), on rays from outside, from inside and along faces.
+    /// The planes-only paths give the general closed form's hits bit for bit (t and
+    /// normal), and the box path the plane loop's: an axis-aligned box, the same box
+    /// moved, a rotated and scaled one, and a wedge of three tilted planes (unbounded),
+    /// on rays from outside, from inside, along faces and parallel to them.
     #[test]
     fn polytopes_equal_the_general_closed_form() {
         use rand::{Rng, SeedableRng};
