@@ -270,6 +270,7 @@ pub fn run(
     overwrite_partial: bool,
     film: &output::FilmArgs,
 ) -> Result<(), String> {
+    let start = std::time::Instant::now();
     let formats = output::check_scene_outputs(outs)?;
     if let Some(d) = dump_to {
         output::check_writable(d)?;
@@ -306,6 +307,8 @@ pub fn run(
         }
     }
     let scene = Scene::from_data(&data);
+    // What a render waits for before its first sample (Mitsuba's "Loading scene" line).
+    let load = start.elapsed();
     if !formats.contains(&Format::Exr) && !opts.aovs.is_empty() {
         eprintln!(
             "note: AOV channels ({}) are only written to .exr",
@@ -329,6 +332,10 @@ pub fn run(
     );
     bar.finish_and_clear();
     let (state, stats, g) = result?;
+    eprintln!(
+        "scene: loaded in {:.3} s (parsing, solids with their bounds and grids, lights, materials)",
+        load.as_secs_f64()
+    );
     eprintln!("{stats}");
     if let Some(g) = &g {
         eprintln!("{}", gpu_line(g));

@@ -240,6 +240,12 @@ fn renders_a_scene_with_overrides() {
         err.contains("MSamples/s") && err.contains("shadow"),
         "{err}"
     );
+    // Start-up is reported too, as a time.
+    let load = err
+        .lines()
+        .find_map(|l| l.strip_prefix("scene: loaded in "))
+        .and_then(|l| l.split(' ').next()?.parse::<f64>().ok());
+    assert!(load.is_some_and(|t| (0.0..600.0).contains(&t)), "{err}");
     let depth = channel(&out, "depth");
     assert!(depth.iter().any(|d| d.is_finite() && *d > 0.0));
     let bad = frepray()
