@@ -14,7 +14,7 @@ use glam::DVec3;
 use std::mem::MaybeUninit;
 
 mod order;
-pub use order::{EntryOrder, Heap};
+pub use order::{EntryOrder, Queue};
 
 /// The most items a leaf holds.
 const MAX_LEAF: usize = 4;

@@ -10,7 +10,7 @@
 //! rounding. Perturbations whose last interval ends before the current piece leave the
 //! active set (once [`RETIRE`] have piled up, or when it is full), which so holds only
 //! the supports near the scan front. Where the front still overlaps more than
-//! [`MAX_ACTIVE`], the heap of pending boxes fills, or the range is unbounded, it defers
+//! [`MAX_ACTIVE`], the queue of pending boxes fills, or the range is unbounded, it defers
 //! to [`super::scan::first_crossing`].
 //!
 //! **Pieces of certain sign.** Before a piece is expanded, a few flops per perturbation
@@ -165,8 +165,8 @@ pub(super) fn first_crossing(
         along: Quadratic::new(super::along::q_local(base, o, d)),
         mag: sum(q_local_mag(base, o, d)),
     };
-    let mut heap = EntryOrder::heap();
-    let mut walk = EntryOrder::new(bvh, ray, lo, hi, &mut heap);
+    let mut queue = EntryOrder::queue();
+    let mut walk = EntryOrder::new(bvh, ray, lo, hi, &mut queue);
     let mut known = Fixed::<Known, MAX_ACTIVE>::new();
     let mut ends = Ends::new();
     let (mut ta, mut s) = (lo, sign);
