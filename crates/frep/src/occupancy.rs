@@ -434,7 +434,8 @@ impl Builder {
         if !excluded && size <= MEAN_VALUE_SIZE {
             let tape = &self.nodes[own[0] as usize..own[1] as usize];
             self.spent = self.spent.saturating_add(4 * tape.len());
-            if let Some(sign) = mean_value_sign(tape, lo - m, hi.max(lo) + m, &mut self.duals) {
+            let scratch = (&mut self.scratch, &mut self.duals);
+            if let Some(sign) = mean_value_sign(tape, lo - m, hi.max(lo) + m, scratch) {
                 (excluded, positive) = (true, sign);
             }
         }
@@ -464,16 +465,19 @@ const MEAN_VALUE_SIZE: usize = 4;
 /// ∇F(box)·(box − c) (Moore 1966, §6), c the box's centre, excludes 0; None where it
 /// does not. Where F is smooth it is far tighter than the plain interval on small
 /// boxes, which overestimates sums like x⁴ − 5x² by their whole range (the dependency
-/// problem); both are enclosures, so either may exclude.
+/// problem); both are enclosures, so either may exclude. F(c) is evaluated in plain
+/// intervals: a dual number's value part takes the same interval operations, so it is
+/// the same enclosure, without the three derivatives' work (a fifth of the table
+/// scene's loading instructions; docs/benchmarks.md, ninth round).
 fn mean_value_sign(
     tape: &[Node],
     lo: DVec3,
     hi: DVec3,
-    scratch: &mut Vec<Dual<Interval, 3>>,
+    (points, scratch): (&mut Vec<Interval>, &mut Vec<Dual<Interval, 3>>),
 ) -> Option<bool> {
     let c = 0.5 * (lo + hi);
-    let at = |k: usize| Dual::new(Interval::point(c[k]), [Interval::point(0.0); 3]);
-    let fc = eval_nodes(tape, at(0), at(1), at(2), scratch).v;
+    let at = |k: usize| Interval::point(c[k]);
+    let fc = eval_nodes(tape, at(0), at(1), at(2), points);
     let var = |k: usize| {
         let mut d = [Interval::point(0.0); 3];
         d[k] = Interval::point(1.0);
@@ -614,6 +618,63 @@ pub fn runs<'g>(
 mod tests {
     use super::*;
     use crate::read::read_file;
+
+    /// The mean-value test's F(c) in plain intervals is the value part of the dual
+    /// evaluation it replaced, bit for bit, on every model of the repository and the
+    /// shared ones, at points and over boxes (so the grids, and the images, are the
+    /// same).
+    #[test]
+    fn plain_intervals_are_the_dual_value_part() {
+        use rand::{Rng, SeedableRng};
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+        let mut models: Vec<_> = [
+            "../shared/models/fidget",
+            "models/canonical",
+            "scenes/models",
+        ]
+        .iter()
+        .flat_map(|d| std::fs::read_dir(root.join(d)).expect("a model folder"))
+        .map(|e| e.expect("an entry").path())
+        .filter(|p| {
+            matches!(
+                p.extension().and_then(|e| e.to_str()),
+                Some("vm" | "hf" | "frep")
+            )
+        })
+        .collect();
+        models.sort();
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(13);
+        let (mut points, mut duals, mut checked) = (Vec::new(), Vec::new(), 0);
+        for m in &models {
+            let model = read_file(m).unwrap_or_else(|e| panic!("{m:?}: {e}"));
+            let crate::Shape::Function { tree, .. } = &model.shape else {
+                continue;
+            };
+            let expr = crate::expr::Expr::new(tree);
+            for k in 0..400 {
+                let lo = DVec3::new(
+                    rng.gen_range(-1.5..1.5),
+                    rng.gen_range(-1.5..1.5),
+                    rng.gen_range(-1.5..1.5),
+                );
+                // Points first, then boxes up to 0.5 wide.
+                let w = if k % 2 == 0 {
+                    0.0
+                } else {
+                    rng.gen_range(0.0..0.5)
+                };
+                let x = |k: usize| Interval::new(lo[k], lo[k] + w);
+                let plain = eval_nodes(expr.nodes(), x(0), x(1), x(2), &mut points);
+                let d = |k: usize| Dual::new(x(k), [Interval::point(0.0); 3]);
+                let dual: Dual<Interval, 3> =
+                    eval_nodes(expr.nodes(), d(0), d(1), d(2), &mut duals);
+                let bits = |i: Interval| (i.lo.to_bits(), i.hi.to_bits());
+                assert_eq!(bits(plain), bits(dual.v), "{m:?} at {lo} + {w}");
+            }
+            checked += 1;
+        }
+        assert!(checked >= 8, "{checked} models");
+    }
 
     /// Splitting the octree into parallel subtrees changes no cell: on colonnade.vm
     /// (whose fine grid's subtrees add up to 46 000 nodes each) and a HyperFun blend, the
