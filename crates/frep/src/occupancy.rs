@@ -657,15 +657,15 @@ mod tests {
                     rng.gen_range(-1.5..1.5),
                     rng.gen_range(-1.5..1.5),
                 );
-                // Points first, then boxes up to 0.5 wide.
+                // Points at even k, boxes up to 0.5 wide at odd k.
                 let w = if k % 2 == 0 {
                     0.0
                 } else {
                     rng.gen_range(0.0..0.5)
                 };
-                let x = |k: usize| Interval::new(lo[k], lo[k] + w);
+                let x = |a: usize| Interval::new(lo[a], lo[a] + w);
                 let plain = eval_nodes(expr.nodes(), x(0), x(1), x(2), &mut points);
-                let d = |k: usize| Dual::new(x(k), [Interval::point(0.0); 3]);
+                let d = |a: usize| Dual::new(x(a), [Interval::point(0.0); 3]);
                 let dual: Dual<Interval, 3> =
                     eval_nodes(expr.nodes(), d(0), d(1), d(2), &mut duals);
                 let bits = |i: Interval| (i.lo.to_bits(), i.hi.to_bits());
