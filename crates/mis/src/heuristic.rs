@@ -81,6 +81,32 @@ impl Heuristic {
         }
     }
 
+    /// `w_t / q_t`: the factor of `f` in technique t's term `w_t f / (n_t p_t)` of the
+    /// multi-sample estimator (Veach 1997, eq. 9.4); 0 where `w_t` is. The power heuristic
+    /// with β = 2 takes `x_k = q_k / max` through one reciprocal, and `w_t / q_t =
+    /// x_t² / (Σ x_k² · q_t) = x_t / (max · Σ x_k²)`: two divisions where
+    /// [`Self::weight`] then `/ q_t` takes T + 2 (each draw of every scene under the power
+    /// heuristic pays them; docs/benchmarks.md, tenth round).
+    #[inline]
+    pub fn scale(&self, t: usize, counts: &[f64], pdfs: &[f64]) -> f64 {
+        debug_assert_eq!(counts.len(), pdfs.len());
+        let qt = counts[t] * pdfs[t];
+        if qt.is_nan() || qt <= 0.0 {
+            return 0.0;
+        }
+        if let Heuristic::Power { beta: 2.0 } = *self {
+            let qs = counts.iter().zip(pdfs).map(|(n, p)| n * p);
+            let max = qs.clone().fold(0.0, f64::max);
+            // Past the normal range 1/max would overflow: the general form below.
+            if max >= f64::MIN_POSITIVE && max.is_finite() {
+                let r = 1.0 / max;
+                let sum = qs.map(|q| (q * r) * (q * r)).sum::<f64>();
+                return qt * r * r / sum;
+            }
+        }
+        self.weight(t, counts, pdfs) / qt
+    }
+
     /// All T weights at one point into `out` (they sum to 1 where any `q_k > 0`).
     pub fn weights(&self, counts: &[f64], pdfs: &[f64], out: &mut [f64]) {
         for (t, w) in out.iter_mut().enumerate() {
@@ -140,6 +166,67 @@ mod tests {
             }
             h.weights(&counts, &[0.0; 3], &mut w);
             assert_eq!(w, [0.0; 3], "{h}: no pdf, no weight");
+        }
+    }
+
+    /// `scale` is `weight / q_t`: within 4 ulps for the power heuristic with β = 2 (its
+    /// own two-division form; where that weight underflows, both are negligible), bit for
+    /// bit for the others, over pdfs spread across the whole range of f64, the subnormal
+    /// and infinite ones included, and 0 where q_t is.
+    #[test]
+    fn scale_is_the_weight_over_q() {
+        use rand::{Rng, SeedableRng};
+        let counts = [1.0, 2.0, 0.5];
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(3);
+        let special = [
+            0.0,
+            1e-310,
+            f64::MIN_POSITIVE,
+            1e-300,
+            1.0,
+            1e300,
+            f64::INFINITY,
+        ];
+        let mut cases = Vec::new();
+        for a in special {
+            for b in special {
+                cases.push([a, b, 0.25]);
+            }
+        }
+        for _ in 0..20_000 {
+            cases.push([0; 3].map(|_| {
+                if rng.gen_bool(0.1) {
+                    0.0
+                } else {
+                    rng.gen_range(0.0..1.0) * 10f64.powi(rng.gen_range(-300..300))
+                }
+            }));
+        }
+        for h in ALL {
+            for pdfs in &cases {
+                for t in 0..3 {
+                    let q = counts[t] * pdfs[t];
+                    let w = h.weight(t, &counts, pdfs);
+                    let want = if q > 0.0 && w != 0.0 { w / q } else { 0.0 };
+                    let got = h.scale(t, &counts, pdfs);
+                    if want.is_nan() {
+                        // An infinite pdf: no weight (callers reject these draws first).
+                        assert!(got.is_nan(), "{h}, t = {t}, {pdfs:?}: {got:e}");
+                    } else if q > 0.0 && w < 1e-290 && h == (Heuristic::Power { beta: 2.0 }) {
+                        // w (the reference) loses its digits as x_t² underflows, where
+                        // the two-division form keeps them: both weights must be tiny.
+                        assert!(got * q <= 1e-290, "{h}, t = {t}, {pdfs:?}: {got:e}");
+                    } else if h == (Heuristic::Power { beta: 2.0 }) {
+                        let tol = 4.0 * f64::EPSILON * want.abs();
+                        assert!(
+                            (got - want).abs() <= tol || got == want,
+                            "{h}, t = {t}, {pdfs:?}: {got:e} against {want:e}"
+                        );
+                    } else {
+                        assert_eq!(got.to_bits(), want.to_bits(), "{h}, t = {t}, {pdfs:?}");
+                    }
+                }
+            }
         }
     }
 

@@ -32,10 +32,7 @@ pub(crate) fn add_sample(
     // w_t f / (n_t p_t); for balance w_t / (n_t p_t) = 1/s exactly.
     let scale = match heuristic {
         Heuristic::Balance => 1.0 / s,
-        h => {
-            let n = layout.counts();
-            h.weight(technique, n, pdfs) / (n[technique] * pdfs[technique])
-        }
+        h => h.scale(technique, layout.counts(), pdfs),
     };
     if scale != 0.0 {
         for (sum, fc) in block[1..].iter_mut().zip(f) {

@@ -268,10 +268,7 @@ impl Pixel<'_> {
                 };
                 let scale = match h {
                     mis::Heuristic::Balance => 1.0 / s,
-                    h => {
-                        let n = it.layout.counts();
-                        h.weight(k, n, pdfs) / (n[k] * pdfs[k])
-                    }
+                    h => h.scale(k, it.layout.counts(), pdfs),
                 };
                 if scale != 0.0 {
                     self.add(f * scale);
