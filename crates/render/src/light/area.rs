@@ -308,7 +308,7 @@ impl AreaLight {
         // The point on the sphere along the sampled cone direction.
         let cos_alpha = sin2_t / sin2_max.sqrt() + cos_t * safe_sqrt(1.0 - sin2_t / sin2_max);
         let sin_alpha = safe_sqrt(1.0 - cos_alpha * cos_alpha);
-        let w = spherical_direction(sin_alpha, cos_alpha, 2.0 * PI * u.y);
+        let w = spherical_direction(sin_alpha, cos_alpha, u.y);
         let frame = Frame::from_z((center - p).normalize());
         let n = frame.from_local(-w);
         self.toward(p, center + radius * n, n, |_| {
