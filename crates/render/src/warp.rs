@@ -38,7 +38,7 @@ const fn taylor(first: u32) -> [f64; 8] {
 /// instructions of glibc's `sincos` and no call: every sampled direction takes one
 /// (2.6 % of the diffuse scene's instructions went to `sincos`, docs/benchmarks.md).
 #[inline]
-fn sin_cos_kernel(x: f64) -> (f64, f64) {
+pub fn sin_cos_kernel(x: f64) -> (f64, f64) {
     let z = x * x;
     let horner = |c: &[f64; 8]| c.iter().rev().fold(0.0, |acc, &k| acc * z + k);
     let s = x + x * z * horner(&SIN_TAYLOR);
