@@ -129,6 +129,15 @@ impl Kernel {
         self.params.ridge_for(self.method)
     }
 
+    /// Whether a sample whose integrand is 0 changes the estimate: not under a heuristic
+    /// weighting (its term is w·0 and it adds nothing, Veach 1997, eq. 9.4), but under
+    /// the optimal estimators, whose technique matrix `A_ik = ∫ p_i p_k / s` takes every
+    /// sample's pdfs (Kondapaneni et al. 2019; RESEARCH.md). A caller may skip such
+    /// samples where it is false.
+    pub fn counts_zero_samples(&self) -> bool {
+        !matches!(self.code, Code::Weighted(_))
+    }
+
     /// Words of one block. A zero-filled block is an empty estimator.
     pub fn block_len(&self) -> usize {
         self.len

@@ -263,6 +263,23 @@ pub fn trained_selection(
 /// of state per pixel and depth (at 32: 624 words, 4.9 KiB; docs/render-state.md).
 pub const MAX_TECHNIQUES: usize = 32;
 
+#[cfg(test)]
+thread_local! {
+    /// Tests: integrators made on this thread combine every draw, also those whose value
+    /// is 0 under heuristic weights (the reference for skipping them).
+    static COUNT_ZERO_DRAWS: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+}
+
+#[cfg(test)]
+fn forced_zero_draws() -> bool {
+    COUNT_ZERO_DRAWS.with(std::cell::Cell::get)
+}
+
+#[cfg(not(test))]
+fn forced_zero_draws() -> bool {
+    false
+}
+
 /// How the draws at a vertex are combined.
 #[derive(Clone, Debug)]
 pub(crate) enum Combine {
@@ -289,6 +306,9 @@ pub(crate) struct Integrator {
     pub bsdf_index: Option<usize>,
     /// Whether a technique needs the lights' by-area pdfs ([`Technique::LightArea`]).
     pub area_pdfs: bool,
+    /// Whether a draw whose value is 0 still enters the MIS combination (the optimal
+    /// estimators); else it is skipped before its pdfs are found ([`Kernel::counts_zero_samples`]).
+    pub zero_draws_count: bool,
     pub max_depth: u32,
     /// Vertices shallower than this add nothing ([`RenderOptions::min_depth`]).
     pub min_depth: u32,
@@ -351,6 +371,11 @@ impl Integrator {
             sampler: Sampler::new(o.seed),
             bsdf_index: techniques.iter().position(|&t| t == Technique::Bsdf),
             area_pdfs: techniques.contains(&Technique::LightArea),
+            zero_draws_count: forced_zero_draws()
+                || match &combine {
+                    Combine::Estimator(k) => k.counts_zero_samples(),
+                    Combine::Heuristic(_) => false,
+                },
             techniques,
             counts,
             layout,
@@ -521,6 +546,102 @@ mod tests {
         assert_eq!((o.integrator, o.spp), (settings.integrator, settings.spp));
         settings.aovs = vec!["position".into()];
         assert!(RenderOptions::from_settings(&settings).is_err());
+    }
+
+    /// Skipping the draws whose value is 0 under heuristic weights changes no bit of the
+    /// image: a floor, a ball shadowing it, a sphere light and a one-sided rectangle
+    /// light without red (most BSDF draws meet no light, many light draws are shadowed;
+    /// draws of the rectangle are 0 in red only and must be kept), `direct` and `path`,
+    /// balance and power, against the same renders combining every draw.
+    #[test]
+    fn skipping_zero_draws_changes_no_bit() {
+        use crate::camera::Camera;
+        use crate::color::Rgb;
+        use crate::light::{AreaLight, Lights, Shape as LightShape};
+        use crate::scene::{Object, Scene};
+        use crate::{Material, Texture};
+        use frep::{PerturbedQuadric, Quadric, Shape, Solid};
+        use glam::DVec3;
+        use std::sync::atomic::AtomicBool;
+        let object = |q: Quadric| Object {
+            name: "test".into(),
+            solid: Solid::build(&Shape::Perturbed(PerturbedQuadric::new(q))).unwrap(),
+            material: 0,
+        };
+        let sphere = LightShape::Sphere {
+            center: DVec3::new(0.8, 0.1, 1.5),
+            radius: 0.3,
+        };
+        // Facing −z (edge_u × edge_v), one-sided: the ball's top half sees its back.
+        let rect = LightShape::Rect {
+            corner: DVec3::new(-1.2, -0.4, 1.2),
+            edge_u: DVec3::new(0.0, 0.8, 0.0),
+            edge_v: DVec3::new(0.6, 0.0, 0.0),
+        };
+        let scene = Scene::new(
+            Camera::look_at(
+                DVec3::new(0.0, -2.0, 2.0),
+                DVec3::ZERO,
+                DVec3::Z,
+                50.0,
+                20,
+                20,
+            ),
+            vec![Material::Diffuse {
+                reflectance: Texture::Constant(Rgb::new(0.8, 0.6, 0.4)),
+            }],
+            vec![
+                object(Quadric::plane(DVec3::Z, 0.0)),
+                object(Quadric::sphere(DVec3::new(0.3, 0.0, 0.5), 0.4)),
+            ],
+            Lights::new(
+                vec![
+                    AreaLight::new(sphere, Rgb::new(6.0, 4.0, 2.0)),
+                    // No red: a draw whose value is 0 in one channel only is kept.
+                    AreaLight::new(rect, Rgb::new(0.0, 2.0, 3.0)),
+                ],
+                vec![],
+                None,
+                3.0,
+            ),
+        );
+        let render = |o: &RenderOptions, every: bool| {
+            COUNT_ZERO_DRAWS.with(|c| c.set(every));
+            let r = crate::render_loop::render(&scene, o, &AtomicBool::new(false), &|_, _| {});
+            COUNT_ZERO_DRAWS.with(|c| c.set(false));
+            r.unwrap().0.image()
+        };
+        for integrator in [IntegratorKind::Direct, IntegratorKind::Path] {
+            for method in [Method::Balance, Method::Power] {
+                let o = RenderOptions {
+                    integrator,
+                    method,
+                    techniques: vec![
+                        (Technique::Bsdf, 1),
+                        (Technique::LightPower, 1),
+                        (Technique::LightArea, 1),
+                    ],
+                    spp: 4,
+                    seed: 5,
+                    max_depth: 3,
+                    ..RenderOptions::default()
+                };
+                assert!(!Integrator::new(&o).unwrap().zero_draws_count);
+                let (fast, every) = (render(&o, false), render(&o, true));
+                let bits =
+                    |i: &crate::Image| i.data().iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+                assert!(
+                    fast.data().iter().any(|&v| v > 0.0),
+                    "{integrator:?} {method}: black"
+                );
+                assert_eq!(bits(&fast), bits(&every), "{integrator:?} {method}");
+            }
+        }
+        let optimal = RenderOptions {
+            method: Method::OptimalDirect,
+            ..RenderOptions::default()
+        };
+        assert!(Integrator::new(&optimal).unwrap().zero_draws_count);
     }
 
     /// Up to [`MAX_TECHNIQUES`] techniques; the per-pixel state of optimal-direct is

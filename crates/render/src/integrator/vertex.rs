@@ -312,21 +312,10 @@ impl Integrator {
                 } else {
                     (v.bsdf.f(v.wo, s.wi), None)
                 };
-                crate::technique::pdfs(
-                    &self.techniques,
-                    &ctx,
-                    s.wi,
-                    along.crossed(),
-                    bsdf_pdf,
-                    &mut pdfs[..t_count],
-                );
-                if s.pdf.is_nan() && !(pdfs[k] > 0.0 && pdfs[k].is_finite()) {
-                    // What `Technique::sample` refuses: no density of its own there.
-                    px.add_failed(self, depth, k);
-                    continue;
-                }
                 let fc = f * s.wi.dot(v.n).abs();
-                let li = match &s.bsdf {
+                // Li along the draw: the continuation's trace for the draw that carries
+                // the path, else a shadow ray toward the light it meets.
+                let mut li_of = |rays: &mut _| match &s.bsdf {
                     Some(bs) if carries => self.li_of_bsdf_draw(
                         scene,
                         v,
@@ -341,6 +330,37 @@ impl Integrator {
                         incident_from(scene, &ray, along.nearest, v.left_behind(scene, s.wi), rays)
                     }
                     _ => Rgb::ZERO,
+                };
+                // Li before the pdfs, where the draw is surely valid (only a light draw,
+                // whose own pdf comes from `pdfs`, can be refused below, and a refused
+                // draw must not carry the path): a draw whose value is 0 then skips its
+                // pdfs and MIS term where such draws add nothing (heuristic weights). Most
+                // BSDF draws of `direct` meet no light.
+                let li_first = if !carries || !s.pdf.is_nan() {
+                    let li = li_of(rays);
+                    if !self.zero_draws_count && beta * fc * li == Rgb::ZERO {
+                        continue;
+                    }
+                    Some(li)
+                } else {
+                    None
+                };
+                crate::technique::pdfs(
+                    &self.techniques,
+                    &ctx,
+                    s.wi,
+                    along.crossed(),
+                    bsdf_pdf,
+                    &mut pdfs[..t_count],
+                );
+                if s.pdf.is_nan() && !(pdfs[k] > 0.0 && pdfs[k].is_finite()) {
+                    // What `Technique::sample` refuses: no density of its own there.
+                    px.add_failed(self, depth, k);
+                    continue;
+                }
+                let li = match li_first {
+                    Some(li) => li,
+                    None => li_of(rays),
                 };
                 let light = if self.record.lights > 1 {
                     light_reached(scene, along.nearest)
