@@ -331,11 +331,12 @@ impl Integrator {
                     }
                     _ => Rgb::ZERO,
                 };
-                // Li before the pdfs, where the draw is surely valid (only a light draw,
-                // whose own pdf comes from `pdfs`, can be refused below, and a refused
-                // draw must not carry the path): a draw whose value is 0 then skips its
-                // pdfs and MIS term where such draws add nothing (heuristic weights). Most
-                // BSDF draws of `direct` meet no light.
+                // Li before the pdfs, so that a draw whose value is 0 skips its pdfs and
+                // MIS term where such draws add nothing (heuristic weights; most BSDF
+                // draws of `direct` meet no light). Not for a draw that carries the path
+                // and may yet be refused below (only a draw whose own pdf comes from
+                // `pdfs` can be): a refused draw must not carry it. A refused draw that
+                // does not carry it has traced one shadow ray for nothing.
                 let li_first = if !carries || !s.pdf.is_nan() {
                     let li = li_of(rays);
                     if !self.zero_draws_count && beta * fc * li == Rgb::ZERO {
