@@ -50,6 +50,17 @@ pub fn philox4x32_10(c: [u32; 4], k: [u32; 2]) -> [u32; 4] {
 #[cfg(target_arch = "x86_64")]
 #[inline]
 fn philox_sse2(c: [u32; 4], k: [u32; 2]) -> [u32; 4] {
+    let [out] = philox_sse2_n([c], k);
+    out
+}
+
+/// [`philox_sse2`] on `N` counters at once, their rounds interleaved: each round of one
+/// counter waits on the last (a multiply, a shuffle and an exclusive or: about 5 cycles,
+/// 50 for the ten), and the other counters' rounds fill those waits, so four cost little
+/// more time than one (docs/benchmarks.md, eleventh round).
+#[cfg(target_arch = "x86_64")]
+#[inline]
+fn philox_sse2_n<const N: usize>(c: [[u32; 4]; N], k: [u32; 2]) -> [[u32; 4]; N] {
     use std::arch::x86_64::{
         __m128i, _mm_add_epi32, _mm_loadu_si128, _mm_mul_epu32, _mm_set_epi32, _mm_shuffle_epi32,
         _mm_srli_epi64, _mm_storeu_si128, _mm_xor_si128,
@@ -57,7 +68,7 @@ fn philox_sse2(c: [u32; 4], k: [u32; 2]) -> [u32; 4] {
     // SAFETY: SSE2 is part of the x86-64 baseline; the loads and stores are unaligned
     // ones of 16-byte arrays.
     unsafe {
-        let mut x = _mm_loadu_si128(c.as_ptr().cast::<__m128i>());
+        let mut x = c.map(|c| _mm_loadu_si128(c.as_ptr().cast::<__m128i>()));
         // Lanes 0 and 2 carry the multipliers and the key words (1 and 3 are unused).
         let m = _mm_set_epi32(0, M1 as i32, 0, M0 as i32);
         let w = _mm_set_epi32(0, W1 as i32, 0, W0 as i32);
@@ -66,16 +77,20 @@ fn philox_sse2(c: [u32; 4], k: [u32; 2]) -> [u32; 4] {
             if round > 0 {
                 key = _mm_add_epi32(key, w);
             }
-            // [lo0, hi0, lo1, hi1]: the products c0·M0 and c2·M1.
-            let p = _mm_mul_epu32(x, m);
-            // [c1 ^ k0, 0, c3 ^ k1, 0].
-            let odd = _mm_xor_si128(_mm_srli_epi64(x, 32), key);
-            // [hi1, lo1, hi0, lo0] ^ odd.
-            x = _mm_xor_si128(_mm_shuffle_epi32(p, 0b00_01_10_11), odd);
+            for x in &mut x {
+                // [lo0, hi0, lo1, hi1]: the products c0·M0 and c2·M1.
+                let p = _mm_mul_epu32(*x, m);
+                // [c1 ^ k0, 0, c3 ^ k1, 0].
+                let odd = _mm_xor_si128(_mm_srli_epi64(*x, 32), key);
+                // [hi1, lo1, hi0, lo0] ^ odd.
+                *x = _mm_xor_si128(_mm_shuffle_epi32(p, 0b00_01_10_11), odd);
+            }
         }
-        let mut out = [0u32; 4];
-        _mm_storeu_si128(out.as_mut_ptr().cast::<__m128i>(), x);
-        out
+        x.map(|x| {
+            let mut out = [0u32; 4];
+            _mm_storeu_si128(out.as_mut_ptr().cast::<__m128i>(), x);
+            out
+        })
     }
 }
 
@@ -118,19 +133,33 @@ impl Sampler {
         SampleStream {
             key: [self.seed as u32, (self.seed >> 32) as u32],
             counter: [x, y, index],
-            cached: Cell::new(None),
+            first: Cell::new(NONE),
+            bits: Default::default(),
         }
     }
 }
 
-/// The random values of one sample, addressed by dimension. The last Philox block
-/// computed is kept, so that reading a vertex's dimensions in order costs one evaluation
-/// per four dimensions.
+/// Philox blocks of four dimensions that [`SampleStream`] evaluates at once and keeps: a
+/// vertex's dimensions (`integrator/dims.rs`: three per draw and one more, from a
+/// multiple of 4) mostly lie within 16 consecutive ones, and four interleaved
+/// evaluations take little more time than one ([`philox_sse2_n`]).
+const CACHED_BLOCKS: u32 = 4;
+
+/// [`SampleStream`]'s first cached block when none is: `block − NONE` (wrapping) is at
+/// least 9 for every block (blocks are below 2³⁰), so no block reads as cached.
+const NONE: u32 = u32::MAX - 8;
+
+/// The random values of one sample, addressed by dimension. The last
+/// [`CACHED_BLOCKS`] Philox blocks computed are kept, so that reading a vertex's
+/// dimensions in order costs about one (interleaved) evaluation per 16 dimensions.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct SampleStream {
     key: [u32; 2],
     counter: [u32; 3],
-    cached: Cell<Option<(u32, [u32; 4])>>,
+    /// The first block kept ([`NONE`]: none yet).
+    first: Cell<u32>,
+    /// Dimensions `4·first …`, as 32-bit integers.
+    bits: [Cell<u32>; 4 * CACHED_BLOCKS as usize],
 }
 
 impl SampleStream {
@@ -141,23 +170,34 @@ impl SampleStream {
         philox4x32_10([x, y, i, block], self.key)
     }
     /// The value of dimension `dim` in [0, 1), whatever was drawn before. The cached
-    /// block's path is inlined into the caller, the Philox evaluation is not: as one
+    /// blocks' path is inlined into the caller, the Philox evaluation is not: as one
     /// function, its call cost about 16 instructions of saved registers per value.
     #[inline(always)]
     pub fn get(&self, dim: u32) -> f64 {
         let block = dim / 4;
-        let bits = match self.cached.get() {
-            Some((b, bits)) if b == block => bits,
-            _ => self.refill(block),
-        };
-        to_unit(bits[(dim % 4) as usize])
+        if block.wrapping_sub(self.first.get()) >= CACHED_BLOCKS {
+            self.refill(block);
+        }
+        let at = dim.wrapping_sub(4 * self.first.get()) as usize;
+        to_unit(self.bits[at % self.bits.len()].get())
     }
-    /// Evaluates and caches `block`.
+    /// Evaluates and keeps blocks `block … block + CACHED_BLOCKS − 1` (no counter
+    /// overflows: blocks are below 2³⁰).
     #[inline(never)]
-    fn refill(&self, block: u32) -> [u32; 4] {
-        let bits = self.block_bits(block);
-        self.cached.set(Some((block, bits)));
-        bits
+    fn refill(&self, block: u32) {
+        let [x, y, i] = self.counter;
+        let counters: [[u32; 4]; CACHED_BLOCKS as usize] =
+            std::array::from_fn(|j| [x, y, i, block + j as u32]);
+        #[cfg(target_arch = "x86_64")]
+        let blocks = philox_sse2_n(counters, self.key);
+        #[cfg(not(target_arch = "x86_64"))]
+        let blocks = counters.map(|c| philox_scalar(c, self.key));
+        for (cells, words) in self.bits.chunks_exact(4).zip(blocks) {
+            for (cell, w) in cells.iter().zip(words) {
+                cell.set(w);
+            }
+        }
+        self.first.set(block);
     }
     /// Dimensions `dim` and `dim + 1` as a point of [0, 1)².
     #[inline]
@@ -179,26 +219,50 @@ mod tests {
         (s, counts.len() - 1)
     }
 
-    /// The SSE2 rounds give the scalar rounds' words bit for bit, on 100 000 random
-    /// counters and keys and on the extremes.
-    #[cfg(target_arch = "x86_64")]
-    #[test]
-    fn sse2_philox_equals_the_scalar_one() {
-        // splitmix64 (Steele et al. 2014) as the source of test words.
-        let mut state = 4u64;
-        let mut word = || {
+    /// splitmix64 (Steele et al. 2014) from `state`, as a source of test words.
+    fn words(mut state: u64) -> impl FnMut() -> u32 {
+        move || {
             state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
             let mut z = state;
             z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
             z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
             (z ^ (z >> 31)) as u32
-        };
+        }
+    }
+
+    /// The SSE2 rounds give the scalar rounds' words bit for bit, on 100 000 random
+    /// counters and keys and on the extremes.
+    #[cfg(target_arch = "x86_64")]
+    #[test]
+    fn sse2_philox_equals_the_scalar_one() {
+        let mut word = words(4);
         let mut cases = vec![([0; 4], [0; 2]), ([u32::MAX; 4], [u32::MAX; 2])];
         for _ in 0..100_000 {
             cases.push(([word(), word(), word(), word()], [word(), word()]));
         }
         for (c, k) in cases {
             assert_eq!(philox_sse2(c, k), philox_scalar(c, k), "{c:x?} {k:x?}");
+        }
+    }
+
+    /// `get` reads the value of its block's Philox evaluation whatever was read before:
+    /// dimensions in order, backwards, repeated, far apart and up to the last block,
+    /// through the cache of [`CACHED_BLOCKS`] interleaved evaluations.
+    #[test]
+    fn cached_blocks_give_each_dimension_its_value() {
+        let mut word = words(11);
+        let s = Sampler::new(0x1234_5678_9abc_def0);
+        let expect = |t: &SampleStream, d: u32| to_unit(t.block_bits(d / 4)[(d % 4) as usize]);
+        for round in 0..200 {
+            let t = s.stream(word(), word(), round);
+            let mut dims: Vec<u32> = (0..40).collect();
+            dims.extend((0..40).rev());
+            dims.extend([u32::MAX, u32::MAX - 5, 0, u32::MAX - 17, 3, 16, 15, 63, 64]);
+            dims.extend((0..200).map(|_| word() % 96));
+            dims.extend((0..50).map(|_| word()));
+            for d in dims {
+                assert_eq!(t.get(d), expect(&t, d), "dimension {d}");
+            }
         }
     }
 
