@@ -127,6 +127,7 @@ impl AreaLight {
         }
     }
     /// Every crossing of the line `o + t d` (d unit) with t > 0, nearest first.
+    #[inline(always)]
     pub fn crossings(&self, o: DVec3, d: DVec3) -> ([Option<Crossing>; 2], usize) {
         let mut out = [None, None];
         let mut k = 0;
