@@ -262,10 +262,26 @@ impl AreaLight {
         })
     }
     /// Uniform area sampling seen from `p`; the pdf (solid angle) is [`Self::pdf_area`],
-    /// which sums over every crossing of the direction with the shape.
+    /// which sums over every crossing of the direction with the shape. A flat shape is
+    /// crossed once, at the point sampled: its pdf is that crossing's term, dist² /
+    /// (A |cos θ_light|) (pbrt-v4 §6.5, `ShapeSample` to solid angle), without finding
+    /// the crossing again.
     pub fn sample_area(&self, p: DVec3, u: DVec2) -> Option<LightSample> {
         let (q, n) = self.sample_point(u);
-        self.toward(p, q, n, |wi| self.pdf_area(p, wi))
+        match self.shape {
+            Shape::Sphere { .. } => self.toward(p, q, n, |wi| self.pdf_area(p, wi)),
+            Shape::Rect { .. } | Shape::Disk { .. } => {
+                let dist2 = p.distance_squared(q);
+                self.toward(p, q, n, |wi| {
+                    let cos = n.dot(wi).abs();
+                    if cos > 0.0 {
+                        dist2 / (self.area() * cos)
+                    } else {
+                        0.0
+                    }
+                })
+            }
+        }
     }
     /// Σ over crossings of t² / (A |cos θ_light|): the solid-angle density of
     /// [`Self::sample_area`] at direction `wi` (unit).
