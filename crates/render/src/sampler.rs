@@ -149,9 +149,9 @@ const CACHED_BLOCKS: u32 = 4;
 /// least 9 for every block (blocks are below 2³⁰), so no block reads as cached.
 const NONE: u32 = u32::MAX - 8;
 
-/// The random values of one sample, addressed by dimension. The last
-/// [`CACHED_BLOCKS`] Philox blocks computed are kept, so that reading a vertex's
-/// dimensions in order costs about one (interleaved) evaluation per 16 dimensions.
+/// The random values of one sample, addressed by dimension. The last four Philox
+/// blocks computed are kept (16 dimensions, evaluated together), so that reading a
+/// vertex's dimensions in order costs about one evaluation per 16 dimensions.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct SampleStream {
     key: [u32; 2],
