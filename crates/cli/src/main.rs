@@ -405,12 +405,17 @@ fn render(args: RenderArgs) -> Result<(), String> {
         ("--ridge", args.ridge.is_some()),
         ("--samples", args.samples.is_some()),
         ("--dump-scene", args.dump_scene.is_some()),
+        ("--backend gpu", args.backend == scene_render::Backend::Gpu),
     ];
     if let Some((flag, _)) = scene_only.iter().find(|(_, set)| *set) {
         return Err(format!(
-            "{flag} applies to scene files (.toml, .json); {} is a model",
+            "{flag} applies to scene files (.toml, .json); {} is a model \
+             (bare models render on the CPU: name it as an object's `model` in a scene for the GPU)",
             args.input.display()
         ));
+    }
+    if args.backend == scene_render::Backend::Auto && !args.quiet {
+        eprintln!("note: --backend auto renders on the CPU: bare models render on the CPU only");
     }
     let look = match args.integrator.as_deref() {
         None | Some("shaded") => preview::Look::Shaded,

@@ -569,6 +569,40 @@ fn gpu_backend_refuses_by_name_and_auto_falls_back() {
     assert!(d.join("a.exr").exists());
 }
 
+/// A bare model renders on the CPU only: `--backend gpu` is refused before any work
+/// (exit non-zero, no output, the flag named), `--backend auto` renders on the CPU and
+/// says so.
+#[test]
+fn bare_models_refuse_the_gpu_backend() {
+    let d = out_dir("model-backend");
+    let model = d.join("ball.frep");
+    std::fs::write(&model, "output sphere([0, 0, 0], 1)\n").unwrap();
+    let small = ["--width", "8", "--height", "8", "--spp", "1"];
+    let gpu = frepray()
+        .args(["render", model.to_str().unwrap(), "--backend", "gpu", "-o"])
+        .arg(d.join("g.png"))
+        .args(small)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&gpu.stderr);
+    assert_eq!(gpu.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("--backend gpu applies to scene files"),
+        "{err}"
+    );
+    assert!(!d.join("g.png").exists());
+    let auto = frepray()
+        .args(["render", model.to_str().unwrap(), "--backend", "auto", "-o"])
+        .arg(d.join("a.png"))
+        .args(small)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&auto.stderr);
+    assert!(auto.status.success(), "{err}");
+    assert!(err.contains("bare models render on the CPU only"), "{err}");
+    assert!(d.join("a.png").exists());
+}
+
 /// `render --stage-times` prints the CPU's stage times after the render, and the image is
 /// the one a render without timers writes, byte for byte.
 #[test]

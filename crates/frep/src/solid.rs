@@ -38,6 +38,12 @@ pub struct Solid {
     /// The nodes that intersect planes only, derived from `flat` ([`Polytopes`]).
     #[cfg_attr(feature = "serde", serde(skip))]
     polytopes: Polytopes,
+    /// Per CSG node, the size its crossings are located relative to ([`walk_scales`]).
+    #[cfg_attr(feature = "serde", serde(skip))]
+    scales: Vec<f64>,
+    /// Per CSG node, whether its crossings are roots in closed form ([`exact_nodes`]).
+    #[cfg_attr(feature = "serde", serde(skip))]
+    exact: Vec<bool>,
 }
 
 /// The CSG intersections whose parts are all plain planes (boxes, slabs, wedges):
@@ -117,16 +123,6 @@ impl Rule {
     }
 }
 
-/// The range a CSG walk over a node with these bounds covers: (t_min, t_max) clipped to
-/// the bounds grown by 10⁻⁹ (None where the ray misses them).
-fn walk_range(bounds: &Aabb, ray: &Ray, t_min: f64, t_max: f64) -> Option<(f64, f64)> {
-    if bounds.is_finite() {
-        Aabb::new(bounds.lo - 1e-9, bounds.hi + 1e-9).clip(ray, t_min, t_max)
-    } else {
-        Some((t_min, t_max))
-    }
-}
-
 impl Solid {
     /// Builds a solid from a shape. Expression leaves are bounded inside their declared
     /// domain, else inside ±[`DEFAULT_DOMAIN`]. Errors for a singular transform, an
@@ -140,7 +136,14 @@ impl Solid {
             ));
         }
         let polytopes = Polytopes::new(&flat);
-        Ok(Solid { flat, polytopes })
+        let scales = walk_scales(&flat);
+        let exact = exact_nodes(&flat);
+        Ok(Solid {
+            flat,
+            polytopes,
+            scales,
+            exact,
+        })
     }
 
     /// Appends the nodes of `shape` moved by `m`; returns the root's index and depth.
@@ -280,7 +283,7 @@ impl Solid {
                 LeafView::Expr(ref s) => s.crosses(ray, t_min, t_max),
             },
             CsgOp::Union => {
-                let Some((lo, hi)) = walk_range(&node.bounds, ray, t_min, t_max) else {
+                let Some((lo, hi)) = self.walk_range(i, ray, t_min, t_max) else {
                     return false;
                 };
                 let parts = self.flat.parts(i);
@@ -294,7 +297,7 @@ impl Solid {
                 self.intersect_node(i, ray, t_min, t_max).is_some()
             }
             CsgOp::Difference => {
-                let Some((lo, hi)) = walk_range(&node.bounds, ray, t_min, t_max) else {
+                let Some((lo, hi)) = self.walk_range(i, ray, t_min, t_max) else {
                     return false;
                 };
                 let parts = self.flat.parts(i);
@@ -358,24 +361,38 @@ impl Solid {
             }
             CsgOp::Difference => Rule::FirstNotSecond,
         };
-        self.combine(self.flat.parts(i), &node.bounds, rule, ray, t_min, t_max)
+        self.combine(i, rule, ray, t_min, t_max)
     }
 
-    /// Walks the parts' crossings in order, flipping each part's state, until the
-    /// combined state flips. A part's next crossing is searched a hair past its last one
-    /// so that a root found to rounding is never found twice. States and pending
-    /// crossings live in fixed arrays (at most [`MAX_PARTS`] parts per node).
-    fn combine(
-        &self,
-        parts: &[u32],
-        bounds: &Aabb,
-        rule: Rule,
-        ray: &Ray,
-        t_min: f64,
-        t_max: f64,
-    ) -> Option<Hit> {
-        let (lo, hi) = walk_range(bounds, ray, t_min, t_max)?;
-        let nudge = 1e-10 * bounds.extent().length().clamp(1.0, 1e12) / ray.d.length();
+    /// The range a CSG walk over node i covers: (t_min, t_max) clipped to the node's
+    /// bounds grown by 10⁻⁹ (None where the ray misses them), its start moved on by a
+    /// [`nudge`]. The walk takes each part's state where it starts; a ray continued from
+    /// a crossing starts on a part's surface, where F ≈ 0 says nothing, and a nudge on
+    /// the state is the one the walk goes on with.
+    fn walk_range(&self, i: usize, ray: &Ray, t_min: f64, t_max: f64) -> Option<(f64, f64)> {
+        let bounds = &self.flat.nodes[i].bounds;
+        let (lo, hi) = if bounds.is_finite() {
+            Aabb::new(bounds.lo - 1e-9, bounds.hi + 1e-9).clip(ray, t_min, t_max)?
+        } else {
+            (t_min, t_max)
+        };
+        let lo = if lo.is_finite() {
+            lo + nudge(self.scales[i], ray, lo)
+        } else {
+            lo
+        };
+        (lo < hi).then_some((lo, hi))
+    }
+
+    /// Walks the parts' crossings of node i in order, updating each part's state, until
+    /// the combined state flips. A part's next crossing is searched a hair past its last
+    /// one ([`nudge`]) so that a root found to rounding is never found twice, and its
+    /// state is taken there. States and
+    /// pending crossings live in fixed arrays (at most [`MAX_PARTS`] parts per node).
+    fn combine(&self, i: usize, rule: Rule, ray: &Ray, t_min: f64, t_max: f64) -> Option<Hit> {
+        let parts = self.flat.parts(i);
+        let (lo, hi) = self.walk_range(i, ray, t_min, t_max)?;
+        let scale = self.scales[i];
         // Each part's state at the start of the clipped range: a part may well be inside
         // there even though the combination is not.
         let start = ray.at(lo);
@@ -386,25 +403,79 @@ impl Solid {
             state[k] = self.inside_node(p as usize, start);
             next[k] = self.intersect_node(p as usize, ray, lo, hi);
         }
-        let mut combined = rule.apply(&state[..n]);
+        let combined = rule.apply(&state[..n]);
         loop {
-            let (k, h) = next[..n]
+            let t = next[..n]
                 .iter()
-                .enumerate()
-                .filter_map(|(k, h)| h.map(|h| (k, h)))
-                .min_by(|a, b| a.1.t.total_cmp(&b.1.t))?;
-            state[k] = !state[k];
-            let now = rule.apply(&state[..n]);
-            if now != combined {
+                .filter_map(|h| h.map(|h| h.t))
+                .min_by(f64::total_cmp)?;
+            let from = t + nudge(scale, ray, t);
+            let mut batch = [0usize; MAX_PARTS];
+            let (mut m, mut changed, mut sliver) = (0, None::<(usize, Hit)>, None);
+            for k in 0..n {
+                let Some(h) = next[k].filter(|h| h.t <= from) else {
+                    continue;
+                };
+                let part = parts[k] as usize;
+                let inside = if self.exact[part] {
+                    // Roots in closed form, the same whatever the search starts from:
+                    // each one flips the state, in order, and the next is searched from
+                    // it exactly, so that none is skipped.
+                    if h.t > t {
+                        continue;
+                    }
+                    !state[k]
+                } else {
+                    // Where a root is only found to a tolerance, the next search starts
+                    // a nudge on, and the part's state is taken where that search
+                    // starts (as its own walk takes it): a blind flip would be wrong
+                    // for the rest of the walk after a second crossing inside the
+                    // nudge (a sliver, or parts meeting at an edge).
+                    self.inside_node(part, ray.at(self.resume_at(part, ray, from)))
+                };
+                batch[m] = k;
+                m += 1;
+                if inside != state[k] {
+                    state[k] = inside;
+                    if changed.is_none_or(|(_, c): (usize, Hit)| h.t < c.t) {
+                        changed = Some((k, h));
+                    }
+                } else if sliver.is_none() {
+                    // Crossed and back within the nudge: a sliver of the part, which
+                    // is the node's crossing where it would show (as the part alone
+                    // reports it, and as `occludes` answers).
+                    let mut probe = state;
+                    probe[k] = !probe[k];
+                    if rule.apply(&probe[..n]) != combined {
+                        sliver = Some((k, h));
+                    }
+                }
+            }
+            let hit = changed
+                .filter(|_| rule.apply(&state[..n]) != combined)
+                .or(sliver);
+            if let Some((k, h)) = hit {
                 let normal = match (rule, k) {
                     (Rule::FirstNotSecond, 1) => -h.normal,
                     _ => h.normal,
                 };
                 return Some(Hit { t: h.t, normal });
             }
-            combined = now;
-            let from = h.t + nudge.max(h.t.abs() * 1e-15);
-            next[k] = self.intersect_node(parts[k] as usize, ray, from, hi);
+            for &k in &batch[..m] {
+                let part = parts[k] as usize;
+                let start = if self.exact[part] { t } else { from };
+                next[k] = self.intersect_node(part, ray, start, hi);
+            }
+        }
+    }
+
+    /// Where a walk resuming part i's crossings from `from` takes its state: there for
+    /// a leaf; a nudge on for a CSG node, where its own walk starts ([`Self::walk_range`]).
+    #[inline]
+    fn resume_at(&self, i: usize, ray: &Ray, from: f64) -> f64 {
+        match self.flat.nodes[i].op {
+            CsgOp::Leaf => from,
+            _ => from + nudge(self.scales[i], ray, from),
         }
     }
 
@@ -636,6 +707,65 @@ fn tighten(shape: &Shape, m: &Affine, from_parts: Aabb) -> Result<Aabb, String> 
     Ok(if touches { from_parts } else { b })
 }
 
+/// Per CSG node, the size its crossings are located relative to: the extent of its
+/// bounds where they are finite; else the largest such size among its parts, or 0 for
+/// a leaf without finite bounds (a plane, a cylinder: roots in closed form, rounded
+/// relative to where they are, which [`nudge`] adds). Never the extent of an infinite
+/// box, which would push the next search past whole parts.
+fn walk_scales(flat: &Flat) -> Vec<f64> {
+    let mut scales: Vec<f64> = Vec::with_capacity(flat.nodes.len());
+    for (i, node) in flat.nodes.iter().enumerate() {
+        let s = if node.bounds.is_finite() {
+            node.bounds.extent().length()
+        } else if node.op == CsgOp::Leaf {
+            0.0
+        } else {
+            // Post order: parts come before their node.
+            flat.parts(i)
+                .iter()
+                .map(|&p| scales[p as usize])
+                .fold(0.0, f64::max)
+        };
+        scales.push(s);
+    }
+    scales
+}
+
+/// Per CSG node, whether its crossings are roots in closed form, computed about the ray's
+/// origin whatever the search starts from, so that a search from a root never finds it
+/// again nor skips the next: a plain quadric (no perturbations), or an intersection of
+/// plain quadrics ([`Solid::plain_intersection`], boxes and polytopes).
+fn exact_nodes(flat: &Flat) -> Vec<bool> {
+    let plain = |i: usize| {
+        let node = &flat.nodes[i];
+        node.op == CsgOp::Leaf
+            && matches!(
+                flat.leaves[node.operands.first as usize],
+                Leaf::Perturbed {
+                    perturbations: Span { count: 0, .. },
+                    ..
+                }
+            )
+    };
+    (0..flat.nodes.len())
+        .map(|i| {
+            plain(i)
+                || (flat.nodes[i].op == CsgOp::Intersection
+                    && flat.parts(i).iter().all(|&p| plain(p as usize)))
+        })
+        .collect()
+}
+
+/// How far past a crossing at t a CSG walk searches the crossed part again, in t: 10⁻¹⁰
+/// of the larger of the node's size (`scale`, [`walk_scales`]), the crossing's distance
+/// from the origin and 1 — past the rounding of a root located to 10⁻¹² of its leaf's
+/// size or to f64 rounding where it is, short of any feature the renderer resolves.
+#[inline]
+fn nudge(scale: f64, ray: &Ray, t: f64) -> f64 {
+    let at = ray.at(t).abs().max_element();
+    1e-10 * scale.max(at).max(1.0) / ray.d.length()
+}
+
 /// Bounding box of a box's image.
 fn transform_box(b: &Aabb, m: &Affine) -> Aabb {
     let mut out = Aabb::EMPTY;
@@ -664,7 +794,9 @@ fn polytope_intersection(planes: &[Quadric], ray: &Ray, t_min: f64, t_max: f64) 
         let a0 = x * c[6] + y * c[7] + z * c[8] + c[9];
         let a1 = c[6] * u + c[7] * v + c[8] * w;
         let (s, e) = if a1 == 0.0 {
-            if a0 > 0.0 {
+            // Parallel to the plane: inside it all along (F ≥ 0, a face included) or
+            // never.
+            if a0 >= 0.0 {
                 continue;
             }
             return None;
@@ -742,8 +874,9 @@ fn box_intersection(planes: &[Quadric], ray: &Ray, t_min: f64, t_max: f64) -> Op
         let (x, u) = (o[axis], d[axis]);
         let (upper, lower) = (planes[2 * axis].c[9], planes[2 * axis + 1].c[9]);
         if u == 0.0 {
-            // Parallel to both planes: inside both (strictly) or never crossing.
-            if upper - x > 0.0 && x + lower > 0.0 {
+            // Parallel to both planes: inside both (F ≥ 0: a face counts) or never
+            // crossing.
+            if upper - x >= 0.0 && x + lower >= 0.0 {
                 continue;
             }
             return None;
@@ -1109,11 +1242,7 @@ mod tests {
             let s = Solid::build(shape).unwrap();
             let root = s.root();
             assert_eq!(s.flat.nodes[root].op, CsgOp::Intersection);
-            let bounds = s.flat.nodes[root].bounds;
-            let general = |ray: &Ray, t0: f64| {
-                let parts = s.flat.parts(root);
-                s.combine(parts, &bounds, Rule::All, ray, t0, 50.0)
-            };
+            let general = |ray: &Ray, t0: f64| s.combine(root, Rule::All, ray, t0, 50.0);
             for _ in 0..2000 {
                 let o = DVec3::new(
                     rng.gen_range(-3.0..3.0),

@@ -1,5 +1,5 @@
 //! A quadric along a ray: q(o + t·d) as a quadratic in t, the magnitudes that bound its
-//! rounding, and the open set where it is positive. Generic over the float type, like the
+//! rounding, and the set where it is inside (≥ 0). Generic over the float type, like the
 //! scan ([`super::scan`]) that builds on it.
 
 use num_traits::Float;
@@ -66,15 +66,17 @@ pub(crate) fn q_local_mag<T: Float>(c: &Coeffs<T>, p: [T; 3], d: [T; 3]) -> [T; 
     [q_eval(&c, [x, y, z]), gx * u + gy * v + gz * w, curv]
 }
 
-/// The open set {t : a0 + a1·t + a2·t² > 0} as at most two open intervals, with the
-/// real roots as their finite ends (stable quadratic formula: Press et al., Numerical
-/// Recipes §5.6). A double root is a touch, not an interval end.
+/// The set {t : a0 + a1·t + a2·t² ≥ 0} (inside, by the FRep convention F ≥ 0) as at
+/// most two intervals, with the real roots as their finite ends (stable quadratic
+/// formula: Press et al., Numerical Recipes §5.6). Only its ends matter to a ray, so
+/// isolated points are dropped: a double root is a touch, not an interval end. A
+/// constant 0 (a ray lying in a plane or along a cylinder's surface) is inside.
 pub(crate) fn positive_set<T: Float>(a: [T; 3]) -> ([(T, T); 2], usize) {
     let (inf, none) = (T::infinity(), [(T::zero(), T::zero()); 2]);
     let [a0, a1, a2] = a;
     if a2 == T::zero() {
         if a1 == T::zero() {
-            return if a0 > T::zero() {
+            return if a0 >= T::zero() {
                 ([(-inf, inf), (T::zero(), T::zero())], 1)
             } else {
                 (none, 0)

@@ -181,7 +181,8 @@ fn q_local_mag(c: array<f32, 10>, p: vec3<f32>, d: vec3<f32>) -> vec3<f32> {
 
 struct PosSet { s: vec4<f32>, n: u32 }
 
-// {t : a0 + a1·t + a2·t² > 0} as ≤ 2 open intervals (positive_set; Numerical Recipes §5.6).
+// {t : a0 + a1·t + a2·t² ≥ 0} as ≤ 2 intervals, isolated points dropped (positive_set;
+// Numerical Recipes §5.6).
 fn positive_set(a: vec3<f32>) -> PosSet {
     let a0 = a.x;
     let a1 = a.y;
@@ -189,7 +190,7 @@ fn positive_set(a: vec3<f32>) -> PosSet {
     let big = inf();
     if (a2 == 0.0) {
         if (a1 == 0.0) {
-            if (a0 > 0.0) { return PosSet(vec4<f32>(-big, big, 0.0, 0.0), 1u); }
+            if (a0 >= 0.0) { return PosSet(vec4<f32>(-big, big, 0.0, 0.0), 1u); }
             return PosSet(vec4<f32>(0.0), 0u);
         }
         let r = -a0 / a1;
