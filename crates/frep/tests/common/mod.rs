@@ -1,6 +1,8 @@
 //! Helpers shared by the reader and ray tests.
 #![allow(dead_code, unused_imports)]
 
+pub mod random_csg;
+
 pub use frep::read::{read_file, read_str, write_vm, Format, Model, ReadError};
 pub use frep::shape::Shape;
 pub use frep::{BinaryOp, Expr, Tree, UnaryOp};
