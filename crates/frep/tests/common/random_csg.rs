@@ -51,6 +51,7 @@ pub struct Tree3 {
 pub struct Gen {
     rng: Pcg64,
     quadrics: Vec<Quadric>,
+    perturbed: bool,
 }
 
 impl Gen {
@@ -59,6 +60,16 @@ impl Gen {
         Self {
             rng: Pcg64::seed_from_u64(seed),
             quadrics: Vec::new(),
+            perturbed: true,
+        }
+    }
+
+    /// A generator of trees of plain quadrics only (plain spheres where the others have
+    /// perturbed ones).
+    pub fn plain(seed: u64) -> Self {
+        Self {
+            perturbed: false,
+            ..Self::new(seed)
         }
     }
 }
@@ -180,6 +191,9 @@ impl Gen {
                 let f = self.rng.gen_range(-2.0..4.0);
                 let s = Quadric::sphere(c, rad);
                 self.quadrics.push(s);
+                if !self.perturbed {
+                    return plain(s);
+                }
                 Shape::Perturbed(PerturbedQuadric::new(s).with(f, Quadric::sphere(bump, 0.4)))
             }
         }
