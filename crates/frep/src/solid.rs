@@ -369,6 +369,7 @@ impl Solid {
     /// [`nudge`]. The walk takes each part's state where it starts; a ray continued from
     /// a crossing starts on a part's surface, where F ≈ 0 says nothing, and a nudge on
     /// the state is the one the walk goes on with.
+    #[inline]
     fn walk_range(&self, i: usize, ray: &Ray, t_min: f64, t_max: f64) -> Option<(f64, f64)> {
         let bounds = &self.flat.nodes[i].bounds;
         let (lo, hi) = if bounds.is_finite() {
@@ -385,10 +386,11 @@ impl Solid {
     }
 
     /// Walks the parts' crossings of node i in order, updating each part's state, until
-    /// the combined state flips. A part's next crossing is searched a hair past its last
-    /// one ([`nudge`]) so that a root found to rounding is never found twice, and its
-    /// state is taken there. States and
-    /// pending crossings live in fixed arrays (at most [`MAX_PARTS`] parts per node).
+    /// the combined state flips. A part whose roots are in closed form ([`exact_nodes`])
+    /// flips at each and is searched again from it; any other part is searched again a
+    /// [`nudge`] past its last crossing, so that a root found to a tolerance is never
+    /// found twice, and takes the state F's sign gives it there. States and pending
+    /// crossings live in fixed arrays (at most [`MAX_PARTS`] parts per node).
     fn combine(&self, i: usize, rule: Rule, ray: &Ray, t_min: f64, t_max: f64) -> Option<Hit> {
         let parts = self.flat.parts(i);
         let (lo, hi) = self.walk_range(i, ray, t_min, t_max)?;
@@ -757,13 +759,14 @@ fn exact_nodes(flat: &Flat) -> Vec<bool> {
 }
 
 /// How far past a crossing at t a CSG walk searches the crossed part again, in t: 10⁻¹⁰
-/// of the larger of the node's size (`scale`, [`walk_scales`]), the crossing's distance
-/// from the origin and 1 — past the rounding of a root located to 10⁻¹² of its leaf's
+/// of the largest of the node's size (`scale`, [`walk_scales`]), the crossing's distance
+/// from the origin and 1, over |d| — past the rounding of a root located to 10⁻¹² of its leaf's
 /// size or to f64 rounding where it is, short of any feature the renderer resolves.
 #[inline]
 fn nudge(scale: f64, ray: &Ray, t: f64) -> f64 {
     let at = ray.at(t).abs().max_element();
-    1e-10 * scale.max(at).max(1.0) / ray.d.length()
+    // |d|'s largest component, not its length: the same within √3, without a root.
+    1e-10 * scale.max(at).max(1.0) / ray.d.abs().max_element()
 }
 
 /// Bounding box of a box's image.
