@@ -202,7 +202,7 @@ impl Renderer for SceneRenderer {
         });
         let mut next = acc.as_ref().map_or(0, |s| s.samples()[0].end);
         if next > 0 && !self.quiet {
-            eprintln!(
+            note!(
                 "reference: continuing from {next} of {spp} samples ({})",
                 checkpoint.display()
             );
@@ -219,7 +219,7 @@ impl Renderer for SceneRenderer {
                 if let Some(s) = &acc {
                     s.write(checkpoint).map_err(|e| e.to_string())?;
                     if !self.quiet {
-                        eprintln!(
+                        note!(
                             "reference: {} of {spp} samples kept in {}",
                             s.samples()[0].end,
                             checkpoint.display()
@@ -314,13 +314,13 @@ pub fn run(a: ExperimentArgs) -> Result<(), String> {
     let quiet = a.quiet;
     let summary = experiment::run(&cfg, &mut r, &|line: &str| {
         if !quiet {
-            eprintln!("{line}");
+            note!("{line}");
         }
     })?;
     if summary.interrupted {
-        eprintln!("interrupted: rerun the same command to resume");
+        note!("interrupted: rerun the same command to resume");
     } else {
-        eprintln!("results in {}", a.out.display());
+        note!("results in {}", a.out.display());
     }
     Ok(())
 }

@@ -20,13 +20,13 @@ pub fn stop_flag() -> Arc<AtomicBool> {
         let s = stop.clone();
         let installed = ctrlc::set_handler(move || {
             if s.swap(true, Ordering::SeqCst) {
-                eprintln!("\ninterrupted twice: quitting without writing");
+                note!("\ninterrupted twice: quitting without writing");
                 std::process::exit(i32::from(EXIT_INTERRUPTED));
             }
-            eprintln!("\ninterrupted: finishing the samples in flight (Ctrl-C again to quit)");
+            note!("\ninterrupted: finishing the samples in flight (Ctrl-C again to quit)");
         });
         if let Err(e) = installed {
-            eprintln!("warning: Ctrl-C will not stop renders cleanly: {e}");
+            note!("warning: Ctrl-C will not stop renders cleanly: {e}");
         }
         stop
     })

@@ -10,8 +10,18 @@ macro_rules! out {
             if e.kind() == std::io::ErrorKind::BrokenPipe {
                 std::process::exit(0);
             }
-            eprintln!("warning: cannot write to stdout: {e}");
+            note!("warning: cannot write to stdout: {e}");
         }
+    }};
+}
+
+/// `eprintln!` that never panics: a message that cannot be written (stderr closed, full,
+/// or a log pipe that went away) is dropped, and the work it reports on — a finished
+/// render, its output files — goes on.
+macro_rules! note {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stderr().lock(), $($arg)*);
     }};
 }
 
@@ -286,7 +296,7 @@ fn main() -> ExitCode {
     let code = match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {e}");
+            note!("error: {e}");
             ExitCode::FAILURE
         }
     };
@@ -415,7 +425,7 @@ fn render(args: RenderArgs) -> Result<(), String> {
         ));
     }
     if args.backend == scene_render::Backend::Auto && !args.quiet {
-        eprintln!("note: --backend auto renders on the CPU: bare models render on the CPU only");
+        note!("note: --backend auto renders on the CPU: bare models render on the CPU only");
     }
     let look = match args.integrator.as_deref() {
         None | Some("shaded") => preview::Look::Shaded,
@@ -460,7 +470,7 @@ fn render(args: RenderArgs) -> Result<(), String> {
         .collect();
     if !clipped.is_empty() {
         let b = model.view_box.bounds;
-        eprintln!(
+        note!(
             "note: the surface is unbounded along {} (it reaches the ±{} search domain); \
              the view shows [{:.3}, {:.3}] × [{:.3}, {:.3}] × [{:.3}, {:.3}]",
             clipped.join(", "),
@@ -490,7 +500,7 @@ fn render(args: RenderArgs) -> Result<(), String> {
     });
     bar.finish_and_clear();
     let (state, stats) = result.map_err(|e| e.to_string())?;
-    eprintln!(
+    note!(
         "{}: setup {:.2} s; {stats}",
         args.input.display(),
         setup.as_secs_f64()
@@ -504,7 +514,7 @@ fn render(args: RenderArgs) -> Result<(), String> {
         args.output.clone()
     };
     output::write_all(&outs, &formats, &state.image(), &film)?;
-    eprintln!(
+    note!(
         "{}{} written",
         if stats.stopped {
             "interrupted: what was rendered is "

@@ -35,7 +35,7 @@ pub fn run(args: MergeArgs) -> Result<(), String> {
     }
     let merged = merged.expect("clap requires one state");
     output::write_state(&args.output, &formats, &merged, &film)?;
-    eprintln!(
+    note!(
         "merged {} state(s): {}; written {}",
         args.states.len(),
         merged.summary(),

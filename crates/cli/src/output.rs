@@ -48,7 +48,7 @@ pub fn clip_note(outs: &[PathBuf], formats: &[Format], img: &Image, film: &Film)
     };
     let f = img.clipped_fraction(film);
     if f >= 0.01 {
-        eprintln!(
+        note!(
             "note: {}: {:.1} % of pixels clip (a channel ≥ 1 after exposure {} and tone \
              mapping {}); --exposure -1 halves the brightness, --tonemap reinhard or aces \
              compresses highlights",

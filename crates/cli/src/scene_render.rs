@@ -51,13 +51,13 @@ fn render_on(
 ) -> Result<Rendered, String> {
     if backend == Backend::Gpu {
         if let Ok(g) = frepray::backend::shared_gpu() {
-            eprintln!("GPU: {}", g.info());
+            note!("GPU: {}", g.info());
         }
     }
     let r = frepray::render_range_on(backend.into(), data, scene, opts, samples, stop, progress)
         .map_err(|e| e.to_string())?;
     if let Some(why) = &r.fallback {
-        eprintln!("note: --backend auto renders on the CPU: {why}");
+        note!("note: --backend auto renders on the CPU: {why}");
     }
     Ok((r.state, r.stats, r.gpu))
 }
@@ -289,7 +289,7 @@ pub fn run(
     warn_unused(o, &opts);
     if let Some(path) = dump_to {
         dump(&data, path)?;
-        eprintln!("resolved scene written to {}", path.display());
+        note!("resolved scene written to {}", path.display());
         if outs.is_empty() {
             return Ok(());
         }
@@ -310,7 +310,7 @@ pub fn run(
     // What a render waits for before its first sample (Mitsuba's "Loading scene" line).
     let load = start.elapsed();
     if !formats.contains(&Format::Exr) && !opts.aovs.is_empty() {
-        eprintln!(
+        note!(
             "note: AOV channels ({}) are only written to .exr",
             aov_list(&opts.aovs)
         );
@@ -332,15 +332,15 @@ pub fn run(
     );
     bar.finish_and_clear();
     let (state, stats, g) = result?;
-    eprintln!(
+    note!(
         "scene: loaded in {:.3} s (parsing, solids with their bounds and grids, lights, materials)",
         load.as_secs_f64()
     );
-    eprintln!("{stats}");
+    note!("{stats}");
     if let Some(g) = &g {
-        eprintln!("{}", gpu_line(g));
+        note!("{}", gpu_line(g));
     } else if opts.stage_times {
-        eprintln!("{}", cpu_line(&stats));
+        note!("{}", cpu_line(&stats));
     }
     let outs: Vec<PathBuf> = if stats.stopped {
         outs.iter()
@@ -350,7 +350,7 @@ pub fn run(
         outs.to_vec()
     };
     output::write_state(&outs, &formats, &state, &film)?;
-    eprintln!(
+    note!(
         "{}{} written",
         if stats.stopped {
             "interrupted: what was rendered is "
@@ -416,7 +416,7 @@ fn warn_unused(o: &Overrides, opts: &RenderOptions) {
         ),
     ];
     for (flag, _, applies) in unused.iter().filter(|u| u.1) {
-        eprintln!(
+        note!(
             "warning: {flag} has no effect here (integrator {}, estimator {}); it applies with {applies}",
             opts.integrator,
             opts.method.name()
@@ -457,7 +457,7 @@ pub fn bench(
             continue;
         }
         let g = frepray::backend::shared_gpu().map_err(|e| e.to_string())?;
-        eprintln!("GPU: {}", g.info());
+        note!("GPU: {}", g.info());
         for integrator in [IntegratorKind::Direct, IntegratorKind::Path] {
             let o = RenderOptions {
                 integrator,
@@ -543,7 +543,7 @@ pub fn bench(
         let svg = crate::stage_plot::svg(&title, &bars);
         render::output::write_atomically(p, |w| w.write_all(svg.as_bytes()))
             .map_err(|e| format!("{}: {e}", p.display()))?;
-        eprintln!("{} written", p.display());
+        note!("{} written", p.display());
     }
     Ok(())
 }

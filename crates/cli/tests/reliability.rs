@@ -702,3 +702,47 @@ radiance = [10, 10, 10]
         }
     }
 }
+
+/// A message that cannot be written never costs the render: with stderr on a full disk
+/// (`/dev/full`) or a pipe whose reader has gone, `render` exits 0 and writes its output
+/// whole (the same bytes as with stderr intact).
+#[test]
+fn a_broken_stderr_keeps_the_render() {
+    let d = out_dir("broken-stderr");
+    let scene = root().join("scenes/many-lights.toml");
+    let args = |name: &str| {
+        let mut c = frepray();
+        c.args([
+            "render",
+            scene.to_str().unwrap(),
+            "--width",
+            "32",
+            "--height",
+            "24",
+        ])
+        .args(["--spp", "2", "--seed", "5", "-o"])
+        .arg(d.join(name));
+        c
+    };
+    let ok = args("ok.exr").output().unwrap();
+    assert!(
+        ok.status.success(),
+        "{}",
+        String::from_utf8_lossy(&ok.stderr)
+    );
+    let want = std::fs::read(d.join("ok.exr")).unwrap();
+    // stderr on a device that is always full.
+    let full = std::fs::OpenOptions::new()
+        .write(true)
+        .open("/dev/full")
+        .unwrap();
+    let st = args("full.exr").stderr(full).status().unwrap();
+    assert!(st.success(), "{st:?}");
+    assert_eq!(std::fs::read(d.join("full.exr")).unwrap(), want);
+    // stderr a pipe whose reading end is closed before anything is written.
+    let mut child = args("pipe.exr").stderr(Stdio::piped()).spawn().unwrap();
+    drop(child.stderr.take());
+    let st = child.wait().unwrap();
+    assert!(st.success(), "{st:?}");
+    assert_eq!(std::fs::read(d.join("pipe.exr")).unwrap(), want);
+}
