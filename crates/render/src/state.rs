@@ -313,13 +313,7 @@ impl RenderState {
     /// An empty state (every sum 0) for samples `samples` of a render with `header`.
     /// Errors when the header's options are invalid.
     pub fn new(header: StateHeader, samples: Range<u32>) -> Result<Self, Error> {
-        let it = Integrator::new(&header.options())?;
-        let record = it.record;
-        let kernel = it.kernel().cloned();
-        let n = header.width as usize * header.height as usize;
-        let words = n
-            .checked_mul(record.stride())
-            .ok_or_else(|| Error::Options("the render state would not fit in memory".into()))?;
+        let (record, kernel, words) = Self::layout(&header)?;
         Ok(Self {
             header,
             samples: if samples.is_empty() {
@@ -332,6 +326,20 @@ impl RenderState {
             kernel,
             data: vec![0.0; words],
         })
+    }
+
+    /// A state's record layout, estimator kernel and word count for `header`, nothing
+    /// allocated for the sums (so that a file's header can be checked against its size
+    /// before they are).
+    fn layout(header: &StateHeader) -> Result<(Record, Option<Kernel>, usize), Error> {
+        let it = Integrator::new(&header.options())?;
+        let record = it.record;
+        let kernel = it.kernel().cloned();
+        let n = header.width as usize * header.height as usize;
+        let words = n
+            .checked_mul(record.stride())
+            .ok_or_else(|| Error::Options("the render state would not fit in memory".into()))?;
+        Ok((record, kernel, words))
     }
 
     /// What the sums mean.
@@ -536,14 +544,20 @@ impl RenderState {
         }
         let v: Value = serde_json::from_str(text).map_err(|e| corrupt(format!("header: {e}")))?;
         let header = StateHeader::from_json(&v).map_err(corrupt)?;
-        let mut state = RenderState::new(header, 0..0).map_err(corrupt)?;
+        // The header's size against the words present before anything is allocated: a
+        // header that claims more than the file holds is an error, not an allocation.
+        let (record, _, want) = Self::layout(&header).map_err(corrupt)?;
         let stride = v.get("stride").and_then(Value::as_u64);
-        if stride != Some(state.record.stride() as u64) || state.data.len() as u64 != words {
+        if stride != Some(record.stride() as u64) || want as u64 != words {
             return Err(corrupt(format!(
-                "the records do not match the header (stride {stride:?}, expected {})",
-                state.record.stride()
+                "the records do not match the header ({words} words of stride {stride:?}; \
+                 {}×{} pixels of stride {} need {want})",
+                header.width,
+                header.height,
+                record.stride()
             )));
         }
+        let mut state = RenderState::new(header, 0..0).map_err(corrupt)?;
         let ranges = v
             .get("samples")
             .and_then(Value::as_array)

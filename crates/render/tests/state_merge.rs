@@ -239,3 +239,27 @@ fn damaged_state_files_are_errors() {
         .to_string()
         .contains("version 9"));
 }
+
+/// A state file whose header claims far more pixels than its words hold — with a valid
+/// checksum, as a crafted file would have — is an error before anything is allocated
+/// for the claim (a 65 536 × 65 536 header once asked for 256 GiB and aborted).
+#[test]
+fn a_header_claiming_more_than_the_file_holds_is_an_error() {
+    let scene = scene();
+    let o = options(IntegratorKind::Path, Method::OptimalUncorrelated);
+    let bytes = run(&scene, &o, 0..1).to_bytes();
+    let hlen = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
+    let text = std::str::from_utf8(&bytes[16..16 + hlen]).unwrap();
+    let mut v: serde_json::Value = serde_json::from_str(text).unwrap();
+    v["width"] = 65536.into();
+    v["height"] = 65536.into();
+    let text = v.to_string();
+    let mut crafted = bytes[..12].to_vec();
+    crafted.extend_from_slice(&(text.len() as u32).to_le_bytes());
+    crafted.extend_from_slice(text.as_bytes());
+    crafted.extend_from_slice(&bytes[16 + hlen..bytes.len() - 8]);
+    let hash = render::state::fnv1a(&crafted);
+    crafted.extend_from_slice(&hash.to_le_bytes());
+    let e = RenderState::from_bytes(&crafted).unwrap_err().to_string();
+    assert!(e.contains("65536×65536") && e.contains("need"), "{e}");
+}
