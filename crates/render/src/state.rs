@@ -549,8 +549,9 @@ impl RenderState {
         let (record, _, want) = Self::layout(&header).map_err(corrupt)?;
         let stride = v.get("stride").and_then(Value::as_u64);
         if stride != Some(record.stride() as u64) || want as u64 != words {
+            let stride = stride.map_or("none".into(), |s| s.to_string());
             return Err(corrupt(format!(
-                "the records do not match the header ({words} words of stride {stride:?}; \
+                "the records do not match the header ({words} words of stride {stride}; \
                  {}×{} pixels of stride {} need {want})",
                 header.width,
                 header.height,
