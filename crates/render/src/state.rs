@@ -603,17 +603,35 @@ impl RenderState {
         })
     }
 
-    /// Reads a state written by [`RenderState::write`]; errors name the file.
+    /// Reads a state written by [`RenderState::write`]; errors name the file. Only a
+    /// regular file is read (a FIFO would block, a device never end), and only once its
+    /// first bytes are a state's magic (a large file of another kind is not read whole).
     pub fn read(path: impl AsRef<Path>) -> Result<Self, Error> {
+        use std::io::Read as _;
         let path = path.as_ref();
-        let bytes = std::fs::read(path).map_err(|source| Error::Io {
-            path: path.into(),
-            source,
-        })?;
-        Self::from_bytes(&bytes).map_err(|e| Error::InFile {
+        let in_file = |e: Error| Error::InFile {
             path: path.into(),
             source: Box::new(e),
-        })
+        };
+        let io = |source| Error::Io {
+            path: path.into(),
+            source,
+        };
+        // Checked before opening: opening a FIFO for reading blocks until a writer comes.
+        if !std::fs::metadata(path).map_err(io)?.is_file() {
+            return Err(in_file(corrupt("not a regular file")));
+        }
+        let mut file = std::fs::File::open(path).map_err(io)?;
+        let mut bytes = Vec::new();
+        (&mut file)
+            .take(MAGIC.len() as u64)
+            .read_to_end(&mut bytes)
+            .map_err(io)?;
+        if bytes.as_slice() != MAGIC {
+            return Self::from_bytes(&bytes).map_err(in_file);
+        }
+        file.read_to_end(&mut bytes).map_err(io)?;
+        Self::from_bytes(&bytes).map_err(in_file)
     }
 
     /// A one-line summary: size, estimator, samples.

@@ -266,3 +266,41 @@ fn a_header_claiming_more_than_the_file_holds_is_an_error() {
         "{e}"
     );
 }
+
+/// `RenderState::read` refuses what is not a regular file at once — a FIFO (which would
+/// block for ever) and `/dev/zero` (which never ends) — and reads no further than the
+/// magic of a file of another kind; each error names the file.
+#[test]
+fn only_regular_state_files_are_read() {
+    let d = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("state-read");
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    let fifo = d.join("pipe.state");
+    let made = std::process::Command::new("mkfifo").arg(&fifo).status();
+    if made.is_ok_and(|s| s.success()) {
+        let e = RenderState::read(&fifo).unwrap_err().to_string();
+        assert!(
+            e.contains("pipe.state") && e.contains("not a regular file"),
+            "{e}"
+        );
+    }
+    let e = RenderState::read("/dev/zero").unwrap_err().to_string();
+    assert!(
+        e.contains("/dev/zero") && e.contains("not a regular file"),
+        "{e}"
+    );
+    let other = d.join("image.state");
+    std::fs::write(&other, vec![0x89u8; 1 << 20]).unwrap();
+    let e = RenderState::read(&other).unwrap_err().to_string();
+    assert!(e.contains("image.state") && e.contains("magic"), "{e}");
+    // A real state still reads.
+    let scene = scene();
+    let o = options(IntegratorKind::Direct, Method::Balance);
+    let state = run(&scene, &o, 0..1);
+    let good = d.join("good.state");
+    state.write(&good).unwrap();
+    assert_eq!(
+        RenderState::read(&good).unwrap().to_bytes(),
+        state.to_bytes()
+    );
+}
