@@ -44,8 +44,9 @@ use std::sync::Arc;
 /// solids where F(x, y, z) ≥ 0 (perturbed quadrics, CSG, blends, HyperFun and Fidget
 /// models) — with Monte Carlo light transport and optimal multiple importance sampling.
 ///
-/// Exit status: 0 on success, 1 on an error, 130 when interrupted by Ctrl-C (the
-/// partial result is written first; see `frepray render --help`).
+/// Exit status: 0 on success, 1 on an error, 128 + the signal when interrupted: 130 by
+/// Ctrl-C, 143 by SIGTERM, 129 by SIGHUP (the partial result is written first; a second
+/// signal quits at once; see `frepray render --help`).
 #[derive(Parser)]
 #[command(name = "frepray", version)]
 struct Cli {
@@ -183,7 +184,7 @@ struct RenderArgs {
     /// available]; a larger render is refused before it starts, with its estimate.
     #[arg(long, value_name = "SIZE", value_parser = render::limits::parse_bytes)]
     max_memory: Option<u64>,
-    /// On Ctrl-C, write the partial result to the -o names themselves instead of
+    /// On Ctrl-C, SIGTERM or SIGHUP, write the partial result to the -o names themselves instead of
     /// `NAME.partial.EXT` (which never replaces a finished file).
     #[arg(long)]
     overwrite_partial: bool,
@@ -300,10 +301,9 @@ fn main() -> ExitCode {
             ExitCode::FAILURE
         }
     };
-    if interrupt::interrupted() {
-        ExitCode::from(interrupt::EXIT_INTERRUPTED)
-    } else {
-        code
+    match interrupt::exit_status() {
+        Some(status) => ExitCode::from(status),
+        None => code,
     }
 }
 
@@ -320,8 +320,8 @@ pub fn set_threads(n: usize) -> Result<(), String> {
     Ok(())
 }
 
-/// A flag that Ctrl-C sets, so that a render stops and keeps what it has
-/// ([`interrupt`]).
+/// A flag that Ctrl-C, SIGTERM and SIGHUP set, so that a render stops and keeps what it
+/// has ([`interrupt`]).
 pub fn stop_on_ctrl_c() -> Arc<AtomicBool> {
     interrupt::stop_flag()
 }

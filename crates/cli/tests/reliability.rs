@@ -42,8 +42,14 @@ fn run_within(cmd: &mut Command, limit: Duration) -> Output {
 }
 
 fn sigint(child: &Child) {
+    signal(child, "INT");
+}
+
+/// Sends the signal `name` (`INT`, `TERM`, `HUP`) to the child.
+fn signal(child: &Child, name: &str) {
     let st = Command::new("kill")
-        .args(["-INT", &child.id().to_string()])
+        .arg(format!("-{name}"))
+        .arg(child.id().to_string())
         .status()
         .unwrap();
     assert!(st.success());
@@ -127,9 +133,47 @@ fn sigint_stops_a_render_within_two_seconds_with_status_130() {
     assert!(err.contains("cornell.partial.exr"), "{err}");
 }
 
-/// `bench` stops on Ctrl-C too, with status 130.
+/// SIGTERM (schedulers, `timeout`, container stops) and SIGHUP (a closed terminal) stop
+/// a render as Ctrl-C does: the partial result is written, and the status is 128 + the
+/// signal (143, 129).
 #[test]
-fn sigint_stops_bench() {
+fn sigterm_and_sighup_keep_the_render() {
+    for (name, status) in [("TERM", 143), ("HUP", 129)] {
+        let dir = out_dir(&format!("sig{name}"));
+        let out = dir.join("cornell.exr");
+        let mut child = frepray()
+            .arg("render")
+            .arg(root().join("scenes/cornell.toml"))
+            .args([
+                "--spp", "100000", "--width", "24", "--height", "16", "--quiet", "-o",
+            ])
+            .arg(&out)
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        std::thread::sleep(Duration::from_millis(2000));
+        signal(&child, name);
+        let (code, took) = wait_within(&mut child, Duration::from_secs(10));
+        let err = {
+            use std::io::Read;
+            let mut s = String::new();
+            child.stderr.take().unwrap().read_to_string(&mut s).unwrap();
+            s
+        };
+        assert_eq!(code, Some(status), "SIG{name}: {err}");
+        assert!(took < Duration::from_secs(2), "SIG{name}: {took:?}");
+        assert!(!out.exists(), "SIG{name}");
+        let r = exr_channel(&dir.join("cornell.partial.exr"), "R");
+        assert_eq!(r.len(), 24 * 16, "SIG{name}");
+        assert!(r.iter().all(|v| v.is_finite() && *v >= 0.0), "SIG{name}");
+        assert!(err.contains(&format!("SIG{name}")), "SIG{name}: {err}");
+    }
+}
+
+/// `bench` stops on SIGTERM as on Ctrl-C, with status 143.
+#[test]
+fn sigterm_stops_bench() {
     let mut child = frepray()
         .arg("bench")
         .arg(root().join("scenes/cornell.toml"))
@@ -139,9 +183,9 @@ fn sigint_stops_bench() {
         .spawn()
         .unwrap();
     std::thread::sleep(Duration::from_millis(2500));
-    sigint(&child);
+    signal(&child, "TERM");
     let (code, took) = wait_within(&mut child, Duration::from_secs(10));
-    assert_eq!(code, Some(130));
+    assert_eq!(code, Some(143));
     assert!(took < Duration::from_secs(2), "{took:?}");
 }
 
