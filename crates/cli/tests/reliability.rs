@@ -354,6 +354,23 @@ fn oversize_renders_and_thread_counts_are_refused_with_an_estimate() {
         );
         let err = stderr(&o);
         assert!(err.contains("--max-memory") && err.contains("MiB"), "{err}");
+        // A --max-memory above what the machine has cannot make the allocation succeed:
+        // refused (it once aborted with status 134).
+        let o = run_within(
+            frepray()
+                .arg("render")
+                .arg(root().join(input))
+                .args(["--width", "100000", "--height", "100000"])
+                .args(["--max-memory", "1000T", "-o"])
+                .arg(dir.join("huge.exr")),
+            Duration::from_secs(20),
+        );
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(1), "{err}");
+        assert!(
+            err.contains("memory this machine has (RAM and swap; --max-memory asked for more)"),
+            "{input}: {err}"
+        );
         let o = run_within(
             frepray()
                 .arg("render")

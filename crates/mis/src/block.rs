@@ -221,6 +221,15 @@ impl Kernel {
         }
     }
 
+    /// The words of a block that count samples (the iterations; the uncorrelated
+    /// estimator's two sets), for checking a block read from a file.
+    pub fn count_words<'a>(&self, block: &'a [f64]) -> &'a [f64] {
+        match self.code {
+            Code::Uncorrelated => &block[..2],
+            _ => &block[..1],
+        }
+    }
+
     /// The estimate of a block, one value per channel (0 before the first iteration).
     pub fn estimate(&self, block: &[f64], out: &mut [f64]) {
         let (l, ridge) = (&*self.layout, self.ridge());

@@ -37,6 +37,22 @@ pub fn render_bytes(width: u32, height: u32, o: &RenderOptions) -> Result<u64, E
     Ok(pixels.saturating_mul(per_pixel))
 }
 
+/// `n` zeros, or an error naming `what` where the allocator cannot give them (a render
+/// whose `--max-memory` was set above what the machine has: an error, not an abort).
+pub fn zeroed(n: usize, what: &str) -> Result<Vec<f64>, Error> {
+    let mut v = Vec::new();
+    v.try_reserve_exact(n).map_err(|_| {
+        Error::Limit(format!(
+            "{what} needs {} ({} words) and the system cannot give it; lower the \
+             resolution, the AOVs or the depth, or --max-memory",
+            bytes((n as u64).saturating_mul(8)),
+            n
+        ))
+    })?;
+    v.resize(n, 0.0);
+    Ok(v)
+}
+
 /// The memory the system reports available now, in bytes (Linux `MemAvailable`);
 /// `None` where it cannot be read.
 pub fn available_memory() -> Option<u64> {
@@ -52,11 +68,35 @@ pub fn available_memory() -> Option<u64> {
     Some(kb.saturating_mul(1024))
 }
 
-/// The memory limit of a render: `max_memory` if non-zero, else the available
-/// memory, else [`FALLBACK_MEMORY`]; with where it comes from, for messages.
+/// The memory this machine has, RAM and swap, in bytes (Linux `MemTotal + SwapTotal`);
+/// `None` where it cannot be read.
+pub fn total_memory() -> Option<u64> {
+    let text = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let field = |name: &str| -> Option<u64> {
+        let line = text.lines().find(|l| l.starts_with(name))?;
+        let kb: u64 = line[name.len()..]
+            .trim()
+            .trim_end_matches("kB")
+            .trim()
+            .parse()
+            .ok()?;
+        Some(kb.saturating_mul(1024))
+    };
+    Some(field("MemTotal:")?.saturating_add(field("SwapTotal:").unwrap_or(0)))
+}
+
+/// The memory limit of a render: `max_memory` if non-zero (but never more than the
+/// machine has, [`total_memory`]: beyond that the allocation cannot succeed), else the
+/// available memory, else [`FALLBACK_MEMORY`]; with where it comes from, for messages.
 pub fn memory_limit(max_memory: u64) -> (u64, &'static str) {
     if max_memory > 0 {
-        return (max_memory, "--max-memory");
+        return match total_memory() {
+            Some(total) if total < max_memory => (
+                total,
+                "memory this machine has (RAM and swap; --max-memory asked for more)",
+            ),
+            _ => (max_memory, "--max-memory"),
+        };
     }
     match available_memory() {
         Some(m) => (m, "available memory"),

@@ -191,7 +191,7 @@ pub fn render_range(
                 y0,
                 w,
                 h,
-                records: vec![0.0; (w * h) as usize * stride],
+                records: crate::limits::zeroed((w * h) as usize * stride, "a tile's records")?,
                 rays: RayCounts::new(o.stage_times),
                 samples: 0,
             });

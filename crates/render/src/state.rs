@@ -309,11 +309,106 @@ pub fn fnv1a(bytes: &[u8]) -> u64 {
     })
 }
 
+/// What a state file's first bytes say: the header, checked, and where the records are.
+struct Head {
+    header: StateHeader,
+    samples: Vec<Range<u32>>,
+    partial: bool,
+    /// Byte offset of the records.
+    records: usize,
+    /// The file's length the header implies.
+    file_len: u64,
+}
+
+impl Head {
+    /// Parses magic, version, header and word count from the start of a state's bytes
+    /// (the records need not be there), checking the header's fields as a render's options
+    /// are checked and its word count against its size, before anything is allocated.
+    fn parse(bytes: &[u8]) -> Result<Head, Error> {
+        let take = |at: usize, n: usize| -> Result<&[u8], Error> {
+            bytes
+                .get(at..at.checked_add(n).ok_or_else(|| corrupt("truncated"))?)
+                .ok_or_else(|| corrupt(format!("truncated at byte {at}")))
+        };
+        if take(0, 8)? != MAGIC {
+            return Err(corrupt("no FREPSTAT magic at the start"));
+        }
+        let version = u32::from_le_bytes(take(8, 4)?.try_into().unwrap());
+        if version != VERSION {
+            return Err(corrupt(format!(
+                "format version {version}; this frepray reads version {VERSION}"
+            )));
+        }
+        let hlen = u32::from_le_bytes(take(12, 4)?.try_into().unwrap()) as usize;
+        let text = std::str::from_utf8(take(16, hlen)?).map_err(corrupt)?;
+        let at = 16 + hlen;
+        let words = u64::from_le_bytes(take(at, 8)?.try_into().unwrap());
+        let v: Value = serde_json::from_str(text).map_err(|e| corrupt(format!("header: {e}")))?;
+        let header = StateHeader::from_json(&v).map_err(corrupt)?;
+        // The header's options as a render checks them (so that nothing below sizes
+        // tables from a depth or light count no render would have).
+        let mut o = header.options();
+        o.spp = 1;
+        o.validate().map_err(|e| corrupt(format!("header: {e}")))?;
+        // The header's size against the words present: a header that claims more than
+        // the file holds is an error, not an allocation.
+        let (record, _, want) = RenderState::layout(&header).map_err(corrupt)?;
+        let stride = v.get("stride").and_then(Value::as_u64);
+        if stride != Some(record.stride() as u64) || want as u64 != words {
+            let stride = stride.map_or("none".into(), |s| s.to_string());
+            return Err(corrupt(format!(
+                "the records do not match the header ({words} words of stride {stride}; \
+                 {}×{} pixels of stride {} need {want})",
+                header.width,
+                header.height,
+                record.stride()
+            )));
+        }
+        let mut samples: Vec<Range<u32>> = Vec::new();
+        let ranges = v
+            .get("samples")
+            .and_then(Value::as_array)
+            .ok_or_else(|| corrupt("header lacks \"samples\""))?;
+        for r in ranges {
+            let bound = |k: usize| {
+                r.get(k)
+                    .and_then(Value::as_u64)
+                    .and_then(|a| u32::try_from(a).ok())
+            };
+            match (bound(0), bound(1)) {
+                (Some(a), Some(b)) if a < b && samples.last().is_none_or(|l| l.end < a) => {
+                    samples.push(a..b)
+                }
+                _ => {
+                    return Err(corrupt(format!(
+                        "sample range {r} is not an increasing [start, end]"
+                    )))
+                }
+            }
+        }
+        let file_len = (at as u64 + 16)
+            .checked_add(
+                words
+                    .checked_mul(8)
+                    .ok_or_else(|| corrupt("impossible word count"))?,
+            )
+            .ok_or_else(|| corrupt("impossible word count"))?;
+        Ok(Head {
+            header,
+            samples,
+            partial: v.get("partial").and_then(Value::as_bool).unwrap_or(false),
+            records: at + 8,
+            file_len,
+        })
+    }
+}
+
 impl RenderState {
     /// An empty state (every sum 0) for samples `samples` of a render with `header`.
     /// Errors when the header's options are invalid.
     pub fn new(header: StateHeader, samples: Range<u32>) -> Result<Self, Error> {
         let (record, kernel, words) = Self::layout(&header)?;
+        let data = crate::limits::zeroed(words, "the render state")?;
         Ok(Self {
             header,
             samples: if samples.is_empty() {
@@ -324,7 +419,7 @@ impl RenderState {
             partial: false,
             record,
             kernel,
-            data: vec![0.0; words],
+            data,
         })
     }
 
@@ -506,92 +601,72 @@ impl RenderState {
     }
 
     /// Reads a state from bytes in the documented format; every inconsistency is an error
-    /// that says what is wrong.
+    /// that says what is wrong. Nothing is allocated for the records before the header
+    /// has been checked against the bytes present, and the sample counts are checked
+    /// after (a hand-made state with NaN or negative counts would resolve to nonsense).
     pub fn from_bytes(bytes: &[u8]) -> Result<Self, Error> {
-        let take = |at: usize, n: usize| -> Result<&[u8], Error> {
-            bytes
-                .get(at..at.checked_add(n).ok_or_else(|| corrupt("truncated"))?)
-                .ok_or_else(|| corrupt(format!("truncated at byte {at}")))
-        };
-        if take(0, 8)? != MAGIC {
-            return Err(corrupt("no FREPSTAT magic at the start"));
-        }
-        let version = u32::from_le_bytes(take(8, 4)?.try_into().unwrap());
-        if version != VERSION {
-            return Err(corrupt(format!(
-                "format version {version}; this frepray reads version {VERSION}"
-            )));
-        }
-        let hlen = u32::from_le_bytes(take(12, 4)?.try_into().unwrap()) as usize;
-        let text = std::str::from_utf8(take(16, hlen)?).map_err(corrupt)?;
-        let at = 16 + hlen;
-        let words = u64::from_le_bytes(take(at, 8)?.try_into().unwrap());
-        let end = usize::try_from(words)
-            .ok()
-            .and_then(|w| w.checked_mul(8))
-            .and_then(|b| b.checked_add(at + 8))
-            .ok_or_else(|| corrupt("impossible word count"))?;
-        if bytes.len() != end + 8 {
+        let head = Head::parse(bytes)?;
+        if bytes.len() as u64 != head.file_len {
             return Err(corrupt(format!(
                 "{} bytes, the header says {}",
                 bytes.len(),
-                end + 8
+                head.file_len
             )));
         }
-        let stored = u64::from_le_bytes(take(end, 8)?.try_into().unwrap());
+        let end = bytes.len() - 8;
+        let stored = u64::from_le_bytes(bytes[end..].try_into().unwrap());
         if stored != fnv1a(&bytes[..end]) {
             return Err(corrupt("checksum mismatch (the file is damaged)"));
         }
-        let v: Value = serde_json::from_str(text).map_err(|e| corrupt(format!("header: {e}")))?;
-        let header = StateHeader::from_json(&v).map_err(corrupt)?;
-        // The header's size against the words present before anything is allocated: a
-        // header that claims more than the file holds is an error, not an allocation.
-        let (record, _, want) = Self::layout(&header).map_err(corrupt)?;
-        let stride = v.get("stride").and_then(Value::as_u64);
-        if stride != Some(record.stride() as u64) || want as u64 != words {
-            let stride = stride.map_or("none".into(), |s| s.to_string());
-            return Err(corrupt(format!(
-                "the records do not match the header ({words} words of stride {stride}; \
-                 {}×{} pixels of stride {} need {want})",
-                header.width,
-                header.height,
-                record.stride()
-            )));
-        }
-        let mut state = RenderState::new(header, 0..0).map_err(corrupt)?;
-        let ranges = v
-            .get("samples")
-            .and_then(Value::as_array)
-            .ok_or_else(|| corrupt("header lacks \"samples\""))?;
-        for r in ranges {
-            let a = r
-                .get(0)
-                .and_then(Value::as_u64)
-                .and_then(|a| u32::try_from(a).ok());
-            let b = r
-                .get(1)
-                .and_then(Value::as_u64)
-                .and_then(|b| u32::try_from(b).ok());
-            match (a, b) {
-                (Some(a), Some(b)) if a < b && state.samples.last().is_none_or(|l| l.end < a) => {
-                    state.samples.push(a..b)
-                }
-                _ => {
-                    return Err(corrupt(format!(
-                        "sample range {r} is not an increasing [start, end]"
-                    )))
-                }
-            }
-        }
-        state.partial = v.get("partial").and_then(Value::as_bool).unwrap_or(false);
+        let mut state = RenderState::new(head.header, 0..0).map_err(corrupt)?;
+        state.samples = head.samples;
+        state.partial = head.partial;
         for (d, c) in state
             .data
             .iter_mut()
-            .zip(bytes[at + 8..end].chunks_exact(8))
+            .zip(bytes[head.records..end].chunks_exact(8))
         {
             *d = f64::from_le_bytes(c.try_into().unwrap());
         }
+        state.check_counts()?;
         Ok(state)
+    }
+
+    /// Checks every pixel's sample count N (and each MIS block's) against the sample
+    /// ranges: whole numbers, 0 ≤ N_block ≤ N ≤ the samples of the ranges.
+    fn check_counts(&self) -> Result<(), Error> {
+        let total: u64 = self
+            .samples
+            .iter()
+            .map(|r| u64::from(r.end - r.start))
+            .sum();
+        let whole = |v: f64, most: f64| v.fract() == 0.0 && (0.0..=most).contains(&v);
+        let s = self.record.stride();
+        for (k, rec) in self.data.chunks_exact(s).enumerate() {
+            let (x, y) = (
+                k % self.header.width as usize,
+                k / self.header.width as usize,
+            );
+            let n = rec[0];
+            if !whole(n, total as f64) {
+                return Err(corrupt(format!(
+                    "pixel ({x}, {y}) holds {n} samples; its ranges have {total}"
+                )));
+            }
+            if let Some(kernel) = &self.kernel {
+                for b in 0..self.record.blocks() {
+                    let block = &rec[self.record.block_range(b)];
+                    let counts = kernel.count_words(block);
+                    if !counts.iter().all(|&c| whole(c, n)) || kernel.iterations(block) as f64 > n {
+                        return Err(corrupt(format!(
+                            "pixel ({x}, {y}), MIS block {b}: sample counts {counts:?} \
+                             against the pixel's {n}"
+                        )));
+                    }
+                }
+            }
+        }
+        Ok(())
     }
 
     /// Writes the state to `path` (whole or not at all).
@@ -604,8 +679,11 @@ impl RenderState {
     }
 
     /// Reads a state written by [`RenderState::write`]; errors name the file. Only a
-    /// regular file is read (a FIFO would block, a device never end), and only once its
-    /// first bytes are a state's magic (a large file of another kind is not read whole).
+    /// regular file is read (a FIFO would block, a device never end), only once its
+    /// first bytes are a state's magic (a large file of another kind is not read whole),
+    /// only when its size is what its header says, and only when that fits in the
+    /// memory available ([`crate::limits::memory_limit`]): every check before the
+    /// records are read.
     pub fn read(path: impl AsRef<Path>) -> Result<Self, Error> {
         use std::io::Read as _;
         let path = path.as_ref();
@@ -618,18 +696,41 @@ impl RenderState {
             source,
         };
         // Checked before opening: opening a FIFO for reading blocks until a writer comes.
-        if !std::fs::metadata(path).map_err(io)?.is_file() {
+        let meta = std::fs::metadata(path).map_err(io)?;
+        if !meta.is_file() {
             return Err(in_file(corrupt("not a regular file")));
         }
         let mut file = std::fs::File::open(path).map_err(io)?;
         let mut bytes = Vec::new();
-        (&mut file)
-            .take(MAGIC.len() as u64)
-            .read_to_end(&mut bytes)
-            .map_err(io)?;
-        if bytes.as_slice() != MAGIC {
+        let mut more =
+            |bytes: &mut Vec<u8>, n: u64| (&mut file).take(n).read_to_end(bytes).map(|_| ());
+        more(&mut bytes, 16).map_err(io)?;
+        if bytes.len() < 16 || &bytes[..8] != MAGIC {
             return Self::from_bytes(&bytes).map_err(in_file);
         }
+        let hlen = u32::from_le_bytes(bytes[12..16].try_into().unwrap());
+        if u64::from(hlen) + 24 > meta.len() {
+            return Self::from_bytes(&bytes).map_err(in_file);
+        }
+        more(&mut bytes, u64::from(hlen) + 8).map_err(io)?;
+        let head = Head::parse(&bytes).map_err(in_file)?;
+        if meta.len() != head.file_len {
+            return Err(in_file(corrupt(format!(
+                "the file is {} bytes, its header says {}",
+                meta.len(),
+                head.file_len
+            ))));
+        }
+        let (limit, what) = crate::limits::memory_limit(0);
+        if head.file_len > limit {
+            return Err(in_file(Error::Limit(format!(
+                "the state is {} ({} bytes), more than the {what} ({})",
+                crate::limits::bytes(head.file_len),
+                head.file_len,
+                crate::limits::bytes(limit)
+            ))));
+        }
+        bytes.reserve_exact((head.file_len as usize).saturating_sub(bytes.len()));
         file.read_to_end(&mut bytes).map_err(io)?;
         Self::from_bytes(&bytes).map_err(in_file)
     }

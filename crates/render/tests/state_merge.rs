@@ -240,31 +240,111 @@ fn damaged_state_files_are_errors() {
         .contains("version 9"));
 }
 
-/// A state file whose header claims far more pixels than its words hold — with a valid
-/// checksum, as a crafted file would have — is an error before anything is allocated
-/// for the claim (a 65 536 × 65 536 header once asked for 256 GiB and aborted).
+/// `bytes` (a state file) with its header edited by `edit` and its records replaced by
+/// `words` where given, with a valid checksum, as a crafted file would have.
+fn craft(bytes: &[u8], edit: impl Fn(&mut serde_json::Value), words: Option<&[f64]>) -> Vec<u8> {
+    let hlen = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
+    let text = std::str::from_utf8(&bytes[16..16 + hlen]).unwrap();
+    let mut v: serde_json::Value = serde_json::from_str(text).unwrap();
+    edit(&mut v);
+    let text = v.to_string();
+    let mut crafted = bytes[..12].to_vec();
+    crafted.extend_from_slice(&(text.len() as u32).to_le_bytes());
+    crafted.extend_from_slice(text.as_bytes());
+    match words {
+        None => crafted.extend_from_slice(&bytes[16 + hlen..bytes.len() - 8]),
+        Some(w) => {
+            crafted.extend_from_slice(&(w.len() as u64).to_le_bytes());
+            for x in w {
+                crafted.extend_from_slice(&x.to_le_bytes());
+            }
+        }
+    }
+    let hash = render::state::fnv1a(&crafted);
+    crafted.extend_from_slice(&hash.to_le_bytes());
+    crafted
+}
+
+/// A state file whose header claims far more than its words hold — pixels, lights or
+/// depths, with a valid checksum, as a crafted file would have — is an error before
+/// anything is allocated for the claim (a 65 536 × 65 536 header once asked for 256 GiB
+/// and aborted; `per_light` 10⁶ and `max_depth` 10⁵ did the same).
 #[test]
 fn a_header_claiming_more_than_the_file_holds_is_an_error() {
     let scene = scene();
     let o = options(IntegratorKind::Path, Method::OptimalUncorrelated);
     let bytes = run(&scene, &o, 0..1).to_bytes();
-    let hlen = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
-    let text = std::str::from_utf8(&bytes[16..16 + hlen]).unwrap();
-    let mut v: serde_json::Value = serde_json::from_str(text).unwrap();
-    v["width"] = 65536.into();
-    v["height"] = 65536.into();
-    let text = v.to_string();
-    let mut crafted = bytes[..12].to_vec();
-    crafted.extend_from_slice(&(text.len() as u32).to_le_bytes());
-    crafted.extend_from_slice(text.as_bytes());
-    crafted.extend_from_slice(&bytes[16 + hlen..bytes.len() - 8]);
-    let hash = render::state::fnv1a(&crafted);
-    crafted.extend_from_slice(&hash.to_le_bytes());
-    let e = RenderState::from_bytes(&crafted).unwrap_err().to_string();
+    let e = |edit: &dyn Fn(&mut serde_json::Value)| {
+        RenderState::from_bytes(&craft(&bytes, edit, None))
+            .unwrap_err()
+            .to_string()
+    };
+    let big = e(&|v| {
+        v["width"] = 65536.into();
+        v["height"] = 65536.into();
+    });
     assert!(
-        e.contains("10800 words of stride 100; 65536×65536 pixels of stride 100 need"),
-        "{e}"
+        big.contains("10800 words of stride 100; 65536×65536 pixels of stride 100 need"),
+        "{big}"
     );
+    let lights = e(&|v| v["per_light"] = 1_000_000.into());
+    assert!(lights.contains("stride 96000004 need"), "{lights}");
+    let depth = e(&|v| v["max_depth"] = 100_000.into());
+    assert!(depth.contains("stride 3200004 need"), "{depth}");
+    // Depths × lights past what a record can count: the options' error, not an overflow.
+    let both = e(&|v| {
+        v["per_light"] = u32::MAX.into();
+        v["max_depth"] = 200_000_000.into();
+    });
+    assert!(
+        both.contains("more than a pixel's record can hold"),
+        "{both}"
+    );
+    // A header no render would have (checked as a render's options are).
+    let none = e(&|v| v["techniques"] = serde_json::json!([]));
+    assert!(
+        none.contains("header: integrator path needs at least one technique"),
+        "{none}"
+    );
+}
+
+/// Sample counts that no render makes — NaN, negative, fractional, more than the ranges
+/// hold — are errors naming the pixel.
+#[test]
+fn impossible_sample_counts_are_errors() {
+    let scene = scene();
+    for method in [
+        Method::Balance,
+        Method::OptimalUncorrelated,
+        Method::OptimalDirect,
+    ] {
+        let o = options(IntegratorKind::Direct, method);
+        let state = run(&scene, &o, 0..4);
+        let bytes = state.to_bytes();
+        let stride = state.record().stride();
+        assert_eq!(RenderState::from_bytes(&bytes).unwrap(), state);
+        let with = |at: usize, value: f64, partial: bool| {
+            let mut w = state.data().to_vec();
+            w[at] = value;
+            RenderState::from_bytes(&craft(&bytes, |v| v["partial"] = partial.into(), Some(&w)))
+        };
+        // Pixel (1, 0): its N is word `stride`.
+        for (n, partial) in [(f64::NAN, true), (-1.0, false), (2.5, true), (5.0, false)] {
+            let e = with(stride, n, partial).unwrap_err().to_string();
+            assert!(e.contains("pixel (1, 0) holds"), "{method:?} N = {n}: {e}");
+        }
+        // A MIS block counting more samples than its pixel, or NaN.
+        let block = state.record().block_range(0).start;
+        for n in [5.0, f64::NAN, -1.0] {
+            let e = with(stride + block, n, false).unwrap_err().to_string();
+            assert!(e.contains("pixel (1, 0), MIS block 0"), "{method:?}: {e}");
+        }
+        // What a stopped render leaves reads: pixel (0, 0) without samples.
+        let mut w = state.data().to_vec();
+        w[..stride].fill(0.0);
+        let partial = craft(&bytes, |v| v["partial"] = true.into(), Some(&w));
+        assert!(RenderState::from_bytes(&partial).is_ok());
+    }
 }
 
 /// `RenderState::read` refuses what is not a regular file at once — a FIFO (which would
@@ -299,6 +379,47 @@ fn only_regular_state_files_are_read() {
     let state = run(&scene, &o, 0..1);
     let good = d.join("good.state");
     state.write(&good).unwrap();
+    // Cut short: refused from its header and size, before the records are read.
+    let bytes = state.to_bytes();
+    let short = d.join("short.state");
+    std::fs::write(&short, &bytes[..bytes.len() - 100]).unwrap();
+    let e = RenderState::read(&short).unwrap_err().to_string();
+    assert!(
+        e.contains("short.state")
+            && e.contains(&format!(
+                "the file is {} bytes, its header says {}",
+                bytes.len() - 100,
+                bytes.len()
+            )),
+        "{e}"
+    );
+    // A (sparse) 275 GB file whose header says so: refused for the memory, unread.
+    let huge = craft(
+        &bytes,
+        |v| {
+            v["width"] = 65536.into();
+            v["height"] = 65536.into();
+        },
+        Some(&[]),
+    );
+    let words = 65536u64 * 65536 * state.record().stride() as u64;
+    let head_len = huge.len() - 16;
+    let path = d.join("huge.state");
+    {
+        use std::io::Write as _;
+        let mut f = std::fs::File::create(&path).unwrap();
+        f.write_all(&huge[..head_len]).unwrap();
+        f.write_all(&words.to_le_bytes()).unwrap();
+        f.set_len(head_len as u64 + 16 + 8 * words).unwrap();
+    }
+    let e = RenderState::read(&path).unwrap_err().to_string();
+    assert!(
+        e.contains("huge.state")
+            && e.contains("the state is 256.0 GiB")
+            && e.contains("more than the"),
+        "{e}"
+    );
+    std::fs::remove_file(&path).unwrap();
     assert_eq!(
         RenderState::read(&good).unwrap().to_bytes(),
         state.to_bytes()

@@ -365,6 +365,17 @@ impl Integrator {
                 Combine::Heuristic(_) => 0,
             },
         };
+        // Every later `record.stride()` is then free of overflow.
+        record
+            .blocks_checked()
+            .and_then(|b| b.checked_mul(record.block))
+            .and_then(|w| w.checked_add(Record::AOV + record.aov))
+            .ok_or_else(|| {
+                format!(
+                    "{} depths × {} lights of MIS estimators are more than a pixel's record can hold",
+                    record.depths, record.lights
+                )
+            })?;
         let dims = Dims::new(&counts, o.max_depth)?;
         Ok(Self {
             kind: o.integrator,

@@ -192,6 +192,10 @@ impl Record {
     pub fn blocks(&self) -> usize {
         self.depths * self.lights
     }
+    /// [`Record::blocks`], `None` where it overflows.
+    pub fn blocks_checked(&self) -> Option<usize> {
+        self.depths.checked_mul(self.lights)
+    }
     /// The range of block `i` (depth `i / lights`, light `i % lights`).
     pub fn block_range(&self, i: usize) -> std::ops::Range<usize> {
         let at = Self::AOV + self.aov + i * self.block;
