@@ -52,7 +52,7 @@ pub use color::Rgb;
 pub use error::Error;
 pub use image::{Film, Image, Tonemap};
 pub use material::Material;
-pub use render_loop::{render, render_range, RenderStats};
+pub use render_loop::{render, render_range, resume, RenderStats};
 pub use sampler::{SampleStream, Sampler};
 pub use state::{RenderState, StateHeader};
 pub use technique::{ShadingPoint, Technique, TechniqueSample};

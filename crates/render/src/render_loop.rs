@@ -9,8 +9,10 @@
 //! **Determinism.** Each pixel's samples run in index order on its own record, so the
 //! state is the same bit for bit whatever the thread count or tile order (DESIGN.md §4).
 //!
-//! **Passes.** The samples are rendered in passes of `pass_spp` per pixel; within a pass
-//! every tile is one rayon task. Each tile's records stay with it across passes, so the
+//! **Passes.** The samples are rendered in passes over the whole image, of 1, 1, 2, 4, …
+//! samples per pixel doubling up to `pass_spp` (default spp/16), so that a stopped
+//! render is the whole image at fewer samples; within a pass every tile is one rayon
+//! task. Each tile's records stay with it across passes, so the
 //! progressive optimal estimators see each pixel's iterations in order. The stop flag is
 //! read before every sample (a relaxed atomic load, far below a sample's cost): once
 //! set, each thread finishes the sample it is on and the render ends within one sample
@@ -116,14 +118,14 @@ struct Tile {
 impl Tile {
     /// Samples `start..end` of every pixel, each pixel's in index order, until `stop`
     /// is set: it is read before every sample, so that a pixel's record always holds
-    /// whole samples and a stop takes effect within one sample. Returns the samples
-    /// rendered.
+    /// whole samples and a stop takes effect within one sample. A pixel whose record
+    /// already holds samples past `start` (a resumed render: `first` + its count N)
+    /// starts after them. Returns the samples rendered.
     fn render(
         &mut self,
         it: &Integrator,
         scene: &Scene,
-        start: u32,
-        end: u32,
+        (first, start, end): (u32, u32, u32),
         stop: &AtomicBool,
     ) -> u64 {
         let stride = it.record.stride();
@@ -131,7 +133,8 @@ impl Tile {
         let mut n = 0;
         'pixels: for (k, rec) in self.records.chunks_exact_mut(stride).enumerate() {
             let (i, j) = (k as u32 % self.w, k as u32 / self.w);
-            for s in start..end {
+            let next = first.saturating_add(rec[0] as u32).max(start);
+            for s in next..end {
                 if stop.load(Ordering::Relaxed) {
                     break 'pixels;
                 }
@@ -167,6 +170,58 @@ pub fn render_range(
     stop: &AtomicBool,
     progress: &(dyn Fn(u64, u64) + Sync),
 ) -> Result<(RenderState, RenderStats), Error> {
+    render_into(scene, options, samples, None, stop, progress)
+}
+
+/// Renders the samples a stopped render's `partial` state lacks — each pixel from where it
+/// stopped to the end of the state's range — into a copy of it: the result is bit for bit
+/// the state of the render that was not stopped, since each pixel's samples still run in
+/// index order on its own record. `options` must describe the same render (the state's
+/// header, scene hash included); its `spp` is ignored. Errors on a state that is not
+/// partial, holds several ranges (a merge) or does not match `options`.
+pub fn resume(
+    scene: &Scene,
+    options: &RenderOptions,
+    partial: &RenderState,
+    stop: &AtomicBool,
+    progress: &(dyn Fn(u64, u64) + Sync),
+) -> Result<(RenderState, RenderStats), Error> {
+    let range = match partial.samples() {
+        [r] => r.clone(),
+        r => {
+            return Err(Error::Options(format!(
+                "a state to resume holds the one sample range of a stopped render, not {}",
+                if r.is_empty() {
+                    "none".to_string()
+                } else {
+                    format!("{} ranges (a merge)", r.len())
+                }
+            )))
+        }
+    };
+    if !partial.is_partial() {
+        return Err(Error::Options(format!(
+            "nothing to resume: the state holds all of samples {}..{}",
+            range.start, range.end
+        )));
+    }
+    let (width, height) = (scene.camera.width, scene.camera.height);
+    let mine = StateHeader::new(width, height, options);
+    if *partial.header() != mine {
+        return Err(Error::Mismatch(partial.header().difference(&mine)));
+    }
+    render_into(scene, options, range, Some(partial), stop, progress)
+}
+
+/// [`render_range`], continuing `from`'s records where given ([`resume`]).
+fn render_into(
+    scene: &Scene,
+    options: &RenderOptions,
+    samples: Range<u32>,
+    from: Option<&RenderState>,
+    stop: &AtomicBool,
+    progress: &(dyn Fn(u64, u64) + Sync),
+) -> Result<(RenderState, RenderStats), Error> {
     if samples.is_empty() {
         return Err(Error::EmptyRange(samples));
     }
@@ -183,38 +238,54 @@ pub fn render_range(
     let stride = it.record.stride();
     let ts = o.tile_size;
     let mut tiles = Vec::new();
+    let mut before = 0;
     for y0 in (0..height).step_by(ts as usize) {
         for x0 in (0..width).step_by(ts as usize) {
             let (w, h) = (ts.min(width - x0), ts.min(height - y0));
+            let mut records = crate::limits::zeroed((w * h) as usize * stride, "a tile's records")?;
+            if let Some(from) = from {
+                let row = w as usize * stride;
+                for j in 0..h as usize {
+                    let at = ((y0 as usize + j) * width as usize + x0 as usize) * stride;
+                    records[j * row..(j + 1) * row].copy_from_slice(&from.data()[at..at + row]);
+                }
+                before += records
+                    .iter()
+                    .step_by(stride)
+                    .map(|&n| n as u64)
+                    .sum::<u64>();
+            }
             tiles.push(Tile {
                 x0,
                 y0,
                 w,
                 h,
-                records: crate::limits::zeroed((w * h) as usize * stride, "a tile's records")?,
+                records,
                 rays: RayCounts::new(o.stage_times),
                 samples: 0,
             });
         }
     }
     let spp = o.spp;
-    let pass = if o.pass_spp == 0 {
+    let cap = if o.pass_spp == 0 {
         spp.div_ceil(16)
     } else {
         o.pass_spp.min(spp)
     };
     let total = u64::from(width) * u64::from(height) * u64::from(spp);
-    let done = AtomicU64::new(0);
+    let done = AtomicU64::new(before);
     let started = Instant::now();
     let run = |tiles: &mut Vec<Tile>| -> usize {
         let mut start = samples.start;
         while start < samples.end && !stop.load(Ordering::Relaxed) {
-            let end = start.saturating_add(pass).min(samples.end);
+            let end = start
+                .saturating_add(pass_len(start - samples.start, cap))
+                .min(samples.end);
             tiles.par_iter_mut().for_each(|tile| {
                 if stop.load(Ordering::Relaxed) {
                     return;
                 }
-                let n = tile.render(&it, scene, start, end, stop);
+                let n = tile.render(&it, scene, (samples.start, start, end), stop);
                 progress(done.fetch_add(n, Ordering::Relaxed) + n, total);
             });
             start = end;
@@ -242,19 +313,28 @@ pub fn render_range(
             data[at..at + row].copy_from_slice(&t.records[j * row..(j + 1) * row]);
         }
     }
-    if count < total {
+    let stopped = before + count < total;
+    if stopped {
         state.set_partial();
     }
     let stats = RenderStats {
         integrator: o.integrator,
         wall: started.elapsed(),
         samples: count,
-        samples_requested: total,
+        samples_requested: total - before,
         rays,
-        stopped: count < total,
+        stopped,
         threads,
     };
     Ok((state, stats))
+}
+
+/// The samples per pixel of the pass that starts `done` samples into a render: 1, 1, 2,
+/// 4, … doubling up to `cap`, so that a stopped render is the whole image at fewer
+/// samples (after the first pass, every pixel has one) rather than finished tiles
+/// beside black ones, and the passes stay few.
+fn pass_len(done: u32, cap: u32) -> u32 {
+    done.max(1).min(cap.max(1))
 }
 
 /// Throughput of `direct` and `path` on `scene` with `options` otherwise unchanged, for

@@ -257,7 +257,7 @@ impl StateHeader {
     }
 
     /// The first field in which two headers differ, for messages.
-    fn difference(&self, o: &StateHeader) -> String {
+    pub(crate) fn difference(&self, o: &StateHeader) -> String {
         let (a, b) = (self.to_json(), o.to_json());
         let (a, b) = (a.as_object().unwrap(), b.as_object().unwrap());
         a.iter()

@@ -425,3 +425,72 @@ fn only_regular_state_files_are_read() {
         state.to_bytes()
     );
 }
+
+/// A render stopped part-way is the whole image at fewer samples (every pixel has at
+/// least one after the first pass), and [`render::resume`] renders what it lacks into
+/// the state of the render that was never stopped, bit for bit — for the heuristics and
+/// every optimal estimator, the progressive ones included (each pixel's samples still
+/// run in index order on its own record).
+#[test]
+fn a_stopped_render_resumes_to_the_uninterrupted_one() {
+    use std::sync::atomic::{AtomicU64, Ordering};
+    let scene = scene();
+    let pixels = 12 * 9;
+    for (integrator, method) in [
+        (IntegratorKind::Direct, Method::Power),
+        (IntegratorKind::Direct, Method::OptimalProgressive),
+        (IntegratorKind::Path, Method::OptimalUncorrelated),
+        (IntegratorKind::Path, Method::OptimalFull),
+    ] {
+        let mut o = options(integrator, method);
+        o.spp = 32;
+        let whole = run(&scene, &o, 3..35);
+        // Stopped once about 40 % of the samples are in (mid-pass, mid-tile).
+        let stop = AtomicBool::new(false);
+        let seen = AtomicU64::new(0);
+        let (partial, stats) = render_range(&scene, &o, 3..35, &stop, &|done, total| {
+            seen.store(done, Ordering::Relaxed);
+            if done * 10 >= total * 4 {
+                stop.store(true, Ordering::Relaxed);
+            }
+        })
+        .unwrap();
+        assert!(partial.is_partial() && stats.stopped, "{method:?}");
+        let counts: Vec<u64> = (0..9)
+            .flat_map(|y| (0..12).map(move |x| (x, y)))
+            .map(|(x, y)| partial.iterations(x, y))
+            .collect();
+        assert!(counts.iter().all(|&n| n >= 1), "{method:?}: {counts:?}");
+        assert!(counts.iter().sum::<u64>() < 32 * pixels, "{method:?}");
+        // Through a file, as `render --resume` reads it.
+        let partial = RenderState::from_bytes(&partial.to_bytes()).unwrap();
+        let (resumed, stats) =
+            render::resume(&scene, &o, &partial, &AtomicBool::new(false), &|_, _| {}).unwrap();
+        assert!(!resumed.is_partial() && !stats.stopped, "{method:?}");
+        assert_eq!(
+            stats.samples + counts.iter().sum::<u64>(),
+            32 * pixels,
+            "{method:?}"
+        );
+        assert_eq!(resumed, whole, "{method:?}: resumed ≠ uninterrupted");
+        // A finished state has nothing to resume; another render's state is refused.
+        let e = render::resume(&scene, &o, &whole, &AtomicBool::new(false), &|_, _| {})
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("nothing to resume"), "{e}");
+        let other = RenderOptions {
+            seed: 18,
+            ..o.clone()
+        };
+        let e = render::resume(
+            &scene,
+            &other,
+            &partial,
+            &AtomicBool::new(false),
+            &|_, _| {},
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("seed is 17 here and 18 there"), "{e}");
+    }
+}
