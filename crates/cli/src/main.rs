@@ -87,6 +87,12 @@ struct RenderArgs {
     /// disjoint ranges merge into the render of their union (`frepray merge`).
     #[arg(long, value_name = "START..END")]
     samples: Option<String>,
+    /// Continue a stopped render (scenes): render what the partial state
+    /// (`NAME.partial.state`, written when a render is interrupted) lacks and write the
+    /// outputs of the whole render — bit for bit what the render would have given
+    /// uninterrupted. Give the scene and options of the stopped render; on the CPU.
+    #[arg(long, value_name = "NAME.partial.state", conflicts_with = "samples")]
+    resume: Option<PathBuf>,
     /// Write the resolved scene (after overrides) as JSON to this file, for debugging
     /// and GPU tests (scenes); without -o nothing is rendered.
     #[arg(long, value_name = "FILE.json")]
@@ -386,6 +392,7 @@ fn render(args: RenderArgs) -> Result<(), String> {
             args.dump_scene.as_deref(),
             &o,
             samples,
+            args.resume.as_deref(),
             args.quiet,
             args.max_memory.unwrap_or(0),
             args.overwrite_partial,
@@ -414,6 +421,7 @@ fn render(args: RenderArgs) -> Result<(), String> {
         ("--cutoff", args.cutoff.is_some()),
         ("--ridge", args.ridge.is_some()),
         ("--samples", args.samples.is_some()),
+        ("--resume", args.resume.is_some()),
         ("--dump-scene", args.dump_scene.is_some()),
         ("--backend gpu", args.backend == scene_render::Backend::Gpu),
     ];

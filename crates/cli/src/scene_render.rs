@@ -265,6 +265,7 @@ pub fn run(
     dump_to: Option<&Path>,
     o: &Overrides,
     samples: Option<Range<u32>>,
+    resume: Option<&Path>,
     quiet: bool,
     max_memory: u64,
     overwrite_partial: bool,
@@ -272,6 +273,16 @@ pub fn run(
 ) -> Result<(), String> {
     let start = std::time::Instant::now();
     let formats = output::check_scene_outputs(outs)?;
+    if resume.is_some() && o.backend == Backend::Gpu {
+        return Err(
+            "--resume renders on the CPU (the GPU renders whole waves of samples, not each \
+             pixel from where it stopped); leave out --backend gpu"
+                .into(),
+        );
+    }
+    let resume_from = resume
+        .map(|p| render::RenderState::read(p).map_err(|e| e.to_string()))
+        .transpose()?;
     if let Some(d) = dump_to {
         output::check_writable(d)?;
     }
@@ -318,18 +329,32 @@ pub fn run(
 
     let stop = crate::stop_on_ctrl_c();
     let bar = crate::progress_bar(quiet, "samples");
-    let result = render_on(
-        o.backend,
-        &data,
-        &scene,
-        &opts,
-        samples,
-        &stop,
-        &|done, total| {
-            bar.set_length(total);
-            bar.set_position(done);
-        },
-    );
+    let progress = |done, total| {
+        bar.set_length(total);
+        bar.set_position(done);
+    };
+    let result = match &resume_from {
+        Some(partial) => {
+            if o.backend == Backend::Auto {
+                note!("note: --resume renders on the CPU");
+            }
+            let pixels = u64::from(width) * u64::from(height);
+            let have: u64 = (0..height)
+                .flat_map(|y| (0..width).map(move |x| (x, y)))
+                .map(|(x, y)| partial.iterations(x, y))
+                .sum();
+            let r = partial.samples();
+            let want = r.first().map_or(0, |r| u64::from(r.end - r.start)) * pixels;
+            note!("resuming: {have} of {want} samples rendered before");
+            render_loop::resume(&scene, &opts, partial, &stop, &progress)
+                .map(|(s, st)| (s, st, None))
+                .map_err(|e| match resume {
+                    Some(p) => format!("--resume {}: {e}", p.display()),
+                    None => e.to_string(),
+                })
+        }
+        None => render_on(o.backend, &data, &scene, &opts, samples, &stop, &progress),
+    };
     bar.finish_and_clear();
     let (state, stats, g) = result?;
     note!(
@@ -342,23 +367,34 @@ pub fn run(
     } else if opts.stage_times {
         note!("{}", cpu_line(&stats));
     }
-    let outs: Vec<PathBuf> = if stats.stopped {
-        outs.iter()
+    let (mut outs, mut formats) = (outs.to_vec(), formats);
+    if stats.stopped {
+        // A state to resume from, beside the outputs asked for.
+        if !formats.contains(&Format::State) {
+            outs.push(outs[0].with_extension("state"));
+            formats.push(Format::State);
+        }
+        outs = outs
+            .iter()
             .map(|p| output::partial_path(p, overwrite_partial))
-            .collect()
-    } else {
-        outs.to_vec()
-    };
+            .collect();
+    }
     output::write_state(&outs, &formats, &state, &film)?;
-    note!(
-        "{}{} written",
-        if stats.stopped {
-            "interrupted: what was rendered is "
-        } else {
-            ""
-        },
-        output::list(&outs)
-    );
+    if stats.stopped {
+        let at = formats
+            .iter()
+            .position(|f| *f == Format::State)
+            .unwrap_or(0);
+        note!(
+            "interrupted: what was rendered is {} written; `frepray render {} --resume {} -o …` \
+             with the same options renders the rest",
+            output::list(&outs),
+            input.display(),
+            outs[at].display()
+        );
+    } else {
+        note!("{} written", output::list(&outs));
+    }
     Ok(())
 }
 

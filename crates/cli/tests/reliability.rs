@@ -133,6 +133,109 @@ fn sigint_stops_a_render_within_two_seconds_with_status_130() {
     assert!(err.contains("cornell.partial.exr"), "{err}");
 }
 
+/// A render stopped by a signal leaves a state to resume from (`NAME.partial.state`,
+/// written even when only an image was asked for), whose partial image already covers
+/// every pixel; `render --resume` renders the rest, giving the uninterrupted render's
+/// state and image bit for bit.
+#[test]
+fn an_interrupted_render_resumes_to_the_uninterrupted_one() {
+    let dir = out_dir("resume");
+    let render = |spp: u32, outs: &[&str], extra: &[String]| {
+        let mut c = frepray();
+        c.arg("render")
+            .arg(root().join("scenes/cornell.toml"))
+            .args(["--width", "24", "--height", "16", "--quiet", "--seed", "5"])
+            .args(["--integrator", "path", "--mis", "optimal-progressive"])
+            .arg("--spp")
+            .arg(spp.to_string())
+            .args(extra);
+        for o in outs {
+            c.arg("-o").arg(dir.join(o));
+        }
+        c.stdout(Stdio::null()).stderr(Stdio::piped());
+        c
+    };
+    // A render long enough to interrupt half-way: spp doubled until it takes 2 s.
+    let mut spp = 64;
+    let full_time = loop {
+        let t = Instant::now();
+        let o = render(spp, &["full.exr", "full.state"], &[])
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", stderr(&o));
+        if t.elapsed() > Duration::from_secs(2) || spp >= 1 << 20 {
+            break t.elapsed();
+        }
+        spp *= 2;
+    };
+    let mut child = render(spp, &["cut.exr"], &[]).spawn().unwrap();
+    std::thread::sleep(full_time / 2);
+    sigint(&child);
+    let (code, _) = wait_within(&mut child, Duration::from_secs(10));
+    let err = {
+        use std::io::Read;
+        let mut s = String::new();
+        child.stderr.take().unwrap().read_to_string(&mut s).unwrap();
+        s
+    };
+    assert_eq!(code, Some(130), "{err}");
+    let partial = dir.join("cut.partial.state");
+    assert!(
+        err.contains(&format!("--resume {}", partial.display())),
+        "{err}"
+    );
+    // The whole image at fewer samples: every pixel has some, none has all.
+    assert_eq!(
+        exr_channel(&dir.join("cut.partial.exr"), "R").len(),
+        24 * 16
+    );
+    let cut = render::RenderState::read(&partial).unwrap();
+    let counts: Vec<u64> = (0..16)
+        .flat_map(|y| (0..24).map(move |x| (x, y)))
+        .map(|(x, y)| cut.iterations(x, y))
+        .collect();
+    assert!(
+        counts.iter().all(|&n| n >= 1 && n < u64::from(spp)),
+        "{counts:?}"
+    );
+    let resume = ["--resume".to_string(), partial.display().to_string()];
+    let o = render(spp, &["resumed.exr", "resumed.state"], &resume)
+        .output()
+        .unwrap();
+    let err = stderr(&o);
+    assert!(o.status.success(), "{err}");
+    assert!(err.contains("resuming: "), "{err}");
+    assert!(
+        std::fs::read(dir.join("resumed.state")).unwrap()
+            == std::fs::read(dir.join("full.state")).unwrap(),
+        "the resumed state differs from the uninterrupted one"
+    );
+    for c in ["R", "G", "B"] {
+        let (a, b) = (
+            exr_channel(&dir.join("resumed.exr"), c),
+            exr_channel(&dir.join("full.exr"), c),
+        );
+        assert!(
+            a.iter().zip(&b).all(|(x, y)| x.to_bits() == y.to_bits()),
+            "{c}"
+        );
+    }
+    // Another depth is another render: refused, naming the difference.
+    let o = render(
+        spp,
+        &["other.exr"],
+        &[&["--max-depth".into(), "2".into()], &resume[..]].concat(),
+    )
+    .output()
+    .unwrap();
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("max_depth is") && err.contains("here and 2 there"),
+        "{err}"
+    );
+}
+
 /// SIGTERM (schedulers, `timeout`, container stops) and SIGHUP (a closed terminal) stop
 /// a render as Ctrl-C does: the partial result is written, and the status is 128 + the
 /// signal (143, 129).

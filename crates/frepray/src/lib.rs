@@ -161,6 +161,22 @@ impl Scene {
             &self.cpu, &o, samples, stop, progress,
         )?)
     }
+    /// Renders what a stopped render's `partial` state lacks (on the CPU), giving the
+    /// state of the render that was never stopped, bit for bit ([`render::resume`]);
+    /// `options` must be the stopped render's.
+    pub fn resume(
+        &self,
+        options: &RenderOptions,
+        partial: &RenderState,
+        stop: &AtomicBool,
+        progress: &(dyn Fn(u64, u64) + Sync),
+    ) -> Result<(RenderState, RenderStats), Error> {
+        let o = RenderOptions {
+            scene_hash: self.hash,
+            ..options.clone()
+        };
+        Ok(render::resume(&self.cpu, &o, partial, stop, progress)?)
+    }
     /// [`Self::render_with`] on `backend`: the GPU's result carries its own statistics,
     /// and [`Backend::Auto`]'s CPU fallback says why it fell back.
     pub fn render_on(
