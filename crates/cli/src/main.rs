@@ -54,14 +54,19 @@ struct Cli {
     command: Command,
 }
 
+// Negative numbers are values, so that `--seed -1` is refused as a negative seed
+// rather than with clap's tip to write `-- -1` (which would make it the input file).
 #[derive(Subcommand)]
 enum Command {
     /// Render a scene (.toml, .json) or a bare model (.frep, .hf, .vm) to .png or .exr.
+    #[command(allow_negative_numbers = true)]
     Render(RenderArgs),
     /// Measure MSamples/s and MRays/s of `direct` and `path` on a scene.
+    #[command(allow_negative_numbers = true)]
     Bench(BenchArgs),
     /// Compare estimators against a reference: RMSE against samples and time, plots,
     /// Improvement / Speed Up / Overhead tables; resumable.
+    #[command(allow_negative_numbers = true)]
     Experiment(experiment_cmd::ExperimentArgs),
     /// Merge render states (.state) of disjoint sample ranges of one render into one
     /// image (.png, .exr) or state.

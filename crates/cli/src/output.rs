@@ -41,8 +41,24 @@ impl FilmArgs {
     }
 }
 
-/// The note on a PNG whose pixels clip (1 % or more), with the fraction and what helps.
+/// The warning on an image with NaN or infinite pixels, and the note on a PNG whose
+/// pixels clip (1 % or more), with the fraction and what helps.
 pub fn clip_note(outs: &[PathBuf], formats: &[Format], img: &Image, film: &Film) {
+    // Pixels the transport could not represent (overflowed sums): said, not hidden.
+    let channels = img.channels();
+    let bad = img
+        .data()
+        .chunks_exact(channels)
+        .filter(|p| p.iter().any(|v| !v.is_finite()))
+        .count();
+    if bad > 0 {
+        note!(
+            "warning: {bad} of {} pixels are not finite (NaN or infinite): the light \
+             transport overflowed; look for very large values in the scene (powers, \
+             radiances, sizes)",
+            img.width() as u64 * img.height() as u64
+        );
+    }
     let Some(png) = outs.iter().zip(formats).find(|(_, f)| **f == Format::Png) else {
         return;
     };
@@ -171,6 +187,31 @@ pub fn partial_path(path: &Path, overwrite: bool) -> PathBuf {
         None => format!("{stem}.partial"),
     };
     path.with_file_name(name)
+}
+
+/// Refuses an output that is the scene file or a file it reads (a model, an environment
+/// map): writing it would replace what the render was made from.
+pub fn check_not_inputs(outs: &[PathBuf], scene: &Path, inputs: &[PathBuf]) -> Result<(), String> {
+    let same = |a: &Path, b: &Path| match (a.canonicalize(), b.canonicalize()) {
+        (Ok(a), Ok(b)) => a == b,
+        _ => false,
+    };
+    for out in outs {
+        for (input, what) in std::iter::once((scene, "the scene file")).chain(
+            inputs
+                .iter()
+                .map(|p| (p.as_path(), "a file the scene reads")),
+        ) {
+            if same(out, input) {
+                return Err(format!(
+                    "{}: is {what} ({}); an output must not replace an input, choose another name",
+                    out.display(),
+                    input.display()
+                ));
+            }
+        }
+    }
+    Ok(())
 }
 
 /// The paths, comma-separated, for messages.

@@ -287,6 +287,7 @@ pub fn run(
         output::check_writable(d)?;
     }
     let (data, settings) = resolve(input, o)?;
+    output::check_not_inputs(outs, input, &data.inputs)?;
     let film = film.over(render::Film {
         exposure: settings.exposure,
         tonemap: settings.tonemap,

@@ -419,6 +419,29 @@ fn unwritable_outputs_are_refused_before_rendering() {
     }
 }
 
+/// An output that would replace a file the scene reads (its environment map) is refused
+/// before rendering, and the file is left as it was.
+#[test]
+fn outputs_never_replace_the_scene_inputs() {
+    let dir = out_dir("inputs");
+    for f in ["environment.toml", "sky.exr"] {
+        std::fs::copy(root().join("scenes").join(f), dir.join(f)).unwrap();
+    }
+    let before = std::fs::read(dir.join("sky.exr")).unwrap();
+    let o = run_within(
+        frepray()
+            .arg("render")
+            .arg(dir.join("environment.toml"))
+            .args(["--spp", "1", "--width", "8", "--height", "8", "-o"])
+            .arg(dir.join("sky.exr")),
+        Duration::from_secs(20),
+    );
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.contains("is a file the scene reads"), "{err}");
+    assert_eq!(std::fs::read(dir.join("sky.exr")).unwrap(), before);
+}
+
 /// A render too large for memory is refused up front with its estimate; so is one
 /// over `--max-memory`, and an absurd thread count.
 #[test]
@@ -727,6 +750,31 @@ fn check_reads_scenes_and_names_every_kind() {
     assert!(text.contains("physically based renderer"), "{text}");
 }
 
+/// A negative number for an unsigned option is refused as a value of that option, not
+/// with clap's tip to write `-- -1` (which would make it the input file).
+#[test]
+fn negative_numbers_are_refused_as_values() {
+    for (cmd, flag) in [
+        ("render", "--seed"),
+        ("bench", "--spp"),
+        ("experiment", "--width"),
+    ] {
+        let o = frepray()
+            .arg(cmd)
+            .arg(root().join("scenes/cornell.toml"))
+            .args([flag, "-1"])
+            .output()
+            .unwrap();
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(2), "{err}");
+        assert!(
+            err.contains(&format!("invalid value '-1' for '{flag} ")),
+            "{err}"
+        );
+        assert!(!err.contains("-- -1"), "{err}");
+    }
+}
+
 /// A scene file's range errors say "a positive number", not the smallest double.
 #[test]
 fn range_errors_read_as_words() {
@@ -741,6 +789,59 @@ fn range_errors_read_as_words() {
     assert!(!o.status.success());
     assert!(err.contains("expected a positive number"), "{err}");
     assert!(!err.contains("e-308") && err.len() < 400, "{err}");
+}
+
+/// Numbers so large that the light transport's sums overflow (a power of 1e308 gave NaN
+/// pixels without a word) are refused, naming the key; NaN or infinite pixels that get
+/// into an image all the same (here from a crafted state) are reported.
+#[test]
+fn overflowing_values_are_refused_or_reported() {
+    let dir = out_dir("overflow");
+    let text = std::fs::read_to_string(root().join("scenes/cornell.toml"))
+        .unwrap()
+        .replace("power = 30", "power = 1e308");
+    let scene = dir.join("bright.toml");
+    std::fs::write(&scene, text).unwrap();
+    let o = frepray()
+        .args(["render", "--spp", "1", "-o"])
+        .arg(dir.join("bright.exr"))
+        .arg(&scene)
+        .output()
+        .unwrap();
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("lights[0].power: 1e308 is too large: scene numbers are at most 1e30"),
+        "{err}"
+    );
+    // A state whose sums hold an infinity: `merge` writes the image and says so.
+    let state = dir.join("s.state");
+    let o = frepray()
+        .arg("render")
+        .arg(root().join("scenes/cornell.toml"))
+        .args([
+            "--spp", "1", "--width", "4", "--height", "3", "--quiet", "-o",
+        ])
+        .arg(&state)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    let mut s = render::RenderState::read(&state).unwrap();
+    s.data_mut()[1] = f64::INFINITY; // pixel (0, 0), red outside MIS
+    s.write(&state).unwrap();
+    let o = frepray()
+        .arg("merge")
+        .arg(&state)
+        .arg("-o")
+        .arg(dir.join("m.exr"))
+        .output()
+        .unwrap();
+    let err = stderr(&o);
+    assert!(o.status.success(), "{err}");
+    assert!(
+        err.contains("warning: 1 of 12 pixels are not finite"),
+        "{err}"
+    );
 }
 
 /// Pathological but legal functions finish within a bounded time per ray; a model

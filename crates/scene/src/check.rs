@@ -7,13 +7,31 @@ use crate::locate::Source;
 use frep::Affine;
 use glam::DVec3;
 
+/// The largest magnitude a number in a scene may have: beyond it, products in the light
+/// transport (a power times a BSDF times a squared distance, the optimal estimators' sums
+/// of squares) overflow to infinity and the pixels turn NaN without a word.
+pub const MAX_MAGNITUDE: f64 = 1e30;
+
+/// The error for a finite `v` beyond [`MAX_MAGNITUDE`].
+fn too_large(src: &Source, at: &[Seg], v: f64) -> SceneError {
+    src.at_value(
+        at,
+        format!(
+            "{v:e} is too large: scene numbers are at most {MAX_MAGNITUDE:e} in magnitude \
+             (larger ones overflow the light transport's sums)"
+        ),
+    )
+}
+
 /// A finite vector.
 pub(crate) fn vec3(src: &Source, at: &[Seg], v: [f64; 3]) -> Result<DVec3, SceneError> {
     let d = DVec3::from_array(v);
-    if d.is_finite() {
-        Ok(d)
-    } else {
-        Err(src.at_value(at, "expected finite numbers"))
+    if !d.is_finite() {
+        return Err(src.at_value(at, "expected finite numbers"));
+    }
+    match v.iter().find(|x| x.abs() > MAX_MAGNITUDE) {
+        Some(&x) => Err(too_large(src, at, x)),
+        None => Ok(d),
     }
 }
 
@@ -35,6 +53,9 @@ pub(crate) fn number(
     hi: f64,
 ) -> Result<f64, SceneError> {
     if v.is_finite() && v >= lo && v <= hi {
+        if v.abs() > MAX_MAGNITUDE {
+            return Err(too_large(src, at, v));
+        }
         Ok(v)
     } else {
         let what = match (lo == f64::NEG_INFINITY, hi == f64::INFINITY) {

@@ -67,6 +67,10 @@ pub struct SceneData {
     /// Radius of a ball holding the objects and lights; it sets the environment's power
     /// for light selection (π r² ∫ L dω, pbrt-v4 §12.5).
     pub scene_radius: f64,
+    /// The files the scene reads besides itself (models, environment maps), as found:
+    /// outputs must not replace them. Not part of the scene's content (nor its hash).
+    #[serde(skip)]
+    pub inputs: Vec<std::path::PathBuf>,
 }
 
 /// A camera's projection.

@@ -447,6 +447,13 @@ pub(crate) fn resolve_source(
         environment: env,
         maps,
         scene_radius,
+        inputs: d
+            .objects
+            .iter()
+            .filter_map(|o| o.model.as_ref())
+            .chain(d.environment.as_ref().and_then(|e| e.map.as_ref()))
+            .map(|f| base.join(f))
+            .collect(),
     };
     let mut settings = settings(src, &d.render, &data)?;
     crate::settings::film(src, &d.film, &mut settings)?;
