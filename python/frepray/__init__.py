@@ -15,6 +15,8 @@ from typing import Any, Iterable, Mapping, Optional, Sequence, Union
 
 from . import mis
 from ._native import (
+    Cancel,
+    Cancelled,
     Error,
     Model,
     ModelError,
@@ -34,7 +36,8 @@ from ._native import load_json as _load_json
 from ._native import measure
 
 __all__ = [
-    "Error", "SceneError", "RenderError", "ModelError", "Scene", "RenderState", "Model",
+    "Error", "SceneError", "RenderError", "ModelError", "Cancelled", "Cancel", "Scene",
+    "RenderState", "Model",
     "load", "load_dict", "render", "merge", "read_exr", "write_exr", "model", "mis",
     "experiment", "measure", "gpu_available",
 ]
@@ -93,6 +96,7 @@ def experiment(
     trained_spp: Optional[int] = None,
     threads: int = 0,
     pandas: Optional[bool] = None,
+    cancel: Optional[Cancel] = None,
 ):
     """The estimator comparison of ``frepray experiment``: a reference (rendered with
     ``reference_spp`` samples, or the EXR ``reference``), then every estimator at every
@@ -108,7 +112,9 @@ def experiment(
     ``min_depth``, ``hide_emitters``, ``beta``, ``cutoff``, ``ridge``, ``trained_grid``,
     ``trained_floor``, ``trained_spp`` and ``threads`` are its flags of the same names
     (``threads=0``: every core).  ``out`` receives results.json/csv, summary.md, plots and
-    images (a temporary folder when not given); a rerun into the same ``out`` resumes."""
+    images (a temporary folder when not given); a rerun into the same ``out`` resumes.
+    Ctrl-C (KeyboardInterrupt) or ``cancel`` (a :class:`Cancel`; :class:`Cancelled`)
+    stops it with what finished written to ``out``."""
     import tempfile
 
     def run(folder: str):
@@ -122,7 +128,7 @@ def experiment(
             decompose=decompose, max_depth=max_depth, min_depth=min_depth,
             hide_emitters=hide_emitters, beta=beta, cutoff=cutoff, ridge=ridge,
             trained_grid=trained_grid, trained_floor=trained_floor,
-            trained_spp=trained_spp, threads=threads)
+            trained_spp=trained_spp, threads=threads, cancel=cancel)
 
     if out is None:
         with tempfile.TemporaryDirectory(prefix="frepray-experiment-") as folder:

@@ -21,6 +21,13 @@ create_exception!(
 );
 create_exception!(
     frepray,
+    Cancelled,
+    Error,
+    "A render stopped by its `frepray.Cancel` handle: `.state` holds what it rendered (a \
+     partial state; None for an experiment)."
+);
+create_exception!(
+    frepray,
     ModelError,
     Error,
     "A model could not be read or built."

@@ -2,7 +2,7 @@
 //! metrics it uses (`measure`) for images made elsewhere (e.g. on a Ray cluster).
 
 use crate::errors::{render_err, to_py};
-use crate::interrupt;
+use crate::interrupt::{self, Cancel};
 use crate::scene::{resolved, scene_path, Scene};
 use frepray::experiment::{self as exp, ExperimentConfig, Image, Renderer};
 use frepray::RenderOptions;
@@ -127,14 +127,15 @@ pub fn measure<'py>(
 /// speed_up, speed_up_ci, overhead (intervals as [lo, hi] or None with one seed), and
 /// with `decompose` variance_jittered, variance_centered, direction_share. The other
 /// arguments are the CLI's flags of the same names (`per_light` is `--per-light`, and so
-/// on); `threads` 0 uses every core.
+/// on); `threads` 0 uses every core. Ctrl-C and `cancel` stop it (KeyboardInterrupt,
+/// `frepray.Cancelled`) with what finished written to `out`, as the CLI does.
 #[pyfunction]
 #[pyo3(signature = (scene, out, estimators, spp, reference_spp = 256, reference = None,
     reference_estimator = None, baseline = "balance", seed = 0, repeats = exp::DEFAULT_REPEATS,
     techniques = None, integrator = None, width = None, height = None, per_light = false,
     pixel_center = false, decompose = false, max_depth = None, min_depth = None,
     hide_emitters = false, beta = None, cutoff = None, ridge = None, trained_grid = None,
-    trained_floor = None, trained_spp = None, threads = 0))]
+    trained_floor = None, trained_spp = None, threads = 0, cancel = None))]
 #[allow(clippy::too_many_arguments)]
 pub fn experiment<'py>(
     py: Python<'py>,
@@ -165,6 +166,7 @@ pub fn experiment<'py>(
     trained_floor: Option<f64>,
     trained_spp: Option<u32>,
     threads: usize,
+    cancel: Option<PyRef<'_, Cancel>>,
 ) -> PyResult<Bound<'py, PyList>> {
     let canon = |s: &str| {
         mis::Method::from_str(s)
@@ -214,7 +216,7 @@ pub fn experiment<'py>(
     cfg.seed = seed;
     cfg.repeats = repeats;
     cfg.decompose = decompose;
-    let (result, interrupted) = interrupt::run(py, |stop| {
+    let (result, interrupted) = interrupt::run(py, cancel.as_deref(), |stop| {
         let mut r = SceneRenderer {
             scene: s.clone(),
             base: base.clone(),

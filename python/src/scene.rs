@@ -3,7 +3,7 @@
 //! the scene's own values exactly as the CLI's flags are.
 
 use crate::errors::{render_err, scene_error, to_py};
-use crate::interrupt;
+use crate::interrupt::{self, Cancel};
 use crate::state::RenderState;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
@@ -193,14 +193,15 @@ fn technique_text(t: &Bound<'_, PyAny>) -> PyResult<String> {
 /// cores); `backend` "cpu", "gpu" (wgpu: `direct` and `path`; a scene it does not cover
 /// raises RenderError naming what) or "auto" (the GPU where it can, else the CPU, with a
 /// warning saying why). The GIL is released while
-/// rendering; Ctrl-C stops the render and raises KeyboardInterrupt with the partial
-/// state as its `state` attribute.
+/// rendering; Ctrl-C (in any thread) stops the render and raises KeyboardInterrupt with
+/// the partial state as its `state` attribute; `cancel` (a `frepray.Cancel`) stops it
+/// from another thread with `frepray.Cancelled`, which carries the state likewise.
 #[pyfunction]
 #[pyo3(signature = (scene, spp = None, seed = None, samples = None, estimator = None,
     techniques = None, integrator = None, threads = 0, backend = "cpu", width = None,
     height = None, max_depth = None, aovs = None, hide_emitters = false, beta = None,
     cutoff = None, ridge = None, per_light = false, pixel_center = false, min_depth = None,
-    trained_grid = None, trained_floor = None, trained_spp = None))]
+    trained_grid = None, trained_floor = None, trained_spp = None, cancel = None))]
 #[allow(clippy::too_many_arguments)]
 pub fn render(
     py: Python<'_>,
@@ -227,6 +228,7 @@ pub fn render(
     trained_grid: Option<u32>,
     trained_floor: Option<f64>,
     trained_spp: Option<u32>,
+    cancel: Option<PyRef<'_, Cancel>>,
 ) -> PyResult<RenderState> {
     let backend: frepray::Backend = backend.parse().map_err(PyValueError::new_err)?;
     let techniques = techniques
@@ -295,7 +297,7 @@ pub fn render(
         }
         None => 0..options.spp,
     };
-    let (result, interrupted) = interrupt::run(py, |stop| {
+    let (result, interrupted) = interrupt::run(py, cancel.as_deref(), |stop| {
         resolved.render_on(backend, &options, range, stop, &|_, _| {})
     });
     let rendered = result.map_err(|e| to_py(py, e))?;
