@@ -10,8 +10,9 @@ estimators, and compare estimators.  See docs/python.md; renders across machines
 from __future__ import annotations
 
 import json
+import math
 import os
-from typing import Any, Iterable, Mapping, Optional, Sequence, Union
+from typing import Any, Iterable, Mapping, Optional, Sequence, Tuple, Union
 
 from . import mis
 from ._native import (
@@ -50,11 +51,49 @@ def _plain(value: Any) -> Any:
     raise TypeError(f"{type(value).__name__} is not a scene value")
 
 
+def _key(path: str, key: Any) -> str:
+    """``path.key`` as the scene errors print it (keys other than words quoted)."""
+    k = str(key)
+    if not (k and all(c.isascii() and (c.isalnum() or c in "_-") for c in k)):
+        k = json.dumps(k)
+    return f"{path}.{k}" if path else k
+
+
+def _non_finite(value: Any, path: str = "") -> Optional[Tuple[str, float]]:
+    """The key path and value of the first number that is not finite (JSON has none)."""
+    if hasattr(value, "tolist"):
+        value = value.tolist()
+    if isinstance(value, float):
+        return None if math.isfinite(value) else (path, value)
+    if isinstance(value, Mapping):
+        items: Iterable = ((_key(path, k), v) for k, v in value.items())
+    elif isinstance(value, (list, tuple)):
+        items = ((f"{path}[{i}]", v) for i, v in enumerate(value))
+    else:
+        return None
+    for p, v in items:
+        found = _non_finite(v, p)
+        if found:
+            return found
+    return None
+
+
 def load_dict(scene: Mapping[str, Any], base_dir: Union[str, os.PathLike, None] = None) -> Scene:
     """A scene given as a dict (the JSON schema; numpy values allowed).  Relative model
     and map paths are found in ``base_dir`` (default: the working directory).  Raises
-    :class:`SceneError` whose ``key`` is the key path, e.g. ``objects[0].material``."""
-    text = json.dumps(scene, default=_plain)
+    :class:`SceneError` whose ``key`` is the key path, e.g. ``objects[0].material``
+    (also for a NaN or infinite number, which JSON cannot hold)."""
+    try:
+        text = json.dumps(scene, default=_plain, allow_nan=False)
+    except ValueError:
+        found = _non_finite(scene)
+        if found is None:
+            raise
+        key, value = found
+        message = f"expected a finite number, found {value}"
+        err = SceneError(f"{key}: {message}")
+        err.file, err.line, err.column, err.key, err.message = "", 0, 0, key, message
+        raise err from None
     return _load_json(text, None if base_dir is None else os.fspath(base_dir))
 
 

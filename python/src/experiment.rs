@@ -1,7 +1,7 @@
 //! `frepray.experiment`: the estimator comparison of `frepray experiment`, and the
 //! metrics it uses (`measure`) for images made elsewhere (e.g. on a Ray cluster).
 
-use crate::errors::{render_err, to_py};
+use crate::errors::{opt_uint, render_err, to_py, uint};
 use crate::interrupt::{self, Cancel};
 use crate::scene::{resolved, scene_path, Scene};
 use frepray::experiment::{self as exp, ExperimentConfig, Image, Renderer};
@@ -131,7 +131,7 @@ pub fn measure<'py>(
 /// `frepray.Cancelled`) with what finished written to `out`, as the CLI does.
 #[pyfunction]
 #[pyo3(signature = (scene, out, estimators, spp, reference_spp = 256, reference = None,
-    reference_estimator = None, baseline = "balance", seed = 0, repeats = exp::DEFAULT_REPEATS,
+    reference_estimator = None, baseline = "balance", seed = 0, repeats = i128::from(exp::DEFAULT_REPEATS),
     techniques = None, integrator = None, width = None, height = None, per_light = false,
     pixel_center = false, decompose = false, max_depth = None, min_depth = None,
     hide_emitters = false, beta = None, cutoff = None, ridge = None, trained_grid = None,
@@ -142,32 +142,46 @@ pub fn experiment<'py>(
     scene: &Scene,
     out: PathBuf,
     estimators: Vec<String>,
-    spp: Vec<u32>,
-    reference_spp: u32,
+    spp: Vec<i128>,
+    reference_spp: i128,
     reference: Option<PathBuf>,
     reference_estimator: Option<String>,
     baseline: &str,
-    seed: u64,
-    repeats: u32,
+    seed: i128,
+    repeats: i128,
     techniques: Option<String>,
     integrator: Option<String>,
-    width: Option<u32>,
-    height: Option<u32>,
+    width: Option<i128>,
+    height: Option<i128>,
     per_light: bool,
     pixel_center: bool,
     decompose: bool,
-    max_depth: Option<u32>,
-    min_depth: Option<u32>,
+    max_depth: Option<i128>,
+    min_depth: Option<i128>,
     hide_emitters: bool,
     beta: Option<f64>,
     cutoff: Option<f64>,
     ridge: Option<f64>,
-    trained_grid: Option<u32>,
+    trained_grid: Option<i128>,
     trained_floor: Option<f64>,
-    trained_spp: Option<u32>,
-    threads: usize,
+    trained_spp: Option<i128>,
+    threads: i128,
     cancel: Option<PyRef<'_, Cancel>>,
 ) -> PyResult<Bound<'py, PyList>> {
+    let spp: Vec<u32> = spp
+        .into_iter()
+        .map(|n| uint("spp", n))
+        .collect::<PyResult<_>>()?;
+    let reference_spp: u32 = uint("reference_spp", reference_spp)?;
+    let seed: u64 = uint("seed", seed)?;
+    let repeats: u32 = uint("repeats", repeats)?;
+    let width = opt_uint("width", width)?;
+    let height = opt_uint("height", height)?;
+    let max_depth = opt_uint("max_depth", max_depth)?;
+    let min_depth = opt_uint("min_depth", min_depth)?;
+    let trained_grid = opt_uint("trained_grid", trained_grid)?;
+    let trained_spp = opt_uint("trained_spp", trained_spp)?;
+    let threads: usize = uint("threads", threads)?;
     let canon = |s: &str| {
         mis::Method::from_str(s)
             .map(|m| m.name().to_string())

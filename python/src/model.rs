@@ -1,7 +1,7 @@
 //! Bare models (.frep, .hf, .vm, or their text): F and ∇F at many points, bounds, and
 //! the preview picture `frepray render MODEL` makes.
 
-use crate::errors::{to_py, ModelError};
+use crate::errors::{to_py, uint, ModelError};
 use crate::interrupt::{self, Cancel};
 use crate::state::RenderState;
 use frep::read::Format;
@@ -88,14 +88,19 @@ impl Model {
     fn preview(
         &self,
         py: Python<'_>,
-        width: u32,
-        height: u32,
-        spp: u32,
+        width: i128,
+        height: i128,
+        spp: i128,
         look: &str,
         up: &str,
         cancel: Option<PyRef<'_, Cancel>>,
     ) -> PyResult<RenderState> {
         use frepray::preview::{Look, Up};
+        let (width, height, spp): (u32, u32, u32) = (
+            uint("width", width)?,
+            uint("height", height)?,
+            uint("spp", spp)?,
+        );
         let look = match look {
             "shaded" => Look::Shaded,
             "depth" => Look::Depth,

@@ -2,7 +2,7 @@
 //! patched into the scene's description as overrides, so that they are validated with
 //! the scene's own values exactly as the CLI's flags are.
 
-use crate::errors::{render_err, scene_error, to_py};
+use crate::errors::{opt_uint, render_err, scene_error, to_py, uint};
 use crate::interrupt::{self, Cancel};
 use crate::state::RenderState;
 use pyo3::exceptions::PyValueError;
@@ -206,17 +206,17 @@ fn technique_text(t: &Bound<'_, PyAny>) -> PyResult<String> {
 pub fn render(
     py: Python<'_>,
     scene: &Scene,
-    spp: Option<u32>,
-    seed: Option<u64>,
-    samples: Option<(u32, u32)>,
+    spp: Option<i128>,
+    seed: Option<i128>,
+    samples: Option<(i128, i128)>,
     estimator: Option<String>,
     techniques: Option<Bound<'_, PyAny>>,
     integrator: Option<String>,
-    threads: usize,
+    threads: i128,
     backend: &str,
-    width: Option<u32>,
-    height: Option<u32>,
-    max_depth: Option<u32>,
+    width: Option<i128>,
+    height: Option<i128>,
+    max_depth: Option<i128>,
     aovs: Option<Vec<String>>,
     hide_emitters: bool,
     beta: Option<f64>,
@@ -224,12 +224,25 @@ pub fn render(
     ridge: Option<f64>,
     per_light: bool,
     pixel_center: bool,
-    min_depth: Option<u32>,
-    trained_grid: Option<u32>,
+    min_depth: Option<i128>,
+    trained_grid: Option<i128>,
     trained_floor: Option<f64>,
-    trained_spp: Option<u32>,
+    trained_spp: Option<i128>,
     cancel: Option<PyRef<'_, Cancel>>,
 ) -> PyResult<RenderState> {
+    let spp: Option<u32> = opt_uint("spp", spp)?;
+    let seed: Option<u64> = opt_uint("seed", seed)?;
+    let samples: Option<(u32, u32)> = match samples {
+        Some((a, b)) => Some((uint("samples", a)?, uint("samples", b)?)),
+        None => None,
+    };
+    let threads: usize = uint("threads", threads)?;
+    let width = opt_uint("width", width)?;
+    let height = opt_uint("height", height)?;
+    let max_depth = opt_uint("max_depth", max_depth)?;
+    let min_depth = opt_uint("min_depth", min_depth)?;
+    let trained_grid = opt_uint("trained_grid", trained_grid)?;
+    let trained_spp = opt_uint("trained_spp", trained_spp)?;
     let backend: frepray::Backend = backend.parse().map_err(PyValueError::new_err)?;
     let techniques = techniques
         .map(|t| {
