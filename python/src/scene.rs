@@ -161,11 +161,8 @@ fn technique_text(t: &Bound<'_, PyAny>) -> PyResult<String> {
     if let Ok(d) = t.cast::<PyDict>() {
         let mut parts = vec![];
         for (k, v) in d.iter() {
-            parts.push(format!(
-                "{}:{}",
-                k.extract::<String>()?,
-                v.extract::<u32>()?
-            ));
+            let n: u32 = uint("techniques", v.extract()?)?;
+            parts.push(format!("{}:{n}", k.extract::<String>()?));
         }
         return Ok(parts.join(","));
     }
@@ -175,8 +172,8 @@ fn technique_text(t: &Bound<'_, PyAny>) -> PyResult<String> {
         if let Ok(s) = item.extract::<String>() {
             parts.push(s);
         } else {
-            let (name, n): (String, u32) = item.extract()?;
-            parts.push(format!("{name}:{n}"));
+            let (name, n): (String, i128) = item.extract()?;
+            parts.push(format!("{name}:{}", uint::<u32>("techniques", n)?));
         }
     }
     Ok(parts.join(","))

@@ -75,8 +75,8 @@ def test_scene_errors_are_raised_not_retried(cluster, many_lights):
 
 def test_ctrl_c_returns_the_finished_parts_marked_partial(cluster, many_lights):
     # Was: KeyboardInterrupt out of ray.get, the finished parts dropped. Ctrl-C is
-    # simulated (interrupt_main) when the first part arrives: 4 parts of about a second
-    # each on 2 CPUs, so at least two are unfinished then.
+    # simulated (interrupt_main) when the first part arrives: 4 parts on 2 CPUs, so the
+    # third has just started then and the fourth waits.
     import _thread
 
     spp = 512

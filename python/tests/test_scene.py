@@ -103,7 +103,8 @@ def test_a_number_json_cannot_hold_is_named_by_its_key_path():
 
 @pytest.mark.parametrize("kw", [dict(spp=-1), dict(seed=-1), dict(samples=(-1, 2)),
                                 dict(threads=-1), dict(width=-16), dict(max_depth=-1),
-                                dict(trained_spp=-1)], ids=str)
+                                dict(trained_spp=-1), dict(techniques={"light": -1}),
+                                dict(techniques=[("bsdf", -1)])], ids=str)
 def test_negative_integers_are_value_errors_naming_the_argument(kw):
     # Was: OverflowError ("can't convert negative int to unsigned"), naming nothing.
     s = frepray.load_dict(small_dict())
