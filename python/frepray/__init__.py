@@ -10,11 +10,14 @@ estimators, and compare estimators.  See docs/python.md; renders across machines
 from __future__ import annotations
 
 import json
+import math
 import os
-from typing import Any, Iterable, Mapping, Optional, Sequence, Union
+from typing import Any, Iterable, Mapping, Optional, Sequence, Tuple, Union
 
 from . import mis
 from ._native import (
+    Cancel,
+    Cancelled,
     Error,
     Model,
     ModelError,
@@ -34,7 +37,8 @@ from ._native import load_json as _load_json
 from ._native import measure
 
 __all__ = [
-    "Error", "SceneError", "RenderError", "ModelError", "Scene", "RenderState", "Model",
+    "Error", "SceneError", "RenderError", "ModelError", "Cancelled", "Cancel", "Scene",
+    "RenderState", "Model",
     "load", "load_dict", "render", "merge", "read_exr", "write_exr", "model", "mis",
     "experiment", "measure", "gpu_available",
 ]
@@ -47,11 +51,49 @@ def _plain(value: Any) -> Any:
     raise TypeError(f"{type(value).__name__} is not a scene value")
 
 
+def _key(path: str, key: Any) -> str:
+    """``path.key`` as the scene errors print it (keys other than words quoted)."""
+    k = str(key)
+    if not (k and all(c.isascii() and (c.isalnum() or c in "_-") for c in k)):
+        k = json.dumps(k)
+    return f"{path}.{k}" if path else k
+
+
+def _non_finite(value: Any, path: str = "") -> Optional[Tuple[str, float]]:
+    """The key path and value of the first number that is not finite (JSON has none)."""
+    if hasattr(value, "tolist"):
+        value = value.tolist()
+    if isinstance(value, float):
+        return None if math.isfinite(value) else (path, value)
+    if isinstance(value, Mapping):
+        items: Iterable = ((_key(path, k), v) for k, v in value.items())
+    elif isinstance(value, (list, tuple)):
+        items = ((f"{path}[{i}]", v) for i, v in enumerate(value))
+    else:
+        return None
+    for p, v in items:
+        found = _non_finite(v, p)
+        if found:
+            return found
+    return None
+
+
 def load_dict(scene: Mapping[str, Any], base_dir: Union[str, os.PathLike, None] = None) -> Scene:
     """A scene given as a dict (the JSON schema; numpy values allowed).  Relative model
     and map paths are found in ``base_dir`` (default: the working directory).  Raises
-    :class:`SceneError` whose ``key`` is the key path, e.g. ``objects[0].material``."""
-    text = json.dumps(scene, default=_plain)
+    :class:`SceneError` whose ``key`` is the key path, e.g. ``objects[0].material``
+    (also for a NaN or infinite number, which JSON cannot hold)."""
+    try:
+        text = json.dumps(scene, default=_plain, allow_nan=False)
+    except ValueError:
+        found = _non_finite(scene)
+        if found is None:
+            raise
+        key, value = found
+        message = f"expected a finite number, found {value}"
+        err = SceneError(f"{key}: {message}")
+        err.file, err.line, err.column, err.key, err.message = "", 0, 0, key, message
+        raise err from None
     return _load_json(text, None if base_dir is None else os.fspath(base_dir))
 
 
@@ -93,6 +135,7 @@ def experiment(
     trained_spp: Optional[int] = None,
     threads: int = 0,
     pandas: Optional[bool] = None,
+    cancel: Optional[Cancel] = None,
 ):
     """The estimator comparison of ``frepray experiment``: a reference (rendered with
     ``reference_spp`` samples, or the EXR ``reference``), then every estimator at every
@@ -108,7 +151,9 @@ def experiment(
     ``min_depth``, ``hide_emitters``, ``beta``, ``cutoff``, ``ridge``, ``trained_grid``,
     ``trained_floor``, ``trained_spp`` and ``threads`` are its flags of the same names
     (``threads=0``: every core).  ``out`` receives results.json/csv, summary.md, plots and
-    images (a temporary folder when not given); a rerun into the same ``out`` resumes."""
+    images (a temporary folder when not given); a rerun into the same ``out`` resumes.
+    Ctrl-C (KeyboardInterrupt) or ``cancel`` (a :class:`Cancel`; :class:`Cancelled`)
+    stops it with what finished written to ``out``."""
     import tempfile
 
     def run(folder: str):
@@ -122,7 +167,7 @@ def experiment(
             decompose=decompose, max_depth=max_depth, min_depth=min_depth,
             hide_emitters=hide_emitters, beta=beta, cutoff=cutoff, ridge=ridge,
             trained_grid=trained_grid, trained_floor=trained_floor,
-            trained_spp=trained_spp, threads=threads)
+            trained_spp=trained_spp, threads=threads, cancel=cancel)
 
     if out is None:
         with tempfile.TemporaryDirectory(prefix="frepray-experiment-") as folder:

@@ -19,7 +19,7 @@ from __future__ import annotations
 import math
 import os
 import time
-from typing import Any, List, Optional, Sequence, Tuple
+from typing import Any, Callable, List, Optional, Sequence, Tuple
 
 from . import _native
 from ._native import RenderState, Scene
@@ -79,6 +79,7 @@ def render(
     max_retries: int = 3,
     num_cpus: float = 1,
     threads: Optional[int] = None,
+    progress: Optional[Callable[[int, int], None]] = None,
     kill_marker: Optional[str] = None,
     **options: Any,
 ) -> RenderState:
@@ -86,7 +87,11 @@ def render(
     given) of ``scene`` as ``tasks`` Ray tasks of contiguous sample ranges and merges
     them.  Other keywords are :func:`frepray.render`'s options (seed, estimator,
     techniques, integrator, width, height, …).  Each task asks Ray for ``num_cpus`` CPUs
-    and renders on ``threads`` threads (default ``num_cpus``)."""
+    and renders on ``threads`` threads (default ``num_cpus``).  ``progress(done, total)``
+    is called as parts arrive.
+
+    Ctrl-C cancels the unfinished tasks and raises KeyboardInterrupt whose ``state`` is
+    the merge of the parts that finished, marked partial (None if none had)."""
     if samples is None:
         if spp is None:
             spp = int(scene.settings["spp"])
@@ -98,8 +103,39 @@ def render(
     task = _remote(_render_part, max_retries, num_cpus)
     ranges = split(samples[0], samples[1], tasks)
     refs = [task.remote(scene, a, b, options, kill_marker) for a, b in ranges]
-    parts = [RenderState.from_bytes(bytes(p)) for p in ray.get(refs)]
-    return _native.merge(parts)
+    return _native.merge(_gather(ray, refs, progress))
+
+
+def _gather(ray, refs: list, progress: Optional[Callable[[int, int], None]]) -> list:
+    """The tasks' states in the order of ``refs``.  On KeyboardInterrupt the unfinished
+    tasks are cancelled and the exception's ``state`` is the merge of the finished parts,
+    marked partial (None if none finished)."""
+    done: dict = {}
+    pending = list(refs)
+    try:
+        while pending:
+            # A short timeout keeps Ctrl-C prompt while Ray waits.
+            ready, pending = ray.wait(pending, num_returns=1, timeout=0.1)
+            for r in ready:
+                done[r] = RenderState.from_bytes(bytes(ray.get(r)))
+                if progress is not None:
+                    progress(len(done), len(refs))
+    except KeyboardInterrupt as e:
+        if pending:
+            ready, pending = ray.wait(pending, num_returns=len(pending), timeout=0)
+            for r in pending:
+                ray.cancel(r)
+            for r in ready:
+                try:
+                    done[r] = RenderState.from_bytes(bytes(ray.get(r, timeout=0)))
+                except Exception:  # noqa: BLE001 - a failed part is left out, as unfinished
+                    pass
+        parts = [done[r] for r in refs if r in done]
+        e.state = _native.merge(parts) if parts else None
+        if e.state is not None:
+            e.state.mark_partial()
+        raise
+    return [done[r] for r in refs]
 
 
 def _render_timed(scene: Scene, estimator: str, spp: int, seed: int, options: dict):

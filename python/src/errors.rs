@@ -2,7 +2,7 @@
 //! the library's errors into them.
 
 use pyo3::create_exception;
-use pyo3::exceptions::PyException;
+use pyo3::exceptions::{PyException, PyValueError};
 use pyo3::prelude::*;
 
 create_exception!(frepray, Error, PyException, "Any frepray error.");
@@ -18,6 +18,13 @@ create_exception!(
     RenderError,
     Error,
     "Rendering, a render state or a render option failed."
+);
+create_exception!(
+    frepray,
+    Cancelled,
+    Error,
+    "A render stopped by its `frepray.Cancel` handle: `.state` holds what it rendered (a \
+     partial state; None for an experiment)."
 );
 create_exception!(
     frepray,
@@ -58,4 +65,22 @@ pub fn to_py(py: Python<'_>, e: frepray::Error) -> PyErr {
 /// A render-crate error as `frepray.RenderError`.
 pub fn render_err(e: impl std::fmt::Display) -> PyErr {
     RenderError::new_err(e.to_string())
+}
+
+/// An integer argument in `T`'s range, or ValueError naming it. Arguments are taken as
+/// `i128` and converted here because pyo3's own conversion raises OverflowError without
+/// the argument's name for `spp=-1`.
+pub fn uint<T: TryFrom<i128>>(name: &str, v: i128) -> PyResult<T> {
+    T::try_from(v).map_err(|_| {
+        PyValueError::new_err(if v < 0 {
+            format!("{name}: expected a non-negative integer, found {v}")
+        } else {
+            format!("{name}: {v} is too large")
+        })
+    })
+}
+
+/// [`uint`] of an optional argument.
+pub fn opt_uint<T: TryFrom<i128>>(name: &str, v: Option<i128>) -> PyResult<Option<T>> {
+    v.map(|v| uint(name, v)).transpose()
 }

@@ -1,8 +1,8 @@
 //! `frepray.experiment`: the estimator comparison of `frepray experiment`, and the
 //! metrics it uses (`measure`) for images made elsewhere (e.g. on a Ray cluster).
 
-use crate::errors::{render_err, to_py};
-use crate::interrupt;
+use crate::errors::{opt_uint, render_err, to_py, uint};
+use crate::interrupt::{self, Cancel};
 use crate::scene::{resolved, scene_path, Scene};
 use frepray::experiment::{self as exp, ExperimentConfig, Image, Renderer};
 use frepray::RenderOptions;
@@ -127,45 +127,61 @@ pub fn measure<'py>(
 /// speed_up, speed_up_ci, overhead (intervals as [lo, hi] or None with one seed), and
 /// with `decompose` variance_jittered, variance_centered, direction_share. The other
 /// arguments are the CLI's flags of the same names (`per_light` is `--per-light`, and so
-/// on); `threads` 0 uses every core.
+/// on); `threads` 0 uses every core. Ctrl-C and `cancel` stop it (KeyboardInterrupt,
+/// `frepray.Cancelled`) with what finished written to `out`, as the CLI does.
 #[pyfunction]
 #[pyo3(signature = (scene, out, estimators, spp, reference_spp = 256, reference = None,
-    reference_estimator = None, baseline = "balance", seed = 0, repeats = exp::DEFAULT_REPEATS,
+    reference_estimator = None, baseline = "balance", seed = 0, repeats = i128::from(exp::DEFAULT_REPEATS),
     techniques = None, integrator = None, width = None, height = None, per_light = false,
     pixel_center = false, decompose = false, max_depth = None, min_depth = None,
     hide_emitters = false, beta = None, cutoff = None, ridge = None, trained_grid = None,
-    trained_floor = None, trained_spp = None, threads = 0))]
+    trained_floor = None, trained_spp = None, threads = 0, cancel = None))]
 #[allow(clippy::too_many_arguments)]
 pub fn experiment<'py>(
     py: Python<'py>,
     scene: &Scene,
     out: PathBuf,
     estimators: Vec<String>,
-    spp: Vec<u32>,
-    reference_spp: u32,
+    spp: Vec<i128>,
+    reference_spp: i128,
     reference: Option<PathBuf>,
     reference_estimator: Option<String>,
     baseline: &str,
-    seed: u64,
-    repeats: u32,
+    seed: i128,
+    repeats: i128,
     techniques: Option<String>,
     integrator: Option<String>,
-    width: Option<u32>,
-    height: Option<u32>,
+    width: Option<i128>,
+    height: Option<i128>,
     per_light: bool,
     pixel_center: bool,
     decompose: bool,
-    max_depth: Option<u32>,
-    min_depth: Option<u32>,
+    max_depth: Option<i128>,
+    min_depth: Option<i128>,
     hide_emitters: bool,
     beta: Option<f64>,
     cutoff: Option<f64>,
     ridge: Option<f64>,
-    trained_grid: Option<u32>,
+    trained_grid: Option<i128>,
     trained_floor: Option<f64>,
-    trained_spp: Option<u32>,
-    threads: usize,
+    trained_spp: Option<i128>,
+    threads: i128,
+    cancel: Option<PyRef<'_, Cancel>>,
 ) -> PyResult<Bound<'py, PyList>> {
+    let spp: Vec<u32> = spp
+        .into_iter()
+        .map(|n| uint("spp", n))
+        .collect::<PyResult<_>>()?;
+    let reference_spp: u32 = uint("reference_spp", reference_spp)?;
+    let seed: u64 = uint("seed", seed)?;
+    let repeats: u32 = uint("repeats", repeats)?;
+    let width = opt_uint("width", width)?;
+    let height = opt_uint("height", height)?;
+    let max_depth = opt_uint("max_depth", max_depth)?;
+    let min_depth = opt_uint("min_depth", min_depth)?;
+    let trained_grid = opt_uint("trained_grid", trained_grid)?;
+    let trained_spp = opt_uint("trained_spp", trained_spp)?;
+    let threads: usize = uint("threads", threads)?;
     let canon = |s: &str| {
         mis::Method::from_str(s)
             .map(|m| m.name().to_string())
@@ -214,7 +230,7 @@ pub fn experiment<'py>(
     cfg.seed = seed;
     cfg.repeats = repeats;
     cfg.decompose = decompose;
-    let (result, interrupted) = interrupt::run(py, |stop| {
+    let (result, interrupted) = interrupt::run(py, cancel.as_deref(), |stop| {
         let mut r = SceneRenderer {
             scene: s.clone(),
             base: base.clone(),

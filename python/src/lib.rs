@@ -5,15 +5,18 @@
 //! preview), the `mis` estimators over numpy sample arrays, and estimator experiments.
 //! The Python package `frepray` (python/frepray) re-exports these and adds what is
 //! easier in Python (dicts as JSON, pandas tables, Ray). Renders run with the GIL
-//! released; Ctrl-C stops them (module `interrupt`).
+//! released; Ctrl-C, a `Cancel` handle or the interpreter's exit stop them (modules
+//! `interrupt`, `sigint`).
 #![warn(missing_docs)]
 
 mod errors;
 mod experiment;
+mod gpu;
 mod interrupt;
 mod mis_py;
 mod model;
 mod scene;
+mod sigint;
 mod state;
 
 use pyo3::prelude::*;
@@ -26,6 +29,8 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("SceneError", py.get_type::<errors::SceneError>())?;
     m.add("RenderError", py.get_type::<errors::RenderError>())?;
     m.add("ModelError", py.get_type::<errors::ModelError>())?;
+    m.add("Cancelled", py.get_type::<errors::Cancelled>())?;
+    m.add_class::<interrupt::Cancel>()?;
     m.add_class::<scene::Scene>()?;
     m.add_class::<state::RenderState>()?;
     m.add_class::<model::Model>()?;
@@ -40,6 +45,9 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(mis_py::mis_methods, m)?)?;
     m.add_function(wrap_pyfunction!(experiment::experiment, m)?)?;
     m.add_function(wrap_pyfunction!(experiment::measure, m)?)?;
-    m.add("gpu_available", false)?;
+    m.add("gpu_available", gpu::GpuAvailable)?;
+    let at_exit = wrap_pyfunction!(interrupt::_at_exit, m)?;
+    py.import("atexit")?.call_method1("register", (&at_exit,))?;
+    m.add_function(at_exit)?;
     Ok(())
 }

@@ -1,8 +1,8 @@
 //! Bare models (.frep, .hf, .vm, or their text): F and ∇F at many points, bounds, and
 //! the preview picture `frepray render MODEL` makes.
 
-use crate::errors::{to_py, ModelError};
-use crate::interrupt;
+use crate::errors::{to_py, uint, ModelError};
+use crate::interrupt::{self, Cancel};
 use crate::state::RenderState;
 use frep::read::Format;
 use frep::{Expr, Solid, Surface};
@@ -80,18 +80,27 @@ impl Model {
         self.expr.len()
     }
     /// The preview picture (framing camera, key light and sky; `look` "shaded",
-    /// "depth" or "normals"; `up` "x", "y" or "z") as a `RenderState`.
-    #[pyo3(signature = (width = 320, height = 240, spp = 4, look = "shaded", up = "z"))]
+    /// "depth" or "normals"; `up` "x", "y" or "z") as a `RenderState`. Ctrl-C and
+    /// `cancel` stop it as they stop `frepray.render`.
+    #[pyo3(signature = (width = 320, height = 240, spp = 4, look = "shaded", up = "z",
+        cancel = None))]
+    #[allow(clippy::too_many_arguments)]
     fn preview(
         &self,
         py: Python<'_>,
-        width: u32,
-        height: u32,
-        spp: u32,
+        width: i128,
+        height: i128,
+        spp: i128,
         look: &str,
         up: &str,
+        cancel: Option<PyRef<'_, Cancel>>,
     ) -> PyResult<RenderState> {
         use frepray::preview::{Look, Up};
+        let (width, height, spp): (u32, u32, u32) = (
+            uint("width", width)?,
+            uint("height", height)?,
+            uint("spp", spp)?,
+        );
         let look = match look {
             "shaded" => Look::Shaded,
             "depth" => Look::Depth,
@@ -114,7 +123,7 @@ impl Model {
             ));
         }
         let solid = self.solid.clone();
-        let (result, interrupted) = interrupt::run(py, |stop| {
+        let (result, interrupted) = interrupt::run(py, cancel.as_deref(), |stop| {
             frepray::preview::render(solid, up, width, height, look, spp, stop, &|_, _| {})
         });
         let state = RenderState::from(result.map_err(|e| to_py(py, e))?.0);

@@ -2,8 +2,8 @@
 //! patched into the scene's description as overrides, so that they are validated with
 //! the scene's own values exactly as the CLI's flags are.
 
-use crate::errors::{render_err, scene_error, to_py};
-use crate::interrupt;
+use crate::errors::{opt_uint, render_err, scene_error, to_py, uint};
+use crate::interrupt::{self, Cancel};
 use crate::state::RenderState;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
@@ -161,11 +161,8 @@ fn technique_text(t: &Bound<'_, PyAny>) -> PyResult<String> {
     if let Ok(d) = t.cast::<PyDict>() {
         let mut parts = vec![];
         for (k, v) in d.iter() {
-            parts.push(format!(
-                "{}:{}",
-                k.extract::<String>()?,
-                v.extract::<u32>()?
-            ));
+            let n: u32 = uint("techniques", v.extract()?)?;
+            parts.push(format!("{}:{n}", k.extract::<String>()?));
         }
         return Ok(parts.join(","));
     }
@@ -175,8 +172,8 @@ fn technique_text(t: &Bound<'_, PyAny>) -> PyResult<String> {
         if let Ok(s) = item.extract::<String>() {
             parts.push(s);
         } else {
-            let (name, n): (String, u32) = item.extract()?;
-            parts.push(format!("{name}:{n}"));
+            let (name, n): (String, i128) = item.extract()?;
+            parts.push(format!("{name}:{}", uint::<u32>("techniques", n)?));
         }
     }
     Ok(parts.join(","))
@@ -193,29 +190,30 @@ fn technique_text(t: &Bound<'_, PyAny>) -> PyResult<String> {
 /// cores); `backend` "cpu", "gpu" (wgpu: `direct` and `path`; a scene it does not cover
 /// raises RenderError naming what) or "auto" (the GPU where it can, else the CPU, with a
 /// warning saying why). The GIL is released while
-/// rendering; Ctrl-C stops the render and raises KeyboardInterrupt with the partial
-/// state as its `state` attribute.
+/// rendering; Ctrl-C (in any thread) stops the render and raises KeyboardInterrupt with
+/// the partial state as its `state` attribute; `cancel` (a `frepray.Cancel`) stops it
+/// from another thread with `frepray.Cancelled`, which carries the state likewise.
 #[pyfunction]
 #[pyo3(signature = (scene, spp = None, seed = None, samples = None, estimator = None,
     techniques = None, integrator = None, threads = 0, backend = "cpu", width = None,
     height = None, max_depth = None, aovs = None, hide_emitters = false, beta = None,
     cutoff = None, ridge = None, per_light = false, pixel_center = false, min_depth = None,
-    trained_grid = None, trained_floor = None, trained_spp = None))]
+    trained_grid = None, trained_floor = None, trained_spp = None, cancel = None))]
 #[allow(clippy::too_many_arguments)]
 pub fn render(
     py: Python<'_>,
     scene: &Scene,
-    spp: Option<u32>,
-    seed: Option<u64>,
-    samples: Option<(u32, u32)>,
+    spp: Option<i128>,
+    seed: Option<i128>,
+    samples: Option<(i128, i128)>,
     estimator: Option<String>,
     techniques: Option<Bound<'_, PyAny>>,
     integrator: Option<String>,
-    threads: usize,
+    threads: i128,
     backend: &str,
-    width: Option<u32>,
-    height: Option<u32>,
-    max_depth: Option<u32>,
+    width: Option<i128>,
+    height: Option<i128>,
+    max_depth: Option<i128>,
     aovs: Option<Vec<String>>,
     hide_emitters: bool,
     beta: Option<f64>,
@@ -223,11 +221,25 @@ pub fn render(
     ridge: Option<f64>,
     per_light: bool,
     pixel_center: bool,
-    min_depth: Option<u32>,
-    trained_grid: Option<u32>,
+    min_depth: Option<i128>,
+    trained_grid: Option<i128>,
     trained_floor: Option<f64>,
-    trained_spp: Option<u32>,
+    trained_spp: Option<i128>,
+    cancel: Option<PyRef<'_, Cancel>>,
 ) -> PyResult<RenderState> {
+    let spp: Option<u32> = opt_uint("spp", spp)?;
+    let seed: Option<u64> = opt_uint("seed", seed)?;
+    let samples: Option<(u32, u32)> = match samples {
+        Some((a, b)) => Some((uint("samples", a)?, uint("samples", b)?)),
+        None => None,
+    };
+    let threads: usize = uint("threads", threads)?;
+    let width = opt_uint("width", width)?;
+    let height = opt_uint("height", height)?;
+    let max_depth = opt_uint("max_depth", max_depth)?;
+    let min_depth = opt_uint("min_depth", min_depth)?;
+    let trained_grid = opt_uint("trained_grid", trained_grid)?;
+    let trained_spp = opt_uint("trained_spp", trained_spp)?;
     let backend: frepray::Backend = backend.parse().map_err(PyValueError::new_err)?;
     let techniques = techniques
         .map(|t| {
@@ -295,7 +307,7 @@ pub fn render(
         }
         None => 0..options.spp,
     };
-    let (result, interrupted) = interrupt::run(py, |stop| {
+    let (result, interrupted) = interrupt::run(py, cancel.as_deref(), |stop| {
         resolved.render_on(backend, &options, range, stop, &|_, _| {})
     });
     let rendered = result.map_err(|e| to_py(py, e))?;

@@ -116,6 +116,11 @@ impl RenderState {
     fn partial(&self) -> bool {
         self.inner.is_partial()
     }
+    /// Marks the state partial, as a stopped render's is (kept through merges and the
+    /// state file): for a merge of the parts that finished when the rest did not.
+    fn mark_partial(&mut self) {
+        self.inner.set_partial();
+    }
     /// The estimator's name.
     #[getter]
     fn estimator(&self) -> &'static str {

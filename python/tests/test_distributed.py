@@ -71,3 +71,31 @@ def test_scene_errors_are_raised_not_retried(cluster, many_lights):
     with pytest.raises(frepray.SceneError) as e:
         distributed.render(many_lights, 4, tasks=2, estimator="nonsense", **SMALL)
     assert e.value.key == "render.estimator"
+
+
+def test_ctrl_c_returns_the_finished_parts_marked_partial(cluster, many_lights):
+    # Was: KeyboardInterrupt out of ray.get, the finished parts dropped. Ctrl-C is
+    # simulated (interrupt_main) when the first part arrives: 4 parts on 2 CPUs, so the
+    # third has just started then and the fourth waits.
+    import _thread
+
+    spp = 512
+    seen = []
+
+    def progress(done, total):
+        seen.append((done, total))
+        if done == 1:
+            _thread.interrupt_main()
+
+    with pytest.raises(KeyboardInterrupt) as e:
+        distributed.render(many_lights, spp, tasks=4, progress=progress, **OPTS)
+    state = e.value.state
+    assert seen[0] == (1, 4)
+    assert state.partial
+    ranges = distributed.split(0, spp, 4)
+    finished = [r for r in ranges if any(a <= r[0] and r[1] <= b for a, b in state.samples)]
+    assert 1 <= len(finished) <= 2, state.samples
+    # The finished parts, exactly: as the same ranges rendered in this process.
+    same = frepray.merge([frepray.render(many_lights, samples=r, **OPTS) for r in finished])
+    assert np.array_equal(state.sample_counts(), same.sample_counts())
+    assert np.array_equal(state.sums(), same.sums())

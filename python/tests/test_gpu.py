@@ -59,3 +59,17 @@ def test_uncovered_scenes_are_refused_by_name_and_auto_falls_back():
         auto = frepray.render(s, backend="auto", spp=2, seed=5)
     cpu = frepray.render(s, spp=2, seed=5)
     assert np.array_equal(auto.sums(), cpu.sums())
+
+
+def test_gpu_available_says_whether_the_gpu_renders():
+    # Was the constant False, while backend="gpu" rendered. An uncovered scene is refused
+    # after the adapter is found, so its message says which is the case, at no cost.
+    d = small_dict()
+    d["objects"][0]["solid"] = "sphere([0, 0, 0], 1) + 0.05 * sin(8 * x)"
+    with pytest.raises(frepray.RenderError) as e:
+        frepray.render(frepray.load_dict(d), backend="gpu", spp=1)
+    adapter = "no GPU adapter" not in str(e.value)
+    assert frepray.gpu_available() is adapter
+    assert bool(frepray.gpu_available) is adapter
+    if os.environ.get("FREPRAY_REQUIRE_GPU") == "1":
+        assert frepray.gpu_available()

@@ -83,3 +83,44 @@ def test_scene_pickles_as_its_source():
     assert t.hash == s.hash
     f = frepray.load(SCENES / "many-lights.toml")
     assert pickle.loads(pickle.dumps(f)).hash == f.hash
+
+
+def test_a_number_json_cannot_hold_is_named_by_its_key_path():
+    # Was: the position in the JSON text Python made ("line 1 column 24"), not the key.
+    d = small_dict()
+    d["materials"]["white"]["reflectance"] = float("nan")
+    with pytest.raises(frepray.SceneError) as e:
+        frepray.load_dict(d)
+    assert e.value.key == "materials.white.reflectance"
+    assert str(e.value) == "materials.white.reflectance: expected a finite number, found nan"
+    assert e.value.line == 0 and e.value.column == 0
+    d = small_dict()
+    d["objects"][0]["transform"] = {"translate": np.array([0.0, -np.inf, 0.0])}
+    with pytest.raises(frepray.SceneError) as e:
+        frepray.load_dict(d)
+    assert e.value.key == "objects[0].transform.translate[1]"
+
+
+@pytest.mark.parametrize("kw", [dict(spp=-1), dict(seed=-1), dict(samples=(-1, 2)),
+                                dict(threads=-1), dict(width=-16), dict(max_depth=-1),
+                                dict(trained_spp=-1), dict(techniques={"light": -1}),
+                                dict(techniques=[("bsdf", -1)])], ids=str)
+def test_negative_integers_are_value_errors_naming_the_argument(kw):
+    # Was: OverflowError ("can't convert negative int to unsigned"), naming nothing.
+    s = frepray.load_dict(small_dict())
+    (name,) = kw
+    with pytest.raises(ValueError, match=f"^{name}: expected a non-negative integer"):
+        frepray.render(s, **kw)
+
+
+def test_negative_integers_elsewhere(tmp_path):
+    s = frepray.load_dict(small_dict())
+    with pytest.raises(ValueError, match="^spp: expected a non-negative"):
+        frepray.experiment(s, ["balance"], [1, -2], out=tmp_path)
+    with pytest.raises(ValueError, match="^repeats: expected a non-negative"):
+        frepray.experiment(s, ["balance"], [1], repeats=-1, out=tmp_path)
+    m = frepray.model("output sphere([0, 0, 0], 1)")
+    with pytest.raises(ValueError, match="^width: expected a non-negative"):
+        m.preview(width=-1)
+    with pytest.raises(ValueError, match="^spp: 4294967296 is too large"):
+        frepray.render(s, spp=2**32)
