@@ -193,12 +193,14 @@ fn technique_text(t: &Bound<'_, PyAny>) -> PyResult<String> {
 /// rendering; Ctrl-C (in any thread) stops the render and raises KeyboardInterrupt with
 /// the partial state as its `state` attribute; `cancel` (a `frepray.Cancel`) stops it
 /// from another thread with `frepray.Cancelled`, which carries the state likewise.
+/// `resume` (the partial state of a stopped render, with that render's options) renders
+/// what it lacks, on the CPU: the result is the uninterrupted render's, bit for bit.
 #[pyfunction]
 #[pyo3(signature = (scene, spp = None, seed = None, samples = None, estimator = None,
     techniques = None, integrator = None, threads = 0, backend = "cpu", width = None,
     height = None, max_depth = None, aovs = None, hide_emitters = false, beta = None,
     cutoff = None, ridge = None, per_light = false, pixel_center = false, min_depth = None,
-    trained_grid = None, trained_floor = None, trained_spp = None, cancel = None))]
+    trained_grid = None, trained_floor = None, trained_spp = None, cancel = None, resume = None))]
 #[allow(clippy::too_many_arguments)]
 pub fn render(
     py: Python<'_>,
@@ -226,7 +228,14 @@ pub fn render(
     trained_floor: Option<f64>,
     trained_spp: Option<i128>,
     cancel: Option<PyRef<'_, Cancel>>,
+    resume: Option<PyRef<'_, RenderState>>,
 ) -> PyResult<RenderState> {
+    if resume.is_some() && (samples.is_some() || backend.eq_ignore_ascii_case("gpu")) {
+        return Err(PyValueError::new_err(
+            "resume continues the state's own sample range on the CPU: leave out samples \
+             and backend=\"gpu\"",
+        ));
+    }
     let spp: Option<u32> = opt_uint("spp", spp)?;
     let seed: Option<u64> = opt_uint("seed", seed)?;
     let samples: Option<(u32, u32)> = match samples {
@@ -307,8 +316,17 @@ pub fn render(
         }
         None => 0..options.spp,
     };
-    let (result, interrupted) = interrupt::run(py, cancel.as_deref(), |stop| {
-        resolved.render_on(backend, &options, range, stop, &|_, _| {})
+    let partial = resume.as_deref().map(RenderState::inner);
+    let (result, interrupted) = interrupt::run(py, cancel.as_deref(), |stop| match partial {
+        Some(p) => resolved
+            .resume(&options, p, stop, &|_, _| {})
+            .map(|(state, stats)| frepray::Rendered {
+                state,
+                stats,
+                gpu: None,
+                fallback: None,
+            }),
+        None => resolved.render_on(backend, &options, range, stop, &|_, _| {}),
     });
     let rendered = result.map_err(|e| to_py(py, e))?;
     if let Some(why) = &rendered.fallback {

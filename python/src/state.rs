@@ -15,6 +15,13 @@ pub struct RenderState {
     inner: render::RenderState,
 }
 
+impl RenderState {
+    /// The library's state.
+    pub fn inner(&self) -> &render::RenderState {
+        &self.inner
+    }
+}
+
 impl From<render::RenderState> for RenderState {
     fn from(inner: render::RenderState) -> Self {
         RenderState { inner }

@@ -155,3 +155,27 @@ def test_interpreter_exit_during_renders_in_daemon_threads():
     assert status == 0, err
     assert out.strip() == "exiting"
     assert "FATAL" not in err and "Abort" not in err, err
+
+
+def test_a_cancelled_render_resumes_to_the_uninterrupted_one():
+    """A render stopped part-way holds every pixel at fewer samples; ``resume=`` renders
+    the rest into the uninterrupted render's state, bit for bit (even for the progressive
+    estimator, whose weights depend on each pixel's samples in order)."""
+    d = small_dict()
+    d["camera"]["resolution"] = [12, 8]
+    scene = frepray.load_dict(d)
+    opts = dict(spp=16384, seed=3, threads=1, estimator="optimal-progressive")
+    whole = frepray.render(scene, **opts)
+    cancel = frepray.Cancel()
+    threading.Timer(0.1, cancel.cancel).start()
+    with pytest.raises(frepray.Cancelled) as e:
+        frepray.render(scene, cancel=cancel, **opts)
+    partial = e.value.state
+    assert partial.partial
+    resumed = frepray.render(scene, resume=partial, **opts)
+    assert not resumed.partial
+    assert resumed.to_bytes() == whole.to_bytes()
+    with pytest.raises(ValueError, match="resume continues"):
+        frepray.render(scene, resume=partial, samples=(0, 8), **opts)
+    with pytest.raises(frepray.Error, match="seed is 3 here and 4 there"):
+        frepray.render(scene, resume=partial, **{**opts, "seed": 4})
