@@ -116,6 +116,52 @@ fn is_main_thread(py: Python<'_>) -> bool {
     main().unwrap_or(true)
 }
 
+/// While a render runs in the main thread, SIGTERM and SIGHUP (schedulers, `timeout`,
+/// container stops, a closed terminal) stop it as Ctrl-C does, instead of killing the
+/// process with the render lost: where their handler is the default, a temporary one
+/// raises `SystemExit(128 + signal)` — uncaught, the interpreter exits with the status a
+/// shell expects (143, 129) after running `finally` blocks; caught, the exception's
+/// `state` holds the partial render. Returns the handlers to put back.
+fn terminate_handlers(py: Python<'_>) -> Vec<(i32, Py<PyAny>)> {
+    let install = || -> PyResult<Vec<(i32, Py<PyAny>)>> {
+        let signal = py.import("signal")?;
+        let default = signal.getattr("SIG_DFL")?;
+        let mut old = Vec::new();
+        for name in ["SIGTERM", "SIGHUP"] {
+            let Ok(num) = signal.getattr(name) else {
+                continue;
+            };
+            if !signal.call_method1("getsignal", (&num,))?.eq(&default)? {
+                continue;
+            }
+            let raise = pyo3::types::PyCFunction::new_closure(
+                py,
+                None,
+                None,
+                |args: &Bound<'_, pyo3::types::PyTuple>,
+                 _: Option<&Bound<'_, pyo3::types::PyDict>>|
+                 -> PyResult<()> {
+                    let signum: i32 = args.get_item(0)?.extract()?;
+                    Err(pyo3::exceptions::PySystemExit::new_err(128 + signum))
+                },
+            )?;
+            signal.call_method1("signal", (&num, raise))?;
+            old.push((num.extract()?, default.clone().unbind()));
+        }
+        Ok(old)
+    };
+    install().unwrap_or_default()
+}
+
+/// Puts back the handlers [`terminate_handlers`] replaced.
+fn restore_handlers(py: Python<'_>, old: Vec<(i32, Py<PyAny>)>) {
+    if let Ok(signal) = py.import("signal") {
+        for (num, handler) in old {
+            let _ = signal.call_method1("signal", (num, handler));
+        }
+    }
+}
+
 /// Why the waiting thread woke.
 enum Woke {
     Done,
@@ -124,7 +170,8 @@ enum Woke {
 }
 
 /// Runs `work(stop)` with the GIL released. Returns its result and the exception that
-/// stopped it, if any: KeyboardInterrupt for Ctrl-C, `frepray.Cancelled` for `cancel`.
+/// stopped it, if any: KeyboardInterrupt for Ctrl-C, `frepray.Cancelled` for `cancel`,
+/// SystemExit for SIGTERM and SIGHUP in the main thread ([`terminate_handlers`]).
 /// `work` must end soon after `stop` is set.
 pub fn run<T: Send>(
     py: Python<'_>,
@@ -141,6 +188,11 @@ pub fn run<T: Send>(
     }
     sigint::install();
     let sigints = sigint::count();
+    let replaced = if main {
+        terminate_handlers(py)
+    } else {
+        Vec::new()
+    };
     let done = AtomicBool::new(false);
     let mut interrupted = cancel
         .is_some_and(|c| c.load(Ordering::Acquire))
@@ -196,6 +248,7 @@ pub fn run<T: Send>(
         }
         handle.join()
     });
+    restore_handlers(py, replaced);
     drop(active);
     match out {
         Ok(v) => (v, interrupted),

@@ -36,9 +36,10 @@ LONG = {LONG!r}
 """
 
 
-def run_child(code, sigint_after=None, timeout=15.0):
-    """Runs `code` after PRELUDE in a child Python; with `sigint_after`, sends it SIGINT
-    that many seconds after it prints "rendering". Returns (status, stdout, stderr)."""
+def run_child(code, sigint_after=None, timeout=15.0, sig=signal.SIGINT):
+    """Runs `code` after PRELUDE in a child Python; with `sigint_after`, sends it `sig`
+    (SIGINT) that many seconds after it prints "rendering". Returns (status, stdout,
+    stderr)."""
     p = subprocess.Popen([sys.executable, "-c", PRELUDE + textwrap.dedent(code)],
                          stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
@@ -47,7 +48,7 @@ def run_child(code, sigint_after=None, timeout=15.0):
             line = p.stdout.readline() if ready else ""
             assert line.strip() == "rendering", p.communicate(timeout=timeout)
             time.sleep(sigint_after)
-            p.send_signal(signal.SIGINT)
+            p.send_signal(sig)
         out, err = p.communicate(timeout=timeout)
     except subprocess.TimeoutExpired:
         p.kill()
@@ -179,3 +180,29 @@ def test_a_cancelled_render_resumes_to_the_uninterrupted_one():
         frepray.render(scene, resume=partial, samples=(0, 8), **opts)
     with pytest.raises(frepray.Error, match="seed is 3 here and 4 there"):
         frepray.render(scene, resume=partial, **{**opts, "seed": 4})
+
+
+@pytest.mark.parametrize("sig,status", [(signal.SIGTERM, 143), (signal.SIGHUP, 129)],
+                         ids=["SIGTERM", "SIGHUP"])
+def test_sigterm_and_sighup_stop_a_render_and_keep_it(sig, status):
+    # Was: the default action killed the process, the render lost. Now SystemExit with
+    # the partial state: caught, it can be saved; uncaught, the status is 128 + signal.
+    code, out, err = run_child("""
+        try:
+            print("rendering", flush=True)
+            frepray.render(SCENE, **LONG)
+        except SystemExit as e:
+            print(e.code, e.state.partial, e.state.sample_counts().min() >= 1)
+            raise
+        finally:
+            print("finally ran")
+    """, sigint_after=0.5, sig=sig)
+    assert code == status, err
+    assert out.split() == [str(status), "True", "True", "finally", "ran"], (out, err)
+    # The handler is put back after the render: the signal's default action again.
+    code, out, err = run_child("""
+        frepray.render(SCENE, spp=1)
+        print(signal.getsignal(signal.SIGTERM) is signal.SIG_DFL,
+              signal.getsignal(signal.SIGHUP) is signal.SIG_DFL)
+    """)
+    assert code == 0 and out.split() == ["True", "True"], (out, err)
