@@ -5,7 +5,8 @@
 # the GPU back end runs and is tested on machines without a GPU (../shared/GPU.md §11.1).
 # The Python package: a virtual environment in .venv (Python ≥ 3.11) with the pinned
 # tools of python/requirements-dev.txt (maturin, numpy, pytest, Ray), and frepray built
-# into it by maturin (release, editable: python/frepray).
+# into it by maturin (release, editable: python/frepray); `setup.sh --no-python` skips it
+# (the main job renders with the CLI alone).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 if ! command -v cargo >/dev/null 2>&1; then
@@ -33,7 +34,9 @@ if ! dpkg -s mesa-vulkan-drivers libvulkan1 >/dev/null 2>&1; then
   fi
 fi
 
+[ "${1:-}" = --no-python ] && exit 0
 PYTHON="${PYTHON:-python3}"
+echo "setup: the Python package (.venv, built by maturin)" >&2
 if [ ! -x .venv/bin/python ]; then
   "$PYTHON" -c 'import sys; assert sys.version_info >= (3, 11), sys.version' || {
     echo "setup: $PYTHON must be Python 3.11 or newer (set PYTHON=...)" >&2

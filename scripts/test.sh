@@ -4,14 +4,25 @@
 # suite, then the Python package's tests (pytest, Ray on a local 2-CPU cluster).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-bash scripts/setup.sh
+# Each step's wall time goes to stderr, and a summary at the end.
+times=()
+step() {
+  local name=$1 t0=$SECONDS
+  shift
+  echo "test: $name" >&2
+  "$@"
+  times+=("$(printf '%5d s  %s' $((SECONDS - t0)) "$name")")
+}
+summary() { [ ${#times[@]} -gt 0 ] && printf 'test: %s\n' "${times[@]}" >&2; }
+trap summary EXIT
+step "setup (lavapipe, .venv with the Python package)" bash scripts/setup.sh
 [ -x "$HOME/.cargo/bin/cargo" ] && export PATH="$HOME/.cargo/bin:$PATH"
-cargo fmt --all -- --check
-cargo clippy --workspace --all-targets -- -D warnings
-RUSTDOCFLAGS="-D warnings" cargo doc --workspace --no-deps
-python3 scripts/check-licenses.py
+step "cargo fmt --check" cargo fmt --all -- --check
+step "cargo clippy" cargo clippy --workspace --all-targets -- -D warnings
+step "cargo doc" env RUSTDOCFLAGS="-D warnings" cargo doc --workspace --no-deps
+step "licences" python3 scripts/check-licenses.py
 # GPU tests fail, not skip, when no adapter is found (lavapipe comes with setup.sh);
 # Mesa wants a private runtime directory, else it prints a harmless error per device.
 export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-$(mktemp -d)}"
-FREPRAY_REQUIRE_GPU=1 cargo test --workspace
-.venv/bin/python -m pytest -q --doctest-modules python/tests python/frepray
+step "cargo test" env FREPRAY_REQUIRE_GPU=1 cargo test --workspace
+step "pytest" .venv/bin/python -m pytest -q --doctest-modules python/tests python/frepray
