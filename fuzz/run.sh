@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # Fuzzes frepray's readers: `fuzz/run.sh TARGET EXECS [SEED]` or `fuzz/run.sh all EXECS`.
-# TARGET is frep, hf, vm, toml or json; EXECS a count (10_000_000 allowed). Builds the
-# harness with LLVM SanitizerCoverage (inline 8-bit counters: stable codegen flags, no
-# nightly, no libFuzzer), then prints one RESULT line per target: executions, corpus
-# size, edges, crashes, hangs, peak memory. Exit status 1 when anything crashed or hung.
+# TARGET is frep, hf, vm, toml, json, toml-resolve, json-resolve or state (render-state
+# files); EXECS a count (10_000_000 allowed). Builds the harness with LLVM
+# SanitizerCoverage (inline 8-bit counters: stable codegen flags, no nightly, no
+# libFuzzer), then prints one RESULT line per target: executions, corpus size, edges,
+# crashes, hangs, peak memory. Exit status 1 when anything crashed or hung.
 # `fuzz/run.sh selftest 1` checks that each guard (panic, hang, memory, stack) works;
 # FUZZ_MAX_SECONDS=N stops each target after N seconds, as does SIGTERM or Ctrl-C (the
 # summary says how far it got).
@@ -31,7 +32,7 @@ if [ "$1" = selftest ]; then
     exit 0
 fi
 targets=("$1")
-[ "$1" = all ] && targets=(frep hf vm toml json toml-resolve json-resolve)
+[ "$1" = all ] && targets=(frep hf vm toml json toml-resolve json-resolve state)
 status=0
 for t in "${targets[@]}"; do
     "$bin" "$t" "$2" ${3:+"$3"} || status=1

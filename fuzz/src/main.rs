@@ -31,7 +31,7 @@ static PANIC: Mutex<Option<String>> = Mutex::new(None);
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
-    let usage = "usage: frepray-fuzz TARGET EXECS [SEED] | TARGET replay FILE...  (TARGET: frep, hf, vm, toml, json, toml-resolve, json-resolve)";
+    let usage = "usage: frepray-fuzz TARGET EXECS [SEED] | TARGET replay FILE...  (TARGET: frep, hf, vm, toml, json, toml-resolve, json-resolve, state)";
     if let (Some(t), Some("replay")) = (
         args.get(1).and_then(|s| Target::from_name(s)),
         args.get(2).map(|s| s.as_str()),

@@ -26,6 +26,9 @@ PRELUDE = f"""
 import signal, sys, threading, time
 # As in a terminal, also when the tests themselves run in the background (SIGINT ignored).
 signal.signal(signal.SIGINT, signal.default_int_handler)
+# SIGTERM and SIGHUP at their defaults too (`nohup` and some CI runners ignore SIGHUP).
+signal.signal(signal.SIGTERM, signal.SIG_DFL)
+signal.signal(signal.SIGHUP, signal.SIG_DFL)
 sys.path.insert(0, {str(Path(__file__).parent)!r})
 import frepray
 from conftest import small_dict
