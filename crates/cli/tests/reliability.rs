@@ -71,6 +71,32 @@ fn wait_within(child: &mut Child, limit: Duration) -> (Option<i32>, Duration) {
     }
 }
 
+/// Everything the child wrote to its (piped) stderr.
+fn child_stderr(child: &mut Child) -> String {
+    use std::io::Read;
+    let mut s = String::new();
+    child.stderr.take().unwrap().read_to_string(&mut s).unwrap();
+    s
+}
+
+/// A render of the Cornell box at `w × h` that takes hours unless stopped, to `out`,
+/// with stderr piped.
+fn long_render(out: &Path, w: u32, h: u32) -> Child {
+    frepray()
+        .arg("render")
+        .arg(root().join("scenes/cornell.toml"))
+        .args(["--spp", "100000", "--quiet", "--width"])
+        .arg(w.to_string())
+        .arg("--height")
+        .arg(h.to_string())
+        .arg("-o")
+        .arg(out)
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap()
+}
+
 /// Waits until `path` exists (the process got that far), at most `limit`.
 fn wait_for(path: &Path, limit: Duration) {
     let t = Instant::now();
@@ -100,26 +126,11 @@ fn sigint_stops_a_render_within_two_seconds_with_status_130() {
     let dir = out_dir("sigint");
     let out = dir.join("cornell.exr");
     std::fs::write(&out, b"a finished render").unwrap();
-    let mut child = frepray()
-        .arg("render")
-        .arg(root().join("scenes/cornell.toml"))
-        .args([
-            "--spp", "100000", "--width", "48", "--height", "32", "--quiet", "-o",
-        ])
-        .arg(&out)
-        .stdout(Stdio::null())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
+    let mut child = long_render(&out, 48, 32);
     std::thread::sleep(Duration::from_millis(2500));
     sigint(&child);
     let (code, took) = wait_within(&mut child, Duration::from_secs(10));
-    let err = {
-        use std::io::Read;
-        let mut s = String::new();
-        child.stderr.take().unwrap().read_to_string(&mut s).unwrap();
-        s
-    };
+    let err = child_stderr(&mut child);
     assert_eq!(code, Some(130), "{err}");
     assert!(
         took < Duration::from_secs(2),
@@ -172,12 +183,7 @@ fn an_interrupted_render_resumes_to_the_uninterrupted_one() {
     std::thread::sleep(full_time / 2);
     sigint(&child);
     let (code, _) = wait_within(&mut child, Duration::from_secs(10));
-    let err = {
-        use std::io::Read;
-        let mut s = String::new();
-        child.stderr.take().unwrap().read_to_string(&mut s).unwrap();
-        s
-    };
+    let err = child_stderr(&mut child);
     assert_eq!(code, Some(130), "{err}");
     let partial = dir.join("cut.partial.state");
     assert!(
@@ -244,26 +250,11 @@ fn sigterm_and_sighup_keep_the_render() {
     for (name, status) in [("TERM", 143), ("HUP", 129)] {
         let dir = out_dir(&format!("sig{name}"));
         let out = dir.join("cornell.exr");
-        let mut child = frepray()
-            .arg("render")
-            .arg(root().join("scenes/cornell.toml"))
-            .args([
-                "--spp", "100000", "--width", "24", "--height", "16", "--quiet", "-o",
-            ])
-            .arg(&out)
-            .stdout(Stdio::null())
-            .stderr(Stdio::piped())
-            .spawn()
-            .unwrap();
+        let mut child = long_render(&out, 24, 16);
         std::thread::sleep(Duration::from_millis(2000));
         signal(&child, name);
         let (code, took) = wait_within(&mut child, Duration::from_secs(10));
-        let err = {
-            use std::io::Read;
-            let mut s = String::new();
-            child.stderr.take().unwrap().read_to_string(&mut s).unwrap();
-            s
-        };
+        let err = child_stderr(&mut child);
         assert_eq!(code, Some(status), "SIG{name}: {err}");
         assert!(took < Duration::from_secs(2), "SIG{name}: {took:?}");
         assert!(!out.exists(), "SIG{name}");
@@ -351,12 +342,7 @@ fn interrupted_experiment_keeps_the_reference() {
     std::thread::sleep(Duration::from_millis(3000));
     sigint(&child);
     let (code, _) = wait_within(&mut child, Duration::from_secs(10));
-    let err = {
-        use std::io::Read;
-        let mut s = String::new();
-        child.stderr.take().unwrap().read_to_string(&mut s).unwrap();
-        s
-    };
+    let err = child_stderr(&mut child);
     assert_eq!(code, Some(130), "{err}");
     // The reference renders in two halves (their difference estimates its noise); the
     // interrupt lands in the first or, on a fast machine, the second.
@@ -378,12 +364,7 @@ fn interrupted_experiment_keeps_the_reference() {
     std::thread::sleep(Duration::from_millis(2500));
     sigint(&child);
     let (code, _) = wait_within(&mut child, Duration::from_secs(10));
-    let err = {
-        use std::io::Read;
-        let mut s = String::new();
-        child.stderr.take().unwrap().read_to_string(&mut s).unwrap();
-        s
-    };
+    let err = child_stderr(&mut child);
     assert_eq!(code, Some(130), "{err}");
     assert!(err.contains("reference: continuing from"), "{err}");
 }

@@ -135,6 +135,13 @@ impl Scene {
         o.validate().map_err(Error::Invalid)?;
         Ok(o)
     }
+    /// `options` recording this scene's hash (so that its states merge only with its own).
+    fn hashed(&self, options: &RenderOptions) -> RenderOptions {
+        RenderOptions {
+            scene_hash: self.hash,
+            ..options.clone()
+        }
+    }
     /// Renders samples `samples` of every pixel (see [`Scene::render_with`]).
     pub fn render(
         &self,
@@ -153,10 +160,7 @@ impl Scene {
         stop: &AtomicBool,
         progress: &(dyn Fn(u64, u64) + Sync),
     ) -> Result<(RenderState, RenderStats), Error> {
-        let o = RenderOptions {
-            scene_hash: self.hash,
-            ..options.clone()
-        };
+        let o = self.hashed(options);
         Ok(render::render_range(
             &self.cpu, &o, samples, stop, progress,
         )?)
@@ -171,10 +175,7 @@ impl Scene {
         stop: &AtomicBool,
         progress: &(dyn Fn(u64, u64) + Sync),
     ) -> Result<(RenderState, RenderStats), Error> {
-        let o = RenderOptions {
-            scene_hash: self.hash,
-            ..options.clone()
-        };
+        let o = self.hashed(options);
         Ok(render::resume(&self.cpu, &o, partial, stop, progress)?)
     }
     /// [`Self::render_with`] on `backend`: the GPU's result carries its own statistics,
@@ -187,10 +188,7 @@ impl Scene {
         stop: &AtomicBool,
         progress: &(dyn Fn(u64, u64) + Sync),
     ) -> Result<Rendered, Error> {
-        let o = RenderOptions {
-            scene_hash: self.hash,
-            ..options.clone()
-        };
+        let o = self.hashed(options);
         render_range_on(backend, &self.data, &self.cpu, &o, samples, stop, progress)
     }
 }

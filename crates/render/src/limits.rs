@@ -53,13 +53,12 @@ pub fn zeroed(n: usize, what: &str) -> Result<Vec<f64>, Error> {
     Ok(v)
 }
 
-/// The memory the system reports available now, in bytes (Linux `MemAvailable`);
-/// `None` where it cannot be read.
-pub fn available_memory() -> Option<u64> {
+/// A field of Linux's `/proc/meminfo` (`"MemAvailable:"`, …) in bytes; `None` where it
+/// cannot be read.
+fn meminfo(name: &str) -> Option<u64> {
     let text = std::fs::read_to_string("/proc/meminfo").ok()?;
-    let line = text.lines().find(|l| l.starts_with("MemAvailable:"))?;
-    let kb: u64 = line
-        .trim_start_matches("MemAvailable:")
+    let line = text.lines().find(|l| l.starts_with(name))?;
+    let kb: u64 = line[name.len()..]
         .trim()
         .trim_end_matches("kB")
         .trim()
@@ -68,21 +67,16 @@ pub fn available_memory() -> Option<u64> {
     Some(kb.saturating_mul(1024))
 }
 
+/// The memory the system reports available now, in bytes (Linux `MemAvailable`);
+/// `None` where it cannot be read.
+pub fn available_memory() -> Option<u64> {
+    meminfo("MemAvailable:")
+}
+
 /// The memory this machine has, RAM and swap, in bytes (Linux `MemTotal + SwapTotal`);
 /// `None` where it cannot be read.
 pub fn total_memory() -> Option<u64> {
-    let text = std::fs::read_to_string("/proc/meminfo").ok()?;
-    let field = |name: &str| -> Option<u64> {
-        let line = text.lines().find(|l| l.starts_with(name))?;
-        let kb: u64 = line[name.len()..]
-            .trim()
-            .trim_end_matches("kB")
-            .trim()
-            .parse()
-            .ok()?;
-        Some(kb.saturating_mul(1024))
-    };
-    Some(field("MemTotal:")?.saturating_add(field("SwapTotal:").unwrap_or(0)))
+    Some(meminfo("MemTotal:")?.saturating_add(meminfo("SwapTotal:").unwrap_or(0)))
 }
 
 /// The memory limit of a render: `max_memory` if non-zero (but never more than the
