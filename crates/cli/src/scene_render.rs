@@ -471,6 +471,13 @@ pub fn bench(
     plot: Option<&Path>,
 ) -> Result<(), String> {
     if let Some(p) = plot {
+        let svg = p.extension().is_some_and(|e| e.eq_ignore_ascii_case("svg"));
+        if !svg {
+            return Err(format!(
+                "{}: --plot writes an SVG drawing; name it .svg",
+                p.display()
+            ));
+        }
         output::check_writable(p)?;
     }
     let (data, _) = resolve(input, o)?;

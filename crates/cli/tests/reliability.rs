@@ -756,6 +756,27 @@ fn negative_numbers_are_refused_as_values() {
     }
 }
 
+/// `bench --plot` writes SVG: another name is refused before anything runs, not
+/// written as SVG under a name that says otherwise.
+#[test]
+fn bench_plot_refuses_a_name_that_is_not_svg() {
+    let dir = out_dir("plot");
+    let o = frepray()
+        .arg("bench")
+        .arg(root().join("scenes/cornell.toml"))
+        .args(["--spp", "1", "--width", "4", "--height", "4", "--plot"])
+        .arg(dir.join("stages.png"))
+        .output()
+        .unwrap();
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("stages.png: --plot writes an SVG drawing; name it .svg"),
+        "{err}"
+    );
+    assert!(!dir.join("stages.png").exists());
+}
+
 /// A scene file's range errors say "a positive number", not the smallest double.
 #[test]
 fn range_errors_read_as_words() {
