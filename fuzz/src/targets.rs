@@ -81,8 +81,8 @@ pub fn root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
 }
 
-/// Every shipped file of the target's kind under `models/`, `scenes/` and the shared
-/// models (`../shared/models`), and the docs' code blocks in its language.
+/// Every shipped file of the target's kind under `models/` and `scenes/`, and the docs'
+/// code blocks in its language.
 pub fn seeds(t: Target) -> Vec<Vec<u8>> {
     if t == Target::SelfTest {
         return vec![std::env::var("FUZZ_SELFTEST")
@@ -94,11 +94,7 @@ pub fn seeds(t: Target) -> Vec<Vec<u8>> {
     }
     let r = root();
     let mut files = Vec::new();
-    for dir in [
-        r.join("models"),
-        r.join("scenes"),
-        r.join("../shared/models"),
-    ] {
+    for dir in [r.join("models"), r.join("scenes")] {
         walk(&dir, &mut files);
     }
     files.sort();
@@ -183,7 +179,6 @@ impl Sandbox {
         }
         let mut models = Vec::new();
         walk(&r.join("models"), &mut models);
-        walk(&r.join("../shared/models"), &mut models);
         for f in models {
             if std::fs::metadata(&f).is_ok_and(|m| m.len() <= MAX_SEED) {
                 let _ = std::fs::copy(&f, dir.join("models").join(f.file_name().unwrap()));

@@ -30,7 +30,7 @@ usage: fidget-compare [MODEL.vm ...] [--out DIR] [--points N] [--batch B] [--rep
                       [--sizes 512,1024] [--half NAME=H ...]
 
 MODEL.vm   Fidget tapes (default: colonnade.vm and tanglecube.vm in
-           <crate>/../../../shared/models/fidget)
+           <crate>/../../models/fidget)
 --out      output folder for depth PNGs and results.md (default: out)
 --points   random points for the point-evaluation rate (default 1000000)
 --batch    Fidget float-slice batch length (default 4096)
@@ -93,7 +93,7 @@ impl Args {
             }
         }
         if a.models.is_empty() {
-            let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/models/fidget");
+            let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models/fidget");
             a.models = vec![dir.join("colonnade.vm"), dir.join("tanglecube.vm")];
         }
         Ok(a)

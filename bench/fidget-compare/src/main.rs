@@ -1,7 +1,7 @@
 //! Side-by-side benchmark of frepray's FRep kernel (`frep`) against the `fidget` crate.
 //!
 //! For each Fidget `.vm` model given (default: colonnade and tanglecube from
-//! `shared/models/fidget`), it measures
+//! `models/fidget`), it measures
 //!
 //! 1. point evaluation: the same pseudo-random points, Fidget's VM interpreter and JIT
 //!    (float-slice evaluation in batches) against `frep::Expr::eval_with` over f64 and f32

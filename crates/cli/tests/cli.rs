@@ -39,8 +39,8 @@ fn channel(path: &Path, name: &str) -> Vec<f32> {
 #[test]
 fn renders_every_model_framed() {
     let models = [
-        "../shared/models/fidget/colonnade.vm",
-        "../shared/models/fidget/tanglecube.vm",
+        "models/fidget/colonnade.vm",
+        "models/fidget/tanglecube.vm",
         "models/canonical/s1_sphere.hf",
         "models/canonical/s2_csg.hf",
         "models/canonical/s3_blend.hf",
@@ -150,7 +150,7 @@ fn check_summarises_a_model() {
     ] {
         let st = frepray()
             .arg("check")
-            .arg(root().join(format!("../shared/models/fidget/{m}.vm")))
+            .arg(root().join(format!("models/fidget/{m}.vm")))
             .output()
             .unwrap();
         assert!(st.status.success());

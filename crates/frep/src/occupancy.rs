@@ -691,11 +691,11 @@ mod tests {
         let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
         // Named, not listed from the folders: a file added there must not change the test.
         let models = [
-            "../shared/models/fidget/colonnade.vm",
-            "../shared/models/fidget/hi.vm",
-            "../shared/models/fidget/prospero.vm",
-            "../shared/models/fidget/quarter.vm",
-            "../shared/models/fidget/tanglecube.vm",
+            "models/fidget/colonnade.vm",
+            "models/fidget/hi.vm",
+            "models/fidget/prospero.vm",
+            "models/fidget/quarter.vm",
+            "models/fidget/tanglecube.vm",
             "models/canonical/s1_sphere.hf",
             "models/canonical/s2_csg.hf",
             "models/canonical/s3_blend.hf",
@@ -744,7 +744,7 @@ mod tests {
     fn parallel_subtrees_give_the_one_thread_grid() {
         let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
         for m in [
-            "../shared/models/fidget/colonnade.vm",
+            "models/fidget/colonnade.vm",
             "models/canonical/s3_blend.hf",
         ] {
             let model = read_file(&root.join(m)).unwrap_or_else(|e| panic!("{m}: {e}"));

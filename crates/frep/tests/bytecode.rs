@@ -12,7 +12,7 @@ fn models() -> Vec<(PathBuf, Model)> {
     let dirs = [
         root().join("models/examples"),
         root().join("models/canonical"),
-        shared("fidget"),
+        model_file("fidget"),
     ];
     for dir in dirs {
         let Ok(entries) = std::fs::read_dir(&dir) else {

@@ -136,7 +136,7 @@ fn a_batch_of_rays_allocates_nothing() {
         ("gyroid", gyroid),
         ("csg", csg),
         // A quartic, searched in Bernstein form (frep::poly_trace).
-        ("tanglecube", model("../shared/models/fidget/tanglecube.vm")),
+        ("tanglecube", model("models/fidget/tanglecube.vm")),
     ] {
         let s = Solid::build(&shape).unwrap();
         let trace = |rays: &[Ray]| {

@@ -17,8 +17,8 @@ fn occludes_is_whether_intersect_hits() {
         root().join("models/examples/bumpy_ball.frep"),
         root().join("scenes/models/table.frep"),
         root().join("models/examples/machined_part.frep"),
-        shared("fidget/tanglecube.vm"),
-        shared("fidget/quarter.vm"),
+        model_file("fidget/tanglecube.vm"),
+        model_file("fidget/quarter.vm"),
     ];
     for m in &models {
         let model = read_file(m).unwrap_or_else(|e| panic!("{}: {e}", m.display()));

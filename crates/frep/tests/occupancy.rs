@@ -60,7 +60,7 @@ fn the_grid_changes_no_hit() {
         "models/canonical/s5_twist.hf",
         "models/examples/smooth_blob.frep",
         "models/examples/machined_part.frep",
-        "../shared/models/fidget/quarter.vm",
+        "models/fidget/quarter.vm",
     ];
     let mut total = (0, 0, 0);
     for m in models {
@@ -125,8 +125,8 @@ fn cell_tapes_equal_the_whole_tape() {
         "models/canonical/s2_csg.hf",
         "models/canonical/s3_blend.hf",
         "models/examples/machined_part.frep",
-        "../shared/models/fidget/colonnade.vm",
-        "../shared/models/fidget/quarter.vm",
+        "models/fidget/colonnade.vm",
+        "models/fidget/quarter.vm",
     ] {
         let model = read_file(&path(m)).unwrap_or_else(|e| panic!("{m}: {e}"));
         let solid = Solid::build(&model.shape).unwrap();
@@ -178,7 +178,7 @@ fn clear_blocks_change_no_run() {
         "models/canonical/s2_csg.hf",
         "models/canonical/s4_gyroid.hf",
         "models/examples/machined_part.frep",
-        "../shared/models/fidget/colonnade.vm",
+        "models/fidget/colonnade.vm",
     ] {
         let model = read_file(&path(m)).unwrap_or_else(|e| panic!("{m}: {e}"));
         let solid = Solid::build(&model.shape).unwrap();
@@ -262,7 +262,7 @@ fn the_grid_is_the_same_at_any_thread_count() {
         "models/canonical/s2_csg.hf",
         "models/examples/smooth_blob.frep",
         "models/canonical/s4_gyroid.hf",
-        "../shared/models/fidget/colonnade.vm",
+        "models/fidget/colonnade.vm",
     ] {
         let model = read_file(&path(m)).unwrap_or_else(|e| panic!("{m}: {e}"));
         let build = |threads: usize| {

@@ -14,7 +14,7 @@ fn fidget_models_load_and_negate() {
         "tanglecube.vm",
     ] {
         let t = std::time::Instant::now();
-        let m = read_file(&shared(&format!("fidget/{f}"))).unwrap_or_else(|e| panic!("{e}"));
+        let m = read_file(&model_file(&format!("fidget/{f}"))).unwrap_or_else(|e| panic!("{e}"));
         assert!(
             t.elapsed().as_secs_f64() < 5.0,
             "{f} took {:?}",
@@ -24,7 +24,7 @@ fn fidget_models_load_and_negate() {
         assert!(e.len() > 5, "{f}");
         assert!(e.eval([0.1, 0.2, 0.3]).is_finite(), "{f}");
     }
-    let q = read_file(&shared("fidget/quarter.vm")).unwrap();
+    let q = read_file(&model_file("fidget/quarter.vm")).unwrap();
     agree(
         &q,
         |[x, y, _]| -(x.max(y).max(x * x + y * y - 0.5)),
@@ -33,7 +33,7 @@ fn fidget_models_load_and_negate() {
     );
     let e = expr(&q);
     assert!(e.eval([-0.3, -0.3, 0.0]) > 0.0 && e.eval([0.3, 0.3, 0.0]) < 0.0);
-    let t = read_file(&shared("fidget/tanglecube.vm")).unwrap();
+    let t = read_file(&model_file("fidget/tanglecube.vm")).unwrap();
     let tangle = |[x, y, z]: [f64; 3]| {
         -(x.powi(4) - 5.0 * x * x + y.powi(4) - 5.0 * y * y + z.powi(4) - 5.0 * z * z + 10.0)
     };

@@ -50,7 +50,7 @@ fn models() -> Vec<Model> {
     let files: [(&str, PathBuf, f64); 6] = [
         (
             "tanglecube",
-            root.join("../shared/models/fidget/tanglecube.vm"),
+            root.join("models/fidget/tanglecube.vm"),
             5.0,
         ),
         ("s2_csg", root.join("models/canonical/s2_csg.hf"), 1.6),

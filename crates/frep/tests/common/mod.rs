@@ -13,9 +13,9 @@ pub fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..")
 }
 
-pub fn shared(p: &str) -> PathBuf {
+pub fn model_file(p: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../../shared/models")
+        .join("../../models")
         .join(p)
 }
 
