@@ -19,8 +19,8 @@ and LLVM kernel compilation untimed, as frepray's statistics leave out its loadi
 MRays/s is frepray's own count (Mitsuba does not report rays). Every timed render starts
 after a pause (--settle, 0.1 s): Dr.Jit's worker threads keep spinning for a few
 milliseconds after a Mitsuba render returns, and a render started at once shares the
-cores with them (frepray measured right after `llvm_ad_rgb` ran up to a quarter slower than
-after a 20 ms pause: settle.py; docs/benchmarks.md).
+cores with them (frepray measured right after `llvm_ad_rgb` ran slower than after a 20 ms
+pause: settle.py; docs/notebook/2026-12-01-cpu-speed-round-4.md).
 
 Mean images and |z| maps (0 black, 8 and above white) are written to --out.
 `--g2 correlated` gives Mitsuba's rough conductors frepray's height-correlated G2 (g2.py);

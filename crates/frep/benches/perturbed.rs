@@ -121,7 +121,8 @@ fn measure(s: &PerturbedSurface, rays: &[Ray]) -> (f64, usize) {
 fn main() {
     let rays = camera();
     // `PERTURBED_ONE_PASS=N`: one untimed pass at N perturbations, for instruction counts
-    // that other builds on the machine cannot disturb (valgrind, docs/benchmarks.md).
+    // that other builds on the machine cannot disturb (valgrind; docs/benchmarks.md and
+    // docs/notebook/2026-11-21-perturbed-quadrics-scaling.md).
     if let Ok(n) = std::env::var("PERTURBED_ONE_PASS") {
         let s = PerturbedSurface::new(&scene(n.parse().expect("a count")));
         let hits = rays

@@ -1,5 +1,5 @@
 //! Measures what evaluating several rays per pass over a tape would save, for planning
-//! (docs/benchmarks.md, "Issue 10 … where it ends"): over every occupied cell of a
+//! (docs/benchmarks.md, "frepray against Fidget"): over every occupied cell of a
 //! model's 64³ grid, the tape simplified for that cell, and 8 vertical ray segments
 //! through the cell, it times
 //!

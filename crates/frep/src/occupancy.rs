@@ -39,7 +39,8 @@ pub const BLOCK: usize = 4;
 /// `floor(x)` clamped to `[0, last]`, as an index: the same value as
 /// `(x.floor() as i64).clamp(0, last)` for every x (NaN gives 0), without `f64::floor`,
 /// which x86-64's baseline (no SSE4.1 `roundsd`) turns into a call to a generic libm
-/// routine (3.7 % of a colonnade ray's instructions, docs/benchmarks.md).
+/// routine (its share of a colonnade ray's instructions:
+/// docs/notebook/2026-12-02-cpu-speed-round-10.md).
 #[inline(always)]
 fn floor_index(x: f64, last: i64) -> i64 {
     // Truncation saturates (NaN → 0); below zero it rounds up, so step down where it did.
@@ -482,8 +483,9 @@ const MEAN_VALUE_SIZE: usize = 4;
 /// boxes, which overestimates sums like x⁴ − 5x² by their whole range (the dependency
 /// problem); both are enclosures, so either may exclude. F(c) is evaluated in plain
 /// intervals: a dual number's value part takes the same interval operations, so it is
-/// the same enclosure, without the three derivatives' work (a fifth of the table
-/// scene's loading instructions; docs/benchmarks.md, ninth round).
+/// the same enclosure, without the three derivatives' work (measured on the table
+/// scene's loading in
+/// docs/notebook/2026-12-02-cpu-speed-round-9-perturbed-walk-and-scene-loading.md).
 fn mean_value_sign(
     tape: &[Node],
     lo: DVec3,

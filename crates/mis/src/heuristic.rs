@@ -86,7 +86,7 @@ impl Heuristic {
     /// with β = 2 takes `x_k = q_k / max` through one reciprocal, and `w_t / q_t =
     /// x_t² / (Σ x_k² · q_t) = x_t / (max · Σ x_k²)`: two divisions where
     /// [`Self::weight`] then `/ q_t` takes T + 2 (each draw of every scene under the power
-    /// heuristic pays them; docs/benchmarks.md, tenth round).
+    /// heuristic pays them; docs/notebook/2026-12-02-cpu-speed-round-10.md).
     #[inline]
     pub fn scale(&self, t: usize, counts: &[f64], pdfs: &[f64]) -> f64 {
         debug_assert_eq!(counts.len(), pdfs.len());

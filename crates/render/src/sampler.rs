@@ -57,7 +57,7 @@ fn philox_sse2(c: [u32; 4], k: [u32; 2]) -> [u32; 4] {
 /// [`philox_sse2`] on `N` counters at once, their rounds interleaved: each round of one
 /// counter waits on the last (a multiply, a shuffle and an exclusive or: about 5 cycles,
 /// 50 for the ten), and the other counters' rounds fill those waits, so four cost little
-/// more time than one (docs/benchmarks.md, eleventh round).
+/// more time than one (docs/notebook/2026-12-02-cpu-speed-round-11-time-profile.md).
 #[cfg(target_arch = "x86_64")]
 #[inline]
 fn philox_sse2_n<const N: usize>(c: [[u32; 4]; N], k: [u32; 2]) -> [[u32; 4]; N] {

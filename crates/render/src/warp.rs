@@ -36,7 +36,8 @@ const fn taylor(first: u32) -> [f64; 8] {
 /// whose truncation is below 10⁻¹⁶ of the result there, in Horner form over x². Within
 /// 2 ulps of `f64::sin_cos` (`sin_cos_kernel_is_within_two_ulps`), at about half the
 /// instructions of glibc's `sincos` and no call: every sampled direction takes one
-/// (2.6 % of the diffuse scene's instructions went to `sincos`, docs/benchmarks.md).
+/// (the share of the diffuse scene's instructions that went to `sincos`:
+/// docs/notebook/2026-12-02-cpu-speed-round-10.md).
 #[inline]
 pub fn sin_cos_kernel(x: f64) -> (f64, f64) {
     let z = x * x;

@@ -7,8 +7,9 @@
 //! The queue is an array kept in descending order, popped from its end and filled by
 //! insertion from the end. Pending entries are few (the front of the walk), and an
 //! insertion has one unpredictable branch where a binary heap's sifts have several:
-//! over the perturbed benchmark at 4096 perturbations, 11 % fewer mispredicted
-//! branches and 2 % fewer instructions than the heap (docs/benchmarks.md, ninth round).
+//! over the perturbed benchmark at 4096 perturbations, fewer mispredicted branches and
+//! instructions than the heap (measured in
+//! docs/notebook/2026-12-02-cpu-speed-round-9-perturbed-walk-and-scene-loading.md).
 
 use super::{BvhRef, Slab};
 use crate::ray::{Aabb, Ray};

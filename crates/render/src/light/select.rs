@@ -391,8 +391,8 @@ impl Lights {
 
     /// [`Self::along`] written over `out`: a caller that keeps one [`Along`] for all
     /// its draws copies nothing (returned by value, the list of a few hundred bytes was
-    /// built on the callee's stack and copied out on every draw: about 1 % of the
-    /// diffuse scene's instructions, docs/benchmarks.md).
+    /// built on the callee's stack and copied out on every draw; its share of the
+    /// diffuse scene's instructions: docs/notebook/2026-12-01-cpu-speed-round-4.md).
     pub fn along_into(&self, ray: &Ray, area: bool, out: &mut Along) {
         self.walk_crossed(ray, area, true, out)
     }
