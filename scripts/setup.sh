@@ -5,10 +5,23 @@
 # the GPU back end runs and is tested on machines without a GPU (../shared/GPU.md §11.1).
 # The Python package: a virtual environment in .venv (Python ≥ 3.11) with the pinned
 # tools of python/requirements-dev.txt (maturin, numpy, pytest, Ray), and frepray built
-# into it by maturin (release, editable: python/frepray); `setup.sh --no-python` skips it
-# (the main job renders with the CLI alone).
+# into it by maturin (editable: python/frepray). Options:
+#   --no-python   skip the Python package (the CLI alone renders the main job);
+#   --no-gpu      skip Mesa's lavapipe (a CPU-only build needs no Vulkan driver);
+#   --dev         build the extension in the dev profile (optimised, not across crates:
+#                 the build `cargo test` shares, as scripts/test.sh wants) instead of
+#                 release.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+python=1 gpu=1 profile=--release
+for a in "$@"; do
+  case $a in
+    --no-python) python= ;;
+    --no-gpu) gpu= ;;
+    --dev) profile= ;;
+    *) echo "setup: unknown option $a (expected --no-python, --no-gpu, --dev)" >&2; exit 2 ;;
+  esac
+done
 if ! command -v cargo >/dev/null 2>&1; then
   if [ -x "$HOME/.cargo/bin/cargo" ]; then
     export PATH="$HOME/.cargo/bin:$PATH"
@@ -21,7 +34,7 @@ rustup component add rustfmt clippy >/dev/null 2>&1 || true
 
 # lavapipe, at the versions GPU.md measured (Debian 12's main archive).
 LAVAPIPE="mesa-vulkan-drivers=22.3.6-1+deb12u2 libvulkan1=1.3.239.0-1"
-if ! dpkg -s mesa-vulkan-drivers libvulkan1 >/dev/null 2>&1; then
+if [ -n "$gpu" ] && ! dpkg -s mesa-vulkan-drivers libvulkan1 >/dev/null 2>&1; then
   if [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then
     echo "setup: installing Mesa's lavapipe for the GPU tests" >&2
     apt-get update -qq >/dev/null
@@ -34,7 +47,7 @@ if ! dpkg -s mesa-vulkan-drivers libvulkan1 >/dev/null 2>&1; then
   fi
 fi
 
-[ "${1:-}" = --no-python ] && exit 0
+[ -z "$python" ] && exit 0
 PYTHON="${PYTHON:-python3}"
 echo "setup: the Python package (.venv, built by maturin)" >&2
 if [ ! -x .venv/bin/python ]; then
@@ -45,4 +58,5 @@ if [ ! -x .venv/bin/python ]; then
   "$PYTHON" -m venv .venv
 fi
 .venv/bin/python -m pip install -q --disable-pip-version-check -r python/requirements-dev.txt
-VIRTUAL_ENV="$PWD/.venv" .venv/bin/maturin develop -q --release -m python/Cargo.toml
+# shellcheck disable=SC2086
+VIRTUAL_ENV="$PWD/.venv" .venv/bin/maturin develop -q $profile -m python/Cargo.toml

@@ -15,7 +15,7 @@ step() {
 }
 summary() { [ ${#times[@]} -gt 0 ] && printf 'test: %s\n' "${times[@]}" >&2; }
 trap summary EXIT
-step "setup (lavapipe, .venv with the Python package)" bash scripts/setup.sh
+step "setup (lavapipe, .venv with the Python package)" bash scripts/setup.sh --dev
 [ -x "$HOME/.cargo/bin/cargo" ] && export PATH="$HOME/.cargo/bin:$PATH"
 step "cargo fmt --check" cargo fmt --all -- --check
 step "cargo clippy" cargo clippy --workspace --all-targets -- -D warnings

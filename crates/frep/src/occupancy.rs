@@ -745,10 +745,7 @@ mod tests {
     #[test]
     fn parallel_subtrees_give_the_one_thread_grid() {
         let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
-        for m in [
-            "models/fidget/colonnade.vm",
-            "models/canonical/s3_blend.hf",
-        ] {
+        for m in ["models/fidget/colonnade.vm", "models/canonical/s3_blend.hf"] {
             let model = read_file(&root.join(m)).unwrap_or_else(|e| panic!("{m}: {e}"));
             let crate::Shape::Function { tree, .. } = &model.shape else {
                 panic!("{m}: not one expression");

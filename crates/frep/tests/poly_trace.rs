@@ -65,8 +65,7 @@ fn rays(b: &Aabb, seed: u64) -> Vec<Ray> {
 
 #[test]
 fn tanglecube_crossings_are_the_interval_searchs() {
-    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../models/fidget/tanglecube.vm");
+    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../models/fidget/tanglecube.vm");
     let model = read_file(&p).unwrap_or_else(|e| panic!("{e}"));
     let solid = Solid::build(&model.shape).unwrap();
     let mut n = 0;

@@ -398,19 +398,20 @@ fn independent_seed_images_agree() {
 
 /// Every other estimator takes the GPU's draws as it takes the CPU's: power, maximum,
 /// cutoff and the four optimal ones on `direct` (the progressive ones solving after one
-/// iteration), same seed, the same z-tests.
+/// iteration), same seed, the same z-tests. The test command runs one of each family
+/// (a heuristic, a direct solve, a progressive solve); `FREPRAY_LONG=1` all.
 #[test]
 fn every_estimator_agrees() {
     let Some(g) = device() else { return };
-    for method in [
-        mis::Method::Power,
-        mis::Method::Maximum,
-        mis::Method::Cutoff,
-        mis::Method::OptimalDirect,
-        mis::Method::OptimalUncorrelated,
-        mis::Method::OptimalProgressive,
-        mis::Method::OptimalFull,
-    ] {
+    for method in common::cases(vec![
+        (true, mis::Method::Power),
+        (false, mis::Method::Maximum),
+        (false, mis::Method::Cutoff),
+        (true, mis::Method::OptimalDirect),
+        (false, mis::Method::OptimalUncorrelated),
+        (true, mis::Method::OptimalProgressive),
+        (false, mis::Method::OptimalFull),
+    ]) {
         let mut s = load(SCENE);
         s.2.method = method;
         // Solves within a 2-spp sub-render: the progressive estimators after 1
@@ -424,19 +425,22 @@ fn every_estimator_agrees() {
 /// Per-light mode (one optimal-direct estimator per MIS light, Kondapaneni et al. 2019
 /// §7): the GPU tells each draw the light its ray reaches, on the test scene (3 area
 /// lights) and under the sky map (the environment the fourth); same seed, the same
-/// z-tests.
+/// z-tests (under the sky map with `FREPRAY_LONG=1`).
 #[test]
 fn per_light_images_agree() {
     let Some(g) = device() else { return };
     let sky = concat!(env!("CARGO_MANIFEST_DIR"), "/../../scenes/sky.exr");
-    for (label, text, lights) in [
-        ("per light", SCENE.to_string(), 3),
+    for (label, text, lights) in common::cases(vec![
+        (true, ("per light", SCENE.to_string(), 3)),
         (
-            "per light, under the sky map",
-            format!("{SCENE}\n[environment]\nmap = \"{sky}\"\nscale = 0.5\n"),
-            4,
+            false,
+            (
+                "per light, under the sky map",
+                format!("{SCENE}\n[environment]\nmap = \"{sky}\"\nscale = 0.5\n"),
+                4,
+            ),
         ),
-    ] {
+    ]) {
         let mut s = load(&text);
         s.2.method = mis::Method::OptimalDirect;
         s.2.per_light = lights;
@@ -490,16 +494,17 @@ fn aovs_agree() {
 
 /// `path` (depth 3, roulette from depth 2) with the power heuristic and with
 /// optimal-progressive per depth, depths 2–3 alone (`min_depth`), and without a BSDF
-/// technique: the same z-tests as `direct`, same seed.
+/// technique: the same z-tests as `direct`, same seed (the last two with
+/// `FREPRAY_LONG=1`).
 #[test]
 fn path_images_agree() {
     let Some(g) = device() else { return };
-    for (method, min_depth, bsdf) in [
-        (mis::Method::Power, 0, true),
-        (mis::Method::OptimalProgressive, 0, true),
-        (mis::Method::Power, 2, true),
-        (mis::Method::Balance, 0, false),
-    ] {
+    for (method, min_depth, bsdf) in common::cases(vec![
+        (true, (mis::Method::Power, 0, true)),
+        (true, (mis::Method::OptimalProgressive, 0, true)),
+        (false, (mis::Method::Power, 2, true)),
+        (false, (mis::Method::Balance, 0, false)),
+    ]) {
         let mut s = load(SCENE);
         if !bsdf {
             // No BSDF technique: an extra BSDF draw extends the paths and serves the
@@ -527,7 +532,9 @@ fn path_images_agree() {
 /// the shading point) without and with the map; the trained selection (`light-trained`,
 /// its table trained on the CPU) on the test scene and on the teaser's rooms (whose
 /// walls, a union of more than 8 boxes, are a CSG tree of grouped nodes). Same seed,
-/// the same z-tests as the other scenes.
+/// the same z-tests as the other scenes. The test command runs the dome, the map with
+/// the `environment` technique and the spatial and trained selections on the test
+/// scene; `FREPRAY_LONG=1` every case.
 #[test]
 fn environments_and_light_selections_agree() {
     let Some(g) = device() else { return };
@@ -585,7 +592,12 @@ fn environments_and_light_selections_agree() {
             false,
         ),
     ];
-    for (label, text, path) in cases {
+    let quick = [true, true, false, false, true, true, false, false];
+    for (_, (label, text, path)) in cases
+        .into_iter()
+        .enumerate()
+        .filter(|(i, _)| common::long() || quick[*i])
+    {
         let mut s = load(&text);
         if path {
             s.2.integrator = render::integrator::IntegratorKind::Path;

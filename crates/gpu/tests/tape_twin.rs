@@ -48,11 +48,7 @@ struct Model {
 fn models() -> Vec<Model> {
     let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..");
     let files: [(&str, PathBuf, f64); 6] = [
-        (
-            "tanglecube",
-            root.join("models/fidget/tanglecube.vm"),
-            5.0,
-        ),
+        ("tanglecube", root.join("models/fidget/tanglecube.vm"), 5.0),
         ("s2_csg", root.join("models/canonical/s2_csg.hf"), 1.6),
         ("s3_blend", root.join("models/canonical/s3_blend.hf"), 1.6),
         (

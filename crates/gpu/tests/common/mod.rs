@@ -22,6 +22,22 @@ pub fn gpu(options: GpuOptions) -> Option<Gpu> {
     }
 }
 
+/// Whether the long comparisons run (`FREPRAY_LONG=1`, as `scripts/long-test.sh` sets):
+/// every case of each image comparison. The test command runs one case per integrator
+/// and estimator family.
+pub fn long() -> bool {
+    std::env::var("FREPRAY_LONG").as_deref() == Ok("1")
+}
+
+/// The cases to run: all when [`long`], else those `quick` marks.
+pub fn cases<T>(all: Vec<(bool, T)>) -> Vec<T> {
+    let long = long();
+    all.into_iter()
+        .filter(|(quick, _)| long || *quick)
+        .map(|(_, c)| c)
+        .collect()
+}
+
 /// A small deterministic generator for test inputs (SplitMix64, Steele et al. 2014);
 /// each test adds the shapes of input it needs in an `impl Rng` of its own.
 pub struct Rng(pub u64);
