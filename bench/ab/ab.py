@@ -5,7 +5,7 @@ both alike; prints the median MSamples/s and MRays/s of each and the ratio B/A, 
 load average before and after.
 
     python3 bench/ab/ab.py --reps 3 OLD/frepray NEW/frepray -- \
-        --mis balance --spp 8 --width 160 --height 120 --techniques light:1,bsdf:1,light-area:1
+        --estimator balance --spp 8 --width 160 --height 120 --techniques light:1,bsdf:1,light-area:1
 
 Scenes default to the paper's two (scenes/many-lights.toml, scenes/table.toml)."""
 

@@ -4,7 +4,7 @@ across the techniques, 5 rounds, median wall time of each process (docs/light-se
 Run from the repository root after `cargo build --release -p frepray-cli`."""
 import subprocess, time, statistics, os
 B="target/release/frepray"
-base=["render","scenes/many-lights.toml","--integrator","direct","--mis","balance","--spp","16","--width","64","--height","48","--hide-emitters","--threads","1","-o","/tmp/tr.exr"]
+base=["render","scenes/many-lights.toml","--integrator","direct","--estimator","balance","--spp","16","--width","64","--height","48","--hide-emitters","--threads","1","-o","/tmp/tr.exr"]
 T=["light-power:1,bsdf:1","light-uniform:1,bsdf:1","light-spatial:1,bsdf:1","light-trained:1,bsdf:1","light#*:1,bsdf:1"]
 times={t:[] for t in T}
 print("load before", open("/proc/loadavg").read().split()[:3])

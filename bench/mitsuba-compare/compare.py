@@ -55,7 +55,7 @@ STATS = re.compile(r"(direct|path): ([\d.]+) s on \d+ threads, (\d+) samples "
 
 def mitsuba_integrator(kind, max_depth):
     if kind == "direct":
-        # One draw of each technique, power heuristic: frepray's `--mis power` with
+        # One draw of each technique, power heuristic: frepray's `--estimator power` with
         # techniques bsdf:1, light-uniform:1 (Mitsuba picks an emitter uniformly).
         return {"type": "direct", "emitter_samples": 1, "bsdf_samples": 1}
     # Mitsuba's max_depth counts path segments (2 = direct lighting), frepray's counts

@@ -45,12 +45,12 @@ def main():
     for tech in a.techniques:
         t = len(tech.split(","))
         common = ["--techniques", tech]
-        setup = instructions(a.binary, a.scene, [*common, "--mis", "balance", "--width", "1",
+        setup = instructions(a.binary, a.scene, [*common, "--estimator", "balance", "--width", "1",
                                                  "--height", "1", "--spp", "1"])
-        base = instructions(a.binary, a.scene, [*common, "--mis", "balance", *rest]) - setup
+        base = instructions(a.binary, a.scene, [*common, "--estimator", "balance", *rest]) - setup
         print(f"| {tech} | {t} | balance | {base} | 0 |", flush=True)
         for est in a.estimators.split(","):
-            ir = instructions(a.binary, a.scene, [*common, "--mis", est, *rest]) - setup
+            ir = instructions(a.binary, a.scene, [*common, "--estimator", est, *rest]) - setup
             print(f"| {tech} | {t} | {est} | {ir} | {100 * (ir / base - 1):+.2f} % |",
                   flush=True)
 

@@ -55,7 +55,7 @@ def test_image_arrays(many_lights):
 def test_numpy_equals_the_cli_exr(many_lights, cli, tmp_path):
     exr = tmp_path / "cli.exr"
     run_cli(cli, "render", many_lights.source()[1], "-o", exr, "--spp", "2",
-            "--seed", "7", "--mis", "optimal-direct", "--width", "24", "--height", "16",
+            "--seed", "7", "--estimator", "optimal-direct", "--width", "24", "--height", "16",
             "--aovs", "depth", "--quiet")
     st = frepray.render(many_lights, spp=2, seed=7, estimator="optimal-direct",
                         aovs=["depth"], **SMALL)
@@ -74,7 +74,7 @@ def test_numpy_equals_the_cli_exr(many_lights, cli, tmp_path):
 def test_per_light_and_pixel_center_equal_the_cli(many_lights, cli, tmp_path, flags):
     exr = tmp_path / "cli.exr"
     run_cli(cli, "render", many_lights.source()[1], "-o", exr, "--spp", "2", "--seed", "5",
-            "--mis", "optimal-direct", "--width", "24", "--height", "16", "--quiet", *flags)
+            "--estimator", "optimal-direct", "--width", "24", "--height", "16", "--quiet", *flags)
     st = frepray.render(many_lights, spp=2, seed=5, estimator="optimal-direct",
                         per_light="--per-light" in flags,
                         pixel_center="--pixel-center" in flags, **SMALL)
@@ -156,7 +156,7 @@ def test_training_options_and_min_depth_equal_the_cli(many_lights, cli, tmp_path
                                                    max_depth=2))]:
         exr = tmp_path / "cli.exr"
         run_cli(cli, "render", many_lights.source()[1], "-o", exr, "--spp", "2", "--seed",
-                "5", "--mis", "optimal-direct", "--width", "24", "--height", "16",
+                "5", "--estimator", "optimal-direct", "--width", "24", "--height", "16",
                 "--quiet", *flags)
         st = frepray.render(many_lights, spp=2, seed=5, estimator="optimal-direct",
                             **opts, **SMALL)

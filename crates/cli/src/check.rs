@@ -90,6 +90,15 @@ fn model(file: &Path) -> Result<(), String> {
         expr.len()
     );
     out!("perturbed quadrics: {quadrics}, perturbations: {perts}");
+    // A 2-D model (Fidget's prospero.vm): `render` shows it from the top.
+    let planar = !expr.nodes().contains(&frep::Node::Var(frep::Var::Z));
+    out!(
+        "dimensions:    {}",
+        match planar {
+            true => "2-D (F does not depend on z; rendered from the top, parallel rays)",
+            false => "3-D",
+        }
+    );
     // How rays search its expression solids: a polynomial of low degree in Bernstein
     // form, anything else by interval arithmetic.
     let flat = solid.flat();

@@ -108,9 +108,10 @@ struct RenderArgs {
     /// Samples per pixel [scene's, or 4 for models].
     #[arg(long)]
     spp: Option<u32>,
-    /// MIS heuristic or estimator (scenes): balance, power, maximum, cutoff,
-    /// optimal-direct, optimal-uncorrelated, optimal-progressive, optimal-full.
-    #[arg(long)]
+    /// MIS estimator (scenes; the scene file's `estimator`): balance, power, maximum,
+    /// cutoff (the heuristics), optimal-direct, optimal-uncorrelated,
+    /// optimal-progressive, optimal-full. `--mis` is its older name.
+    #[arg(long = "estimator", alias = "mis", value_name = "NAME")]
     mis: Option<String>,
     /// Sampling techniques and samples of each (scenes), e.g. `light:1,bsdf:1`; names:
     /// bsdf, light-power (alias light), light-uniform, light-area, light-spatial,
@@ -131,13 +132,13 @@ struct RenderArgs {
     /// every depth sum to the full one [default: 0].
     #[arg(long)]
     min_depth: Option<u32>,
-    /// Power heuristic exponent β (scenes, `--mis power`) [default: 2].
+    /// Power heuristic exponent β (scenes, `--estimator power`) [default: 2].
     #[arg(long, allow_negative_numbers = true)]
     beta: Option<f64>,
-    /// Cutoff heuristic threshold c (scenes, `--mis cutoff`) [default: 0.5].
+    /// Cutoff heuristic threshold c (scenes, `--estimator cutoff`) [default: 0.5].
     #[arg(long, allow_negative_numbers = true)]
     cutoff: Option<f64>,
-    /// Optimal-MIS ridge λ (scenes, `--mis optimal-*`): the solve adds λ/N·tr(Â)/T to
+    /// Optimal-MIS ridge λ (scenes, `--estimator optimal-*`): the solve adds λ/N·tr(Â)/T to
     /// the diagonal [default: 0.1; 1 for optimal-uncorrelated].
     #[arg(long, allow_negative_numbers = true)]
     ridge: Option<f64>,
@@ -175,9 +176,10 @@ struct RenderArgs {
     up: UpArg,
     /// The side a model is seen from (models). With z up: front looks along +y, back
     /// along −y, left along +x, right along −x, top along −z (x right, y up: how Fidget
-    /// shows its 2-D models), bottom along +z; with x or y up the front looks along −z.
-    #[arg(long, value_enum, default_value_t = ViewArg::Iso)]
-    view: ViewArg,
+    /// shows its 2-D models), bottom along +z; with x or y up the front looks along −z
+    /// [default: iso; a 2-D model (no z): top, with parallel rays].
+    #[arg(long, value_enum)]
+    view: Option<ViewArg>,
     /// Parallel rays instead of a 30° perspective (models): the model's outline fills
     /// the image.
     #[arg(long)]
@@ -267,8 +269,8 @@ struct BenchArgs {
     /// Samples per pixel.
     #[arg(long)]
     spp: Option<u32>,
-    /// MIS heuristic or estimator.
-    #[arg(long)]
+    /// MIS estimator, as for `render` (`--mis` is its older name).
+    #[arg(long = "estimator", alias = "mis", value_name = "NAME")]
     mis: Option<String>,
     /// Sampling techniques, e.g. `light:1,bsdf:1`.
     #[arg(long)]
@@ -351,7 +353,7 @@ fn render(args: RenderArgs) -> Result<(), String> {
     set_threads(args.threads)?;
     if scene_render::is_scene(&args.input) {
         let model_only = [
-            ("--view", args.view != ViewArg::Iso),
+            ("--view", args.view.is_some()),
             ("--orthographic", args.orthographic),
             ("--up", args.up != UpArg::Z),
         ];
@@ -417,7 +419,7 @@ fn render(args: RenderArgs) -> Result<(), String> {
         ));
     }
     let scene_only = [
-        ("--mis", args.mis.is_some()),
+        ("--estimator", args.mis.is_some()),
         ("--techniques", args.techniques.is_some()),
         ("--seed", args.seed.is_some()),
         ("--max-depth", args.max_depth.is_some()),
@@ -455,7 +457,7 @@ fn render(args: RenderArgs) -> Result<(), String> {
         .output
         .iter()
         .map(|p| {
-            let f = output::format_for(p, look)?;
+            let f = output::format_for_model(p)?;
             output::check_writable(p)?;
             Ok(f)
         })
@@ -496,12 +498,25 @@ fn render(args: RenderArgs) -> Result<(), String> {
             b.hi.z
         );
     }
+    // A 2-D model is seen as Fidget shows it: from the top, parallel rays.
+    let (view, orthographic) = match args.view {
+        Some(v) => (v, args.orthographic),
+        None if model.planar => {
+            if !args.quiet {
+                note!(
+                    "note: a 2-D model (F does not depend on z): seen from the top with                      parallel rays (--view chooses another side)"
+                );
+            }
+            (ViewArg::Top, true)
+        }
+        None => (ViewArg::Iso, args.orthographic),
+    };
     let stop = stop_on_ctrl_c();
     let bar = progress_bar(args.quiet, "samples");
     let o = preview::PreviewOptions {
         up: args.up.into(),
-        view: args.view.into(),
-        orthographic: args.orthographic,
+        view: view.into(),
+        orthographic,
         width,
         height,
         look,
@@ -526,7 +541,13 @@ fn render(args: RenderArgs) -> Result<(), String> {
     } else {
         args.output.clone()
     };
-    output::write_all(&outs, &formats, &state.image(), &film)?;
+    output::write_all(
+        &outs,
+        &formats,
+        &state.image(),
+        &film,
+        output::model_values(look),
+    )?;
     note!(
         "{}{} written",
         if stats.stopped {

@@ -3,6 +3,7 @@
 //! writing every output even when one fails.
 
 use frepray::preview::Look;
+use render::value_png::Values;
 use render::{Film, Image, RenderState, Tonemap};
 use std::path::{Path, PathBuf};
 
@@ -106,8 +107,8 @@ pub fn format_for_scene(path: &Path) -> Result<Format, String> {
     }
 }
 
-/// The format for a model preview: depth and normals are EXR channels.
-pub fn format_for(path: &Path, look: Look) -> Result<Format, String> {
+/// The format for a model preview (no state files).
+pub fn format_for_model(path: &Path) -> Result<Format, String> {
     match format_for_scene(path) {
         Ok(Format::State) | Err(_) => Err(format!(
             "{}: unknown output format for a model (expected a .png or .exr file name)",
@@ -115,22 +116,15 @@ pub fn format_for(path: &Path, look: Look) -> Result<Format, String> {
         )),
         Ok(f) => Ok(f),
     }
-    .and_then(|f| match f {
-        Format::Png if look != Look::Shaded => {
-            Err(aov_png_refusal(path, &format!("{look:?}").to_lowercase()))
-        }
-        f => Ok(f),
-    })
 }
 
-/// The refusal of a PNG for `--integrator depth|normals` (scenes and models alike):
-/// distances and normal components are not display colours.
-pub fn aov_png_refusal(path: &Path, integrator: &str) -> String {
-    format!(
-        "{}: --integrator {integrator} writes values, not colours, to EXR channels; use a \
-         .exr output",
-        path.display()
-    )
+/// What a model preview's colour channels hold: values for depth and normals.
+pub fn model_values(look: Look) -> Option<Values> {
+    match look {
+        Look::Shaded => None,
+        Look::Depth => Some(Values::Depth),
+        Look::Normals => Some(Values::Normals),
+    }
 }
 
 /// Checks, before any work, that `path` can be written: its folder exists and is
@@ -223,11 +217,19 @@ pub fn list(paths: &[std::path::PathBuf]) -> String {
         .join(", ")
 }
 
-/// Writes an image whole or not at all (not as a state); a PNG through `film`.
-pub fn write(path: &Path, img: &Image, format: Format, film: &Film) -> Result<(), String> {
-    match format {
-        Format::Png => img.write_png_film(path, film),
-        Format::Exr | Format::State => img.write_exr(path),
+/// Writes an image whole or not at all (not as a state); a PNG through `film`, or as
+/// [`render::value_png`] shows `values`.
+pub fn write(
+    path: &Path,
+    img: &Image,
+    format: Format,
+    film: &Film,
+    values: Option<Values>,
+) -> Result<(), String> {
+    match (format, values) {
+        (Format::Png, Some(v)) => img.write_png_values(path, v),
+        (Format::Png, None) => img.write_png_film(path, film),
+        (Format::Exr | Format::State, _) => img.write_exr(path),
     }
     .map_err(|e| format!("{}: {e}", path.display()))
 }
@@ -243,17 +245,24 @@ pub fn write_state(
 ) -> Result<(), String> {
     let mut image = None;
     let mut failed = Vec::new();
+    let values = Values::of(state.header().integrator);
     for (p, &f) in outs.iter().zip(formats) {
         let r = if f == Format::State {
             state.write(p).map_err(|e| e.to_string())
         } else {
-            write(p, image.get_or_insert_with(|| state.image()), f, film)
+            write(
+                p,
+                image.get_or_insert_with(|| state.image()),
+                f,
+                film,
+                values,
+            )
         };
         if let Err(e) = r {
             failed.push(e);
         }
     }
-    if let Some(img) = &image {
+    if let (Some(img), None) = (&image, values) {
         clip_note(outs, formats, img, film);
     }
     written_or(outs.len(), failed)
@@ -266,13 +275,16 @@ pub fn write_all(
     formats: &[Format],
     img: &Image,
     film: &Film,
+    values: Option<Values>,
 ) -> Result<(), String> {
     let failed: Vec<String> = outs
         .iter()
         .zip(formats)
-        .filter_map(|(p, &f)| write(p, img, f, film).err())
+        .filter_map(|(p, &f)| write(p, img, f, film, values).err())
         .collect();
-    clip_note(outs, formats, img, film);
+    if values.is_none() {
+        clip_note(outs, formats, img, film);
+    }
     written_or(outs.len(), failed)
 }
 

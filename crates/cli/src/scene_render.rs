@@ -34,7 +34,7 @@ impl From<Backend> for frepray::Backend {
 type Rendered = (
     render::RenderState,
     render::RenderStats,
-    Option<gpu::direct::GpuStats>,
+    Option<frepray::backend::GpuStats>,
 );
 
 /// Renders `samples` on `backend` (the library's [`frepray::render_range_on`]); `auto`
@@ -75,30 +75,6 @@ fn cpu_line(s: &render::RenderStats) -> String {
         ms(st.shade),
         ms(st.shadow),
         ms(st.secondary)
-    )
-}
-
-/// The GPU's stage times and counters, one line.
-fn gpu_line(g: &gpu::direct::GpuStats) -> String {
-    let s = &g.stages;
-    let ms = |d: std::time::Duration| d.as_secs_f64() * 1e3;
-    format!(
-        "GPU stages: camera rays {:.1} ms, shade {:.1} ms, shadow rays {:.1} ms, \
-         continuation rays {:.1} ms (GPU timestamps); readback {:.1} ms, accumulate {:.1} ms \
-         (sums on the {}); setup {:.1} ms; \
-         {} waves; {} samples rendered on the CPU after an overflow; most loop iterations \
-         per invocation {:?}",
-        ms(s.camera),
-        ms(s.shade),
-        ms(s.shadow),
-        ms(s.secondary),
-        ms(s.readback),
-        ms(s.accumulate),
-        g.sums,
-        ms(s.setup),
-        g.waves,
-        g.cpu_fallbacks,
-        g.max_loops
     )
 }
 
@@ -194,7 +170,7 @@ impl Overrides {
 fn flag(key: &str) -> &'static str {
     match key {
         "render.spp" => "--spp",
-        "render.estimator" => "--mis",
+        "render.estimator" => "--estimator",
         "render.techniques" => "--techniques",
         "render.seed" => "--seed",
         "render.integrator" => "--integrator",
@@ -310,14 +286,6 @@ pub fn run(
     let samples = samples.unwrap_or(0..opts.spp);
     let (width, height) = (data.camera.width, data.camera.height);
     render::limits::check_memory(width, height, &opts).map_err(|e| e.to_string())?;
-    if let Some(i) = formats.iter().position(|f| *f == Format::Png) {
-        if matches!(
-            opts.integrator,
-            IntegratorKind::Depth | IntegratorKind::Normals
-        ) {
-            return Err(output::aov_png_refusal(&outs[i], opts.integrator.name()));
-        }
-    }
     let scene = Scene::from_data(&data);
     // What a render waits for before its first sample (Mitsuba's "Loading scene" line).
     let load = start.elapsed();
@@ -364,7 +332,7 @@ pub fn run(
     );
     note!("{stats}");
     if let Some(g) = &g {
-        note!("{}", gpu_line(g));
+        note!("{g}");
     } else if opts.stage_times {
         note!("{}", cpu_line(&stats));
     }
@@ -414,17 +382,17 @@ fn warn_unused(o: &Overrides, opts: &RenderOptions) {
         (
             "--beta",
             o.beta.is_some() && (!mis || opts.method != Method::Power),
-            "--mis power",
+            "--estimator power",
         ),
         (
             "--cutoff",
             o.cutoff.is_some() && (!mis || opts.method != Method::Cutoff),
-            "--mis cutoff",
+            "--estimator cutoff",
         ),
         (
             "--ridge",
             o.ridge.is_some() && (!mis || !optimal),
-            "an optimal estimator (--mis optimal-*)",
+            "an optimal estimator (--estimator optimal-*)",
         ),
         (
             "--max-depth",
@@ -432,7 +400,7 @@ fn warn_unused(o: &Overrides, opts: &RenderOptions) {
             "--integrator path",
         ),
         (
-            "--mis",
+            "--estimator",
             o.mis.is_some() && !mis,
             "--integrator direct or path",
         ),
@@ -507,14 +475,23 @@ pub fn bench(
                 integrator,
                 ..opts.clone()
             };
+            let on_gpu = |r: Range<u32>| {
+                frepray::render_range_on(
+                    frepray::Backend::Gpu,
+                    &data,
+                    &scene,
+                    &o,
+                    r,
+                    &stop,
+                    &|_, _| {},
+                )
+                .map_err(|e| e.to_string())
+            };
             // A first 1-spp render compiles the kernels: not timed (GPU.md §10).
-            gpu::direct::render_range(g, &data, &scene, &o, 0..1, &stop, &|_, _| {})
-                .map_err(|e| e.to_string())?;
-            let (_, s, gs) =
-                gpu::direct::render_range(g, &data, &scene, &o, 0..o.spp, &stop, &|_, _| {})
-                    .map_err(|e| e.to_string())?;
-            rows.push(("gpu", s));
-            stages.push((integrator, gs));
+            on_gpu(0..1)?;
+            let r = on_gpu(0..o.spp)?;
+            rows.push(("gpu", r.stats));
+            stages.extend(r.gpu.map(|g| (integrator, g)));
         }
     }
     out!(
@@ -560,24 +537,10 @@ pub fn bench(
         bars.push((format!("CPU {}", s.integrator), parts.to_vec()));
     }
     for (integrator, g) in &stages {
-        let st = &g.stages;
-        let parts = [
-            ("camera rays (GPU)", st.camera),
-            ("shade (GPU)", st.shade),
-            ("shadow rays (GPU)", st.shadow),
-            ("continuation rays (GPU)", st.secondary),
-            ("submit and read back (wall − passes)", st.readback),
-            ("accumulate", st.accumulate),
-        ];
+        let parts = g.stage_parts();
         stage_table(&format!("GPU stage ({integrator})"), &parts);
         out!("");
-        out!(
-            "per-pixel sums on the {}; kernel setup {:.1} ms (excluded); {} waves; most loop iterations per invocation (camera, shadow, shade) {:?}",
-            g.sums,
-            st.setup.as_secs_f64() * 1e3,
-            g.waves,
-            g.max_loops
-        );
+        out!("{}", g.counters());
         bars.push((format!("GPU {integrator}"), parts.to_vec()));
     }
     if let Some(p) = plot {

@@ -137,6 +137,7 @@ fn check_summarises_a_model() {
         "{text}"
     );
     assert!(text.contains("bounds:"), "{text}");
+    assert!(text.contains("dimensions:    3-D"), "{text}");
     // Which search its rays take: tanglecube is a quartic, colonnade is not a polynomial.
     for (m, want) in [
         (
@@ -218,7 +219,7 @@ fn renders_a_scene_with_overrides() {
             "render", "--quiet", "--width", "16", "--height", "12", "--spp", "2",
         ])
         .args([
-            "--mis",
+            "--estimator",
             "optimal-direct",
             "--integrator",
             "direct",
@@ -248,6 +249,7 @@ fn renders_a_scene_with_overrides() {
     assert!(load.is_some_and(|t| (0.0..600.0).contains(&t)), "{err}");
     let depth = channel(&out, "depth");
     assert!(depth.iter().any(|d| d.is_finite() && *d > 0.0));
+    // `--mis`, the older name of `--estimator`, is still taken.
     let bad = frepray()
         .args(["render", "--quiet", "--mis", "optimal-guess", "-o"])
         .arg(dir.join("never.exr"))
@@ -275,7 +277,7 @@ fn split_render_merges_through_state_files() {
         c.args([
             "render", "--quiet", "--width", "20", "--height", "14", "--spp", "6",
         ])
-        .args(["--mis", "optimal-direct"]);
+        .args(["--estimator", "optimal-direct"]);
         if let Some(r) = range {
             c.args(["--samples", r]);
         }
@@ -457,6 +459,28 @@ fn views_of_unbounded_and_2d_models() {
     // π/4 of the outline, which fills 1/1.05² of the image.
     let want = std::f64::consts::FRAC_PI_4 / 1.05f64.powi(2);
     assert!((cap - want).abs() < 0.05, "{cap} vs {want}");
+    // Without a view, a 2-D model is seen so by default, and `check` says it is 2-D.
+    let o = frepray()
+        .arg("render")
+        .arg(&disc)
+        .args([
+            "--integrator",
+            "normals",
+            "--width",
+            "40",
+            "--height",
+            "40",
+            "-o",
+        ])
+        .arg(dir.join("disc-default.exr"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success() && err.contains("a 2-D model"), "{err}");
+    assert_eq!(channel(&dir.join("disc-default.exr"), "normal.Z"), nz);
+    let o = frepray().arg("check").arg(&disc).output().unwrap();
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(text.contains("dimensions:    2-D"), "{text}");
 
     let o = frepray()
         .arg("render")
@@ -524,6 +548,59 @@ fn exposure_and_tone_mapping_shape_the_png_only() {
         .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert_eq!(std::fs::read(dir.join("film.png")).unwrap(), dark);
+}
+
+/// `depth` and `normals` renders write a PNG beside the EXR (scenes and models): at one
+/// sample per pixel, black exactly where the EXR says the ray escaped, depth as grey
+/// from white (nearest) to 20 % (farthest), normals as (n + 1)/2.
+#[test]
+fn depth_and_normals_write_png_views() {
+    let dir = out_dir("values-png");
+    for input in ["scenes/cornell.toml", "models/examples/bumpy_ball.frep"] {
+        for integrator in ["depth", "normals"] {
+            let (png, exr) = (dir.join("v.png"), dir.join("v.exr"));
+            let o = frepray()
+                .arg("render")
+                .arg(root().join(input))
+                .args(["--integrator", integrator, "--spp", "1", "--quiet"])
+                .args(["--width", "24", "--height", "18", "-o"])
+                .arg(&png)
+                .arg("-o")
+                .arg(&exr)
+                .output()
+                .unwrap();
+            let err = String::from_utf8_lossy(&o.stderr);
+            assert!(o.status.success(), "{input} {integrator}: {err}");
+            let img = image::open(&png).unwrap().to_rgb8();
+            assert_eq!(img.dimensions(), (24, 18));
+            let rgb: Vec<Vec<f32>> = ["R", "G", "B"].map(|c| channel(&exr, c)).to_vec();
+            let (near, far) = rgb[0]
+                .iter()
+                .filter(|&&d| d > 0.0)
+                .fold((f32::MAX, 0f32), |(a, b), &d| (a.min(d), b.max(d)));
+            for (i, p) in img.pixels().enumerate() {
+                let v = [rgb[0][i], rgb[1][i], rgb[2][i]];
+                let escaped = v.iter().all(|&c| c == 0.0);
+                assert_eq!(p.0 == [0, 0, 0], escaped, "{input} {integrator} pixel {i}");
+                if escaped {
+                    continue;
+                }
+                let want = if integrator == "depth" {
+                    let g = 1.0 - 0.8 * (v[0] - near) / (far - near);
+                    [g; 3]
+                } else {
+                    v.map(|n| 0.5 * (n + 1.0))
+                };
+                for c in 0..3 {
+                    let d = (f32::from(p.0[c]) / 255.0 - want[c]).abs();
+                    assert!(
+                        d <= 1.0 / 255.0,
+                        "{input} {integrator} pixel {i}: {p:?} {want:?}"
+                    );
+                }
+            }
+        }
+    }
 }
 
 /// `--backend gpu` refuses, before any work and naming the feature, a scene the GPU back

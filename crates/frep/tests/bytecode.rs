@@ -6,7 +6,7 @@ mod common;
 use common::*;
 use frep::bytecode::{Bytecode, MAX_REGISTERS};
 
-/// Every model file in models/ and the shared models folder that frep reads.
+/// Every model file under models/ that frep reads.
 fn models() -> Vec<(PathBuf, Model)> {
     let mut out = Vec::new();
     let dirs = [

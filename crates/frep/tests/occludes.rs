@@ -5,7 +5,7 @@
 
 mod common;
 
-use common::{read_file, root, shared};
+use common::{model_file, read_file, root};
 use frep::solid::Solid;
 use frep::Surface;
 

@@ -1,4 +1,4 @@
-//! The Fidget `.vm` reader and writer: every opcode, every shared model, errors with
+//! The Fidget `.vm` reader and writer: every opcode, every Fidget model, errors with
 //! positions, and write-then-read round trips.
 
 mod common;

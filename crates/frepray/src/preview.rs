@@ -290,6 +290,7 @@ pub fn render(
             clipped: [false; 3],
         },
         solid,
+        planar: false,
     };
     let o = PreviewOptions {
         up,
@@ -336,6 +337,9 @@ pub struct Model {
     pub solid: Solid,
     /// What the camera frames ([`view_box`]).
     pub view_box: ViewBox,
+    /// A 2-D model: F does not depend on z (Fidget's 2-D `.vm` files, drawn in the xy
+    /// plane); shown from the top with parallel rays unless a view is asked for.
+    pub planar: bool,
 }
 
 impl Model {
@@ -349,12 +353,12 @@ impl Model {
     pub fn new(shape: &Shape) -> Result<Model, String> {
         let solid = Solid::build(shape)?;
         let b = solid.bounds();
-        let flat = shape.to_tree().is_ok_and(|t| {
+        let planar = shape.to_tree().is_ok_and(|t| {
             !Expr::new(&t)
                 .nodes()
                 .contains(&frep::Node::Var(frep::Var::Z))
         });
-        if flat && !b.is_empty() && b.lo.x.is_finite() && b.hi.y.is_finite() {
+        if planar && !b.is_empty() && b.lo.x.is_finite() && b.hi.y.is_finite() {
             let e = b.extent();
             let h = (0.025 * e.x.max(e.y)).max(1e-6);
             let mut c = [0.0; 10];
@@ -366,7 +370,11 @@ impl Model {
             // The plane pair's own box is unbounded: the slab's is known.
             let pad = 1e-3 * e.x.max(e.y);
             (view_box.bounds.lo.z, view_box.bounds.hi.z) = (-h - pad, h + pad);
-            return Ok(Model { solid, view_box });
+            return Ok(Model {
+                solid,
+                view_box,
+                planar,
+            });
         }
         let view_box = view_box(&solid, shape);
         // A solid whose box is the whole search domain (intervals proved nothing) but
@@ -392,10 +400,18 @@ impl Model {
                     domain: Some(Aabb::new(b.lo - pad, b.hi + pad)),
                 };
                 let solid = Solid::build(&bounded)?;
-                return Ok(Model { solid, view_box });
+                return Ok(Model {
+                    solid,
+                    view_box,
+                    planar,
+                });
             }
         }
-        Ok(Model { solid, view_box })
+        Ok(Model {
+            solid,
+            view_box,
+            planar,
+        })
     }
 }
 
@@ -578,6 +594,7 @@ mod tests {
         .unwrap()
         .shape;
         let m = Model::new(&shape).unwrap();
+        assert!(m.planar);
         let b = m.view_box.bounds;
         assert!(b.extent().z < 0.06 && b.extent().x > 0.99, "{b:?}");
         let cam = camera(&b, DVec3::Z, View::Top, true, 16, 16);

@@ -55,6 +55,7 @@ use crate::perturbed::{PerturbedPack, PERTURBED_WGSL};
 use crate::quadric::QUADRIC_WGSL;
 use crate::record::GpuSums;
 use crate::sampler::PHILOX_WGSL;
+pub use crate::stats::{GpuStats, StageTimes, SumsOn};
 use crate::tape::GpuTape;
 use crate::tape_trace::TapeSolid;
 use crate::{f4, Gpu, GpuError, FLOAT_WGSL};
@@ -661,67 +662,6 @@ fn tape_normal(p: vec3<f32>) -> vec3<f32> {
         }
         Ok(())
     }
-}
-
-/// Times of a GPU render's stages, summed over its waves.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct StageTimes {
-    /// Camera rays: generation and nearest hit (GPU timestamps; zero without them).
-    pub camera: Duration,
-    /// The techniques' draws and pdfs (GPU).
-    pub shade: Duration,
-    /// Shadow rays (GPU).
-    pub shadow: Duration,
-    /// Continuation rays of `path` (GPU).
-    pub secondary: Duration,
-    /// Submission and read-back: the wall time from submitting a wave to having its
-    /// results on the CPU, less the passes' GPU time (all of it without timestamps).
-    pub readback: Duration,
-    /// Adding the samples into the per-pixel records: where the sums are on the GPU,
-    /// its terms and sums passes (timestamps) and the CPU's fallback samples and final
-    /// read-back; otherwise the CPU adding every draw, fallbacks included.
-    pub accumulate: Duration,
-    /// Pipeline creation (shader compilation), before the first wave.
-    pub setup: Duration,
-}
-
-/// Where a GPU render kept its per-pixel sums (GPU.md §8).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum SumsOn {
-    /// On the CPU: every draw read back and added by the CPU's accumulator
-    /// (`FREPRAY_GPU_SUMS=off`, or terms past the loop budget).
-    #[default]
-    Cpu,
-    /// On the GPU in f64 (`SHADER_F64`).
-    GpuF64,
-    /// On the GPU in double-float pairs of f32.
-    GpuDoubleFloat,
-}
-
-impl std::fmt::Display for SumsOn {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(match self {
-            SumsOn::Cpu => "CPU",
-            SumsOn::GpuF64 => "GPU, f64",
-            SumsOn::GpuDoubleFloat => "GPU, double-float",
-        })
-    }
-}
-
-/// What a GPU render did, beyond [`RenderStats`].
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct GpuStats {
-    /// Stage times.
-    pub stages: StageTimes,
-    /// Waves.
-    pub waves: u32,
-    /// Samples the CPU rendered because a ray overflowed a fixed capacity.
-    pub cpu_fallbacks: u64,
-    /// Where the per-pixel sums were kept.
-    pub sums: SumsOn,
-    /// The most loop iterations one invocation ran, per kernel: camera and
-    /// continuation trace, shadow trace, shade (GPU.md §3.1: llvmpipe cuts an invocation's loops at 65 535).
-    pub max_loops: [u32; 3],
 }
 
 /// Compiled kernels by the tape part of their source, kept by [`Gpu`].

@@ -71,6 +71,7 @@ pub mod progressive;
 pub mod quadric;
 pub mod record;
 pub mod sampler;
+pub mod stats;
 pub mod sums;
 pub mod tape;
 pub mod tape_trace;

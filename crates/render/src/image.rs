@@ -171,10 +171,22 @@ impl Image {
             .chunks_exact(self.channels())
             .flat_map(|p| [0, 1, 2].map(|c| srgb_u8(film.map(p[c]))))
             .collect();
-        write_atomically(path.as_ref(), |w| {
+        self.write_png_rgb8(path.as_ref(), &bytes)
+    }
+    /// Writes a PNG of what the colour channels hold when they hold values (depth,
+    /// normals: [`crate::value_png`]), whole or not at all.
+    pub fn write_png_values(
+        &self,
+        path: impl AsRef<Path>,
+        values: crate::value_png::Values,
+    ) -> io::Result<()> {
+        self.write_png_rgb8(path.as_ref(), &values.rgb8(self))
+    }
+    fn write_png_rgb8(&self, path: &Path, bytes: &[u8]) -> io::Result<()> {
+        write_atomically(path, |w| {
             image::codecs::png::PngEncoder::new(w)
                 .write_image(
-                    &bytes,
+                    bytes,
                     self.width,
                     self.height,
                     image::ExtendedColorType::Rgb8,

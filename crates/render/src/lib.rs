@@ -45,6 +45,7 @@ pub mod technique;
 #[cfg(test)]
 mod testutil;
 pub mod texture;
+pub mod value_png;
 pub mod warp;
 
 pub use camera::{Camera, Projection};

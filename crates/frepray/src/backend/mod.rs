@@ -6,10 +6,15 @@ use crate::{Error, RenderOptions, RenderState, RenderStats, SceneData};
 use render::render_loop;
 use std::ops::Range;
 use std::sync::atomic::AtomicBool;
-use std::sync::OnceLock;
 
+#[cfg(feature = "gpu")]
 pub use gpu::direct::GpuStats;
+#[cfg(feature = "gpu")]
 pub use gpu::{Gpu, GpuError, GpuInfo};
+#[cfg(not(feature = "gpu"))]
+mod no_gpu;
+#[cfg(not(feature = "gpu"))]
+pub use no_gpu::{Gpu, GpuError, GpuInfo, GpuStats};
 
 /// Where a scene is rendered.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -61,13 +66,58 @@ pub struct Rendered {
     pub fallback: Option<String>,
 }
 
-/// The process's GPU, opened once with [`gpu::GpuOptions::from_env`]: its compiled
+/// The process's GPU, opened once with `gpu::GpuOptions::from_env`: its compiled
 /// kernels are kept for every later render (compiling them takes minutes on lavapipe).
+#[cfg(feature = "gpu")]
 pub fn shared_gpu() -> Result<&'static Gpu, GpuError> {
-    static GPU: OnceLock<Result<Gpu, GpuError>> = OnceLock::new();
+    static GPU: std::sync::OnceLock<Result<Gpu, GpuError>> = std::sync::OnceLock::new();
     GPU.get_or_init(|| Gpu::new(&gpu::GpuOptions::from_env()))
         .as_ref()
         .map_err(Clone::clone)
+}
+
+/// There is no GPU in a build without the `gpu` feature.
+#[cfg(not(feature = "gpu"))]
+pub fn shared_gpu() -> Result<&'static Gpu, GpuError> {
+    Err(GpuError::NotBuilt)
+}
+
+/// Renders on the GPU, as [`render_range_on`] does.
+#[cfg(feature = "gpu")]
+fn gpu_range(
+    data: &SceneData,
+    scene: &render::scene::Scene,
+    options: &RenderOptions,
+    samples: Range<u32>,
+    stop: &AtomicBool,
+    progress: &(dyn Fn(u64, u64) + Sync),
+) -> Result<(RenderState, RenderStats, GpuStats), GpuError> {
+    let g = shared_gpu()?;
+    gpu::direct::render_range(g, data, scene, options, samples, stop, progress)
+}
+
+/// Whether `auto` may fall back to the CPU after this error: no adapter, a scene the
+/// GPU does not cover.
+#[cfg(feature = "gpu")]
+fn may_fall_back(e: &GpuError) -> bool {
+    matches!(e, GpuError::NoAdapter(_) | GpuError::Unsupported(_))
+}
+
+#[cfg(not(feature = "gpu"))]
+fn gpu_range(
+    _: &SceneData,
+    _: &render::scene::Scene,
+    _: &RenderOptions,
+    _: Range<u32>,
+    _: &AtomicBool,
+    _: &(dyn Fn(u64, u64) + Sync),
+) -> Result<(RenderState, RenderStats, GpuStats), GpuError> {
+    Err(GpuError::NotBuilt)
+}
+
+#[cfg(not(feature = "gpu"))]
+fn may_fall_back(_: &GpuError) -> bool {
+    true
 }
 
 /// Renders samples `samples` of `scene` (built from `data`) with `options` on
@@ -84,10 +134,7 @@ pub fn render_range_on(
 ) -> Result<Rendered, Error> {
     let mut fallback = None;
     if backend != Backend::Cpu {
-        let tried = shared_gpu().and_then(|g| {
-            gpu::direct::render_range(g, data, scene, options, samples.clone(), stop, progress)
-        });
-        match tried {
+        match gpu_range(data, scene, options, samples.clone(), stop, progress) {
             Ok((state, stats, g)) => {
                 return Ok(Rendered {
                     state,
@@ -97,9 +144,7 @@ pub fn render_range_on(
                 })
             }
             Err(e) if backend == Backend::Gpu => return Err(Error::Gpu(e)),
-            Err(e @ (GpuError::NoAdapter(_) | GpuError::Unsupported(_))) => {
-                fallback = Some(e.to_string());
-            }
+            Err(e) if may_fall_back(&e) => fallback = Some(e.to_string()),
             Err(e) => return Err(Error::Gpu(e)),
         }
     }
