@@ -1,6 +1,7 @@
 //! The GPU's `direct` images against the CPU's (GPU.md §9): the same estimators, the same
-//! random numbers, f32 instead of f64. Small images (48 × 36) and few samples, on
-//! lavapipe in CI.
+//! random numbers, f32 instead of f64. Small images (32 × 24; 48 × 36 and every case of
+//! each comparison with `FREPRAY_LONG=1`, as `scripts/long-test.sh` runs them) and few
+//! samples, on lavapipe in CI.
 //!
 //! - Same seed: per pixel, |mean_gpu − mean_cpu| / σ > 4 on < 0.1 % of pixels, σ from
 //!   the spread of 16 sub-renders of each (disjoint sample ranges, so independent).
@@ -198,15 +199,24 @@ two_sided = true
 "#;
 
 fn load(text: &str) -> (SceneData, Scene, RenderOptions) {
-    let (data, settings) = scene::parse(text, SceneFormat::Toml, Path::new("gpu-test.toml"))
+    let (w, h) = size();
+    let text = text.replace("resolution = [48, 36]", &format!("resolution = [{w}, {h}]"));
+    let (data, settings) = scene::parse(&text, SceneFormat::Toml, Path::new("gpu-test.toml"))
         .unwrap_or_else(|e| panic!("{e}"));
     let scene = Scene::from_data(&data);
     let o = RenderOptions::from_settings(&settings).unwrap();
     (data, scene, o)
 }
 
-const W: u32 = 48;
-const H: u32 = 36;
+/// The image size: 48 × 36 with `FREPRAY_LONG=1` (`scripts/long-test.sh`), else 32 × 24
+/// (lavapipe's time goes with the pixels: about 0.2 s per sample per pixel at 48 × 36).
+fn size() -> (u32, u32) {
+    if common::long() {
+        (48, 36)
+    } else {
+        (32, 24)
+    }
+}
 /// Sub-renders per side, and samples per sub-render.
 const SUBS: u32 = 16;
 const SUB_SPP: u32 = 2;
@@ -241,10 +251,11 @@ fn cpu_render(s: &(SceneData, Scene, RenderOptions), r: Range<u32>) -> RenderSta
 
 /// Per pixel and channel, the mean and variance of the mean over sub-renders.
 fn spread(subs: &[RenderState]) -> Vec<(f64, f64)> {
+    let (w, h) = size();
     let n = subs.len() as f64;
     let mut out = Vec::new();
-    for y in 0..H {
-        for x in 0..W {
+    for y in 0..h {
+        for x in 0..w {
             let v: Vec<[f64; 3]> = subs.iter().map(|s| s.rgb(x, y).to_array()).collect();
             for c in 0..3 {
                 let m = v.iter().map(|p| p[c]).sum::<f64>() / n;
@@ -299,10 +310,11 @@ fn merged(states: &[RenderState]) -> RenderState {
 /// bits), so besides the z-test fewer than 1 % of the pixels may differ by more than 1 %
 /// (GPU.md §9); this is what catches a bias hidden in the noise, e.g. self-shadowing.
 fn assert_correlated(a: &[RenderState], b: &[RenderState]) {
+    let (w, h) = size();
     let (a, b) = (merged(a), merged(b));
     let mut far = 0;
-    for y in 0..H {
-        for x in 0..W {
+    for y in 0..h {
+        for x in 0..w {
             let (p, q) = (a.rgb(x, y).to_array(), b.rgb(x, y).to_array());
             let (sp, sq) = (p.iter().sum::<f64>(), q.iter().sum::<f64>());
             far += usize::from((sp - sq).abs() > 1e-2 * sp.abs().max(sq.abs()).max(1e-3));
@@ -310,10 +322,10 @@ fn assert_correlated(a: &[RenderState], b: &[RenderState]) {
     }
     eprintln!(
         "same seed: {far} of {} pixels differ by more than 1 %",
-        W * H
+        w * h
     );
     assert!(
-        far * 100 < (W * H) as usize,
+        far * 100 < (w * h) as usize,
         "{far} pixels differ by more than 1 %"
     );
 }
@@ -329,10 +341,11 @@ fn assert_agree(
     cpu: &(SceneData, Scene, RenderOptions),
     z_max: f64,
 ) -> (Vec<RenderState>, Vec<RenderState>) {
+    let (w, h) = size();
     let gpu_subs = subs(|r| gpu_render(g, s, r));
     let cpu_subs = subs(|r| cpu_render(cpu, r));
     let (over, z) = compare(&spread(&gpu_subs), &spread(&cpu_subs));
-    let cells = (W * H * 3) as usize;
+    let cells = (w * h * 3) as usize;
     eprintln!("{label}: {over} of {cells} beyond 4σ; image-mean z {z:?}");
     assert!(
         over * 1000 < cells,
@@ -353,10 +366,11 @@ fn assert_agree(
 /// holds exactly the sums of both and agrees with CPU [0, 32) in the same way.
 #[test]
 fn same_seed_images_agree_and_merge_with_the_cpu() {
+    let (w, h) = size();
     let Some(g) = device() else { return };
     let s = load(SCENE);
     let (gpu_subs, cpu_subs) = assert_agree(g, "same seed", &s, &s, 3.0);
-    let cells = (W * H * 3) as usize;
+    let cells = (w * h * 3) as usize;
     let half = (SUBS / 2) as usize;
     let g_first = merged(&gpu_subs[..half]);
     let c_second = merged(&cpu_subs[half..]);
@@ -371,11 +385,11 @@ fn same_seed_images_agree_and_merge_with_the_cpu() {
     let all_cpu = merged(&cpu_subs);
     let sp = spread(&cpu_subs);
     let mut over = 0;
-    for y in 0..H {
-        for x in 0..W {
+    for y in 0..h {
+        for x in 0..w {
             let (a, b) = (mixed.rgb(x, y).to_array(), all_cpu.rgb(x, y).to_array());
             for c in 0..3 {
-                let var = 2.0 * sp[((y * W + x) * 3) as usize + c].1 + f32_floor(a[c], b[c]);
+                let var = 2.0 * sp[((y * w + x) * 3) as usize + c].1 + f32_floor(a[c], b[c]);
                 let d = (a[c] - b[c]).abs();
                 over += usize::from(d > 4.0 * var.sqrt());
             }
@@ -457,6 +471,7 @@ fn per_light_images_agree() {
 /// where f32 and f64 may find different surfaces).
 #[test]
 fn aovs_agree() {
+    let (w, h) = size();
     use render::integrator::{Aov, IntegratorKind};
     let Some(g) = device() else { return };
     let mut s = load(SCENE);
@@ -468,8 +483,8 @@ fn aovs_agree() {
     let (gpu_subs, cpu_subs) = assert_agree(g, "direct with AOVs", &s, &s, 3.0);
     let (a, b) = (merged(&gpu_subs), merged(&cpu_subs));
     let mut far = [0usize; 3];
-    for y in 0..H {
-        for x in 0..W {
+    for y in 0..h {
+        for x in 0..w {
             let (p, q) = (a.pixel(x, y), b.pixel(x, y));
             let v = |r: &[f64], k: usize| r[4 + k] / r[0];
             let (dp, dq) = (v(p, 0), v(q, 0));
@@ -483,12 +498,12 @@ fn aovs_agree() {
     }
     eprintln!(
         "pixels beyond the bounds (depth, normal, albedo): {far:?} of {}",
-        W * H
+        w * h
     );
     assert!(
-        far.iter().all(|&n| n * 100 < (W * H) as usize),
+        far.iter().all(|&n| n * 100 < (w * h) as usize),
         "{far:?} of {} pixels",
-        W * H
+        w * h
     );
 }
 
@@ -803,14 +818,15 @@ fn check_progressive(
     );
 }
 
-/// Bands: the image rendered in bands of 100 pixels (18 bands, the last of 28) gives
-/// the records of the one-band render bit for bit, with the sums on the GPU and on the
-/// CPU, for `direct` and `path`, and for optimal-progressive on `path` (α solved per
-/// band) in double-float.
+/// Bands: the image rendered in bands of 100 pixels (8 bands at 32 × 24, the last of 68;
+/// 18 at 48 × 36) gives the records of the one-band render bit for bit, with the sums on
+/// the GPU and on the CPU, for `direct` and `path`, and for optimal-progressive on
+/// `path` (α solved per band) in double-float.
 #[test]
 fn bands_give_the_same_records() {
     use gpu::direct::{render_range_with, SumsOn, WaveOptions};
     use render::integrator::IntegratorKind;
+    let (w, h) = size();
     let Some(g) = device() else { return };
     let stop = AtomicBool::new(false);
     for (integrator, sums, method) in [
@@ -831,12 +847,16 @@ fn bands_give_the_same_records() {
             let how = WaveOptions { sums, band_pixels };
             let (state, stats, gs) =
                 render_range_with(g, &s.0, &s.1, &s.2, 0..2, &stop, &|_, _| {}, &how).unwrap();
-            assert_eq!(stats.samples, u64::from(W * H) * 2);
+            assert_eq!(stats.samples, u64::from(w * h) * 2);
             (state, gs.waves)
         };
         let (one, waves_one) = render(None);
         let (banded, waves) = render(Some(100));
-        assert_eq!(waves, waves_one * 18, "{integrator:?}: one wave per band");
+        assert_eq!(
+            waves,
+            waves_one * (w * h).div_ceil(100),
+            "{integrator:?}: one wave per band"
+        );
         let differ = one
             .data()
             .iter()

@@ -1,0 +1,91 @@
+#!/usr/bin/env python3
+"""The workspace's dependency arrows against DESIGN.md §3 ("Layout"): arrows point down
+only, `cli, python → frepray → render, gpu → state → scene → frep, mis`; the front ends
+import `frepray` alone; `render` and `gpu` stand side by side; crates of one layer never
+import each other. Normal and build dependencies are checked (tests may compare the two
+back ends, so dev-dependencies are not).
+
+Arrows the layout does not allow yet but the code still has are listed in DEBT, each
+with what removes it. The check fails on any other wrong arrow, and on a DEBT entry the
+code no longer has (remove it from the list: the debt only shrinks).
+Reads `cargo metadata`; exits non-zero naming each arrow.
+"""
+
+import json
+import subprocess
+import sys
+
+# Layers, top to bottom (DESIGN.md §3).
+LAYER = {
+    "frepray-cli": 5, "frepray-py": 5,
+    "frepray": 4,
+    "render": 3, "gpu": 3,
+    "state": 2,
+    "scene": 1,
+    "frep": 0, "mis": 0,
+}
+FRONT_ENDS = {"frepray-cli", "frepray-py"}
+
+# Wrong arrows the code still has, and what removes each.
+DEBT = {
+    ("gpu", "render"): "RenderState, records and coat tables move below both back ends",
+    ("frepray-cli", "frep"): "model information through frepray",
+    ("frepray-cli", "mis"): "estimator names through frepray",
+    ("frepray-cli", "render"): "render options, statistics and images through frepray",
+    ("frepray-cli", "scene"): "scene settings and overrides through frepray",
+    ("frepray-py", "frep"): "model evaluation through frepray",
+    ("frepray-py", "mis"): "the numpy estimators through frepray",
+    ("frepray-py", "render"): "render options, statistics and images through frepray",
+    ("frepray-py", "scene"): "scene settings and overrides through frepray",
+}
+
+
+def allowed(a: str, b: str) -> bool:
+    """Whether `a` may depend on `b`: a lower layer, and for a front end `frepray` only."""
+    if a in FRONT_ENDS:
+        return b == "frepray"
+    return LAYER[b] < LAYER[a]
+
+
+def arrows(metadata: dict) -> set:
+    """(crate, dependency) for every normal or build dependency inside the workspace."""
+    names = {p["name"] for p in metadata["packages"]}
+    out = set()
+    for p in metadata["packages"]:
+        for d in p["dependencies"]:
+            if d["name"] in names and d["kind"] in (None, "build"):
+                out.add((p["name"], d["name"]))
+    return out
+
+
+def check(found: set) -> list:
+    """The problems: unknown crates, wrong arrows outside DEBT, DEBT entries gone."""
+    problems = []
+    for a, b in sorted(found):
+        for c in (a, b):
+            if c not in LAYER:
+                problems.append(f"{c}: a crate DESIGN.md §3 does not place (add it to LAYER)")
+        if a in LAYER and b in LAYER and not allowed(a, b) and (a, b) not in DEBT:
+            problems.append(f"{a} → {b}: not allowed by DESIGN.md §3 (arrows point down only; "
+                            "front ends import frepray alone)")
+    for a, b in sorted(set(DEBT) - found):
+        problems.append(f"{a} → {b} is gone: remove it from DEBT in scripts/check-deps.py")
+    return problems
+
+
+def main() -> int:
+    metadata = json.loads(subprocess.run(
+        ["cargo", "metadata", "--format-version", "1", "--no-deps"],
+        check=True, capture_output=True, text=True).stdout)
+    found = arrows(metadata)
+    problems = check(found)
+    for p in problems:
+        print(f"check-deps: {p}", file=sys.stderr)
+    debt = sorted(set(DEBT) & found)
+    print(f"check-deps: {len(found)} arrows, {len(debt)} still to remove "
+          f"({', '.join(f'{a} → {b}' for a, b in debt)})", file=sys.stderr)
+    return 1 if problems else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
