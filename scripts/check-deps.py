@@ -8,7 +8,9 @@ back ends, so dev-dependencies are not).
 Arrows the layout does not allow yet but the code still has are listed in DEBT, each
 with what removes it. The check fails on any other wrong arrow, and on a DEBT entry the
 code no longer has (remove it from the list: the debt only shrinks).
-Reads `cargo metadata`; exits non-zero naming each arrow.
+Also the minimum Rust version: every member takes the workspace's `rust-version`, and no
+locked dependency declares a higher one.
+Reads `cargo metadata`; exits non-zero naming each problem.
 """
 
 import json
@@ -49,9 +51,10 @@ def allowed(a: str, b: str) -> bool:
 
 def arrows(metadata: dict) -> set:
     """(crate, dependency) for every normal or build dependency inside the workspace."""
-    names = {p["name"] for p in metadata["packages"]}
+    members = [p for p in metadata["packages"] if p["id"] in set(metadata["workspace_members"])]
+    names = {p["name"] for p in members}
     out = set()
-    for p in metadata["packages"]:
+    for p in members:
         for d in p["dependencies"]:
             if d["name"] in names and d["kind"] in (None, "build"):
                 out.add((p["name"], d["name"]))
@@ -73,12 +76,33 @@ def check(found: set) -> list:
     return problems
 
 
+def version(v: str) -> tuple:
+    """A `rust-version` as a comparable tuple (1.87 == 1.87.0)."""
+    parts = [int(x) for x in v.split(".")]
+    return tuple(parts + [0] * (3 - len(parts)))
+
+
+def msrv(metadata: dict) -> list:
+    """The problems with the minimum Rust version: a member whose `rust-version` is not
+    the workspace's one, or a dependency declaring a higher one."""
+    members = set(metadata["workspace_members"])
+    ours = {p["rust_version"] for p in metadata["packages"] if p["id"] in members}
+    if len(ours) != 1 or None in ours:
+        return [f"members declare rust-version {sorted(map(str, ours))}: expected one, "
+                "the workspace's (rust-version.workspace = true)"]
+    (v,) = ours
+    higher = [f"{p['name']} {p['version']} ({p['rust_version']})" for p in metadata["packages"]
+              if p["id"] not in members and p.get("rust_version")
+              and version(p["rust_version"]) > version(v)]
+    return [f"rust-version {v} is below what dependencies need: {', '.join(higher)}"] if higher else []
+
+
 def main() -> int:
     metadata = json.loads(subprocess.run(
-        ["cargo", "metadata", "--format-version", "1", "--no-deps"],
+        ["cargo", "metadata", "--format-version", "1"],
         check=True, capture_output=True, text=True).stdout)
     found = arrows(metadata)
-    problems = check(found)
+    problems = check(found) + msrv(metadata)
     for p in problems:
         print(f"check-deps: {p}", file=sys.stderr)
     debt = sorted(set(DEBT) & found)
