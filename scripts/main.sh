@@ -25,4 +25,8 @@ $B experiment scenes/two-lights.toml --estimators balance,optimal-direct --spp 1
   --reference-spp 1024 --width 160 --height 120 --hide-emitters --quiet --out out/two-lights
 # The table of summary.md: RMSE of each, and optimal-direct's Improvement over balance.
 awk '/^\| Estimator/{t=1} t&&!/^\|/{exit} t' out/two-lights/summary.md >&2
-step "done: out/many-lights.png (and .exr with depth, normal, albedo); out/two-lights/images/ (each estimator's image), out/two-lights/summary.md"
+for e in balance optimal-direct; do
+  $B render scenes/two-lights.toml --estimator "$e" --spp 16 --hide-emitters --quiet \
+    -o "out/two-lights-$e.png" 2>/dev/null
+done
+step "done: out/many-lights.png (and .exr with depth, normal, albedo); out/two-lights-balance.png and out/two-lights-optimal-direct.png side by side (16 samples per pixel each); out/two-lights/summary.md"
