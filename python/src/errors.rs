@@ -56,7 +56,9 @@ pub fn to_py(py: Python<'_>, e: frepray::Error) -> PyErr {
     match e {
         frepray::Error::Scene(s) => scene_error(py, &s),
         frepray::Error::Render(r) => RenderError::new_err(r.to_string()),
-        e @ frepray::Error::Model { .. } => ModelError::new_err(e.to_string()),
+        e @ (frepray::Error::Model { .. } | frepray::Error::Read(_)) => {
+            ModelError::new_err(e.to_string())
+        }
         frepray::Error::Invalid(m) => RenderError::new_err(m),
         frepray::Error::Gpu(g) => RenderError::new_err(g.to_string()),
     }

@@ -1,24 +1,6 @@
 //! `frepray check`: read a model or a scene, build it, and summarise it.
 
-use frep::{Expr, Shape, Solid, Surface};
 use std::path::Path;
-
-/// Number of perturbations in every perturbed quadric of a shape.
-fn perturbations(s: &Shape) -> (usize, usize) {
-    match s {
-        Shape::Function { .. } => (0, 0),
-        Shape::Perturbed(p) => (1, p.perturbations().len()),
-        Shape::Union(v) | Shape::Intersection(v) => v
-            .iter()
-            .map(perturbations)
-            .fold((0, 0), |a, b| (a.0 + b.0, a.1 + b.1)),
-        Shape::Difference(a, b) => {
-            let (x, y) = (perturbations(a), perturbations(b));
-            (x.0 + y.0, x.1 + y.1)
-        }
-        Shape::Transformed(_, s) => perturbations(s),
-    }
-}
 
 /// The kinds of file `check` and `render` read, for messages.
 pub const KINDS: &str = "a scene (.toml, .json) or a model (.frep, .hf, .vm)";
@@ -73,65 +55,57 @@ fn scene(file: &Path) -> Result<(), String> {
     Ok(())
 }
 
-/// Reads, lowers and bounds a model file.
+/// Reads, lowers and bounds a model file ([`frepray::model_info`]) and prints it.
 fn model(file: &Path) -> Result<(), String> {
-    let model = frep::read::read_file(file).map_err(|e| e.to_string())?;
-    let tree = model.shape.to_tree()?;
-    let expr = Expr::new(&tree);
-    let solid = Solid::build(&model.shape).map_err(|e| format!("{}: {e}", file.display()))?;
-    let b = solid.bounds();
-    let (quadrics, perts) = perturbations(&model.shape);
+    let m = frepray::model_info(file).map_err(|e| e.to_string())?;
     out!("file:          {}", file.display());
-    if let Some(n) = &model.name {
+    if let Some(n) = &m.name {
         out!("model:         {n}");
     }
+    out!("nodes:         {} (deduplicated expression DAG)", m.nodes);
     out!(
-        "nodes:         {} (deduplicated expression DAG)",
-        expr.len()
+        "perturbed quadrics: {}, perturbations: {}",
+        m.perturbed.0,
+        m.perturbed.1
     );
-    out!("perturbed quadrics: {quadrics}, perturbations: {perts}");
-    // A 2-D model (Fidget's prospero.vm): `render` shows it from the top.
-    let planar = !expr.nodes().contains(&frep::Node::Var(frep::Var::Z));
     out!(
         "dimensions:    {}",
-        match planar {
+        match m.planar {
             true => "2-D (F does not depend on z; rendered from the top, parallel rays)",
             false => "3-D",
         }
     );
     // How rays search its expression solids: a polynomial of low degree in Bernstein
     // form, anything else by interval arithmetic.
-    let flat = solid.flat();
-    let degrees: Vec<Option<u8>> = (0..flat.leaves.len())
-        .filter_map(|k| match flat.leaf(k) {
-            frep::LeafView::Expr(v) => Some(v.degree),
-            frep::LeafView::Perturbed(_) => None,
-        })
-        .collect();
-    if !degrees.is_empty() {
-        let poly: Vec<String> = degrees.iter().flatten().map(|d| d.to_string()).collect();
-        let intervals = degrees.len() - poly.len();
+    let poly = &m.polynomial_degrees;
+    if !poly.is_empty() || m.by_intervals > 0 {
         out!(
-            "expression solids: {} polynomial (Bernstein search{}), {intervals} by intervals",
+            "expression solids: {} polynomial (Bernstein search{}), {} by intervals",
             poly.len(),
             match poly.is_empty() {
                 true => String::new(),
-                false => format!(", degree {}", poly.join(", ")),
-            }
+                false => format!(
+                    ", degree {}",
+                    poly.iter()
+                        .map(u8::to_string)
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ),
+            },
+            m.by_intervals
         );
     }
-    if b.is_empty() {
-        out!("bounds:        empty (F < 0 everywhere in the search domain)");
-    } else {
-        out!(
+    match m.bounds {
+        None => out!("bounds:        empty (F < 0 everywhere in the search domain)"),
+        Some((lo, hi)) => out!(
             "bounds:        [{:.6}, {:.6}, {:.6}] .. [{:.6}, {:.6}, {:.6}]",
-            b.lo.x,
-            b.lo.y,
-            b.lo.z,
-            b.hi.x,
-            b.hi.y,
-            b.hi.z
-        );
+            lo[0],
+            lo[1],
+            lo[2],
+            hi[0],
+            hi[1],
+            hi[2]
+        ),
     }
     Ok(())
 }

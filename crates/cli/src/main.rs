@@ -489,7 +489,7 @@ fn render(args: RenderArgs) -> Result<(), String> {
             "note: the surface is unbounded along {} (it reaches the ±{} search domain); \
              the view shows [{:.3}, {:.3}] × [{:.3}, {:.3}] × [{:.3}, {:.3}]",
             clipped.join(", "),
-            frep::bounds::DEFAULT_DOMAIN,
+            preview::DEFAULT_DOMAIN,
             b.lo.x,
             b.hi.x,
             b.lo.y,

@@ -252,7 +252,7 @@ impl Bytecode {
         if words.is_empty() {
             return bad(0, "empty program");
         }
-        if words.len() % 2 != 0 {
+        if !words.len().is_multiple_of(2) {
             return bad(words.len() / 2, "an instruction is two words");
         }
         let code = Self { words, registers };

@@ -41,9 +41,11 @@ pub struct LibraryGuide;
 
 pub mod backend;
 pub mod experiment;
+pub mod model_info;
 pub mod preview;
 
 pub use backend::{render_range_on, Backend, Rendered};
+pub use model_info::{info as model_info, ModelInfo};
 
 pub use render::integrator::{Aov, IntegratorKind, RenderOptions};
 pub use render::{Film, Image, RenderState, RenderStats, StateHeader, Tonemap};
@@ -62,7 +64,10 @@ pub enum Error {
     /// Rendering or a render state failed.
     #[error(transparent)]
     Render(#[from] render::Error),
-    /// A model file could not be read or built.
+    /// A model file is malformed: its file, line and column, and what was expected.
+    #[error(transparent)]
+    Read(#[from] frep::read::ReadError),
+    /// A model could not be built.
     #[error("{path}: {message}")]
     Model {
         /// The model file.

@@ -12,7 +12,8 @@
 //! perspective or an orthographic lens ([`PreviewOptions`]).
 
 use crate::Error;
-use frep::bounds::{surface_bounds, DEFAULT_DOMAIN};
+use frep::bounds::surface_bounds;
+pub use frep::bounds::DEFAULT_DOMAIN;
 use frep::shape::Shape;
 use frep::{Aabb, Expr, Solid, Surface};
 use glam::DVec3;
@@ -481,10 +482,7 @@ pub fn load_model(path: &std::path::Path) -> Result<Solid, Error> {
 
 /// Reads a model file (.frep, .hf, .vm): its solid and view box ([`Model::new`]).
 pub fn load(path: &std::path::Path) -> Result<Model, Error> {
-    let model = frep::read::read_file(path).map_err(|e| Error::Model {
-        path: path.into(),
-        message: e.to_string(),
-    })?;
+    let model = frep::read::read_file(path)?;
     Model::new(&model.shape).map_err(|message| Error::Model {
         path: path.into(),
         message,

@@ -55,7 +55,7 @@ impl Schedule {
         match self {
             Schedule::Doubling { warmup } => {
                 let w = warmup.max(1);
-                n >= w && n % w == 0 && (n / w).is_power_of_two()
+                n >= w && n.is_multiple_of(w) && (n / w).is_power_of_two()
             }
             Schedule::Every { warmup } => n >= warmup.max(1),
             Schedule::Once { after } => n == after.max(1),

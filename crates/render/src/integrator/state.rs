@@ -143,7 +143,7 @@ impl RayLog for Timed<'_> {
     #[inline(always)]
     fn begin(&mut self, kind: RayKind) {
         let n = self.0.count(kind);
-        self.1 = (n % TIMED_EVERY == 0).then(std::time::Instant::now);
+        self.1 = n.is_multiple_of(TIMED_EVERY).then(std::time::Instant::now);
     }
     #[inline(always)]
     fn end(&mut self, kind: RayKind) {
