@@ -126,7 +126,7 @@ const REFERENCE_CHUNKS: u32 = 32;
 impl SceneRenderer {
     fn options(&self, estimator: &str, spp: u32, seed: u64) -> Result<RenderOptions, String> {
         Ok(RenderOptions {
-            method: mis::Method::from_str(estimator).map_err(|e| e.to_string())?,
+            method: frepray::Method::from_str(estimator).map_err(|e| e.to_string())?,
             spp,
             seed,
             ..self.base.clone()
@@ -271,7 +271,7 @@ pub fn run(a: ExperimentArgs) -> Result<(), String> {
     // One spelling per estimator, so that "optimal_direct" and "optimal-direct" are
     // the same point of the sweep.
     let canon = |s: &str| {
-        mis::Method::from_str(s)
+        frepray::Method::from_str(s)
             .map(|m| m.name().to_string())
             .map_err(|e| e.to_string())
     };
@@ -285,7 +285,7 @@ pub fn run(a: ExperimentArgs) -> Result<(), String> {
     let reference = a.reference_estimator.as_deref().map(canon).transpose()?;
     for e in estimators.iter().chain(&reference) {
         let o = RenderOptions {
-            method: mis::Method::from_str(e).map_err(|e| e.to_string())?,
+            method: frepray::Method::from_str(e).map_err(|e| e.to_string())?,
             ..base.clone()
         };
         render::limits::check_memory(scene.camera.width, scene.camera.height, &o)

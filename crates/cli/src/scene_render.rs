@@ -369,7 +369,7 @@ pub fn run(
 
 /// Warns about overrides that do not apply to the chosen estimator or integrator.
 fn warn_unused(o: &Overrides, opts: &RenderOptions) {
-    use mis::Method;
+    use frepray::Method;
     let optimal = !matches!(
         opts.method,
         Method::Balance | Method::Power | Method::Maximum | Method::Cutoff

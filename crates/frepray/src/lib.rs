@@ -47,6 +47,8 @@ pub mod preview;
 pub use backend::{render_range_on, Backend, Rendered};
 pub use model_info::{info as model_info, ModelInfo};
 
+/// The MIS estimators by name (`balance`, `power`, …, `optimal-direct`, …).
+pub use mis::Method;
 pub use render::integrator::{Aov, IntegratorKind, RenderOptions};
 pub use render::{Film, Image, RenderState, RenderStats, StateHeader, Tonemap};
 pub use scene::{Overrides, RenderSettings, SceneData, SceneError, SceneFormat};

@@ -78,7 +78,10 @@ pub enum SolveMethod {
 pub fn solve(a: &[f64], t: usize, ridge: f64, rhs: &[f64], alpha: &mut [f64]) -> SolveMethod {
     assert_eq!(a.len(), packed_len(t), "packed matrix length");
     assert_eq!(rhs.len(), alpha.len(), "rhs and alpha lengths");
-    assert!(t > 0 && rhs.len().is_multiple_of(t), "rhs holds whole columns");
+    assert!(
+        t > 0 && rhs.len().is_multiple_of(t),
+        "rhs holds whole columns"
+    );
     assert!(ridge >= 0.0, "ridge must be non-negative");
     let trace: f64 = (0..t).map(|i| a[packed_index(i, i)]).sum();
     if !(trace > 0.0 && trace.is_finite()) || rhs.iter().any(|v| !v.is_finite()) {
