@@ -82,8 +82,8 @@ pub fn shared_gpu() -> Result<&'static Gpu, GpuError> {
     Err(GpuError::NotBuilt)
 }
 
-/// Renders on the GPU, as [`render_range_on`] does.
-#[cfg(feature = "gpu")]
+/// Renders on the GPU, as [`render_range_on`] does ([`GpuError::NotBuilt`] without the
+/// `gpu` feature).
 fn gpu_range(
     data: &SceneData,
     scene: &render::scene::Scene,
@@ -93,31 +93,22 @@ fn gpu_range(
     progress: &(dyn Fn(u64, u64) + Sync),
 ) -> Result<(RenderState, RenderStats, GpuStats), GpuError> {
     let g = shared_gpu()?;
-    gpu::direct::render_range(g, data, scene, options, samples, stop, progress)
+    #[cfg(feature = "gpu")]
+    return gpu::direct::render_range(g, data, scene, options, samples, stop, progress);
+    #[cfg(not(feature = "gpu"))]
+    {
+        let _ = (g, data, scene, options, samples, stop, progress);
+        Err(GpuError::NotBuilt)
+    }
 }
 
 /// Whether `auto` may fall back to the CPU after this error: no adapter, a scene the
-/// GPU does not cover.
-#[cfg(feature = "gpu")]
+/// GPU does not cover, or no GPU back end built in.
 fn may_fall_back(e: &GpuError) -> bool {
-    matches!(e, GpuError::NoAdapter(_) | GpuError::Unsupported(_))
-}
-
-#[cfg(not(feature = "gpu"))]
-fn gpu_range(
-    _: &SceneData,
-    _: &render::scene::Scene,
-    _: &RenderOptions,
-    _: Range<u32>,
-    _: &AtomicBool,
-    _: &(dyn Fn(u64, u64) + Sync),
-) -> Result<(RenderState, RenderStats, GpuStats), GpuError> {
-    Err(GpuError::NotBuilt)
-}
-
-#[cfg(not(feature = "gpu"))]
-fn may_fall_back(_: &GpuError) -> bool {
-    true
+    #[cfg(feature = "gpu")]
+    return matches!(e, GpuError::NoAdapter(_) | GpuError::Unsupported(_));
+    #[cfg(not(feature = "gpu"))]
+    matches!(e, GpuError::NotBuilt)
 }
 
 /// Renders samples `samples` of `scene` (built from `data`) with `options` on
