@@ -75,8 +75,26 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 use wgpu::util::DeviceExt;
 
-/// The WGSL of the three kernels (without the helpers they include).
-pub const DIRECT_WGSL: &str = include_str!("shaders/direct.wgsl");
+/// The WGSL of the three kernels (without the helpers they include), by stage: the
+/// bindings and record layout, random numbers and frames, shapes, CSG, the scene query
+/// and normals, lights and pdfs, the trace kernel, the shade and prepare kernels.
+pub const DIRECT_WGSL: &str = concat!(
+    include_str!("shaders/direct_bindings.wgsl"),
+    "\n",
+    include_str!("shaders/direct_sampling.wgsl"),
+    "\n",
+    include_str!("shaders/direct_shapes.wgsl"),
+    "\n",
+    include_str!("shaders/direct_csg.wgsl"),
+    "\n",
+    include_str!("shaders/direct_scene.wgsl"),
+    "\n",
+    include_str!("shaders/direct_lights.wgsl"),
+    "\n",
+    include_str!("shaders/direct_trace.wgsl"),
+    "\n",
+    include_str!("shaders/direct_shade.wgsl"),
+);
 
 /// At most this many draws (slots × draws per slot) per wave: 40 MiB of draw records.
 pub const WAVE_DRAWS: u32 = 1 << 19;
