@@ -53,7 +53,9 @@ use crate::layout::{GpuBvhNode, GpuItemBox};
 use crate::light::{self, GpuAreaLight, GPU_AREA_LIGHT_WGSL, LIGHT_WGSL};
 use crate::perturbed::{PerturbedPack, PERTURBED_WGSL};
 use crate::quadric::QUADRIC_WGSL;
+use crate::readback::read_back;
 use crate::record::GpuSums;
+pub use crate::record::{DRAW_WORDS, HIT_WORDS};
 use crate::sampler::PHILOX_WGSL;
 pub use crate::stats::{GpuStats, StageTimes, SumsOn};
 use crate::tape::GpuTape;
@@ -108,11 +110,6 @@ pub const MAX_GPU_TAPES: usize = 16;
 
 /// The deepest `path` the GPU renders (a uniform block per depth and pass).
 pub const MAX_GPU_DEPTH: u32 = 16;
-
-/// f32 words of a slot's hit record in the wave's `hits` buffer.
-pub const HIT_WORDS: usize = 40;
-/// f32 words of one draw record in the wave's `draws` buffer.
-pub const DRAW_WORDS: usize = 20;
 
 /// One object: a leaf or an intersection of plain-quadric leaves (the WGSL `GpuShape`).
 #[repr(C)]
@@ -946,22 +943,6 @@ fn storage(gpu: &Gpu, label: &str, bytes: &[u8]) -> Result<wgpu::Buffer, GpuErro
             contents: data,
             usage: wgpu::BufferUsages::STORAGE,
         }))
-}
-
-pub(crate) fn read_back(gpu: &Gpu, buffer: &wgpu::Buffer, bytes: u64) -> Result<Vec<u8>, GpuError> {
-    let run = |e: &dyn std::fmt::Display| GpuError::Run(e.to_string());
-    let slice = buffer.slice(..bytes);
-    let (tx, rx) = std::sync::mpsc::channel();
-    slice.map_async(wgpu::MapMode::Read, move |r| {
-        let _ = tx.send(r);
-    });
-    gpu.device
-        .poll(wgpu::PollType::wait_indefinitely())
-        .map_err(|e| run(&e))?;
-    rx.recv().map_err(|e| run(&e))?.map_err(|e| run(&e))?;
-    let out = slice.get_mapped_range().map_err(|e| run(&e))?.to_vec();
-    buffer.unmap();
-    Ok(out)
 }
 
 /// Adds one slot's hit record `hw` and its draw records (`vertex(depth)`: the

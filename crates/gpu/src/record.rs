@@ -13,7 +13,6 @@
 //! overflows where `p_i p_j / s²` would. [`slot_terms`] is the kernel's CPU twin,
 //! operation for operation.
 
-use crate::direct::{DRAW_WORDS, HIT_WORDS};
 use crate::progressive::{Blocks, ProgressiveSums};
 use crate::{Gpu, GpuError};
 use bytemuck::{Pod, Zeroable};
@@ -21,6 +20,12 @@ use render::integrator::{LinearMis, LinearRecord, Record};
 
 /// The terms kernel.
 pub const RECORD_WGSL: &str = include_str!("shaders/record.wgsl");
+
+/// f32 words of a slot's hit record in the wave's `hits` buffer (the `direct` kernels'
+/// layout, `shaders/direct_bindings.wgsl`).
+pub const HIT_WORDS: usize = 40;
+/// f32 words of one draw record in the wave's `draws` buffer.
+pub const DRAW_WORDS: usize = 20;
 
 /// Where the overflow list starts in the tally buffer (in u32 words).
 pub const TALLY_LIST: usize = 8;
@@ -568,8 +573,8 @@ impl RecordTerms {
         enc.copy_buffer_to_buffer(&terms, 0, &terms_r, 0, 4 * n_terms as u64);
         enc.copy_buffer_to_buffer(&tally, 0, &tally_r, 0, 4 * n_tally as u64);
         gpu.queue.submit([enc.finish()]);
-        let t = crate::direct::read_back(gpu, &terms_r, 4 * n_terms as u64)?;
-        let y = crate::direct::read_back(gpu, &tally_r, 4 * n_tally as u64)?;
+        let t = crate::readback::read_back(gpu, &terms_r, 4 * n_terms as u64)?;
+        let y = crate::readback::read_back(gpu, &tally_r, 4 * n_tally as u64)?;
         Ok((
             bytemuck::cast_slice(&t).to_vec(),
             bytemuck::cast_slice(&y).to_vec(),
@@ -819,7 +824,7 @@ impl GpuSums {
     /// The tally of the wave of `slots` slots last submitted.
     pub fn tally(&self, gpu: &Gpu, slots: u32) -> Result<WaveTally, GpuError> {
         let bytes = (TALLY_LIST as u64 + u64::from(slots)) * 4;
-        let words = crate::direct::read_back(gpu, &self.tally_r, bytes)?;
+        let words = crate::readback::read_back(gpu, &self.tally_r, bytes)?;
         let t: &[u32] = bytemuck::cast_slice(&words);
         let mut overflow = t[TALLY_LIST..TALLY_LIST + t[0] as usize].to_vec();
         // The atomics append in any order: sorted, the CPU adds them in one.
@@ -889,7 +894,7 @@ fn read_sums(
     let mut enc = gpu.device.create_command_encoder(&Default::default());
     enc.copy_buffer_to_buffer(buffer, 0, &staging, 0, bytes);
     gpu.queue.submit([enc.finish()]);
-    let data = crate::direct::read_back(gpu, &staging, bytes)?;
+    let data = crate::readback::read_back(gpu, &staging, bytes)?;
     let w: &[u32] = bytemuck::cast_slice(&data);
     Ok(w.chunks_exact(2)
         .map(|w| match f64 {
