@@ -131,7 +131,7 @@ pub struct Gpu {
     info: GpuInfo,
     /// The `direct` kernels by the scene part of their source (its expression tape),
     /// compiled on first use (seconds to minutes on llvmpipe).
-    pub(crate) direct: crate::direct::PipelineCache,
+    pub(crate) direct: crate::direct::pipelines::PipelineCache,
     /// The record-terms and sums kernels, compiled on first use.
     pub(crate) record: std::sync::Mutex<Option<std::sync::Arc<crate::record::SumKernels>>>,
 }
