@@ -14,10 +14,11 @@
 //! ([`crate::record`]): each slot's f32 terms, then the sums in f64 (`SHADER_F64`) or
 //! double-float, pixel by pixel in sample order; only a small tally (ray counts,
 //! overflowing slots) is read back per wave, and the sums once at the end, into the
-//! same [`RenderState`] as the CPU's. The progressive estimators' second pass applies
-//! α and stops each pixel where its schedule re-solves α, which the CPU does between
-//! passes ([`crate::progressive`]). Otherwise (`FREPRAY_GPU_SUMS=off`; sums too large
-//! for one binding or the loop budget) the hits and draws are read back and added by
+//! same [`RenderState`](render::RenderState) as the CPU's. The progressive estimators'
+//! second pass applies α and stops each pixel where its schedule re-solves α, which the
+//! CPU does between passes ([`crate::progressive`]). Otherwise (`FREPRAY_GPU_SUMS=off`;
+//! sums too large for one binding or the loop budget) the hits and draws are read back
+//! and added by
 //! [`render::integrator::Accumulator`], the CPU integrator's own bookkeeping, in f64.
 //! Either way the optimal estimators' solves are the CPU's and a GPU sample range
 //! merges with a CPU one.
@@ -44,7 +45,7 @@
 //! `light-spatial`, `light-trained` (the table the CPU trained), `light#k` and
 //! `environment`; every MIS method, per light too; AOVs and the AOV integrators; `path` up to depth
 //! [`MAX_GPU_DEPTH`]. Anything else is a
-//! [`GpuError::Unsupported`] naming it, before any work.
+//! [`GpuError::Unsupported`](crate::GpuError::Unsupported) naming it, before any work.
 //!
 //! **Rooms.** `pack` turns the scene into the kernels' structs ([`DirectScene`]),
 //! `pipelines` assembles and compiles the kernels' WGSL (kept by [`Gpu`](crate::Gpu)),

@@ -49,7 +49,7 @@ pub struct WaveOptions {
     pub sums: SumsOn,
     /// The most pixels a band covers (the image is rendered in bands of consecutive
     /// pixels, each through all its samples); None: as many as a wave of one sample
-    /// index may hold ([`WAVE_DRAWS`] draws).
+    /// index may hold ([`WAVE_DRAWS`](super::WAVE_DRAWS) draws).
     pub band_pixels: Option<u32>,
 }
 
