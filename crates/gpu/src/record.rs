@@ -606,8 +606,11 @@ fn sum_kernels(gpu: &Gpu) -> Result<std::sync::Arc<SumKernels>, GpuError> {
         .record
         .lock()
         .map_err(|e| GpuError::Run(e.to_string()))?;
-    if let Some(k) = cache.as_ref() {
-        return Ok(k.clone());
+    if let Some((_, k)) = cache.first() {
+        return k
+            .clone()
+            .downcast()
+            .map_err(|_| GpuError::Run("the sums kernels' cache holds another type".into()));
     }
     let k = std::sync::Arc::new(SumKernels {
         terms: RecordTerms::new(gpu)?,
@@ -618,7 +621,7 @@ fn sum_kernels(gpu: &Gpu) -> Result<std::sync::Arc<SumKernels>, GpuError> {
         },
         progressive: crate::progressive::Kernels::new(gpu, gpu.info().f64)?,
     });
-    *cache = Some(k.clone());
+    cache.push((String::new(), k.clone()));
     Ok(k)
 }
 

@@ -18,8 +18,8 @@
 //! second pass applies α and stops each pixel where its schedule re-solves α, which the
 //! CPU does between passes ([`crate::progressive`]). Otherwise (`FREPRAY_GPU_SUMS=off`;
 //! sums too large for one binding or the loop budget) the hits and draws are read back
-//! and added by
-//! [`render::integrator::Accumulator`], the CPU integrator's own bookkeeping, in f64.
+//! and added by [`render::integrator::Accumulator`], the CPU integrator's own
+//! bookkeeping, in f64.
 //! Either way the optimal estimators' solves are the CPU's and a GPU sample range
 //! merges with a CPU one.
 //!

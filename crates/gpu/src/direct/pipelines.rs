@@ -66,9 +66,6 @@ fn tape_normal(p: vec3<f32>) -> vec3<f32> {
     }
 }
 
-/// Compiled kernels by the tape part of their source, kept by [`Gpu`].
-pub(crate) type PipelineCache = std::sync::Mutex<Vec<(String, std::sync::Arc<Pipelines>)>>;
-
 /// The compiled kernels, kept by [`Gpu`] for every later render.
 pub(crate) struct Pipelines {
     /// Entry `trace`: camera, shadow and continuation rays, and probes (by frame mode).
@@ -205,7 +202,10 @@ pub(super) fn kernels(
         .lock()
         .map_err(|e| GpuError::Run(e.to_string()))?;
     if let Some((_, p)) = cache.iter().find(|(src, _)| *src == tape_wgsl) {
-        return Ok(p.clone());
+        return p
+            .clone()
+            .downcast()
+            .map_err(|_| GpuError::Run("the direct kernels' cache holds another type".into()));
     }
     let p = std::sync::Arc::new(compile(gpu, &tape_wgsl)?);
     cache.push((tape_wgsl, p.clone()));
