@@ -18,7 +18,7 @@ use crate::{Gpu, GpuError};
 use bytemuck::{Pod, Zeroable};
 use render::integrator::{LinearMis, LinearRecord, Record};
 
-/// The terms kernel.
+/// The terms kernel (after [`record_consts_wgsl`]).
 pub const RECORD_WGSL: &str = include_str!("shaders/record.wgsl");
 
 /// f32 words of a slot's hit record in the wave's `hits` buffer (the `direct` kernels'
@@ -29,6 +29,40 @@ pub const DRAW_WORDS: usize = 20;
 
 /// Where the overflow list starts in the tally buffer (in u32 words).
 pub const TALLY_LIST: usize = 8;
+
+/// WGSL constants of the wave's records, from [`HIT_WORDS`] and [`DRAW_WORDS`]: the
+/// vec4s of a hit and of a draw record (`HIT_WORDS`, `DRAW_WORDS`), prepended to the
+/// kernels that read or write them so that no shader repeats them by hand.
+pub fn wave_consts_wgsl() -> String {
+    format!(
+        "const HIT_WORDS: u32 = {}u;\nconst DRAW_WORDS: u32 = {}u;\n",
+        HIT_WORDS / 4,
+        DRAW_WORDS / 4
+    )
+}
+
+/// The terms kernel's WGSL constants from this module's and the record's: the wave's
+/// records ([`wave_consts_wgsl`]), the record's words `OUTSIDE` and `AOV`
+/// ([`Record`]), [`TALLY_LIST`] and how draws enter the record (`C_AOV`, …).
+pub fn record_consts_wgsl() -> String {
+    let u = |name: &str, v: usize| format!("const {name}: u32 = {v}u;\n");
+    let codes = [
+        ("C_AOV", code::AOV),
+        ("C_OUTSIDE", code::OUTSIDE),
+        ("C_WEIGHTED", code::WEIGHTED),
+        ("C_DIRECT", code::DIRECT),
+        ("C_UNCORRELATED", code::UNCORRELATED),
+        ("C_PROGRESSIVE", code::PROGRESSIVE),
+    ];
+    let mut s = wave_consts_wgsl();
+    s += &u("OUTSIDE", Record::OUTSIDE);
+    s += &u("AOV", Record::AOV);
+    s += &u("TALLY_LIST", TALLY_LIST);
+    for (name, v) in codes {
+        s += &u(name, v as usize);
+    }
+    s
+}
 
 /// How draws enter the record (`LinearMis`, and the AOV integrators).
 mod code {
@@ -506,7 +540,7 @@ pub struct RecordTerms {
 impl RecordTerms {
     /// Compiles the kernel.
     pub fn new(gpu: &Gpu) -> Result<Self, GpuError> {
-        let source = [crate::FLOAT_WGSL, RECORD_WGSL].join("\n");
+        let source = [crate::FLOAT_WGSL, &record_consts_wgsl(), RECORD_WGSL].join("\n");
         let pipeline = crate::kernel::compute_pipeline(gpu, &source, "record_terms", false)?;
         Ok(Self { pipeline })
     }
@@ -905,4 +939,37 @@ fn read_sums(
             false => crate::sums::df_value([f32::from_bits(w[0]), f32::from_bits(w[1])]),
         })
         .collect())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The constants the shaders share with Rust are prepended from Rust's, with the
+    /// values the shaders once wrote by hand, and no shader defines them again.
+    #[test]
+    fn shared_constants_are_generated() {
+        let wave = wave_consts_wgsl();
+        assert!(wave.contains("const HIT_WORDS: u32 = 10u;"));
+        assert!(wave.contains("const DRAW_WORDS: u32 = 5u;"));
+        let record = record_consts_wgsl();
+        for line in [
+            "const OUTSIDE: u32 = 1u;",
+            "const AOV: u32 = 4u;",
+            "const TALLY_LIST: u32 = 8u;",
+            "const C_AOV: u32 = 0u;",
+            "const C_PROGRESSIVE: u32 = 5u;",
+        ] {
+            assert!(record.contains(line), "{line}");
+        }
+        for (shader, consts) in [(RECORD_WGSL, &record), (crate::direct::DIRECT_WGSL, &wave)] {
+            for line in consts.lines() {
+                let declared = line.split(':').next().expect("a declaration");
+                assert!(
+                    !shader.contains(&format!("{declared}:")),
+                    "the shader defines `{declared}` by hand"
+                );
+            }
+        }
+    }
 }

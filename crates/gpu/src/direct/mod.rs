@@ -67,9 +67,10 @@ pub use pack::{DirectScene, GpuMaterial, GpuShape};
 pub use probe::{probe, Probe};
 pub use waves::{render_range, render_range_with, WaveOptions};
 
-/// The WGSL of the three kernels (without the helpers they include), by stage: the
-/// bindings and record layout, random numbers and frames, shapes, CSG, the scene query
-/// and normals, lights and pdfs, the trace kernel, the shade and prepare kernels.
+/// The WGSL of the three kernels (without the helpers they include and the wave records'
+/// constants, [`crate::record::wave_consts_wgsl`]), by stage: the bindings and record
+/// layout, random numbers and frames, shapes, CSG, the scene query and normals, lights
+/// and pdfs, the trace kernel, the shade and prepare kernels.
 pub const DIRECT_WGSL: &str = concat!(
     include_str!("../shaders/direct_bindings.wgsl"),
     "\n",

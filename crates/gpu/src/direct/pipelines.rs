@@ -10,6 +10,7 @@ use crate::layout::LAYOUT_WGSL;
 use crate::light::{GPU_AREA_LIGHT_WGSL, LIGHT_WGSL};
 use crate::perturbed::PERTURBED_WGSL;
 use crate::quadric::QUADRIC_WGSL;
+use crate::record::wave_consts_wgsl;
 use crate::sampler::PHILOX_WGSL;
 use crate::tape_trace::TapeSolid;
 use crate::{Gpu, GpuError, FLOAT_WGSL};
@@ -78,8 +79,8 @@ pub(crate) struct Pipelines {
     pub(super) layout: wgpu::BindGroupLayout,
 }
 
-/// The whole source of the kernels: the shared helpers, the scene's tape WGSL, then
-/// [`DIRECT_WGSL`].
+/// The whole source of the kernels: the shared helpers, the scene's tape WGSL, the
+/// wave records' constants ([`wave_consts_wgsl`]), then [`DIRECT_WGSL`].
 fn kernel_source(tape_wgsl: &str) -> String {
     [
         FLOAT_WGSL,
@@ -93,6 +94,7 @@ fn kernel_source(tape_wgsl: &str) -> String {
         LIGHT_WGSL,
         ENV_WGSL,
         tape_wgsl,
+        &wave_consts_wgsl(),
         DIRECT_WGSL,
     ]
     .join("\n")

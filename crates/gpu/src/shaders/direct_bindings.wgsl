@@ -90,8 +90,8 @@ struct GpuMaterial { bsdf: GpuBsdf, tex_kind: u32, pad0: u32, pad1: u32, pad2: u
 // [β, ·], then the continuation the shade pass chose: [o, traced], [wi, survives],
 // [β after it and roulette, ·]; then the camera ray's first hit for AOVs: [its outward
 // normal, depth], [albedo, ·] (integrator/aov.rs).
-const HIT_WORDS: u32 = 10u;
-const DRAW_WORDS: u32 = 5u;   // vec4s per draw in `draws`
+// HIT_WORDS (those vec4s) and DRAW_WORDS (vec4s per draw in `draws`) come from
+// gpu::record, prepended by gpu::record::wave_consts_wgsl.
 const FLAG_HIDE: u32 = 1u;
 const FLAG_CENTER: u32 = 2u;
 const FLAG_ORTHO: u32 = 4u;
