@@ -124,6 +124,12 @@ impl fmt::Display for GpuInfo {
     }
 }
 
+/// Compiled kernels kept by a [`Gpu`] for every later render, by the part of their
+/// source that tells them apart; the module that compiles them names their type (so that
+/// this one names none, and depends on none of them).
+pub(crate) type KernelCache =
+    std::sync::Mutex<Vec<(String, std::sync::Arc<dyn std::any::Any + Send + Sync>)>>;
+
 /// An opened device with its queue.
 pub struct Gpu {
     pub(crate) device: wgpu::Device,
@@ -131,9 +137,9 @@ pub struct Gpu {
     info: GpuInfo,
     /// The `direct` kernels by the scene part of their source (its expression tape),
     /// compiled on first use (seconds to minutes on llvmpipe).
-    pub(crate) direct: crate::direct::PipelineCache,
+    pub(crate) direct: KernelCache,
     /// The record-terms and sums kernels, compiled on first use.
-    pub(crate) record: std::sync::Mutex<Option<std::sync::Arc<crate::record::SumKernels>>>,
+    pub(crate) record: KernelCache,
 }
 
 impl Gpu {

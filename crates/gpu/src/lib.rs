@@ -69,6 +69,7 @@ pub mod light;
 pub mod perturbed;
 pub mod progressive;
 pub mod quadric;
+mod readback;
 pub mod record;
 pub mod sampler;
 pub mod stats;

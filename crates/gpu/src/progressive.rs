@@ -225,7 +225,7 @@ impl ProgressiveSums {
             let mut enc = gpu.device.create_command_encoder(&Default::default());
             enc.copy_buffer_to_buffer(&self.cursor, 0, &self.cursor_r, 0, 8 * np as u64);
             gpu.queue.submit([enc.finish()]);
-            let bytes = crate::direct::read_back(gpu, &self.cursor_r, 8 * np as u64)?;
+            let bytes = crate::readback::read_back(gpu, &self.cursor_r, 8 * np as u64)?;
             let cursor: &[u32] = bytemuck::cast_slice(&bytes);
             let stopped: Vec<usize> = (0..np).filter(|&p| cursor[np + p] != 0).collect();
             if stopped.is_empty() {

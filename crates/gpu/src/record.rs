@@ -13,17 +13,56 @@
 //! overflows where `p_i p_j / s²` would. [`slot_terms`] is the kernel's CPU twin,
 //! operation for operation.
 
-use crate::direct::{DRAW_WORDS, HIT_WORDS};
 use crate::progressive::{Blocks, ProgressiveSums};
 use crate::{Gpu, GpuError};
 use bytemuck::{Pod, Zeroable};
 use render::integrator::{LinearMis, LinearRecord, Record};
 
-/// The terms kernel.
+/// The terms kernel (after [`record_consts_wgsl`]).
 pub const RECORD_WGSL: &str = include_str!("shaders/record.wgsl");
+
+/// f32 words of a slot's hit record in the wave's `hits` buffer (the `direct` kernels'
+/// layout, `shaders/direct_bindings.wgsl`).
+pub const HIT_WORDS: usize = 40;
+/// f32 words of one draw record in the wave's `draws` buffer.
+pub const DRAW_WORDS: usize = 20;
 
 /// Where the overflow list starts in the tally buffer (in u32 words).
 pub const TALLY_LIST: usize = 8;
+
+/// WGSL constants of the wave's records, from [`HIT_WORDS`] and [`DRAW_WORDS`]: the
+/// vec4s of a hit and of a draw record (`HIT_WORDS`, `DRAW_WORDS`), prepended to the
+/// kernels that read or write them so that no shader repeats them by hand.
+pub fn wave_consts_wgsl() -> String {
+    format!(
+        "const HIT_WORDS: u32 = {}u;\nconst DRAW_WORDS: u32 = {}u;\n",
+        HIT_WORDS / 4,
+        DRAW_WORDS / 4
+    )
+}
+
+/// The terms kernel's WGSL constants from this module's and the record's: the wave's
+/// records ([`wave_consts_wgsl`]), the record's words `OUTSIDE` and `AOV`
+/// ([`Record`]), [`TALLY_LIST`] and how draws enter the record (`C_AOV`, …).
+pub fn record_consts_wgsl() -> String {
+    let u = |name: &str, v: usize| format!("const {name}: u32 = {v}u;\n");
+    let codes = [
+        ("C_AOV", code::AOV),
+        ("C_OUTSIDE", code::OUTSIDE),
+        ("C_WEIGHTED", code::WEIGHTED),
+        ("C_DIRECT", code::DIRECT),
+        ("C_UNCORRELATED", code::UNCORRELATED),
+        ("C_PROGRESSIVE", code::PROGRESSIVE),
+    ];
+    let mut s = wave_consts_wgsl();
+    s += &u("OUTSIDE", Record::OUTSIDE);
+    s += &u("AOV", Record::AOV);
+    s += &u("TALLY_LIST", TALLY_LIST);
+    for (name, v) in codes {
+        s += &u(name, v as usize);
+    }
+    s
+}
 
 /// How draws enter the record (`LinearMis`, and the AOV integrators).
 mod code {
@@ -501,7 +540,7 @@ pub struct RecordTerms {
 impl RecordTerms {
     /// Compiles the kernel.
     pub fn new(gpu: &Gpu) -> Result<Self, GpuError> {
-        let source = [crate::FLOAT_WGSL, RECORD_WGSL].join("\n");
+        let source = [crate::FLOAT_WGSL, &record_consts_wgsl(), RECORD_WGSL].join("\n");
         let pipeline = crate::kernel::compute_pipeline(gpu, &source, "record_terms", false)?;
         Ok(Self { pipeline })
     }
@@ -568,8 +607,8 @@ impl RecordTerms {
         enc.copy_buffer_to_buffer(&terms, 0, &terms_r, 0, 4 * n_terms as u64);
         enc.copy_buffer_to_buffer(&tally, 0, &tally_r, 0, 4 * n_tally as u64);
         gpu.queue.submit([enc.finish()]);
-        let t = crate::direct::read_back(gpu, &terms_r, 4 * n_terms as u64)?;
-        let y = crate::direct::read_back(gpu, &tally_r, 4 * n_tally as u64)?;
+        let t = crate::readback::read_back(gpu, &terms_r, 4 * n_terms as u64)?;
+        let y = crate::readback::read_back(gpu, &tally_r, 4 * n_tally as u64)?;
         Ok((
             bytemuck::cast_slice(&t).to_vec(),
             bytemuck::cast_slice(&y).to_vec(),
@@ -601,8 +640,11 @@ fn sum_kernels(gpu: &Gpu) -> Result<std::sync::Arc<SumKernels>, GpuError> {
         .record
         .lock()
         .map_err(|e| GpuError::Run(e.to_string()))?;
-    if let Some(k) = cache.as_ref() {
-        return Ok(k.clone());
+    if let Some((_, k)) = cache.first() {
+        return k
+            .clone()
+            .downcast()
+            .map_err(|_| GpuError::Run("the sums kernels' cache holds another type".into()));
     }
     let k = std::sync::Arc::new(SumKernels {
         terms: RecordTerms::new(gpu)?,
@@ -613,7 +655,7 @@ fn sum_kernels(gpu: &Gpu) -> Result<std::sync::Arc<SumKernels>, GpuError> {
         },
         progressive: crate::progressive::Kernels::new(gpu, gpu.info().f64)?,
     });
-    *cache = Some(k.clone());
+    cache.push((String::new(), k.clone()));
     Ok(k)
 }
 
@@ -819,7 +861,7 @@ impl GpuSums {
     /// The tally of the wave of `slots` slots last submitted.
     pub fn tally(&self, gpu: &Gpu, slots: u32) -> Result<WaveTally, GpuError> {
         let bytes = (TALLY_LIST as u64 + u64::from(slots)) * 4;
-        let words = crate::direct::read_back(gpu, &self.tally_r, bytes)?;
+        let words = crate::readback::read_back(gpu, &self.tally_r, bytes)?;
         let t: &[u32] = bytemuck::cast_slice(&words);
         let mut overflow = t[TALLY_LIST..TALLY_LIST + t[0] as usize].to_vec();
         // The atomics append in any order: sorted, the CPU adds them in one.
@@ -889,7 +931,7 @@ fn read_sums(
     let mut enc = gpu.device.create_command_encoder(&Default::default());
     enc.copy_buffer_to_buffer(buffer, 0, &staging, 0, bytes);
     gpu.queue.submit([enc.finish()]);
-    let data = crate::direct::read_back(gpu, &staging, bytes)?;
+    let data = crate::readback::read_back(gpu, &staging, bytes)?;
     let w: &[u32] = bytemuck::cast_slice(&data);
     Ok(w.chunks_exact(2)
         .map(|w| match f64 {
@@ -897,4 +939,37 @@ fn read_sums(
             false => crate::sums::df_value([f32::from_bits(w[0]), f32::from_bits(w[1])]),
         })
         .collect())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The constants the shaders share with Rust are prepended from Rust's, with the
+    /// values the shaders once wrote by hand, and no shader defines them again.
+    #[test]
+    fn shared_constants_are_generated() {
+        let wave = wave_consts_wgsl();
+        assert!(wave.contains("const HIT_WORDS: u32 = 10u;"));
+        assert!(wave.contains("const DRAW_WORDS: u32 = 5u;"));
+        let record = record_consts_wgsl();
+        for line in [
+            "const OUTSIDE: u32 = 1u;",
+            "const AOV: u32 = 4u;",
+            "const TALLY_LIST: u32 = 8u;",
+            "const C_AOV: u32 = 0u;",
+            "const C_PROGRESSIVE: u32 = 5u;",
+        ] {
+            assert!(record.contains(line), "{line}");
+        }
+        for (shader, consts) in [(RECORD_WGSL, &record), (crate::direct::DIRECT_WGSL, &wave)] {
+            for line in consts.lines() {
+                let declared = line.split(':').next().expect("a declaration");
+                assert!(
+                    !shader.contains(&format!("{declared}:")),
+                    "the shader defines `{declared}` by hand"
+                );
+            }
+        }
+    }
 }

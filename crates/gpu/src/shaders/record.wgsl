@@ -15,7 +15,7 @@
 // [N_A, N_B | Â, b̂ of A | of B], progressive [N | Σ F (3) | α (3T) | Â, b̂], whose terms are
 // α-free: G in the Σ F words and Q in the first T α words (progressive.wgsl applies α).
 //
-// Needs FLOAT_WGSL before it.
+// Needs FLOAT_WGSL and gpu::record's constants before it.
 
 struct RecordParams {
     slots: u32, pixels: u32, samples: u32, stride: u32,
@@ -32,18 +32,10 @@ struct RecordParams {
 @group(0) @binding(3) var<storage, read_write> terms: array<f32>;
 @group(0) @binding(4) var<storage, read_write> tally: array<atomic<u32>>;
 
-const HIT_WORDS: u32 = 10u;
-const DRAW_WORDS: u32 = 5u;
-const OUTSIDE: u32 = 1u;
-const AOV: u32 = 4u;
-const TALLY_LIST: u32 = 8u;
-// How draws enter the record (gpu::record::Code).
-const C_AOV: u32 = 0u;
-const C_OUTSIDE: u32 = 1u;
-const C_WEIGHTED: u32 = 2u;
-const C_DIRECT: u32 = 3u;
-const C_UNCORRELATED: u32 = 4u;
-const C_PROGRESSIVE: u32 = 5u;
+// HIT_WORDS, DRAW_WORDS (vec4s of a hit and a draw record), the record's words OUTSIDE
+// and AOV, TALLY_LIST and how draws enter the record (C_AOV, C_OUTSIDE, C_WEIGHTED,
+// C_DIRECT, C_UNCORRELATED, C_PROGRESSIVE) come from gpu::record's constants, prepended
+// by gpu::record::record_consts_wgsl.
 // Heuristics (mis::Heuristic).
 const H_BALANCE: u32 = 0u;
 const H_POWER: u32 = 1u;

@@ -1,0 +1,539 @@
+//! The scene and render options packed as the kernels read them: objects (leaves,
+//! intersections, CSG trees, expression solids), materials, lights, the selection
+//! tables and the uniform [`Frame`].
+
+use super::{MAX_GPU_DEPTH, MAX_GPU_TAPES, MAX_GPU_TECHNIQUES};
+use crate::bsdf::{GpuBsdf, COAT_TABLE_LEN};
+use crate::env::GpuEnv;
+use crate::layout::{outward, GpuBvhNode, GpuItemBox, GpuObject, GpuPerturbation, GpuQuadric};
+use crate::light::{self, GpuAreaLight};
+use crate::perturbed::PerturbedPack;
+use crate::tape::GpuTape;
+use crate::tape_trace::TapeSolid;
+use crate::{f4, GpuError};
+use bytemuck::{Pod, Zeroable};
+use frep::flat::CsgOp;
+use frep::LeafView;
+use render::bsdf::CoatTable;
+use render::integrator::{IntegratorKind, RenderOptions};
+use render::light::TrainedSelection;
+use render::Technique;
+use scene::{CameraKind, LightKind, MaterialData, SceneData, TextureData, TextureSpace};
+
+/// One object: a leaf or an intersection of plain-quadric leaves (the WGSL `GpuShape`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuShape {
+    /// 0: one leaf; 1: an intersection of `count` plain-quadric leaves.
+    pub kind: u32,
+    /// The first leaf (`GpuObject`).
+    pub first: u32,
+    /// Leaves.
+    pub count: u32,
+    /// The material.
+    pub material: u32,
+    /// Bounds minimum, rounded down (w unused).
+    pub lo: [f32; 4],
+    /// Bounds maximum, rounded up (w unused).
+    pub hi: [f32; 4],
+}
+
+/// A material: its BSDF with constant colours, and a point-space checker in place of
+/// `bsdf.rgb` where `tex_kind` is 1 (`a.xyz`, `b.xyz`, the scale in `a.w`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuMaterial {
+    /// The BSDF.
+    pub bsdf: GpuBsdf,
+    /// 0 constant, 1 point checker.
+    pub tex_kind: u32,
+    /// Padding.
+    pub pad: [u32; 3],
+    /// Even cells' colour and the scale.
+    pub a: [f32; 4],
+    /// Odd cells' colour.
+    pub b: [f32; 4],
+}
+
+/// The kernels' uniform block (the WGSL `Frame`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub(super) struct Frame {
+    pub(super) width: u32,
+    pub(super) height: u32,
+    pub(super) pixels: u32,
+    pub(super) slots: u32,
+    pub(super) sample: u32,
+    pub(super) n_shapes: u32,
+    pub(super) seed_lo: u32,
+    pub(super) seed_hi: u32,
+    pub(super) n_tech: u32,
+    pub(super) n_draws: u32,
+    pub(super) n_lights: u32,
+    pub(super) power_off: u32,
+    pub(super) area_off: u32,
+    pub(super) flags: u32,
+    pub(super) mode: u32,
+    pub(super) zero: u32,
+    pub(super) depth: u32,
+    pub(super) max_depth: u32,
+    pub(super) rr_depth: u32,
+    pub(super) stride: u32,
+    pub(super) carry: u32,
+    pub(super) n_delta: u32,
+    pub(super) per_slot: u32,
+    pub(super) spatial_off: u32,
+    pub(super) eye: [f32; 4],
+    pub(super) right: [f32; 4],
+    pub(super) up: [f32; 4],
+    pub(super) forward: [f32; 4],
+    pub(super) tech: [[u32; 4]; 2],
+    pub(super) count: [[u32; 4]; 2],
+    pub(super) env: GpuEnv,
+    /// The trained selection's table in `tables` (u32::MAX: none), cells per axis, MIS
+    /// lights covered.
+    pub(super) trained: [u32; 4],
+    /// Where the live and continuation queues' entries start in `stats` (words), and
+    /// the first pixel of the wave's band.
+    pub(super) wave: [u32; 4],
+}
+
+const _: () = assert!(size_of::<GpuShape>() == 48);
+const _: () = assert!(size_of::<GpuMaterial>() == 112);
+const _: () = assert!(size_of::<Frame>() == 352);
+
+/// The scene and options as the kernels read them.
+#[derive(Clone, Debug, Default)]
+pub struct DirectScene {
+    /// Objects.
+    pub shapes: Vec<GpuShape>,
+    /// Leaves (perturbed or plain quadrics), as the perturbed scan reads them.
+    pub leaves: Vec<GpuObject>,
+    /// Base quadrics.
+    pub quadrics: Vec<GpuQuadric>,
+    /// Perturbations.
+    pub perturbations: Vec<GpuPerturbation>,
+    /// Support BVH nodes (escape layout).
+    pub nodes: Vec<GpuBvhNode>,
+    /// Support item boxes.
+    pub items: Vec<GpuItemBox>,
+    /// Materials.
+    pub materials: Vec<GpuMaterial>,
+    /// Area lights.
+    pub lights: Vec<GpuAreaLight>,
+    /// The scene's expression solids (at most [`MAX_GPU_TAPES`]: their tapes are
+    /// compiled into the kernels' source, GPU.md §6.2), in the order of their leaves'
+    /// `first_op`.
+    pub tapes: Vec<TapeSolid>,
+    /// CSG nodes of kind-2 shapes, post-order: (op, leaf or part count, 0, 0).
+    pub csg: Vec<[u32; 4]>,
+    /// Light-selection tables (by power at 0, by area at `frame.area_off`) and plastic
+    /// coat tables.
+    pub tables: Vec<f32>,
+    pub(super) frame: Frame,
+}
+
+/// The most CSG nodes one object may have on the GPU (after shared parts are copied).
+const MAX_CSG_NODES: u32 = 256;
+
+fn unsupported(what: impl Into<String>) -> GpuError {
+    GpuError::Unsupported(what.into())
+}
+
+fn f3(v: [f64; 3]) -> [f32; 3] {
+    [v[0] as f32, v[1] as f32, v[2] as f32]
+}
+
+impl DirectScene {
+    /// Packs `data` for a `direct` render with `o` (and the light selection trained
+    /// for it, if any), or says what the GPU cannot do.
+    pub fn new(
+        data: &SceneData,
+        o: &RenderOptions,
+        trained: Option<&TrainedSelection>,
+    ) -> Result<Self, GpuError> {
+        let mut s = DirectScene::default();
+        s.pack_lights(data)?;
+        s.pack_materials(data)?;
+        for obj in &data.objects {
+            s.pack_object(data, obj)?;
+        }
+        s.pack_frame(data, o)?;
+        s.pack_trained(trained);
+        Ok(s)
+    }
+
+    fn pack_leaf(&mut self, view: &frep::PerturbedView, material: u32) -> u32 {
+        let p = PerturbedPack::new(view);
+        let mut ob = p.object;
+        ob.kind = u32::from(!view.perturbations.is_empty());
+        ob.material = material;
+        ob.first_node = self.nodes.len() as u32;
+        ob.first_item = self.items.len() as u32;
+        ob.first_op = self.quadrics.len() as u32;
+        ob.op_count = self.perturbations.len() as u32;
+        self.quadrics.extend(p.quadrics);
+        self.perturbations.extend(p.perturbations);
+        self.nodes.extend(p.nodes);
+        self.items.extend(p.items);
+        self.leaves.push(ob);
+        self.leaves.len() as u32 - 1
+    }
+
+    fn pack_expr(
+        &mut self,
+        flat: &frep::Flat,
+        leaf: usize,
+        view: &frep::ExprView,
+        name: &str,
+        material: u32,
+    ) -> Result<(), GpuError> {
+        if self.tapes.len() >= MAX_GPU_TAPES {
+            return Err(unsupported(format!(
+                "object '{name}': more than {MAX_GPU_TAPES} expression solids"
+            )));
+        }
+        let frep::Leaf::Expr {
+            code, registers, ..
+        } = flat.leaves[leaf]
+        else {
+            unreachable!("an expression leaf");
+        };
+        let words = flat.bytecode[code.range()].to_vec();
+        let bytecode = frep::Bytecode::from_words(words, registers as usize)
+            .map_err(|e| unsupported(format!("object '{name}': {e}")))?;
+        let tape =
+            GpuTape::new(&bytecode).map_err(|e| unsupported(format!("object '{name}': {e}")))?;
+        if !view.bounds.is_finite() {
+            return Err(unsupported(format!(
+                "object '{name}' is an unbounded expression"
+            )));
+        }
+        let solid = TapeSolid::new(tape, &view.bounds);
+        let (lo, hi) = (solid.lo, solid.hi);
+        self.tapes.push(solid);
+        self.leaves.push(GpuObject {
+            kind: 2,
+            material,
+            lo,
+            hi,
+            // Which of the scene's tapes (`use_tape`).
+            first_op: self.tapes.len() as u32 - 1,
+            ..GpuObject::default()
+        });
+        Ok(())
+    }
+
+    fn pack_object(&mut self, data: &SceneData, obj: &scene::ObjectData) -> Result<(), GpuError> {
+        let flat = data.solids.solid(obj.solid).flat();
+        let root = flat.nodes.len() - 1;
+        let node = &flat.nodes[root];
+        let material = obj.material.0;
+        let first = self.leaves.len() as u32;
+        let plain = |k: u32| -> Option<frep::PerturbedView> {
+            let n = &flat.nodes[k as usize];
+            match (n.op, flat.leaf(n.operands.first as usize)) {
+                (CsgOp::Leaf, LeafView::Perturbed(v)) if v.perturbations.is_empty() => Some(v),
+                _ => None,
+            }
+        };
+        // (kind, first leaf or CSG node, leaves or nodes)
+        let (kind, first, count) = match node.op {
+            CsgOp::Leaf => match flat.leaf(node.operands.first as usize) {
+                LeafView::Perturbed(v) => {
+                    self.pack_leaf(&v, material);
+                    (0, first, 1)
+                }
+                LeafView::Expr(v) => {
+                    self.pack_expr(flat, node.operands.first as usize, &v, &obj.name, material)?;
+                    (0, first, 1)
+                }
+            },
+            CsgOp::Intersection if flat.parts(root).iter().all(|&k| plain(k).is_some()) => {
+                for &k in flat.parts(root) {
+                    let v = plain(k).expect("checked");
+                    self.pack_leaf(&v, material);
+                }
+                (1, first, flat.parts(root).len() as u32)
+            }
+            _ => {
+                // Any other CSG tree: its nodes in post-order from the root, so that
+                // each op's parts are the last lists on the kernel's stack (a part
+                // shared by two nodes is emitted under each). Plain quadrics give their
+                // ends in closed form, perturbed and expression parts by repeated
+                // crossing searches (`general_ends` in the kernel).
+                let first_node = self.csg.len() as u32;
+                let mut todo = vec![(root as u32, false)];
+                while let Some((i, expanded)) = todo.pop() {
+                    let n = &flat.nodes[i as usize];
+                    if n.op == CsgOp::Leaf {
+                        let k = n.operands.first as usize;
+                        let leaf = match flat.leaf(k) {
+                            LeafView::Perturbed(v) => self.pack_leaf(&v, material),
+                            LeafView::Expr(v) => {
+                                self.pack_expr(flat, k, &v, &obj.name, material)?;
+                                self.leaves.len() as u32 - 1
+                            }
+                        };
+                        self.csg.push([0, leaf, 0, 0]);
+                    } else if expanded {
+                        let op = match n.op {
+                            CsgOp::Union => 1,
+                            CsgOp::Intersection => 2,
+                            _ => 3,
+                        };
+                        self.csg
+                            .push([op, flat.parts(i as usize).len() as u32, 0, 0]);
+                    } else {
+                        todo.push((i, true));
+                        todo.extend(flat.parts(i as usize).iter().rev().map(|&k| (k, false)));
+                    }
+                    if self.csg.len() as u32 - first_node > MAX_CSG_NODES {
+                        break;
+                    }
+                }
+                let count = self.csg.len() as u32 - first_node;
+                if count > MAX_CSG_NODES {
+                    return Err(unsupported(format!(
+                        "object '{}' has more than {MAX_CSG_NODES} CSG nodes",
+                        obj.name
+                    )));
+                }
+                (2, first_node, count)
+            }
+        };
+        let (lo, hi) = outward(&node.bounds);
+        self.shapes.push(GpuShape {
+            kind,
+            first,
+            count,
+            material,
+            lo: [lo[0], lo[1], lo[2], 0.0],
+            hi: [hi[0], hi[1], hi[2], 0.0],
+        });
+        Ok(())
+    }
+
+    fn pack_materials(&mut self, data: &SceneData) -> Result<(), GpuError> {
+        for (m, name) in data.materials.iter().zip(&data.material_names) {
+            let constant = |id: scene::TextureId| -> Result<[f64; 3], GpuError> {
+                match &data.textures[id.index()] {
+                    TextureData::Constant { rgb } => Ok(*rgb),
+                    _ => Err(unsupported(format!(
+                        "material '{name}' has a textured parameter other than its colour"
+                    ))),
+                }
+            };
+            // The colour slot may be a point-space checker.
+            let (colour, clamp) = match m {
+                MaterialData::Diffuse { reflectance } => (Some(*reflectance), false),
+                MaterialData::Plastic { diffuse, .. } => (Some(*diffuse), true),
+                _ => (None, false),
+            };
+            let mut tex = (0, [0.0; 4], [0.0; 4]);
+            if let Some(id) = colour {
+                match &data.textures[id.index()] {
+                    TextureData::Constant { .. } => {}
+                    TextureData::Checker {
+                        a,
+                        b,
+                        scale,
+                        space: TextureSpace::Point,
+                    } => {
+                        let c = |v: [f64; 3]| {
+                            if clamp {
+                                v.map(|x| x.clamp(0.0, 1.0))
+                            } else {
+                                v
+                            }
+                        };
+                        tex = (1, f4(c(*a), *scale), f4(c(*b), 0.0));
+                    }
+                    TextureData::Checker { .. } => {
+                        return Err(unsupported(format!(
+                            "material '{name}' has a uv-space checker"
+                        )))
+                    }
+                }
+            }
+            let rgb = |id: scene::TextureId| match &data.textures[id.index()] {
+                TextureData::Constant { rgb } => *rgb,
+                // The checker's colours are written per hit; any value serves here.
+                TextureData::Checker { a, .. } => *a,
+            };
+            let bsdf = match *m {
+                MaterialData::Diffuse { reflectance } => GpuBsdf::diffuse(rgb(reflectance)),
+                MaterialData::Conductor { eta, k, roughness } => {
+                    GpuBsdf::conductor(constant(eta)?, constant(k)?, roughness)
+                }
+                MaterialData::Dielectric { eta, roughness } => GpuBsdf::dielectric(eta, roughness),
+                MaterialData::Plastic {
+                    diffuse,
+                    eta,
+                    roughness,
+                } => {
+                    let coat = CoatTable::new(eta, roughness);
+                    let at = self.tables.len() as u32;
+                    self.tables.extend(
+                        (0..COAT_TABLE_LEN).map(|j| coat.albedo((j as f64 / 64.0).powi(2)) as f32),
+                    );
+                    GpuBsdf::plastic(rgb(diffuse), eta, roughness, coat.r_int, at)
+                }
+            };
+            self.materials.push(GpuMaterial {
+                bsdf,
+                tex_kind: tex.0,
+                pad: [0; 3],
+                a: tex.1,
+                b: tex.2,
+            });
+        }
+        Ok(())
+    }
+
+    fn pack_lights(&mut self, data: &SceneData) -> Result<(), GpuError> {
+        for l in &data.lights.area {
+            let (rad, area) = (f3(l.emission), l.area as f32);
+            self.lights.push(match l.kind {
+                LightKind::Sphere => GpuAreaLight::sphere(f3(l.p0), l.radius as f32, rad, area),
+                LightKind::Rect => {
+                    GpuAreaLight::rect(f3(l.p0), f3(l.e1), f3(l.e2), l.two_sided, rad, area)
+                }
+                LightKind::Disk => {
+                    GpuAreaLight::disk(f3(l.p0), f3(l.e1), l.radius as f32, l.two_sided, rad, area)
+                }
+                LightKind::Point | LightKind::Spot => unreachable!("area lights only"),
+            });
+        }
+        // Point and spot lights after them (shape 3 and 4; the kernel's shade_delta).
+        for l in &data.lights.delta {
+            let spot = l.kind == LightKind::Spot;
+            self.lights.push(GpuAreaLight {
+                shape: if spot { 4 } else { 3 },
+                two_sided: 0,
+                pad: [0; 2],
+                radiance: f4(l.emission, 0.0),
+                p0: f4(l.p0, 0.0),
+                e1: f4(l.e1, l.cos_falloff_start),
+                e2: [l.cos_falloff_end as f32, 0.0, 0.0, 0.0],
+            });
+        }
+        self.frame.n_delta = data.lights.delta.len() as u32;
+        Ok(())
+    }
+
+    /// The trained selection's grid (low corner, cells per unit) and pmfs after the
+    /// other tables.
+    fn pack_trained(&mut self, trained: Option<&TrainedSelection>) {
+        self.frame.trained = [u32::MAX, 0, 0, 0];
+        if let Some(t) = trained {
+            let (lo, scale, res) = t.grid();
+            self.frame.trained = [self.tables.len() as u32, res as u32, t.lights() as u32, 0];
+            self.tables.extend(lo.as_vec3().to_array());
+            self.tables.extend(scale.as_vec3().to_array());
+            self.tables.extend(t.table().iter().map(|&p| p as f32));
+        }
+    }
+
+    fn pack_frame(&mut self, data: &SceneData, o: &RenderOptions) -> Result<(), GpuError> {
+        let f = &mut self.frame;
+        f.power_off = self.tables.len() as u32;
+        if let Some(d) = &data.lights.by_power {
+            self.tables.extend(light::table(d));
+        }
+        f.area_off = self.tables.len() as u32;
+        if let Some(d) = &data.lights.by_area {
+            self.tables.extend(light::table(d));
+        }
+        // The spatial selection's importance records, then the environment's map and
+        // tables after the selection tables (`sel_buf`).
+        f.spatial_off = self.tables.len() as u32;
+        for l in &data.lights.area {
+            if let Some(a) = render::light::AreaLight::from_data(l) {
+                self.tables.extend(light::importance_record(&a));
+            }
+        }
+        f.env = GpuEnv::pack(data, &mut self.tables);
+        if self.tables.is_empty() {
+            self.tables.push(0.0);
+        }
+        f.n_lights = data.lights.area.len() as u32;
+        // The MIS lights: the area lights, then the environment.
+        let n_mis = data.lights.area.len() + usize::from(data.environment.is_some());
+        f.n_shapes = self.shapes.len() as u32;
+        let c = &data.camera;
+        let (w, h) = (c.width, c.height);
+        (f.width, f.height, f.pixels) = (w, h, w * h);
+        f.seed_lo = o.seed as u32;
+        f.seed_hi = (o.seed >> 32) as u32;
+        // render::camera::Camera::look_at / orthographic, in f64, then rounded.
+        let v = |a: [f64; 3]| glam::DVec3::from_array(a);
+        let (eye, target, up) = (v(c.eye), v(c.target), v(c.up));
+        let forward = (target - eye).normalize();
+        let right = forward.cross(up).normalize();
+        let up = right.cross(forward);
+        let scale = match c.kind {
+            CameraKind::Perspective => (c.fov.to_radians() / 2.0).tan(),
+            CameraKind::Orthographic => 0.5 * c.scale.unwrap_or(1.0),
+        };
+        f.eye = f4(eye.to_array(), scale);
+        f.right = f4(right.to_array(), f64::from(w) / f64::from(h));
+        f.up = f4(up.to_array(), 0.0);
+        f.forward = f4(forward.to_array(), 0.0);
+        f.flags = u32::from(o.hide_emitters)
+            | (u32::from(o.pixel_center) << 1)
+            | (u32::from(c.kind == CameraKind::Orthographic) << 2)
+            | (u32::from(o.per_light > 0) << 3)
+            | (u32::from(
+                !o.aovs.is_empty()
+                    || !matches!(o.integrator, IntegratorKind::Direct | IntegratorKind::Path),
+            ) << 4);
+        if o.techniques.len() > MAX_GPU_TECHNIQUES {
+            return Err(unsupported(format!(
+                "{} techniques (at most {MAX_GPU_TECHNIQUES})",
+                o.techniques.len()
+            )));
+        }
+        f.max_depth = match o.integrator {
+            IntegratorKind::Path => o.max_depth,
+            _ => 1,
+        };
+        if f.max_depth > MAX_GPU_DEPTH {
+            return Err(unsupported(format!(
+                "max depth {} (at most {MAX_GPU_DEPTH})",
+                f.max_depth
+            )));
+        }
+        f.rr_depth = o.rr_depth;
+        f.n_tech = o.techniques.len() as u32;
+        for (k, &(t, n)) in o.techniques.iter().enumerate() {
+            let code = match t {
+                Technique::Bsdf => 0,
+                Technique::LightPower => 1,
+                Technique::LightUniform => 2,
+                Technique::LightArea => 3,
+                Technique::Light(l) if l < n_mis => 4 | (l as u32) << 8,
+                Technique::Environment => 5,
+                Technique::LightSpatial => 6,
+                Technique::LightTrained => 7,
+                t => return Err(unsupported(format!("technique {}", t.name()))),
+            };
+            f.tech[k / 4][k % 4] = code;
+            f.count[k / 4][k % 4] = n;
+            f.n_draws += n;
+        }
+        // render::integrator::dims: the vertex stride, and the draw that extends a path
+        // (the BSDF technique's first, else the extra draw).
+        f.stride = (3 * (f.n_draws + 1) + 1).div_ceil(4) * 4;
+        f.per_slot = f.n_draws + 1 + f.n_delta;
+        f.carry = f.n_draws;
+        let mut slot = 0;
+        for &(t, n) in &o.techniques {
+            if t == Technique::Bsdf {
+                f.carry = slot;
+            }
+            slot += n;
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,186 @@
+// --- lights ------------------------------------------------------------------------
+
+// The nearest area light along the ray: (t, index bits) with the radiance it sends back
+// along −d (0 from a non-emitting side); t = ∞ when none.
+struct LightHit { t: f32, index: u32, le: vec3<f32>, n: vec3<f32> }
+
+fn nearest_light(o: vec3<f32>, d: vec3<f32>, t_max: f32) -> LightHit {
+    var h = LightHit(inf(), 0u, vec3<f32>(0.0), vec3<f32>(0.0));
+    var best = t_max;
+    for (var i = 0u; i < frame.n_lights; i++) {
+        loops++;
+        let l = lights[i];
+        let c = light_intersect(l, o, d, 0.0, best);
+        if (c.x > 0.0) {
+            best = c.x;
+            var le = vec3<f32>(0.0);
+            if (light_emits(l, c.yzw, -d)) { le = l.radiance.xyz; }
+            h = LightHit(c.x, i, le, c.yzw);
+        }
+    }
+    return h;
+}
+
+// The MIS lights: the area lights, then the environment (render::light::Lights::count).
+fn n_mis() -> u32 {
+    return frame.n_lights + select(0u, 1u, frame.env.kind != ENV_NONE);
+}
+
+// Radiance arriving along d from the nearest light `lh` found, or from the environment
+// where the ray escapes (render::light::Lights::radiance_along over (0, ∞)).
+fn incoming(lh: LightHit, d: vec3<f32>) -> vec3<f32> {
+    if (lh.t < inf()) { return lh.le; }
+    return env_radiance(frame.env, d);
+}
+
+// The spatial selection (render::light::Selection::Spatial): the environment with
+// probability ½ (1 without area lights), the area lights with the rest ∝ their
+// importance at (p, n).
+fn spatial_env() -> f32 {
+    if (frame.env.kind == ENV_NONE) { return 0.0; }
+    if (frame.n_lights == 0u) { return 1.0; }
+    return 0.5;
+}
+
+fn importance_of(i: u32, p: vec3<f32>, n: vec3<f32>) -> f32 {
+    return light_importance(frame.spatial_off + 12u * i, p, n);
+}
+
+fn importance_total(p: vec3<f32>, n: vec3<f32>) -> f32 {
+    var total = 0.0;
+    for (var i = 0u; i < frame.n_lights; i++) {
+        loops++;
+        total += importance_of(i, p, n);
+    }
+    return total;
+}
+
+// The MIS light the spatial selection picks with uc, as bits (n_lights: the
+// environment), or 0xffffffff when none has probability (Lights::select).
+fn spatial_select(p: vec3<f32>, n: vec3<f32>, uc: f32) -> u32 {
+    let pe = spatial_env();
+    if (uc < pe) { return frame.n_lights; }
+    let total = importance_total(p, n);
+    if (!(total > 0.0)) { return 0xffffffffu; }
+    let aim = (uc - pe) / (1.0 - pe) * total;
+    var acc = 0.0;
+    var last = 0xffffffffu;
+    for (var i = 0u; i < frame.n_lights; i++) {
+        loops++;
+        let w = importance_of(i, p, n);
+        if (w > 0.0) {
+            acc += w;
+            last = i;
+            if (aim < acc) { return i; }
+        }
+    }
+    return last;
+}
+
+// The trained selection (render::light::TrainedSelection): whether its table covers the
+// MIS lights, and the offset of the pmf row of p's cell (points outside the grid go to
+// the nearest cell).
+fn trained_usable() -> bool {
+    return frame.trained.x != 0xffffffffu && frame.trained.z == n_mis();
+}
+
+fn trained_row(p: vec3<f32>) -> u32 {
+    let off = frame.trained.x;
+    let res = frame.trained.y;
+    let lo = vec3<f32>(sel_buf[off], sel_buf[off + 1u], sel_buf[off + 2u]);
+    let sc = vec3<f32>(sel_buf[off + 3u], sel_buf[off + 4u], sel_buf[off + 5u]);
+    let q = floor((p - lo) * sc);
+    let m = f32(res - 1u);
+    var c = vec3<u32>(0u);
+    for (var k = 0u; k < 3u; k++) {
+        if (q[k] == q[k]) { c[k] = u32(clamp(q[k], 0.0, m)); }
+    }
+    return off + 6u + ((c.z * res + c.y) * res + c.x) * frame.trained.z;
+}
+
+// The MIS light the trained pmf at p picks with uc (0xffffffff: none).
+fn trained_select(p: vec3<f32>, uc: f32) -> u32 {
+    if (!trained_usable()) { return 0xffffffffu; }
+    let row = trained_row(p);
+    let n = frame.trained.z;
+    var acc = 0.0;
+    for (var i = 0u; i < n; i++) {
+        loops++;
+        acc += sel_buf[row + i];
+        if (uc < acc) { return i; }
+    }
+    for (var i = n; i > 0u; i--) {
+        loops++;
+        if (sel_buf[row + i - 1u] > 0.0) { return i - 1u; }
+    }
+    return 0xffffffffu;
+}
+
+fn pmf_at(off: u32, i: u32) -> f32 {
+    let n = bitcast<u32>(sel_buf[off]);
+    return sel_buf[off + 1u + (n + 1u) + i];
+}
+
+// The solid-angle pdf of technique `code` (light index `one` for T_ONE) at wi, the
+// BSDF's being `bsdf_pdf` (render::technique::Technique::pdf).
+fn tech_pdf(code: u32, one: u32, p: vec3<f32>, n: vec3<f32>, wi: vec3<f32>, bsdf_pdf: f32) -> f32 {
+    if (code == T_BSDF) { return bsdf_pdf; }
+    if (code == T_ENV) { return env_pdf(frame.env, wi); }
+    if (code == T_TRAINED) {
+        if (!trained_usable()) { return 0.0; }
+        let row = trained_row(p);
+        var sum = 0.0;
+        for (var i = 0u; i < frame.n_lights; i++) {
+            loops++;
+            let pm = sel_buf[row + i];
+            if (pm > 0.0) { sum += pm * light_pdf_li(lights[i], p, wi); }
+        }
+        if (frame.env.kind != ENV_NONE) {
+            let pm = sel_buf[row + frame.n_lights];
+            if (pm > 0.0) { sum += pm * env_pdf(frame.env, wi); }
+        }
+        return sum;
+    }
+    if (code == T_SPATIAL) {
+        // Σ P(k | p, n) p_k(wi): (1 − P(env)) · importance_k / total over the area
+        // lights, then the environment (Lights::pdf_selected_over).
+        let pe = spatial_env();
+        var sum = 0.0;
+        let total = importance_total(p, n);
+        if (total > 0.0) {
+            for (var i = 0u; i < frame.n_lights; i++) {
+                loops++;
+                let pm = (1.0 - pe) * importance_of(i, p, n) / total;
+                if (pm > 0.0) { sum += pm * light_pdf_li(lights[i], p, wi); }
+            }
+        }
+        if (pe > 0.0) { sum += pe * env_pdf(frame.env, wi); }
+        return sum;
+    }
+    if (code == T_ONE) {
+        if (one == frame.n_lights) { return env_pdf(frame.env, wi); }
+        return light_pdf_li(lights[one], p, wi);
+    }
+    var sum = 0.0;
+    for (var i = 0u; i < frame.n_lights; i++) {
+        loops++;
+        if (code == T_AREA) {
+            let pm = pmf_at(frame.area_off, i);
+            if (pm > 0.0) { sum += pm * light_pdf_area(lights[i], p, wi); }
+        } else {
+            var pm = 1.0 / f32(n_mis());
+            if (code == T_POWER) { pm = pmf_at(frame.power_off, i); }
+            if (pm > 0.0) { sum += pm * light_pdf_li(lights[i], p, wi); }
+        }
+    }
+    // The environment last, as Lights::pdf_selected_over (not a by-area light).
+    if (code != T_AREA && frame.env.kind != ENV_NONE) {
+        var pm = 1.0 / f32(n_mis());
+        if (code == T_POWER) { pm = pmf_at(frame.power_off, frame.n_lights); }
+        if (pm > 0.0) { sum += pm * env_pdf(frame.env, wi); }
+    }
+    return sum;
+}
+
+fn tech_code(k: u32) -> u32 { return frame.tech[k / 4u][k % 4u] & 0xffu; }
+fn tech_light(k: u32) -> u32 { return frame.tech[k / 4u][k % 4u] >> 8u; }

@@ -1,0 +1,311 @@
+// Draw j of the vertex of slot q / nd at depth 0 (every slot, in slot order: coherent
+// rays), else of the live slot queued at q / nd: technique k's (j < Σ n_k), or the
+// extra BSDF draw that only extends the path (j = Σ n_k). The draws of slots not
+// queued keep the zeros the wave began with (status 0: no vertex).
+@compute @workgroup_size(64)
+fn shade(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nw: vec3<u32>) {
+    let q = gid.x + gid.y * nw.x * 64u;
+    let nd = frame.per_slot;
+    var slot = q / nd;
+    if (frame.depth == 0u) {
+        if (q >= frame.slots * nd) { return; }
+    } else {
+        if (q >= atomicLoad(&stats[LIVE_LEN]) * nd) { return; }
+        slot = atomicLoad(&stats[frame.wave.x + q / nd]);
+    }
+    loops = 0u;
+    let j = q % nd;
+    let i = slot * nd + j;
+    let at = draw_at(slot, j);
+    let ha = slot * HIT_WORDS;
+    let hp = hits[ha];
+    if (hp.w != S_SURFACE) {
+        draws[at + 1u] = vec4<f32>(0.0, 0.0, 0.0, 0.0);
+        return;
+    }
+    let extend = frame.depth + 1u < frame.max_depth;
+    let carries = extend && j == frame.carry;
+    let hn = hits[ha + 1u];
+    let mat = materials[bitcast<u32>(hn.w)];
+    // Delta lobes (render::bsdf::Bxdf::has_specular) and nothing else but them.
+    let spec_mat = mat.bsdf.delta != 0u;
+    let pure = spec_mat && (mat.bsdf.kind == 1u || mat.bsdf.kind == 2u);
+    let vflags = select(0.0, F_PURE, pure);
+    // The extra BSDF draw serves the continuation and, without a BSDF technique, the
+    // delta lobes (Integrator::shade).
+    let extra_used = carries || (frame.carry == frame.n_draws && spec_mat);
+    let px = slot_pixel(slot);
+    let p = hp.xyz;
+    let n = hn.xyz;
+    let wo = hits[ha + 2u].xyz;
+    let beta = hits[ha + 4u].xyz;
+    var m = mat.bsdf;
+    m.zero = frame.zero;
+    if (mat.tex_kind == 1u) {
+        // render::texture: cells of p·scale − n·10⁻³, a where their index sum is even.
+        let q = floor(p * mat.a.w - n * 1e-3);
+        let cells = q.x + q.y + q.z;
+        let r = cells - 2.0 * floor(cells * 0.5);
+        m.rgb = select(mat.b, mat.a, r < 0.5);
+        m.rgb.w = 0.0;
+    }
+    let f = basis(n);
+    let wo_l = to_local(f, wo);
+    if (frame.depth == 0u && j == 0u && (frame.flags & FLAG_AOVS) != 0u) {
+        // The albedo AOV: one BSDF draw's weight, from its own dimensions
+        // (integrator/aov.rs, dims::ALBEDO).
+        let s = bsdf_sample_f(m, wo_l, rnd(px.x, px.y, px.z, 2u),
+            vec2<f32>(rnd(px.x, px.y, px.z, 3u), rnd(px.x, px.y, px.z, 4u)));
+        var albedo = vec3<f32>(0.0);
+        if ((s.flags & 1u) != 0u) { albedo = s.weight; }
+        hits[ha + 9u] = vec4<f32>(albedo, 0.0);
+    }
+    if (j == frame.n_draws && !extra_used) {
+        draws[at + 1u] = vec4<f32>(0.0, 0.0, 0.0, 0.0);
+        return;
+    }
+    if (j > frame.n_draws) {
+        shade_delta(i, at, j - frame.n_draws - 1u, p, n, f, wo_l, m, beta);
+        atomicMax(&stats[2], loops);
+        return;
+    }
+    // Technique k of draw j (the extra draw samples the BSDF).
+    var k = 0u;
+    var first = 0u;
+    var code = T_BSDF;
+    if (j < frame.n_draws) {
+        for (var t = 0u; t < frame.n_tech; t++) {
+            loops++;
+            let c = frame.count[t / 4u][t % 4u];
+            if (j < first + c) { k = t; break; }
+            first += c;
+        }
+        code = tech_code(k);
+    }
+    if (pure && code != T_BSDF) {
+        draws[at + 1u] = vec4<f32>(0.0, 0.0, 0.0, D_SKIP);
+        draws[at + 2u] = vec4<f32>(0.0, 0.0, 0.0, vflags);
+        return;
+    }
+    let base = 8u + frame.depth * frame.stride;
+    let dim = base + 3u * j;
+    let uc = rnd(px.x, px.y, px.z, dim);
+    let u = vec2<f32>(rnd(px.x, px.y, px.z, dim + 1u), rnd(px.x, px.y, px.z, dim + 2u));
+    var wi = vec3<f32>(0.0);
+    var ok = false;
+    var weight = vec3<f32>(0.0);
+    var spec = false;
+    if (code == T_BSDF) {
+        let s = bsdf_sample_f(m, wo_l, uc, u);
+        ok = (s.flags & 1u) != 0u;
+        spec = ok && (s.flags & 2u) != 0u;
+        wi = from_local(f, s.wi);
+        weight = s.weight;
+    } else if (code == T_ENV) {
+        let es = env_sample(frame.env, u);
+        ok = es.ok != 0u;
+        wi = es.wi;
+    } else if (code == T_AREA) {
+        if (frame.n_lights > 0u) {
+            let sel = light_select(frame.area_off, true, frame.n_lights, uc);
+            let ls = light_sample_area(lights[bitcast<u32>(sel.x)], p, u);
+            ok = ls.ok != 0u;
+            wi = ls.wi;
+        }
+    } else if (n_mis() > 0u) {
+        var li = tech_light(k);
+        if (code == T_SPATIAL) {
+            li = spatial_select(p, n, uc);
+        } else if (code == T_TRAINED) {
+            li = trained_select(p, uc);
+        } else if (code != T_ONE) {
+            let sel = light_select(frame.power_off, code == T_POWER, n_mis(), uc);
+            li = bitcast<u32>(sel.x);
+        }
+        if (li == 0xffffffffu) {
+            ok = false;
+        } else if (li == frame.n_lights) {
+            // The environment, the last MIS light.
+            let es = env_sample(frame.env, u);
+            ok = es.ok != 0u;
+            wi = es.wi;
+        } else {
+            let ls = light_sample_li(lights[li], p, u);
+            ok = ls.ok != 0u;
+            wi = ls.wi;
+        }
+    }
+    let o = spawn(p, n, wi);
+    if (carries) {
+        // The path's next ray, β after it, and roulette (render::integrator::path).
+        var next = beta * weight;
+        var survives = ok && all(next == next) && any(next != vec3<f32>(0.0)) && is_finite(max(next.x, max(next.y, next.z)));
+        if (survives && frame.depth + 1u >= frame.rr_depth) {
+            let q = max(0.05, 1.0 - max(next.x, max(next.y, next.z)));
+            if (rnd(px.x, px.y, px.z, base + 3u * (frame.n_draws + 1u)) < q) {
+                survives = false;
+            } else {
+                next = next / (1.0 - q);
+            }
+        }
+        hits[ha + 5u] = vec4<f32>(o, select(0.0, 1.0, ok));
+        hits[ha + 6u] = vec4<f32>(wi, select(0.0, 1.0, survives));
+        hits[ha + 7u] = vec4<f32>(next, 0.0);
+        // Traced for the draw's Li even where roulette ends the path there.
+        if (ok) { push(CONT_LEN, frame.wave.y, slot); }
+    }
+    if (spec) {
+        // A delta lobe: outside MIS, weight·Li/n (n the BSDF technique's draws, 1 for the
+        // extra draw), Li from the continuation's trace or a shadow ray.
+        var nk = 1u;
+        if (j < frame.n_draws) { nk = frame.count[k / 4u][k % 4u]; }
+        let gw = beta * weight / f32(nk);
+        if (carries) {
+            write_carried(at, o, wi, gw, F_OUTSIDE + vflags);
+        } else {
+            let lh = nearest_light(o, wi, inf());
+            let le = incoming(lh, wi);
+            let traced = any(le != vec3<f32>(0.0));
+            write_shadow(i, at, o, wi, lh.t, gw * le, F_OUTSIDE + vflags, traced);
+        }
+        atomicMax(&stats[2], loops);
+        return;
+    }
+    if (carries) {
+        if (j == frame.n_draws) {
+            draws[at + 1u] = vec4<f32>(wi, select(0.0, D_CARRIED, ok));
+            draws[at + 2u] = vec4<f32>(0.0, 0.0, 0.0, vflags);
+            atomicMax(&stats[2], loops);
+            return;
+        }
+    }
+    var pdfs: array<f32, 8>;
+    var fc = vec3<f32>(0.0);
+    if (ok) {
+        let wi_l = to_local(f, wi);
+        let ev = bsdf_eval(m, wo_l, wi_l);
+        fc = ev.xyz * abs(dot(wi, n));
+        for (var t = 0u; t < frame.n_tech; t++) {
+            loops++;
+            pdfs[t] = tech_pdf(tech_code(t), tech_light(t), p, n, wi, ev.w);
+        }
+        // A light draw's own density is the mixture's, and it fails where that is not
+        // positive (Lights::sample_selected, sample_by_area).
+        let own = pdfs[k];
+        if (code != T_BSDF) { ok = own > 0.0 && is_finite(own); }
+    }
+    if (!ok || j == frame.n_draws) {
+        // (The extra draw, when it neither extends the path nor hit a delta lobe, adds
+        // nothing.)
+        draws[at + 1u] = vec4<f32>(0.0, 0.0, 0.0, select(D_FAILED, 0.0, j == frame.n_draws));
+        draws[at + 2u] = vec4<f32>(0.0, 0.0, 0.0, vflags);
+        atomicMax(&stats[2], loops);
+        return;
+    }
+    draws[at + 3u] = vec4<f32>(pdfs[0], pdfs[1], pdfs[2], pdfs[3]);
+    draws[at + 4u] = vec4<f32>(pdfs[4], pdfs[5], pdfs[6], pdfs[7]);
+    // Per-light mode: the MIS light the draw's ray reaches, objects ignored (the nearest
+    // area light, else the environment; render::integrator::vertex::light_reached),
+    // as 4 × (1 + index) in the flags (0: none).
+    let per_light = (frame.flags & FLAG_PER_LIGHT) != 0u;
+    var lh = LightHit(inf(), 0u, vec3<f32>(0.0), vec3<f32>(0.0));
+    if (!carries || per_light) { lh = nearest_light(o, wi, inf()); }
+    var reached = vflags;
+    if (per_light) {
+        if (lh.t < inf()) {
+            reached += 4.0 * f32(lh.index + 1u);
+        } else if (frame.env.kind != ENV_NONE) {
+            reached += 4.0 * f32(frame.n_lights + 1u);
+        }
+    }
+    if (carries) {
+        write_carried(at, o, wi, beta * fc, reached);
+    } else {
+        // render::integrator::vertex::incident.
+        let le = incoming(lh, wi);
+        let traced = any(fc != vec3<f32>(0.0)) && any(le != vec3<f32>(0.0));
+        write_shadow(i, at, o, wi, lh.t, beta * fc * le, reached, traced);
+    }
+    atomicMax(&stats[2], loops);
+}
+
+// A draw whose light arrives along a shadow ray from o along wi up to t_max: its record,
+// with g the integrand before visibility, and, where `traced`, the ray queued for the
+// shadow pass (which runs over the queue alone: compaction, GPU.md §7.4).
+fn write_shadow(i: u32, at: u32, o: vec3<f32>, wi: vec3<f32>, t_max: f32, g: vec3<f32>, flags: f32, traced: bool) {
+    draws[at] = vec4<f32>(o, t_max);
+    draws[at + 1u] = vec4<f32>(wi, select(D_ZERO, D_SHADOW, traced));
+    draws[at + 2u] = vec4<f32>(g, flags);
+    if (traced) { push(QUEUE_LEN, QUEUE_ITEMS, i); }
+}
+
+// The draw that extends the path: Li comes from the continuation's trace (mode 2),
+// which multiplies it into g.
+fn write_carried(at: u32, o: vec3<f32>, wi: vec3<f32>, g: vec3<f32>, flags: f32) {
+    draws[at] = vec4<f32>(o, 0.0);
+    draws[at + 1u] = vec4<f32>(wi, D_CARRIED);
+    draws[at + 2u] = vec4<f32>(g, flags);
+}
+
+// render::integrator::vertex::spawn, with an offset for f32: the CPU's 10⁻⁷ (for f64)
+// left 2.7 % of a test image's pixels darker by over 30 % (shadow rays finding the
+// surface they leave); 10⁻⁵ left none (docs/gpu.md).
+fn spawn(p: vec3<f32>, n: vec3<f32>, wi: vec3<f32>) -> vec3<f32> {
+    var side = n;
+    if (dot(wi, n) < 0.0) { side = -n; }
+    return p + side * (1e-5 * (1.0 + max(abs(p.x), max(abs(p.y), abs(p.z)))));
+}
+
+// Point or spot light l (after the area lights in `lights`: shape 3 point, 4 spot;
+// radiance = intensity, p0 = position, e1 = axis and cos of the falloff's start,
+// e2.x = cos of the cone) at the vertex, outside MIS (Integrator::delta_lights): its
+// shadow ray is queued with β·f·|cos|·I/d², unless nothing could arrive.
+fn shade_delta(i: u32, at: u32, l: u32, p: vec3<f32>, n: vec3<f32>, f: Basis, wo_l: vec3<f32>, m: GpuBsdf, beta: vec3<f32>) {
+    draws[at + 1u] = vec4<f32>(0.0, 0.0, 0.0, 0.0);
+    let dl = lights[frame.n_lights + l];
+    let v = dl.p0.xyz - p;
+    let d2 = dot(v, v);
+    if (d2 == 0.0) { return; }
+    let wi = v / sqrt(d2);
+    var intensity = dl.radiance.xyz;
+    if (dl.shape == 4u) {
+        // smoothstep(axis·(−wi), cos_end, cos_start), as render::light::delta.
+        let a = dl.e2.x;
+        let b = dl.e1.w;
+        let x = dot(dl.e1.xyz, -wi);
+        var s = 0.0;
+        if (a == b) {
+            s = select(1.0, 0.0, x < a);
+        } else {
+            let t = clamp((x - a) / (b - a), 0.0, 1.0);
+            s = t * t * (3.0 - 2.0 * t);
+        }
+        intensity = intensity * s;
+    }
+    let radiance = intensity / d2;
+    let fc = bsdf_eval(m, wo_l, to_local(f, wi)).xyz * abs(dot(wi, n));
+    if (all(fc == vec3<f32>(0.0)) || all(radiance == vec3<f32>(0.0))) { return; }
+    let o = spawn(p, n, wi);
+    let dist = length(dl.p0.xyz - o);
+    if (nearest_light(o, wi, dist).t < inf()) { return; }
+    write_shadow(i, at, o, wi, dist, beta * fc * radiance, 0.0, true);
+}
+
+// An indirect dispatch of n invocations at stats[at..at + 3], split over y where x
+// would pass 65 535 workgroups.
+fn dispatch_args(at: u32, n: u32) {
+    let groups = max((n + 63u) / 64u, 1u);
+    let x = min(groups, 65535u);
+    atomicStore(&stats[at], x);
+    atomicStore(&stats[at + 1u], (groups + x - 1u) / x);
+    atomicStore(&stats[at + 2u], 1u);
+}
+
+// The queued passes' indirect dispatches from their queues' lengths (one invocation):
+// the shadow rays, the live slots' draws, the continuations.
+@compute @workgroup_size(1)
+fn prepare() {
+    dispatch_args(QUEUE_ARGS, atomicLoad(&stats[QUEUE_LEN]));
+    dispatch_args(LIVE_ARGS, atomicLoad(&stats[LIVE_LEN]) * frame.per_slot);
+    dispatch_args(CONT_ARGS, atomicLoad(&stats[CONT_LEN]));
+}
