@@ -1,5 +1,5 @@
 //! The `direct` and `path` integrators on the GPU: the resolved scene packed into
-//! buffers, wavefront kernels (shaders/direct.wgsl: camera rays with their nearest hits,
+//! buffers, wavefront kernels (shaders/direct_*.wgsl: camera rays with their nearest hits,
 //! the techniques' draws with every pdf, shadow rays, the paths' continuation rays), and
 //! the CPU's per-pixel records filled from them (GPU.md §7–§8, first version).
 //!
