@@ -31,12 +31,6 @@ FRONT_ENDS = {"frepray-cli", "frepray-py"}
 # Wrong arrows the code still has, and what removes each.
 DEBT = {
     ("gpu", "render"): "RenderState, records and coat tables move below both back ends",
-    ("frepray-cli", "render"): "render options, statistics and images through frepray",
-    ("frepray-cli", "scene"): "scene settings and overrides through frepray",
-    ("frepray-py", "frep"): "model evaluation through frepray",
-    ("frepray-py", "mis"): "the numpy estimators through frepray",
-    ("frepray-py", "render"): "render options, statistics and images through frepray",
-    ("frepray-py", "scene"): "scene settings and overrides through frepray",
 }
 
 

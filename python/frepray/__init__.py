@@ -34,13 +34,13 @@ from ._native import (
 )
 from ._native import experiment as _experiment
 from ._native import load_json as _load_json
-from ._native import measure
+from ._native import measure, summarize
 
 __all__ = [
     "Error", "SceneError", "RenderError", "ModelError", "Cancelled", "Cancel", "Scene",
     "RenderState", "Model",
     "load", "load_dict", "render", "merge", "read_exr", "write_exr", "model", "mis",
-    "experiment", "measure", "gpu_available",
+    "experiment", "measure", "summarize", "gpu_available",
 ]
 
 

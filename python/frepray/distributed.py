@@ -16,7 +16,6 @@ initialised yet.
 
 from __future__ import annotations
 
-import math
 import os
 import time
 from typing import Any, Callable, List, Optional, Sequence, Tuple
@@ -164,9 +163,10 @@ def experiment(
 ):
     """The estimator comparison with every render a Ray task: the reference (unless
     given) split over ``reference_tasks`` tasks, then each (estimator, spp, repeat) as
-    one task.  Metrics and the Improvement / Speed Up / Overhead definitions are those
-    of :func:`frepray.experiment` (DESIGN.md §4); times are each task's render time.
-    Returns the same records (or DataFrame)."""
+    one task.  The tables are :func:`frepray.summarize`'s: the same points, 95 %
+    intervals (with ``repeats`` ≥ 2) and Improvement / Speed Up / Overhead as
+    :func:`frepray.experiment` gives; times are each task's render time.  Returns the
+    same records (or DataFrame)."""
     from . import _table
 
     ray = _ray()
@@ -183,27 +183,11 @@ def experiment(
     task = _remote(_render_timed, max_retries, num_cpus)
     jobs = [(e, s, r) for e in names for s in sorted(set(spp)) for r in seeds]
     results = ray.get([task.remote(scene, e, s, r, options) for e, s, r in jobs])
-    points: dict = {}
-    for (e, s, _), (img, secs) in zip(jobs, results):
+    measured = []
+    for (e, s, r), (img, secs) in zip(jobs, results):
         m = _native.measure(img, ref)
-        acc = points.setdefault((e, s), [0.0, 0.0, 0.0, 0])
-        acc[0] += m["mse"]
-        acc[1] += m["relmse"]
-        acc[2] += secs
-        acc[3] += 1
-    rows = []
-    for (e, s), (mse, rel, secs, n) in points.items():
-        rows.append({"estimator": e, "spp": s, "time_s": secs / n, "mse": mse / n,
-                     "rmse": (mse / n) ** 0.5, "relmse": rel / n})
-
-    def ratio(a: float, b: float) -> Optional[float]:
-        ok = lambda v: math.isfinite(v) and v > 0  # noqa: E731 - as report.rs
-        return a / b if ok(a) and ok(b) else None
-
-    for r in rows:
-        base = next(x for x in rows if x["estimator"] == baseline and x["spp"] == r["spp"])
-        r["improvement"] = ratio(base["rmse"], r["rmse"])
-        o = ratio(r["time_s"], base["time_s"])
-        r["overhead"] = None if o is None else o - 1.0
-        r["speed_up"] = ratio(base["mse"] * base["time_s"], r["mse"] * r["time_s"])
+        measured.append(dict(m, estimator=e, spp=s, seed=r, time_s=secs))
+    # The library's tables (frepray::experiment::summarize): the points averaged over
+    # seeds with their intervals, and the comparisons, as frepray.experiment gives them.
+    rows = _native.summarize(measured, baseline)
     return _table(rows, pandas)

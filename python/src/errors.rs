@@ -34,7 +34,7 @@ create_exception!(
 );
 
 /// A [`frepray::SceneError`] as `frepray.SceneError` with its location as attributes.
-pub fn scene_error(py: Python<'_>, e: &scene::SceneError) -> PyErr {
+pub fn scene_error(py: Python<'_>, e: &frepray::SceneError) -> PyErr {
     let err = SceneError::new_err(e.to_string());
     let v = err.value(py);
     let set = |k: &str, val: Bound<'_, PyAny>| {

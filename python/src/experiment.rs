@@ -3,85 +3,13 @@
 
 use crate::errors::{opt_uint, render_err, to_py, uint};
 use crate::interrupt::{self, Cancel};
-use crate::scene::{resolved, scene_path, Scene};
-use frepray::experiment::{self as exp, ExperimentConfig, Image, Renderer};
-use frepray::RenderOptions;
+use crate::scene::{keyword, resolved, scene_path, warn, Scene};
+use frepray::experiment::{self as exp, ExperimentConfig, Image, SceneRenderer};
 use numpy::PyReadonlyArray3;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 use std::path::PathBuf;
-use std::str::FromStr;
-use std::sync::atomic::AtomicBool;
-use std::sync::Arc;
-
-/// Renders the scene for the experiment driver.
-struct SceneRenderer<'a> {
-    scene: Arc<frepray::Scene>,
-    base: RenderOptions,
-    stop: &'a AtomicBool,
-}
-
-impl SceneRenderer<'_> {
-    fn run(&mut self, o: RenderOptions) -> Result<Option<(Image, f64)>, String> {
-        let spp = o.spp;
-        let (state, stats) = self
-            .scene
-            .render_with(&o, 0..spp, self.stop, &|_, _| {})
-            .map_err(|e| e.to_string())?;
-        if stats.stopped {
-            return Ok(None);
-        }
-        Ok(Some((to_image(&state.image()), stats.wall.as_secs_f64())))
-    }
-
-    fn options(&self, estimator: &str, spp: u32, seed: u64) -> Result<RenderOptions, String> {
-        Ok(RenderOptions {
-            method: mis::Method::from_str(estimator).map_err(|e| e.to_string())?,
-            spp,
-            seed,
-            ..self.base.clone()
-        })
-    }
-}
-
-impl Renderer for SceneRenderer<'_> {
-    fn render(
-        &mut self,
-        estimator: &str,
-        spp: u32,
-        seed: u64,
-    ) -> Result<Option<(Image, f64)>, String> {
-        let o = self.options(estimator, spp, seed)?;
-        self.run(o)
-    }
-
-    fn render_pixel_centers(
-        &mut self,
-        estimator: &str,
-        spp: u32,
-        seed: u64,
-    ) -> Result<Option<(Image, f64)>, String> {
-        let o = RenderOptions {
-            pixel_center: true,
-            ..self.options(estimator, spp, seed)?
-        };
-        self.run(o)
-    }
-}
-
-/// The colour of a render image.
-fn to_image(img: &render::Image) -> Image {
-    let (w, h) = (img.width(), img.height());
-    Image {
-        width: w,
-        height: h,
-        rgb: (0..h)
-            .flat_map(|y| (0..w).map(move |x| (x, y)))
-            .map(|(x, y)| img.rgb(x, y).to_array())
-            .collect(),
-    }
-}
 
 /// An `(h, w, ≥3)` array's first three channels as an experiment image.
 fn array_image(a: &PyReadonlyArray3<'_, f64>) -> PyResult<Image> {
@@ -115,8 +43,55 @@ pub fn measure<'py>(
     d.set_item("mse", m.mse)?;
     d.set_item("rmse", m.mse.sqrt())?;
     d.set_item("relmse", m.relmse)?;
+    d.set_item("trimmed_mse", m.trimmed_mse)?;
     d.set_item("nonfinite", m.nonfinite)?;
     Ok(d)
+}
+
+/// The tables of renders measured elsewhere (e.g. Ray tasks): `renders` is a list of
+/// dicts with estimator, spp, seed, time_s and `measure`'s mse, relmse, trimmed_mse;
+/// returns `experiment`'s records (points averaged over seeds, with intervals from two
+/// seeds on, and Improvement / Speed Up / Overhead against `baseline`), computed by the
+/// same code.
+#[pyfunction]
+#[pyo3(signature = (renders, baseline = "balance", reference_noise = None))]
+pub fn summarize<'py>(
+    py: Python<'py>,
+    renders: Vec<Bound<'py, PyDict>>,
+    baseline: &str,
+    reference_noise: Option<f64>,
+) -> PyResult<Bound<'py, PyList>> {
+    let get = |d: &Bound<'py, PyDict>, k: &str| -> PyResult<Bound<'py, PyAny>> {
+        d.get_item(k)?
+            .ok_or_else(|| PyValueError::new_err(format!("a render without {k:?}")))
+    };
+    let canon = |e: &str| exp::canonical(e).map_err(|e| PyValueError::new_err(e.to_string()));
+    let measured = renders
+        .iter()
+        .map(|d| {
+            let mse: f64 = get(d, "mse")?.extract()?;
+            Ok(exp::Measured {
+                estimator: canon(&get(d, "estimator")?.extract::<String>()?)?,
+                spp: uint("spp", get(d, "spp")?.extract()?)?,
+                seed: uint("seed", get(d, "seed")?.extract()?)?,
+                time_s: get(d, "time_s")?.extract()?,
+                metrics: exp::Metrics {
+                    mse,
+                    relmse: get(d, "relmse")?.extract()?,
+                    trimmed_mse: match d.get_item("trimmed_mse")? {
+                        Some(v) => v.extract()?,
+                        None => f64::NAN,
+                    },
+                    nonfinite: match d.get_item("nonfinite")? {
+                        Some(v) => v.extract()?,
+                        None => 0,
+                    },
+                },
+            })
+        })
+        .collect::<PyResult<Vec<_>>>()?;
+    let summary = exp::summarize(&measured, &canon(baseline)?, reference_noise);
+    records(py, &summary)
 }
 
 /// Runs the comparison: a reference (`reference_spp` samples, or the EXR `reference`),
@@ -182,15 +157,10 @@ pub fn experiment<'py>(
     let trained_grid = opt_uint("trained_grid", trained_grid)?;
     let trained_spp = opt_uint("trained_spp", trained_spp)?;
     let threads: usize = uint("threads", threads)?;
-    let canon = |s: &str| {
-        mis::Method::from_str(s)
-            .map(|m| m.name().to_string())
-            .map_err(|e| PyValueError::new_err(e.to_string()))
-    };
-    let o = scene::Overrides {
+    let o = frepray::Overrides {
         techniques: techniques
             .as_deref()
-            .map(scene::parse_technique_list)
+            .map(frepray::parse_technique_list)
             .transpose()
             .map_err(|e| crate::errors::scene_error(py, &e))?,
         integrator,
@@ -209,39 +179,56 @@ pub fn experiment<'py>(
         ..Default::default()
     };
     let s = resolved(py, scene, &o)?;
-    let mut base = s.options().map_err(|e| to_py(py, e))?;
-    base.pixel_center = pixel_center;
-    base.threads = threads;
-    base.validate().map_err(PyValueError::new_err)?;
-    let mut cfg = ExperimentConfig::new(scene_path(scene), out);
-    cfg.command_line = "frepray.experiment (Python)".into();
-    let (width, height) = s.resolution();
-    cfg.renderer_settings = exp::renderer_settings(&base, width, height);
-    cfg.size = Some((width, height));
-    cfg.estimators = estimators
+    let settings = frepray::Settings {
+        overrides: o,
+        threads,
+        pixel_center,
+        ..Default::default()
+    };
+    let (base, _) = s.options_with(&settings).map_err(|e| to_py(py, e))?;
+    let parse = |e: &str| {
+        e.parse::<frepray::Method>()
+            .map_err(|e| PyValueError::new_err(e.to_string()))
+    };
+    let methods = estimators
         .iter()
-        .map(|e| canon(e))
-        .collect::<PyResult<_>>()?;
+        .map(|e| parse(e))
+        .collect::<PyResult<Vec<_>>>()?;
+    parse(baseline)?;
+    reference_estimator.as_deref().map(parse).transpose()?;
+    for u in frepray::settings::unused_in_sweep(&settings.overrides, &base, &methods) {
+        warn(py, &u.message(keyword))?;
+    }
+    let mut cfg = ExperimentConfig::for_scene(
+        &s,
+        &base,
+        scene_path(scene),
+        out,
+        &estimators,
+        baseline,
+        reference_estimator.as_deref(),
+    )
+    .map_err(|e| to_py(py, e))?;
+    cfg.command_line = "frepray.experiment (Python)".into();
     cfg.spp = spp;
     cfg.reference_spp = reference_spp;
     cfg.reference = reference;
-    cfg.reference_estimator = reference_estimator.as_deref().map(canon).transpose()?;
-    cfg.baseline = canon(baseline)?;
     cfg.seed = seed;
     cfg.repeats = repeats;
     cfg.decompose = decompose;
     let (result, interrupted) = interrupt::run(py, cancel.as_deref(), |stop| {
-        let mut r = SceneRenderer {
-            scene: s.clone(),
-            base: base.clone(),
-            stop,
-        };
+        let mut r = SceneRenderer::new(&s, base.clone(), stop, &|_| {});
         exp::run(&cfg, &mut r, &|_| {})
     });
     if let Some(err) = interrupted {
         return Err(err);
     }
     let summary = result.map_err(render_err)?;
+    records(py, &summary)
+}
+
+/// One dict per (estimator, spp) point of a summary, with its comparison.
+fn records<'py>(py: Python<'py>, summary: &exp::Summary) -> PyResult<Bound<'py, PyList>> {
     let list = PyList::empty(py);
     for row in &summary.rows {
         let d = PyDict::new(py);

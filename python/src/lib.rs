@@ -45,6 +45,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(mis_py::mis_methods, m)?)?;
     m.add_function(wrap_pyfunction!(experiment::experiment, m)?)?;
     m.add_function(wrap_pyfunction!(experiment::measure, m)?)?;
+    m.add_function(wrap_pyfunction!(experiment::summarize, m)?)?;
     m.add("gpu_available", gpu::GpuAvailable)?;
     let at_exit = wrap_pyfunction!(interrupt::_at_exit, m)?;
     py.import("atexit")?.call_method1("register", (&at_exit,))?;

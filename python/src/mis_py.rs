@@ -1,7 +1,7 @@
 //! The `mis` estimators over numpy arrays: any integral a researcher samples in numpy
 //! (python/frepray/mis.py shapes the arrays and documents the model).
 
-use mis::{Estimator, Layout, Method, Params};
+use frepray::estimators::{Estimator, Layout, Method, Params, DEFAULT_TRAIN, DEFAULT_WARMUP};
 use numpy::ndarray::Array1;
 use numpy::{IntoPyArray, PyArray1, PyReadonlyArray3};
 use pyo3::exceptions::PyValueError;
@@ -14,7 +14,7 @@ use std::str::FromStr;
 /// pdf is 0 counts as failed); `ridge` None: the method's default. Returns float64 `(C,)`.
 #[pyfunction]
 #[pyo3(signature = (method, f, pdfs, beta = 2.0, cutoff = 0.5, ridge = None,
-    warmup = mis::DEFAULT_WARMUP, train = mis::DEFAULT_TRAIN))]
+    warmup = DEFAULT_WARMUP, train = DEFAULT_TRAIN))]
 #[allow(clippy::too_many_arguments)]
 pub fn mis_estimate<'py>(
     py: Python<'py>,

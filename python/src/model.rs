@@ -4,8 +4,8 @@
 use crate::errors::{to_py, uint, ModelError};
 use crate::interrupt::{self, Cancel};
 use crate::state::RenderState;
-use frep::read::Format;
-use frep::{Expr, Solid, Surface};
+use frepray::model::{read_file, read_str, Format};
+use frepray::model::{Expr, Solid, Surface};
 use numpy::ndarray::{Array1, Array2};
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray2};
 use pyo3::exceptions::PyValueError;
@@ -150,7 +150,7 @@ pub fn model(py: Python<'_>, source: &str, format: Option<&str>) -> PyResult<Mod
     let path = Path::new(source);
     let is_file = format.is_none() && !source.contains('\n') && path.is_file();
     let read = if is_file {
-        frep::read::read_file(path)
+        read_file(path)
     } else {
         let f = match format.unwrap_or("frep") {
             "frep" => Format::Frep,
@@ -162,7 +162,7 @@ pub fn model(py: Python<'_>, source: &str, format: Option<&str>) -> PyResult<Mod
                 )))
             }
         };
-        frep::read::read_str(source, f, "<text>")
+        read_str(source, f, "<text>")
     };
     let m = read.map_err(|e| ModelError::new_err(e.to_string()))?;
     let tree = m.shape.to_tree().map_err(ModelError::new_err)?;

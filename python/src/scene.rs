@@ -27,18 +27,13 @@ pub struct Scene {
 }
 
 impl Scene {
-    fn resolve(&self, py: Python<'_>, o: &scene::Overrides) -> PyResult<frepray::Scene> {
+    fn resolve(&self, py: Python<'_>, o: &frepray::Overrides) -> PyResult<frepray::Scene> {
         match &self.source {
             Source::File(path) => frepray::load_with(path, o).map_err(|e| to_py(py, e)),
             Source::Json { text, base_dir } => {
                 let value: serde_json::Value =
                     serde_json::from_str(text).map_err(|e| PyValueError::new_err(e.to_string()))?;
-                let mut d =
-                    scene::description_from_value(value).map_err(|e| scene_error(py, &e))?;
-                d.apply_overrides(o);
-                let (data, settings) =
-                    scene::resolve(&d, base_dir).map_err(|e| scene_error(py, &o.blame(e)))?;
-                Ok(frepray::Scene::from_data(data, settings))
+                frepray::load_value_with(value, base_dir, o).map_err(|e| to_py(py, e))
             }
         }
     }
@@ -253,10 +248,10 @@ pub fn render(
     let techniques = techniques
         .map(|t| {
             let s = technique_text(&t)?;
-            scene::parse_technique_list(&s).map_err(|e| scene_error(py, &e))
+            frepray::parse_technique_list(&s).map_err(|e| scene_error(py, &e))
         })
         .transpose()?;
-    let o = scene::Overrides {
+    let o = frepray::Overrides {
         spp,
         estimator,
         techniques,
@@ -297,16 +292,28 @@ pub fn render(
     } else {
         scene.inner.clone()
     };
-    let mut options = resolved.options().map_err(|e| to_py(py, e))?;
+    // spp and seed change no resolved value: they go into the options directly.
+    let settings = frepray::Settings {
+        overrides: frepray::Overrides {
+            spp: None,
+            seed: None,
+            ..o
+        },
+        threads,
+        pixel_center,
+        ..Default::default()
+    };
+    let (mut options, unused) = resolved.options_with(&settings).map_err(|e| to_py(py, e))?;
     if let Some(n) = spp {
         options.spp = n;
     }
     if let Some(s) = seed {
         options.seed = s;
     }
-    options.threads = threads;
-    options.pixel_center = pixel_center;
     options.validate().map_err(render_err)?;
+    for u in &unused {
+        warn(py, &u.message(keyword))?;
+    }
     let range = match samples {
         Some((a, b)) if a < b => a..b,
         Some((a, b)) => {
@@ -330,14 +337,7 @@ pub fn render(
     });
     let rendered = result.map_err(|e| to_py(py, e))?;
     if let Some(why) = &rendered.fallback {
-        let msg = std::ffi::CString::new(format!("backend \"auto\" renders on the CPU: {why}"))
-            .unwrap_or_default();
-        PyErr::warn(
-            py,
-            &py.get_type::<pyo3::exceptions::PyUserWarning>(),
-            &msg,
-            1,
-        )?;
+        warn(py, &format!("backend \"auto\" renders on the CPU: {why}"))?;
     }
     let state = RenderState::from(rendered.state);
     if let Some(err) = interrupted {
@@ -345,6 +345,26 @@ pub fn render(
         return Err(err);
     }
     Ok(state)
+}
+
+/// A `UserWarning` with `message`.
+pub fn warn(py: Python<'_>, message: &str) -> PyResult<()> {
+    let msg = std::ffi::CString::new(message).unwrap_or_default();
+    PyErr::warn(
+        py,
+        &py.get_type::<pyo3::exceptions::PyUserWarning>(),
+        &msg,
+        1,
+    )
+}
+
+/// The keyword argument that sets a scene key (`render.beta` → `beta`,
+/// `camera.resolution` → `width/height`).
+pub fn keyword(key: &str) -> String {
+    match key {
+        "camera.resolution" => "width/height".into(),
+        k => k.rsplit('.').next().unwrap_or(k).to_string(),
+    }
 }
 
 /// The scene's source path, for experiments (`<dict>` for a scene given as data).
@@ -359,7 +379,7 @@ pub fn scene_path(scene: &Scene) -> PathBuf {
 pub fn resolved(
     py: Python<'_>,
     scene: &Scene,
-    o: &scene::Overrides,
+    o: &frepray::Overrides,
 ) -> PyResult<Arc<frepray::Scene>> {
     Ok(Arc::new(scene.resolve(py, o)?))
 }

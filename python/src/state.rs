@@ -12,24 +12,24 @@ use std::path::PathBuf;
 /// disjoint ranges of one render merge into the render of their union.
 #[pyclass(module = "frepray")]
 pub struct RenderState {
-    inner: render::RenderState,
+    inner: frepray::RenderState,
 }
 
 impl RenderState {
     /// The library's state.
-    pub fn inner(&self) -> &render::RenderState {
+    pub fn inner(&self) -> &frepray::RenderState {
         &self.inner
     }
 }
 
-impl From<render::RenderState> for RenderState {
-    fn from(inner: render::RenderState) -> Self {
+impl From<frepray::RenderState> for RenderState {
+    fn from(inner: frepray::RenderState) -> Self {
         RenderState { inner }
     }
 }
 
 /// An image's channels `first..first + n` as a float32 array `(h, w, n)`.
-fn channels(img: &render::Image, first: usize, n: usize) -> Array3<f32> {
+fn channels(img: &frepray::Image, first: usize, n: usize) -> Array3<f32> {
     let (w, h, c) = (img.width() as usize, img.height() as usize, img.channels());
     let v: Vec<f32> = img
         .data()
@@ -42,7 +42,7 @@ fn channels(img: &render::Image, first: usize, n: usize) -> Array3<f32> {
 /// `(rgb, {aov: array})` of an image, in float32 as the EXR holds them.
 fn image_arrays<'py>(
     py: Python<'py>,
-    img: &render::Image,
+    img: &frepray::Image,
 ) -> PyResult<(Bound<'py, PyArray3<f32>>, Bound<'py, PyDict>)> {
     let rgb = channels(img, 0, 3).into_pyarray(py);
     let aovs = PyDict::new(py);
@@ -157,7 +157,7 @@ impl RenderState {
     /// A state from `to_bytes` output (or a `.state` file's bytes).
     #[staticmethod]
     fn from_bytes(data: &[u8]) -> PyResult<RenderState> {
-        Ok(render::RenderState::from_bytes(data)
+        Ok(frepray::RenderState::from_bytes(data)
             .map_err(render_err)?
             .into())
     }
@@ -168,7 +168,7 @@ impl RenderState {
     /// Reads a state file (`frepray render --samples A..B -o part.state` writes one).
     #[staticmethod]
     fn read(path: PathBuf) -> PyResult<RenderState> {
-        Ok(render::RenderState::read(path).map_err(render_err)?.into())
+        Ok(frepray::RenderState::read(path).map_err(render_err)?.into())
     }
     /// Writes the image as a linear float32 EXR (R, G, B and the AOVs).
     fn write_exr(&self, py: Python<'_>, path: PathBuf) -> PyResult<()> {
@@ -214,6 +214,6 @@ pub fn read_exr<'py>(
     py: Python<'py>,
     path: PathBuf,
 ) -> PyResult<(Bound<'py, PyArray3<f32>>, Bound<'py, PyDict>)> {
-    let img = render::Image::read_exr(&path).map_err(render_err)?;
+    let img = frepray::Image::read_exr(&path).map_err(render_err)?;
     image_arrays(py, &img)
 }

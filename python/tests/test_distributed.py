@@ -107,3 +107,16 @@ def test_ctrl_c_returns_the_finished_parts_marked_partial(cluster, many_lights):
     same = frepray.merge([frepray.render(many_lights, samples=r, **OPTS) for r in finished])
     assert np.array_equal(state.sample_counts(), same.sample_counts())
     assert np.array_equal(state.sums(), same.sums())
+
+
+def test_distributed_experiment_has_the_library_intervals(cluster, many_lights):
+    # Two seeds per point: the intervals of frepray.experiment's tables, from the same
+    # code (frepray::experiment::summarize).
+    rows = distributed.experiment(
+        many_lights, ["optimal-direct"], [2], reference_spp=8, repeats=2, pandas=False,
+        **SMALL)
+    opt = next(r for r in rows if r["estimator"] == "optimal-direct")
+    lo, hi = opt["improvement_ci"]
+    assert lo <= opt["improvement"] <= hi
+    assert opt["rmse_ci"][0] <= opt["rmse"] <= opt["rmse_ci"][1]
+    assert opt["speed_up_ci"] is not None

@@ -60,3 +60,18 @@ def test_experiment_takes_the_render_options(many_lights, tmp_path):
         frepray.experiment(many_lights, ["power"], [2], out=tmp_path / "c",
                            trained_floor=2.0, **opts)
     assert e.value.key == "render.trained_floor"
+
+
+def test_summarize_equals_the_hand_computed_ratios():
+    renders = [dict(estimator=e, spp=4, seed=s, time_s=t, mse=v, relmse=v, trimmed_mse=v)
+               for e, s, t, v in [("balance", 0, 1.0, 4.0), ("balance", 1, 1.0, 6.0),
+                                  ("optimal_direct", 0, 2.0, 1.0),
+                                  ("optimal-direct", 1, 2.0, 1.5)]]
+    rows = frepray.summarize(renders, "balance")
+    opt = next(r for r in rows if r["estimator"] == "optimal-direct")
+    assert opt["improvement"] == pytest.approx(2.0)   # √(5 / 1.25)
+    assert opt["overhead"] == pytest.approx(1.0)      # 2 s against 1 s
+    assert opt["speed_up"] == pytest.approx(2.0)      # 5·1 / (1.25·2)
+    assert opt["improvement_ci"][0] <= 2.0 <= opt["improvement_ci"][1]
+    with pytest.raises(ValueError, match="estimator"):
+        frepray.summarize([dict(spp=1, seed=0, time_s=1, mse=1, relmse=1)])

@@ -9,6 +9,7 @@ import os
 import signal
 import threading
 import time
+import warnings
 
 import numpy as np
 import pytest
@@ -168,3 +169,18 @@ def test_training_options_and_min_depth_equal_the_cli(many_lights, cli, tmp_path
         many_lights, spp=2, seed=5, estimator="optimal-direct", **kw, **SMALL).image())
     with pytest.raises(Exception, match="trained_grid"):
         frepray.render(many_lights, spp=1, trained_grid=0, **SMALL)
+
+
+def test_options_the_render_ignores_are_warned_about(many_lights):
+    # The CLI's warnings, from the same library call (frepray::Settings), with the
+    # keyword arguments' names.
+    opts = dict(SMALL, estimator="balance", spp=1)
+    with pytest.warns(UserWarning) as caught:
+        frepray.render(many_lights, beta=3.0, ridge=0.5, **opts)
+    messages = [str(w.message) for w in caught]
+    assert any(m.startswith("beta has no effect here") and "estimator power" in m
+               for m in messages), messages
+    assert any(m.startswith("ridge has no effect here") for m in messages), messages
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        frepray.render(many_lights, beta=3.0, **dict(opts, estimator="power"))

@@ -24,7 +24,8 @@ pub fn run(file: &Path) -> Result<(), String> {
 
 /// Resolves a scene file and summarises it.
 fn scene(file: &Path) -> Result<(), String> {
-    let (data, settings) = crate::scene_render::resolve(file, &Default::default())?;
+    let scene = crate::scene_flags::load(file, &Default::default())?;
+    let (data, settings) = (scene.data(), scene.settings());
     out!("file:          {}", file.display());
     out!(
         "resolution:    {}×{}",

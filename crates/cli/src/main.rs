@@ -30,6 +30,7 @@ mod experiment_cmd;
 mod interrupt;
 mod merge_cmd;
 mod output;
+mod scene_flags;
 mod scene_render;
 mod stage_plot;
 
@@ -112,65 +113,20 @@ struct RenderArgs {
     /// cutoff (the heuristics), optimal-direct, optimal-uncorrelated,
     /// optimal-progressive, optimal-full. `--mis` is its older name.
     #[arg(long = "estimator", alias = "mis", value_name = "NAME")]
-    mis: Option<String>,
-    /// Sampling techniques and samples of each (scenes), e.g. `light:1,bsdf:1`; names:
-    /// bsdf, light-power (alias light), light-uniform, light-area, light-spatial,
-    /// light-trained (trained per spatial cell in a pass before the render),
-    /// light#k (MIS light k: area lights in file order, then the environment), light#*
-    /// (every MIS light), environment, cosine; at most 32.
-    #[arg(long)]
-    techniques: Option<String>,
+    estimator: Option<String>,
     /// Random seed (scenes): the same seed gives the same image at any thread count.
     #[arg(long)]
     seed: Option<u64>,
-    /// Maximum path depth (scenes, `path`).
-    #[arg(long)]
-    max_depth: Option<u32>,
-    /// Minimum path depth (scenes): only light of paths with at least this many bounces
-    /// reaches the image (0: all; camera-seen emitters are depth 0). With
-    /// `--min-depth d --max-depth d` the image holds depth d alone, and the images of
-    /// every depth sum to the full one [default: 0].
-    #[arg(long)]
-    min_depth: Option<u32>,
-    /// Power heuristic exponent β (scenes, `--estimator power`) [default: 2].
-    #[arg(long, allow_negative_numbers = true)]
-    beta: Option<f64>,
-    /// Cutoff heuristic threshold c (scenes, `--estimator cutoff`) [default: 0.5].
-    #[arg(long, allow_negative_numbers = true)]
-    cutoff: Option<f64>,
-    /// Optimal-MIS ridge λ (scenes, `--estimator optimal-*`): the solve adds λ/N·tr(Â)/T to
-    /// the diagonal [default: 0.1; 1 for optimal-uncorrelated].
-    #[arg(long, allow_negative_numbers = true)]
-    ridge: Option<f64>,
-    /// Leave emitters seen directly by the camera out of the image (scenes).
-    #[arg(long)]
-    hide_emitters: bool,
-    /// Trace every camera ray through its pixel's centre (scenes; a diagnostic: no
-    /// pixel-footprint variance, and the image converges to point samples).
-    #[arg(long)]
-    pixel_center: bool,
     /// Print the CPU's time per stage after the render (camera-ray generation, camera,
     /// shadow and continuation rays, shading), as `bench` does; the timers slow the
     /// render by a few per cent.
     #[arg(long)]
     stage_times: bool,
-    /// Per-light mode (scenes): one MIS estimator per light (area lights, then the
-    /// environment), each fed only the radiance of the light its draws reach; the pixel
-    /// is their sum. Changes only the optimal estimators' result.
-    #[arg(long)]
-    per_light: bool,
-    /// How `light-trained` learns its pmfs.
-    #[command(flatten)]
-    trained: crate::TrainedArgs,
     /// Extra EXR channels (scenes), e.g. `depth,normal,albedo`.
     #[arg(long)]
     aovs: Option<String>,
-    /// Image width in pixels [scene's, or 512 for models].
-    #[arg(long)]
-    width: Option<u32>,
-    /// Image height in pixels [scene's, or 512 for models].
-    #[arg(long)]
-    height: Option<u32>,
+    #[command(flatten)]
+    scene: scene_flags::SceneFlags,
     /// A model's vertical axis (models).
     #[arg(long, value_enum, default_value_t = UpArg::Z)]
     up: UpArg,
@@ -184,19 +140,11 @@ struct RenderArgs {
     /// the image.
     #[arg(long)]
     orthographic: bool,
-    /// Worker threads (0: one per core; at most 8 per core). The image does not depend
-    /// on it.
-    #[arg(long, default_value_t = 0)]
-    threads: usize,
     /// Where to render (scenes): cpu; gpu (wgpu: `direct` and `path` on scenes of
     /// quadrics, CSG of plain quadrics and one expression, area lights and rough
     /// materials; docs/gpu.md); or auto (the GPU where it can, else the CPU).
     #[arg(long, value_enum, default_value_t = scene_render::Backend::Cpu)]
     backend: scene_render::Backend,
-    /// The memory the render may take, e.g. `512M`, `8G` [default: what the system has
-    /// available]; a larger render is refused before it starts, with its estimate.
-    #[arg(long, value_name = "SIZE", value_parser = render::limits::parse_bytes)]
-    max_memory: Option<u64>,
     /// On Ctrl-C, SIGTERM or SIGHUP, write the partial result to the -o names themselves instead of
     /// `NAME.partial.EXT` (which never replaces a finished file).
     #[arg(long)]
@@ -266,34 +214,20 @@ impl From<ViewArg> for preview::View {
 struct BenchArgs {
     /// The scene file (.toml or .json).
     scene: PathBuf,
-    /// Samples per pixel.
+    /// Samples per pixel [the scene's].
     #[arg(long)]
     spp: Option<u32>,
-    /// MIS estimator, as for `render` (`--mis` is its older name).
+    /// MIS estimator, as for `render` (`--mis` is its older name) [the scene's].
     #[arg(long = "estimator", alias = "mis", value_name = "NAME")]
-    mis: Option<String>,
-    /// Sampling techniques, e.g. `light:1,bsdf:1`.
-    #[arg(long)]
-    techniques: Option<String>,
-    /// Image width.
-    #[arg(long)]
-    width: Option<u32>,
-    /// Image height.
-    #[arg(long)]
-    height: Option<u32>,
-    /// Worker threads (0: one per core).
-    #[arg(long, default_value_t = 0)]
-    threads: usize,
+    estimator: Option<String>,
+    #[command(flatten)]
+    flags: scene_flags::SceneFlags,
     /// Back ends to measure, comma-separated: cpu, gpu (direct and path on each; the GPU's
     /// kernels are compiled by an untimed 1-spp render first).
     #[arg(long, value_enum, value_delimiter = ',', default_value = "cpu")]
     backend: Vec<scene_render::Backend>,
-    /// The memory each render may take, as for `render` (`512M`, `8G`) [default: what
-    /// the system has available]; a larger one is refused before anything runs.
-    #[arg(long, value_name = "SIZE", value_parser = render::limits::parse_bytes)]
-    max_memory: Option<u64>,
-    /// Also draw the GPU's stage times as stacked bars (the paper's Fig. 4–5) into
-    /// this SVG file.
+    /// Also draw the stage times as stacked bars (the paper's Fig. 4–5) into this SVG
+    /// file.
     #[arg(long, value_name = "FILE.svg")]
     plot: Option<PathBuf>,
 }
@@ -321,9 +255,9 @@ fn main() -> ExitCode {
 }
 
 /// Sets the global thread pool's size (0 keeps one thread per core); refuses more
-/// than [`render::limits::max_threads`].
+/// than [`frepray::limits::max_threads`].
 pub fn set_threads(n: usize) -> Result<(), String> {
-    render::limits::check_threads(n).map_err(|e| e.to_string())?;
+    frepray::limits::check_threads(n).map_err(|e| e.to_string())?;
     if n > 0 {
         rayon::ThreadPoolBuilder::new()
             .num_threads(n)
@@ -350,7 +284,7 @@ pub fn progress_bar(quiet: bool, unit: &str) -> indicatif::ProgressBar {
 }
 
 fn render(args: RenderArgs) -> Result<(), String> {
-    set_threads(args.threads)?;
+    set_threads(args.scene.threads)?;
     if scene_render::is_scene(&args.input) {
         let model_only = [
             ("--view", args.view.is_some()),
@@ -364,47 +298,26 @@ fn render(args: RenderArgs) -> Result<(), String> {
                 args.input.display()
             ));
         }
-        let o = scene_render::Overrides {
-            spp: args.spp,
-            mis: args.mis,
-            techniques: args.techniques,
-            seed: args.seed,
-            integrator: args.integrator,
-            width: args.width,
-            height: args.height,
-            max_depth: args.max_depth,
-            min_depth: args.min_depth,
-            aovs: args.aovs,
-            threads: 0,
-            hide_emitters: args.hide_emitters,
-            pixel_center: args.pixel_center,
-            stage_times: args.stage_times,
-            beta: args.beta,
-            cutoff: args.cutoff,
-            ridge: args.ridge,
-            per_light: args.per_light,
-            backend: args.backend,
-            trained_grid: args.trained.trained_grid,
-            trained_floor: args.trained.trained_floor,
-            trained_spp: args.trained.trained_spp,
-        };
+        let mut settings = args.scene.settings()?;
+        let o = &mut settings.overrides;
+        o.spp = args.spp;
+        o.estimator = args.estimator.clone();
+        o.seed = args.seed;
+        o.integrator = args.integrator.clone();
+        o.aovs = args.aovs.as_deref().map(|s| {
+            s.split(',')
+                .map(str::trim)
+                .filter(|x| !x.is_empty())
+                .map(String::from)
+                .collect()
+        });
+        settings.stage_times = args.stage_times;
         let samples = args
             .samples
             .as_deref()
             .map(scene_render::parse_samples)
             .transpose()?;
-        return scene_render::run(
-            &args.input,
-            &args.output,
-            args.dump_scene.as_deref(),
-            &o,
-            samples,
-            args.resume.as_deref(),
-            args.quiet,
-            args.max_memory.unwrap_or(0),
-            args.overwrite_partial,
-            &args.film,
-        );
+        return scene_render::run(&args, &settings, samples);
     }
     let is_model = args
         .input
@@ -419,20 +332,17 @@ fn render(args: RenderArgs) -> Result<(), String> {
         ));
     }
     let scene_only = [
-        ("--estimator", args.mis.is_some()),
-        ("--techniques", args.techniques.is_some()),
+        ("--estimator", args.estimator.is_some()),
         ("--seed", args.seed.is_some()),
-        ("--max-depth", args.max_depth.is_some()),
         ("--aovs", args.aovs.is_some()),
-        ("--beta", args.beta.is_some()),
-        ("--cutoff", args.cutoff.is_some()),
-        ("--ridge", args.ridge.is_some()),
+        ("--stage-times", args.stage_times),
         ("--samples", args.samples.is_some()),
         ("--resume", args.resume.is_some()),
         ("--dump-scene", args.dump_scene.is_some()),
         ("--backend gpu", args.backend == scene_render::Backend::Gpu),
     ];
-    if let Some((flag, _)) = scene_only.iter().find(|(_, set)| *set) {
+    let transport = args.scene.transport_flags();
+    if let Some((flag, _)) = scene_only.iter().chain(&transport).find(|(_, set)| *set) {
         return Err(format!(
             "{flag} applies to scene files (.toml, .json); {} is a model \
              (bare models render on the CPU: name it as an object's `model` in a scene for the GPU)",
@@ -452,7 +362,10 @@ fn render(args: RenderArgs) -> Result<(), String> {
             ))
         }
     };
-    let (width, height) = (args.width.unwrap_or(512), args.height.unwrap_or(512));
+    let (width, height) = (
+        args.scene.width.unwrap_or(512),
+        args.scene.height.unwrap_or(512),
+    );
     let formats = args
         .output
         .iter()
@@ -469,12 +382,12 @@ fn render(args: RenderArgs) -> Result<(), String> {
     if spp == 0 {
         return Err("--spp must be at least 1".into());
     }
-    let film = args.film.over(render::Film::default())?;
-    let limit = render::integrator::RenderOptions {
-        max_memory: args.max_memory.unwrap_or(0),
+    let film = args.film.over(frepray::Film::default())?;
+    let limit = frepray::RenderOptions {
+        max_memory: args.scene.max_memory.unwrap_or(0),
         ..preview::options(look, spp, 0)
     };
-    render::limits::check_memory(width, height, &limit).map_err(|e| e.to_string())?;
+    frepray::limits::check_memory(width, height, &limit).map_err(|e| e.to_string())?;
     let start = std::time::Instant::now();
     let model = preview::load(&args.input).map_err(|e| e.to_string())?;
     let setup = start.elapsed();
@@ -561,36 +474,9 @@ fn render(args: RenderArgs) -> Result<(), String> {
 }
 
 fn bench(args: BenchArgs) -> Result<(), String> {
-    set_threads(args.threads)?;
-    let o = scene_render::Overrides {
-        spp: args.spp,
-        mis: args.mis,
-        techniques: args.techniques,
-        width: args.width,
-        height: args.height,
-        ..Default::default()
-    };
-    scene_render::bench(
-        &args.scene,
-        &o,
-        args.max_memory.unwrap_or(0),
-        &args.backend,
-        args.plot.as_deref(),
-    )
-}
-
-/// The `light-trained` flags, shared by `render`, `bench` and `experiment`.
-#[derive(clap::Args, Clone, Debug)]
-pub struct TrainedArgs {
-    /// `light-trained`: cells per axis of the grid over the first hits whose cells
-    /// each learn a light pmf (1: one pmf for the whole scene; at most 64) [default: 8].
-    #[arg(long)]
-    pub trained_grid: Option<u32>,
-    /// `light-trained`: the uniform share ε of every cell's pmf,
-    /// `P(k) = (1 − ε)·w_k/Σw + ε/L`, in (0, 1] [default: 0.1].
-    #[arg(long)]
-    pub trained_floor: Option<f64>,
-    /// `light-trained`: camera rays per pixel of the training pass [default: 4].
-    #[arg(long)]
-    pub trained_spp: Option<u32>,
+    set_threads(args.flags.threads)?;
+    let mut settings = args.flags.settings()?;
+    settings.overrides.spp = args.spp;
+    settings.overrides.estimator = args.estimator.clone();
+    scene_render::bench(&args.scene, &settings, &args.backend, args.plot.as_deref())
 }

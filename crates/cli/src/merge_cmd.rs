@@ -3,7 +3,7 @@
 //! writes the result as an image or as a state.
 
 use crate::output::{self, Format};
-use render::RenderState;
+use frepray::RenderState;
 use std::path::PathBuf;
 
 /// Arguments of `frepray merge`.
@@ -22,7 +22,7 @@ pub struct MergeArgs {
 /// Reads, merges and writes; errors name the file that does not fit.
 pub fn run(args: MergeArgs) -> Result<(), String> {
     let formats: Vec<Format> = output::check_scene_outputs(&args.output)?;
-    let film = args.film.over(render::Film::default())?;
+    let film = args.film.over(frepray::Film::default())?;
     let mut merged: Option<RenderState> = None;
     for path in &args.states {
         let s = RenderState::read(path).map_err(|e| e.to_string())?;

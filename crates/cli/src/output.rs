@@ -3,8 +3,8 @@
 //! writing every output even when one fails.
 
 use frepray::preview::Look;
-use render::value_png::Values;
-use render::{Film, Image, RenderState, Tonemap};
+use frepray::value_png::Values;
+use frepray::{Film, Image, RenderState, Tonemap};
 use std::path::{Path, PathBuf};
 
 /// How PNG outputs show the image: `--exposure` and `--tonemap` (EXR and state files
@@ -23,7 +23,7 @@ pub struct FilmArgs {
 }
 
 fn parse_tonemap(s: &str) -> Result<Tonemap, String> {
-    s.parse().map_err(|e: scene::UnknownName| e.to_string())
+    s.parse().map_err(|e: frepray::UnknownName| e.to_string())
 }
 
 impl FilmArgs {
@@ -303,8 +303,8 @@ fn written_or(total: usize, failed: Vec<String>) -> Result<(), String> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use render::integrator::RenderOptions;
-    use render::StateHeader;
+    use frepray::RenderOptions;
+    use frepray::StateHeader;
 
     /// One output that cannot be written does not stop the others; the error names it.
     #[test]

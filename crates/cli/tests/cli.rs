@@ -309,8 +309,8 @@ fn split_render_merges_through_state_files() {
         "{}",
         String::from_utf8_lossy(&st.stderr)
     );
-    let merged = render::RenderState::read(dir.join("merged.state")).unwrap();
-    let whole = render::RenderState::read(dir.join("whole.state")).unwrap();
+    let merged = frepray::RenderState::read(dir.join("merged.state")).unwrap();
+    let whole = frepray::RenderState::read(dir.join("whole.state")).unwrap();
     assert_eq!(merged.samples(), std::slice::from_ref(&(0..6)));
     for (a, b) in merged.data().iter().zip(whole.data()) {
         assert!((a - b).abs() <= 1e-12 * a.abs().max(b.abs()), "{a} vs {b}");

@@ -195,7 +195,7 @@ fn an_interrupted_render_resumes_to_the_uninterrupted_one() {
         exr_channel(&dir.join("cut.partial.exr"), "R").len(),
         24 * 16
     );
-    let cut = render::RenderState::read(&partial).unwrap();
+    let cut = frepray::RenderState::read(&partial).unwrap();
     let counts: Vec<u64> = (0..16)
         .flat_map(|y| (0..24).map(move |x| (x, y)))
         .map(|(x, y)| cut.iterations(x, y))
@@ -676,6 +676,33 @@ fn options_are_consistent() {
     assert!(o.status.success(), "{err}");
     assert!(err.contains("warning: --beta has no effect"), "{err}");
     assert!(err.contains("warning: --max-depth has no effect"), "{err}");
+    // An experiment warns about a flag that no estimator of its sweep uses, and only
+    // then; `bench` takes the same flags (one set, `SceneFlags`).
+    let experiment = |flag: &str, estimators: &str| {
+        let o = frepray()
+            .arg("experiment")
+            .arg(&cornell)
+            .args(["--spp", "1", "--reference-spp", "2", "--repeats", "1", "--quiet"])
+            .args(["--width", "4", "--height", "3", flag, "3"])
+            .args(["--estimators", estimators, "-o"])
+            .arg(dir.join(format!("exp{flag}{estimators}")))
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", stderr(&o));
+        stderr(&o)
+    };
+    assert!(!experiment("--beta", "balance,power").contains("warning"));
+    let err = experiment("--beta", "balance,optimal-direct");
+    assert!(err.contains("warning: --beta has no effect"), "{err}");
+    let o = frepray()
+        .arg("bench")
+        .arg(&cornell)
+        .args(["--spp", "1", "--width", "4", "--height", "3", "--pixel-center"])
+        .args(["--hide-emitters", "--max-depth", "2"])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(String::from_utf8_lossy(&o.stdout).contains("| 4×3 | 1 |"));
 }
 
 /// `check` reads scenes too; an unknown kind of file lists every kind, no `0:0`.
@@ -811,7 +838,7 @@ fn overflowing_values_are_refused_or_reported() {
         .output()
         .unwrap();
     assert!(o.status.success(), "{}", stderr(&o));
-    let mut s = render::RenderState::read(&state).unwrap();
+    let mut s = frepray::RenderState::read(&state).unwrap();
     s.data_mut()[1] = f64::INFINITY; // pixel (0, 0), red outside MIS
     s.write(&state).unwrap();
     let o = frepray()

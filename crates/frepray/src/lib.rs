@@ -40,9 +40,11 @@
 pub struct LibraryGuide;
 
 pub mod backend;
+pub mod bench;
 pub mod experiment;
 pub mod model_info;
 pub mod preview;
+pub mod settings;
 
 pub use backend::{render_range_on, Backend, Rendered};
 pub use model_info::{info as model_info, ModelInfo};
@@ -52,6 +54,35 @@ pub use mis::Method;
 pub use render::integrator::{Aov, IntegratorKind, RenderOptions};
 pub use render::{Film, Image, RenderState, RenderStats, StateHeader, Tonemap};
 pub use scene::{Overrides, RenderSettings, SceneData, SceneError, SceneFormat};
+pub use settings::{Settings, Unused};
+
+/// The limits a render is checked against before it starts: threads, memory (with an
+/// estimate), sizes such as `512M`.
+pub use render::limits;
+/// Files written whole or not at all (a temporary file renamed into place).
+pub use render::output::write_atomically;
+/// Depth and normal images as PNG ([`value_png::Values`]).
+pub use render::value_png;
+/// The technique list of the command line, `bsdf:2,light` (counts 1 when omitted).
+pub use scene::parse_technique_list;
+/// A name that is not one of a list's (tone maps, techniques, AOVs).
+pub use scene::UnknownName;
+
+/// Model files and the solids built from them (the `frep` crate's): readers of
+/// `.frep`, HyperFun `.hf` and Fidget `.vm`, the expression evaluator, the solid with
+/// its bounds and grids.
+pub mod model {
+    pub use frep::read::{read_file, read_str, Format, Model, ReadError};
+    pub use frep::{Expr, Solid, Surface};
+}
+
+/// The MIS estimators themselves (the `mis` crate's), for use outside a render: feed
+/// samples of several techniques, get the combined estimate.
+pub mod estimators {
+    pub use mis::{
+        Estimator, Layout, Method, Params, UnknownMethod, DEFAULT_TRAIN, DEFAULT_WARMUP,
+    };
+}
 
 use std::ops::Range;
 use std::path::{Path, PathBuf};
@@ -216,6 +247,19 @@ pub fn load_with(path: impl AsRef<Path>, overrides: &Overrides) -> Result<Scene,
 /// from `base_dir`). Errors name the key path of the offending value.
 pub fn load_value(value: serde_json::Value, base_dir: &Path) -> Result<Scene, Error> {
     let (data, settings) = scene::load_value(value, base_dir)?;
+    Ok(Scene::from_data(data, settings))
+}
+
+/// [`load_value`] with `overrides` patched into the description before it is resolved;
+/// an error about an overridden value has no file position (it points at no text).
+pub fn load_value_with(
+    value: serde_json::Value,
+    base_dir: &Path,
+    overrides: &Overrides,
+) -> Result<Scene, Error> {
+    let mut d = scene::description_from_value(value)?;
+    d.apply_overrides(overrides);
+    let (data, settings) = scene::resolve(&d, base_dir).map_err(|e| overrides.blame(e))?;
     Ok(Scene::from_data(data, settings))
 }
 

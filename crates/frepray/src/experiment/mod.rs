@@ -21,15 +21,19 @@ mod maps;
 mod metrics;
 mod plot;
 mod report;
+mod scene_renderer;
 mod settings;
 pub mod stats;
+mod summarize;
 #[cfg(test)]
 mod tests;
 
 pub use cpu_time::process_cpu_seconds;
 pub use manifest::{Comparison, Row};
 pub use metrics::{measure, Metrics, REL_EPSILON, TRIM_FRACTION};
+pub use scene_renderer::{canonical, to_image, SceneRenderer, REFERENCE_CHUNKS};
 pub use settings::renderer_settings;
+pub use summarize::{summarize, Measured};
 
 use manifest::{Manifest, ReferenceInfo, ReferenceSource, RenderRecord, FORMAT};
 use std::path::{Path, PathBuf};
