@@ -3,7 +3,9 @@
 # - every case of the GPU-against-CPU image comparisons (FREPRAY_LONG=1: all seven
 #   estimators, per light under the sky map, every path and environment case; the test
 #   command runs one case per integrator and estimator family), on lavapipe where there
-#   is no GPU (about 5 minutes on 2 cores);
+#   is no GPU (about 5 minutes on 2 cores), and the direct kernels compiled with
+#   runtime bounds checks against the unchecked ones (about 5 minutes more: lavapipe
+#   compiles the checked kernels slowly);
 # - the geometry's random CSG trees (docs/geometry.md) with many more trees than the test
 #   command tries: FREPRAY_CSG_TREES sets the count (default 20000 trees, 100 rays each:
 #   two million rays, about 20 minutes on 2 cores).

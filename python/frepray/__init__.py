@@ -25,6 +25,7 @@ from ._native import (
     RenderState,
     Scene,
     SceneError,
+    configure_gpu,
     gpu_available,
     load,
     merge,
@@ -40,7 +41,7 @@ __all__ = [
     "Error", "SceneError", "RenderError", "ModelError", "Cancelled", "Cancel", "Scene",
     "RenderState", "Model",
     "load", "load_dict", "render", "merge", "read_exr", "write_exr", "model", "mis",
-    "experiment", "measure", "summarize", "gpu_available",
+    "experiment", "measure", "summarize", "gpu_available", "configure_gpu",
 ]
 
 

@@ -28,3 +28,40 @@ impl GpuAvailable {
         "<frepray.gpu_available: call it; True where backend=\"gpu\" finds an adapter>"
     }
 }
+
+/// Sets the features the process's GPU opens with, before it opens (over the
+/// `FREPRAY_GPU_*` variables): each keyword True or False, None leaves it. `f64`,
+/// `int64`, `subgroups` and `sums` are on where the adapter has them; `checked` turns
+/// the kernels' runtime bounds checks on (a diagnostic; off). Raises ValueError once the
+/// GPU has opened with other options (it opens once per process). Returns the options
+/// in force as a dict.
+#[pyfunction]
+#[pyo3(signature = (*, f64 = None, int64 = None, subgroups = None, sums = None, checked = None))]
+pub fn configure_gpu<'py>(
+    py: Python<'py>,
+    f64: Option<bool>,
+    int64: Option<bool>,
+    subgroups: Option<bool>,
+    sums: Option<bool>,
+    checked: Option<bool>,
+) -> PyResult<Bound<'py, pyo3::types::PyDict>> {
+    let list: Vec<String> = [
+        ("f64", f64),
+        ("int64", int64),
+        ("subgroups", subgroups),
+        ("sums", sums),
+        ("checked", checked),
+    ]
+    .iter()
+    .filter_map(|(k, v)| v.map(|on| format!("{k}={}", if on { "on" } else { "off" })))
+    .collect();
+    let o = frepray::backend::configure_gpu(&list.join(","))
+        .map_err(|e| pyo3::exceptions::PyValueError::new_err(e.to_string()))?;
+    let d = pyo3::types::PyDict::new(py);
+    d.set_item("f64", o.f64)?;
+    d.set_item("int64", o.int64)?;
+    d.set_item("subgroups", o.subgroups)?;
+    d.set_item("sums", o.sums)?;
+    d.set_item("checked", o.checked)?;
+    Ok(d)
+}

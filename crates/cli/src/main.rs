@@ -145,6 +145,11 @@ struct RenderArgs {
     /// materials; docs/gpu.md); or auto (the GPU where it can, else the CPU).
     #[arg(long, value_enum, default_value_t = scene_render::Backend::Cpu)]
     backend: scene_render::Backend,
+    /// GPU features, comma-separated, each `=on` or `=off` (a bare name: on): f64,
+    /// int64, subgroups, sums (on where the adapter has them), checked (runtime bounds
+    /// checks in the kernels, a diagnostic; off) [the `FREPRAY_GPU_*` variables].
+    #[arg(long, value_name = "LIST")]
+    gpu_options: Option<String>,
     /// On Ctrl-C, SIGTERM or SIGHUP, write the partial result to the -o names themselves instead of
     /// `NAME.partial.EXT` (which never replaces a finished file).
     #[arg(long)]
@@ -226,6 +231,11 @@ struct BenchArgs {
     /// kernels are compiled by an untimed 1-spp render first).
     #[arg(long, value_enum, value_delimiter = ',', default_value = "cpu")]
     backend: Vec<scene_render::Backend>,
+    /// GPU features, comma-separated, each `=on` or `=off` (a bare name: on): f64,
+    /// int64, subgroups, sums (on where the adapter has them), checked (runtime bounds
+    /// checks in the kernels, a diagnostic; off) [the `FREPRAY_GPU_*` variables].
+    #[arg(long, value_name = "LIST")]
+    gpu_options: Option<String>,
     /// Also draw the stage times as stacked bars (the paper's Fig. 4–5) into this SVG
     /// file.
     #[arg(long, value_name = "FILE.svg")]
@@ -267,6 +277,16 @@ pub fn set_threads(n: usize) -> Result<(), String> {
     Ok(())
 }
 
+/// Sets `--gpu-options` for the process's GPU, when given.
+fn configure_gpu(list: Option<&str>) -> Result<(), String> {
+    match list {
+        Some(l) => frepray::backend::configure_gpu(l)
+            .map(|_| ())
+            .map_err(|e| format!("--gpu-options: {e}")),
+        None => Ok(()),
+    }
+}
+
 /// A flag that Ctrl-C, SIGTERM and SIGHUP set, so that a render stops and keeps what it
 /// has ([`interrupt`]).
 pub fn stop_on_ctrl_c() -> Arc<AtomicBool> {
@@ -298,6 +318,7 @@ fn render(args: RenderArgs) -> Result<(), String> {
                 args.input.display()
             ));
         }
+        configure_gpu(args.gpu_options.as_deref())?;
         let mut settings = args.scene.settings()?;
         let o = &mut settings.overrides;
         o.spp = args.spp;
@@ -340,6 +361,7 @@ fn render(args: RenderArgs) -> Result<(), String> {
         ("--resume", args.resume.is_some()),
         ("--dump-scene", args.dump_scene.is_some()),
         ("--backend gpu", args.backend == scene_render::Backend::Gpu),
+        ("--gpu-options", args.gpu_options.is_some()),
     ];
     let transport = args.scene.transport_flags();
     if let Some((flag, _)) = scene_only.iter().chain(&transport).find(|(_, set)| *set) {
@@ -475,6 +497,7 @@ fn render(args: RenderArgs) -> Result<(), String> {
 
 fn bench(args: BenchArgs) -> Result<(), String> {
     set_threads(args.flags.threads)?;
+    configure_gpu(args.gpu_options.as_deref())?;
     let mut settings = args.flags.settings()?;
     settings.overrides.spp = args.spp;
     settings.overrides.estimator = args.estimator.clone();

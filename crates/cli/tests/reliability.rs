@@ -682,7 +682,15 @@ fn options_are_consistent() {
         let o = frepray()
             .arg("experiment")
             .arg(&cornell)
-            .args(["--spp", "1", "--reference-spp", "2", "--repeats", "1", "--quiet"])
+            .args([
+                "--spp",
+                "1",
+                "--reference-spp",
+                "2",
+                "--repeats",
+                "1",
+                "--quiet",
+            ])
             .args(["--width", "4", "--height", "3", flag, "3"])
             .args(["--estimators", estimators, "-o"])
             .arg(dir.join(format!("exp{flag}{estimators}")))
@@ -697,7 +705,15 @@ fn options_are_consistent() {
     let o = frepray()
         .arg("bench")
         .arg(&cornell)
-        .args(["--spp", "1", "--width", "4", "--height", "3", "--pixel-center"])
+        .args([
+            "--spp",
+            "1",
+            "--width",
+            "4",
+            "--height",
+            "3",
+            "--pixel-center",
+        ])
         .args(["--hide-emitters", "--max-depth", "2"])
         .output()
         .unwrap();

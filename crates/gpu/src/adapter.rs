@@ -15,6 +15,10 @@ pub struct GpuOptions {
     /// Keep the integrators' per-pixel sums on the GPU where the estimator allows
     /// (off: every draw is read back and added by the CPU, the first version's path).
     pub sums: bool,
+    /// Compile the integrators' kernels with naga's runtime bounds checks (an index out
+    /// of bounds reads zero or the last element instead of undefined memory): a
+    /// diagnostic, up to 20× slower on private arrays (GPU.md §3.4). Off by default.
+    pub checked: bool,
 }
 
 impl Default for GpuOptions {
@@ -25,21 +29,53 @@ impl Default for GpuOptions {
             int64: true,
             subgroups: true,
             sums: true,
+            checked: false,
         }
     }
 }
 
 impl GpuOptions {
     /// The defaults, with `FREPRAY_GPU_F64=off`, `FREPRAY_GPU_INT64=off`,
-    /// `FREPRAY_GPU_SUBGROUPS=off` and `FREPRAY_GPU_SUMS=off` turning features off.
+    /// `FREPRAY_GPU_SUBGROUPS=off` and `FREPRAY_GPU_SUMS=off` turning features off and
+    /// `FREPRAY_GPU_CHECKED=on` the bounds checks on.
     pub fn from_env() -> Self {
-        let on = |name: &str| std::env::var(name).map_or(true, |v| v != "off" && v != "0");
+        let var = |name: &str| std::env::var(name).ok();
+        let on = |name: &str| var(name).is_none_or(|v| v != "off" && v != "0");
         Self {
             f64: on("FREPRAY_GPU_F64"),
             int64: on("FREPRAY_GPU_INT64"),
             subgroups: on("FREPRAY_GPU_SUBGROUPS"),
             sums: on("FREPRAY_GPU_SUMS"),
+            checked: var("FREPRAY_GPU_CHECKED").is_some_and(|v| v == "on" || v == "1"),
         }
+    }
+
+    /// These options with `list`'s features turned off or on: comma-separated
+    /// `f64`, `int64`, `subgroups`, `sums` (on by default) and `checked` (off), each
+    /// optionally `=on` or `=off` (a bare name turns it on), e.g. `f64=off,checked`.
+    pub fn with(mut self, list: &str) -> Result<Self, String> {
+        for item in list.split(',').map(str::trim).filter(|s| !s.is_empty()) {
+            let (name, value) = item.split_once('=').unwrap_or((item, "on"));
+            let value = match value.trim() {
+                "on" | "1" | "true" => true,
+                "off" | "0" | "false" => false,
+                v => return Err(format!("GPU option {item:?}: {v:?} is not on or off")),
+            };
+            let field = match name.trim() {
+                "f64" => &mut self.f64,
+                "int64" => &mut self.int64,
+                "subgroups" => &mut self.subgroups,
+                "sums" => &mut self.sums,
+                "checked" => &mut self.checked,
+                n => {
+                    return Err(format!(
+                        "GPU option {n:?}: expected f64, int64, subgroups, sums or checked"
+                    ))
+                }
+            };
+            *field = value;
+        }
+        Ok(self)
     }
 }
 
@@ -102,6 +138,9 @@ pub struct GpuInfo {
     pub sums: bool,
     /// The device's largest storage-buffer binding in bytes.
     pub max_storage_binding: u64,
+    /// Whether the integrators' kernels run with runtime bounds checks
+    /// ([`GpuOptions::checked`]).
+    pub checked: bool,
 }
 
 impl fmt::Display for GpuInfo {
@@ -120,7 +159,11 @@ impl fmt::Display for GpuInfo {
             yes(self.timestamps),
             yes(self.sums),
             self.max_storage_binding >> 20
-        )
+        )?;
+        if self.checked {
+            write!(f, "; bounds checks on")?;
+        }
+        Ok(())
     }
 }
 
@@ -191,6 +234,7 @@ impl Gpu {
             timestamps,
             sums: options.sums,
             max_storage_binding: limits.max_storage_buffer_binding_size,
+            checked: options.checked,
         };
         Ok(Gpu {
             device,

@@ -147,7 +147,7 @@ pub(crate) fn compute_pipeline(
         label: Some(entry),
         source: wgpu::ShaderSource::Wgsl(source.into()),
     };
-    let module = if unchecked {
+    let module = if unchecked && !gpu.info().checked {
         // SAFETY: `new_unchecked`'s caller guarantees in-bounds indexing and finite
         // loops; wgpu then skips the runtime checks only.
         unsafe {

@@ -7,15 +7,29 @@ use gpu::{GpuError, GpuOptions, Kernel};
 /// Forcing features off is honoured, and the device reports what it uses.
 #[test]
 fn features_can_be_forced_off() {
-    let off = GpuOptions {
-        f64: false,
-        int64: false,
-        subgroups: false,
-        sums: false,
-    };
+    let off = GpuOptions::default()
+        .with("f64=off, int64=0,subgroups=false,sums=off,checked")
+        .unwrap();
+    assert_eq!(
+        off,
+        GpuOptions {
+            f64: false,
+            int64: false,
+            subgroups: false,
+            sums: false,
+            checked: true,
+        }
+    );
+    for bad in ["f32", "f64=maybe"] {
+        let e = GpuOptions::default().with(bad).unwrap_err();
+        assert!(e.contains(bad.split('=').next_back().unwrap()), "{e}");
+    }
     let Some(g) = common::gpu(off) else { return };
     let i = g.info();
-    assert!(!i.f64 && !i.int64 && !i.subgroups && !i.sums, "{i}");
+    assert!(
+        !i.f64 && !i.int64 && !i.subgroups && !i.sums && i.checked,
+        "{i}"
+    );
     assert!(i.max_storage_binding >= 128 << 20, "{i}");
     assert!(!i.name.is_empty());
 }

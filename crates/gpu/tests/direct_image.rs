@@ -1150,3 +1150,32 @@ fn random_csg_trees_match_the_cpu() {
         "too many excused"
     );
 }
+
+/// The kernels compiled with naga's runtime bounds checks (`GpuOptions::checked`) give
+/// the image of the unchecked kernels the renders use, bit for bit, on the scene of
+/// every feature: the checks clamp an out-of-bounds index (or read zero), so an access
+/// outside an array or buffer would change some pixel (GPU.md §3.4: the unchecked
+/// kernels rely on every index being bounded by construction). Long only
+/// (`FREPRAY_LONG=1`, `scripts/long-test.sh`): lavapipe takes about five minutes to
+/// compile the checked kernels.
+#[test]
+fn bounds_checked_kernels_render_the_same_image() {
+    if !common::long() {
+        eprintln!("skipped: FREPRAY_LONG=1 runs it (five minutes of kernel compilation)");
+        return;
+    }
+    let Some(g) = device() else { return };
+    let Some(checked) = common::gpu(GpuOptions {
+        checked: true,
+        ..GpuOptions::default()
+    }) else {
+        return;
+    };
+    assert!(checked.info().checked && !g.info().checked);
+    let s = load(SCENE);
+    let (a, b) = (gpu_render(g, &s, 0..2), gpu_render(&checked, &s, 0..2));
+    assert!(
+        a.to_bytes() == b.to_bytes(),
+        "the bounds checks changed the image"
+    );
+}

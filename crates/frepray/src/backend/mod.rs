@@ -10,7 +10,7 @@ use std::sync::atomic::AtomicBool;
 #[cfg(feature = "gpu")]
 pub use gpu::direct::GpuStats;
 #[cfg(feature = "gpu")]
-pub use gpu::{Gpu, GpuError, GpuInfo};
+pub use gpu::{Gpu, GpuError, GpuInfo, GpuOptions};
 #[cfg(not(feature = "gpu"))]
 mod no_gpu;
 #[cfg(not(feature = "gpu"))]
@@ -66,14 +66,41 @@ pub struct Rendered {
     pub fallback: Option<String>,
 }
 
-/// The process's GPU, opened once with `gpu::GpuOptions::from_env`: its compiled
-/// kernels are kept for every later render (compiling them takes minutes on lavapipe).
+/// The options the process's GPU opens with, when set before it opens.
+#[cfg(feature = "gpu")]
+static GPU_OPTIONS: std::sync::OnceLock<GpuOptions> = std::sync::OnceLock::new();
+
+/// The process's GPU, opened once, with the options of [`configure_gpu`] or else
+/// `GpuOptions::from_env` (`FREPRAY_GPU_*`): its compiled kernels are kept for every
+/// later render (compiling them takes minutes on lavapipe).
 #[cfg(feature = "gpu")]
 pub fn shared_gpu() -> Result<&'static Gpu, GpuError> {
     static GPU: std::sync::OnceLock<Result<Gpu, GpuError>> = std::sync::OnceLock::new();
-    GPU.get_or_init(|| Gpu::new(&gpu::GpuOptions::from_env()))
+    GPU.get_or_init(|| Gpu::new(GPU_OPTIONS.get_or_init(GpuOptions::from_env)))
         .as_ref()
         .map_err(Clone::clone)
+}
+
+/// Sets the options the process's GPU opens with, over the environment's
+/// (`FREPRAY_GPU_*`): `list` as [`GpuOptions::with`] reads it, e.g. `f64=off,checked`.
+/// An error once the GPU has opened with other options (it opens once per process).
+#[cfg(feature = "gpu")]
+pub fn configure_gpu(list: &str) -> Result<GpuOptions, Error> {
+    let want = GpuOptions::from_env().with(list).map_err(Error::Invalid)?;
+    let have = *GPU_OPTIONS.get_or_init(|| want);
+    if have != want {
+        return Err(Error::Invalid(format!(
+            "GPU options {list:?}: the GPU has already opened with {have:?} (once per process)"
+        )));
+    }
+    Ok(have)
+}
+
+/// Without the GPU back end there is nothing to configure.
+#[cfg(not(feature = "gpu"))]
+pub fn configure_gpu(list: &str) -> Result<(), Error> {
+    let _ = list;
+    Err(Error::Gpu(GpuError::NotBuilt))
 }
 
 /// There is no GPU in a build without the `gpu` feature.

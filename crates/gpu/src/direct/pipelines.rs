@@ -159,17 +159,19 @@ fn compile(gpu: &Gpu, tape_wgsl: &str) -> Result<Pipelines, GpuError> {
         bind_group_layouts: &[Some(&layout)],
         immediate_size: 0,
     });
-    // SAFETY: every index of the kernels is bounded by construction (fixed arrays with
-    // guarded counters, buffers sized from the packed scene and the wave) and every loop
-    // is bounded; GPU.md §3.4 measured naga's checks at up to 20× on lavapipe.
-    let module = unsafe {
-        d.create_shader_module_trusted(
-            wgpu::ShaderModuleDescriptor {
-                label: Some("direct"),
-                source: wgpu::ShaderSource::Wgsl(source.into()),
-            },
-            wgpu::ShaderRuntimeChecks::unchecked(),
-        )
+    let desc = wgpu::ShaderModuleDescriptor {
+        label: Some("direct"),
+        source: wgpu::ShaderSource::Wgsl(source.into()),
+    };
+    let module = if gpu.info().checked {
+        d.create_shader_module(desc)
+    } else {
+        // SAFETY: every index of the kernels is bounded by construction (fixed arrays
+        // with guarded counters, buffers sized from the packed scene and the wave) and
+        // every loop is bounded; GPU.md §3.4 measured naga's checks at up to 20× on
+        // lavapipe. `GpuOptions::checked` compiles them with the checks, and a test
+        // renders so and compares.
+        unsafe { d.create_shader_module_trusted(desc, wgpu::ShaderRuntimeChecks::unchecked()) }
     };
     let make = |entry: &str| {
         d.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
