@@ -9,9 +9,9 @@
 //! empty boxes are dropped. It serves the perturbations of one perturbed quadric and, at
 //! scene level, the objects of a scene.
 
+use crate::fixed::Fixed;
 use crate::ray::{slab_f32, Aabb, Ray};
 use glam::DVec3;
-use std::mem::MaybeUninit;
 
 mod order;
 pub use order::{EntryOrder, Queue};
@@ -26,31 +26,22 @@ const MEDIAN_DEPTH: usize = 40;
 /// Traversal stack size (MEDIAN_DEPTH plus log₂ of any realistic item count).
 const STACK: usize = 80;
 
-/// The pending node indices of a walk, never zeroed: a walk reads only what it pushed
-/// (zeroing 80 words cost more than a small BVH's whole walk).
-struct Stack {
-    v: [MaybeUninit<u32>; STACK],
-    top: usize,
-}
+/// The pending node indices of a walk, never zeroed ([`Fixed`]: zeroing 80 words cost
+/// more than a small BVH's whole walk); the median splits keep a walk within it.
+struct Stack(Fixed<u32, STACK>);
 
 impl Stack {
     #[inline(always)]
     fn new() -> Self {
-        Self {
-            v: [const { MaybeUninit::uninit() }; STACK],
-            top: 0,
-        }
+        Self(Fixed::new())
     }
     #[inline(always)]
     fn push(&mut self, node: u32) {
-        self.v[self.top] = MaybeUninit::new(node);
-        self.top += 1;
+        self.0.push_within(node);
     }
     #[inline(always)]
     fn pop(&mut self) -> Option<usize> {
-        self.top = self.top.checked_sub(1)?;
-        // SAFETY: slots below the old top were written by `push`.
-        Some(unsafe { self.v[self.top].assume_init() } as usize)
+        self.0.pop().map(|n| n as usize)
     }
 }
 

@@ -26,6 +26,7 @@ pub mod bytecode;
 pub mod csg;
 pub mod dual;
 pub mod expr;
+pub mod fixed;
 pub mod flat;
 pub mod interval;
 pub mod interval_trace;

@@ -22,7 +22,8 @@ pub const GRID: usize = 32;
 
 /// Cells per axis of a fine grid, built where the coarse one's cost says it fits in
 /// the build budget: smaller cells hold shorter tapes and less empty space (colonnade
-/// and tanglecube rays 1.4–2× faster), at 8× the cell table (2 MiB).
+/// and tanglecube rays 1.4–2× faster: docs/notebook/2026-11-30-fidget-occupancy-grid-and-cell-tapes.md),
+/// at 8× the cell table (2 MiB).
 pub const FINE_GRID: usize = 64;
 
 /// Words of a coarse grid's bitset (one bit per cell).

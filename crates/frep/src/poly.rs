@@ -12,8 +12,8 @@
 //! at ½ by de Casteljau and look left first. Everything is generic over
 //! [`num_traits::Float`] so that the f32 path the GPU mirrors is the same code.
 
+use crate::fixed::Fixed;
 use num_traits::Float;
-use std::mem::MaybeUninit;
 
 /// The highest degree held (a cubed quadratic).
 pub const MAX_DEGREE: usize = 6;
@@ -388,8 +388,7 @@ impl<T: Float> Bernstein<T> {
         let half = cst::<T>(0.5);
         // Pending right halves. Left uninitialised: zero-filling 49 frames (6.6 KiB in f64)
         // on every call cost more than most searches (perf, many-lights scene).
-        let mut stack = [const { MaybeUninit::<Frame<T>>::uninit() }; MAX_DEPTH + 1];
-        let mut top = 0;
+        let mut stack = Fixed::<Frame<T>, { MAX_DEPTH + 1 }>::new();
         let mut cur = Frame {
             b: self.b,
             e: err.b,
@@ -429,14 +428,13 @@ impl<T: Float> Bernstein<T> {
                     let (l, r) = split_half(&cur.b, n);
                     let (el, er) = split_half(&cur.e, n);
                     let mid = cur.u0 + w * half;
-                    stack[top] = MaybeUninit::new(Frame {
+                    stack.push_within(Frame {
                         b: r,
                         e: er,
                         u0: mid,
                         u1: cur.u1,
                         depth: cur.depth + 1,
                     });
-                    top += 1;
                     cur = Frame {
                         b: l,
                         e: el,
@@ -447,13 +445,10 @@ impl<T: Float> Bernstein<T> {
                     continue;
                 }
             }
-            if top == 0 {
-                return None;
+            match stack.pop() {
+                Some(f) => cur = f,
+                None => return None,
             }
-            top -= 1;
-            // SAFETY: slots below `top` were written by the push above before `top` passed
-            // them, and a pop only ever reads the slot just below `top`.
-            cur = unsafe { stack[top].assume_init() };
         }
     }
 

@@ -12,8 +12,8 @@
 //! docs/notebook/2026-12-02-cpu-speed-round-9-perturbed-walk-and-scene-loading.md).
 
 use super::{BvhRef, Slab};
+use crate::fixed::Fixed;
 use crate::ray::{Aabb, Ray};
-use std::mem::MaybeUninit;
 
 /// Pending entries the queue holds; past it the walk reports [`EntryOrder::overflowed`]
 /// and the caller falls back to an unordered query. 256 × 16 bytes of stack.
@@ -21,7 +21,7 @@ const QUEUE: usize = 256;
 
 /// The storage of an [`EntryOrder`]'s queue, which the caller keeps
 /// ([`EntryOrder::queue`]): held by value, 4 KiB would be copied whenever the walk moves.
-pub type Queue = [MaybeUninit<(f64, u32)>; QUEUE];
+pub type Queue = Fixed<(f64, u32), QUEUE>;
 
 /// Tags of queue entries: an item's leaf position with this bit set, else a node index.
 const ITEM: u32 = 1 << 31;
@@ -36,19 +36,19 @@ pub struct EntryOrder<'a, 'h> {
     hi: f64,
     unbounded: usize,
     queue: &'h mut Queue,
-    len: usize,
     overflowed: bool,
 }
 
 impl<'a, 'h> EntryOrder<'a, 'h> {
     /// Empty storage for [`new`](Self::new) (never written before the walk uses it).
     pub const fn queue() -> Queue {
-        [const { MaybeUninit::uninit() }; QUEUE]
+        Fixed::new()
     }
 
     /// The walk of `bvh` along `ray` over [lo, hi], keeping its queue in `queue`.
     pub fn new(bvh: BvhRef<'a>, ray: &Ray, lo: f64, hi: f64, queue: &'h mut Queue) -> Self {
         let slab = Slab::new(ray);
+        queue.clear();
         let mut walk = Self {
             bvh,
             slab,
@@ -56,7 +56,6 @@ impl<'a, 'h> EntryOrder<'a, 'h> {
             hi,
             unbounded: 0,
             queue,
-            len: 0,
             overflowed: false,
         };
         if let Some(root) = bvh.nodes.first() {
@@ -83,7 +82,7 @@ impl<'a, 'h> EntryOrder<'a, 'h> {
             return Some(i as usize);
         }
         loop {
-            if self.len == 0 || self.top().0 > limit {
+            if self.queue.is_empty() || self.top().0 > limit {
                 return None;
             }
             let (_, mut tag) = self.pop();
@@ -139,43 +138,24 @@ impl<'a, 'h> EntryOrder<'a, 'h> {
         self.slab.enter(b, self.lo, self.hi)
     }
 
-    #[inline]
-    fn at(&self, k: usize) -> (f64, u32) {
-        // SAFETY: slots below `len` were written by `push` (or moved up by it).
-        unsafe { self.queue[k].assume_init() }
-    }
-
     /// The nearest pending entry (the queue must not be empty).
     #[inline]
     fn top(&self) -> (f64, u32) {
-        self.at(self.len - 1)
+        self.queue.at(self.queue.len() - 1)
     }
 
     /// Queues an entry, after (popped before) those of equal parameter.
     #[inline]
     fn push(&mut self, t: f64, tag: u32) {
-        if self.len == QUEUE {
+        if !self.queue.insert_from_back((t, tag), 0, |p| p.0 < t) {
             self.overflowed = true;
-            return;
         }
-        let mut k = self.len;
-        while k > 0 {
-            let p = self.at(k - 1);
-            if p.0 >= t {
-                break;
-            }
-            self.queue[k] = MaybeUninit::new(p);
-            k -= 1;
-        }
-        self.queue[k] = MaybeUninit::new((t, tag));
-        self.len += 1;
     }
 
     /// Takes the nearest pending entry (the queue must not be empty).
     #[inline]
     fn pop(&mut self) -> (f64, u32) {
-        self.len -= 1;
-        self.at(self.len)
+        self.queue.pop().expect("a pending entry")
     }
 }
 

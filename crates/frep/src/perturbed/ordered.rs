@@ -1,4 +1,4 @@
-//! The f64 scan in ray order (issue 10): the support BVH hands out perturbations by the
+//! The f64 scan in ray order: the support BVH hands out perturbations by the
 //! parameter where the ray enters their box ([`EntryOrder`]), and each piece is scanned
 //! as soon as every support that can start before its end is known, so that the walk
 //! stops at the first crossing and never opens the boxes behind it.
@@ -28,7 +28,6 @@ use super::scan::{Active, Actives, Coeffs, Fixed, Scan, MAX_ACTIVE};
 use super::Perturbation;
 use crate::bvh::{BvhRef, EntryOrder};
 use crate::ray::Ray;
-use std::mem::MaybeUninit;
 
 /// How far past a piece's end (relative to |t| + 1) a box entry still counts as before
 /// it: a margin for the rounding of the slab test, so that a support is never missed.
@@ -236,9 +235,8 @@ const RETIRE: usize = 32;
 /// `len` never written, as in [`Fixed`]): supports come in entry order, so most of their
 /// ends land at the back.
 struct Ends {
-    v: [MaybeUninit<f64>; ENDS],
+    v: Fixed<f64, ENDS>,
     head: usize,
-    len: usize,
 }
 
 /// Room for the ends of a full active set (at most two finite ends each).
@@ -247,45 +245,26 @@ const ENDS: usize = 2 * MAX_ACTIVE;
 impl Ends {
     fn new() -> Self {
         Self {
-            v: [const { MaybeUninit::uninit() }; ENDS],
+            v: Fixed::new(),
             head: 0,
-            len: 0,
         }
-    }
-
-    #[inline]
-    fn at(&self, k: usize) -> f64 {
-        debug_assert!(k < self.len);
-        // SAFETY: slots below `len` were written by `insert`.
-        unsafe { self.v[k].assume_init() }
     }
 
     /// Inserts e in order; false when there is no room.
     fn insert(&mut self, e: f64) -> bool {
-        if self.len == ENDS {
-            self.v.copy_within(self.head..self.len, 0);
-            self.len -= self.head;
+        if self.v.is_full() {
+            self.v.drop_front(self.head);
             self.head = 0;
-            if self.len == ENDS {
-                return false;
-            }
         }
-        let mut k = self.len;
-        while k > self.head && self.at(k - 1) > e {
-            self.v[k] = self.v[k - 1];
-            k -= 1;
-        }
-        self.v[k] = MaybeUninit::new(e);
-        self.len += 1;
-        true
+        self.v.insert_from_back(e, self.head, |&p| p > e)
     }
 
     /// The least end above t, dropping those at or below it.
     fn least_above(&mut self, t: f64) -> Option<f64> {
-        while self.head < self.len && self.at(self.head) <= t {
+        while self.head < self.v.len() && self.v.at(self.head) <= t {
             self.head += 1;
         }
-        (self.head < self.len).then(|| self.at(self.head))
+        (self.head < self.v.len()).then(|| self.v.at(self.head))
     }
 }
 

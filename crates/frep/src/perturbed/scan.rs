@@ -32,16 +32,17 @@
 
 pub(crate) use super::along::Coeffs;
 use super::along::{positive_set, q_local, q_local_mag};
+pub(super) use crate::fixed::Fixed;
 use crate::poly::{Bernstein, Poly};
 use num_traits::Float;
 use std::cell::Cell;
-use std::mem::MaybeUninit;
 
 /// The most perturbations one scan keeps in its fixed-capacity active set; past it, the
 /// overflow rule of the module docs. GPU.md §6.1 proposes K = 32 for the WGSL kernel;
 /// on the CPU 64 keeps the overflow path rare (with 4096 perturbations in the benchmark,
 /// a quarter of the rays that enter its bounds meet more than 32 supports, 2 % more than
-/// 64) for 9 KiB of stack per scan.
+/// 64: docs/notebook/2026-11-21-perturbed-quadrics-scaling.md) for 9 KiB of stack per
+/// scan.
 pub const MAX_ACTIVE: usize = 64;
 
 /// The GPU kernel's active-set capacity K (GPU.md §6.1), which the f32 path
@@ -55,62 +56,6 @@ pub const GPU_SPLITS: usize = 4;
 
 /// Breakpoints a full active set can make: a quadratic has at most two real roots.
 const MAX_BREAKS: usize = 2 * MAX_ACTIVE;
-
-/// A fixed-capacity list on the stack whose unused slots are never written (filling
-/// 4 KiB of placeholders per ray costs more than a one-perturbation scan).
-pub(super) struct Fixed<T: Copy, const N: usize> {
-    items: [MaybeUninit<T>; N],
-    len: usize,
-}
-
-impl<T: Copy, const N: usize> Fixed<T, N> {
-    #[inline]
-    pub(super) fn new() -> Self {
-        Self {
-            items: [const { MaybeUninit::uninit() }; N],
-            len: 0,
-        }
-    }
-    /// Appends `v`; false (and nothing written) when full.
-    #[inline]
-    pub(super) fn push(&mut self, v: T) -> bool {
-        if self.len == N {
-            return false;
-        }
-        self.items[self.len] = MaybeUninit::new(v);
-        self.len += 1;
-        true
-    }
-    #[inline]
-    pub(super) fn as_mut_slice(&mut self) -> &mut [T] {
-        // SAFETY: the first `len` slots were written by `push`, and MaybeUninit<T> has
-        // the layout of T.
-        unsafe { std::slice::from_raw_parts_mut(self.items.as_mut_ptr().cast::<T>(), self.len) }
-    }
-    #[inline]
-    pub(super) fn len(&self) -> usize {
-        self.len
-    }
-    #[inline]
-    pub(super) fn as_slice(&self) -> &[T] {
-        // SAFETY: as in `as_mut_slice`.
-        unsafe { std::slice::from_raw_parts(self.items.as_ptr().cast::<T>(), self.len) }
-    }
-    /// Keeps the items for which `keep` holds, in their order.
-    #[inline]
-    pub(super) fn retain(&mut self, mut keep: impl FnMut(&T) -> bool) {
-        let mut k = 0;
-        for j in 0..self.len {
-            // SAFETY: slots below `len` were written by `push` (or moved down here).
-            let v = unsafe { self.items[j].assume_init() };
-            if keep(&v) {
-                self.items[k] = MaybeUninit::new(v);
-                k += 1;
-            }
-        }
-        self.len = k;
-    }
-}
 
 /// Where a scan reads the perturbations (f_i, q_i) that may act on its range, in a fixed
 /// order: the order in which each piece sums them, so every pass must repeat it.
@@ -340,7 +285,7 @@ impl<T: Float, S: Source<T>> Along<'_, T, S> {
                 return;
             }
             if let Some(a) = Active::on(f, q, o, d, lo, hi) {
-                if active.len == self.capacity || !active.push(a) {
+                if active.len() == self.capacity || !active.push(a) {
                     overflow = true;
                     return;
                 }
@@ -361,7 +306,7 @@ impl<T: Float, S: Source<T>> Along<'_, T, S> {
             }
             return self.streamed(lo, hi, sign);
         }
-        let any = breaks.len > 0;
+        let any = !breaks.is_empty();
         let breaks = breaks.as_mut_slice();
         breaks.sort_unstable_by(|a, b| a.partial_cmp(b).unwrap_or(std::cmp::Ordering::Equal));
         let mut k = 0;

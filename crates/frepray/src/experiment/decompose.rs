@@ -9,8 +9,8 @@
 //! seeds of a point, the per-pixel sample variance of the jittered renders estimates
 //! `Var/spp`, that of the centred ones `Var(X | centre)/spp`; summed over pixels and
 //! channels, their ratio is the **direction share** and its complement the **footprint
-//! share** of the image's variance. (An audit found 92 % footprint variance on the
-//! paper's many-lights scene: there even a perfect MIS would remove little.)
+//! share** of the image's variance (measured shares: docs/experiment.md, "Could MIS
+//! help at all?").
 
 use super::manifest::{Manifest, RenderRecord, Row};
 use super::{exr_io, image_file, Image, Plan, Renderer};

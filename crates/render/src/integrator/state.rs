@@ -118,7 +118,7 @@ impl RayCounts {
 /// Where the integrator reports its ray queries: [`RayCounts`] counts them, [`Timed`]
 /// also times one in [`TIMED_EVERY`]. The integrator is generic over it, so that a
 /// render without timers has no timer code in its loop at all (a branch on a flag there
-/// cost 2–3 % on small scenes).
+/// cost 2–4 %: docs/notebook/2026-11-30-cpu-and-gpu-on-lavapipe.md).
 pub(crate) trait RayLog {
     /// Before a query of `kind` (or a camera ray's generation).
     fn begin(&mut self, kind: RayKind);
