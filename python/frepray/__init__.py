@@ -25,6 +25,7 @@ from ._native import (
     RenderState,
     Scene,
     SceneError,
+    bench,
     configure_gpu,
     gpu_available,
     load,
@@ -41,7 +42,7 @@ __all__ = [
     "Error", "SceneError", "RenderError", "ModelError", "Cancelled", "Cancel", "Scene",
     "RenderState", "Model",
     "load", "load_dict", "render", "merge", "read_exr", "write_exr", "model", "mis",
-    "experiment", "measure", "summarize", "gpu_available", "configure_gpu",
+    "experiment", "measure", "summarize", "gpu_available", "configure_gpu", "bench",
 ]
 
 

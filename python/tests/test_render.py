@@ -184,3 +184,18 @@ def test_options_the_render_ignores_are_warned_about(many_lights):
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         frepray.render(many_lights, beta=3.0, **dict(opts, estimator="power"))
+
+
+def test_bench_rows_are_the_clis(many_lights):
+    # frepray.bench is `frepray bench`'s measurement (frepray::bench::bench).
+    rows = frepray.bench(many_lights, spp=1, **SMALL)
+    assert [(r["backend"], r["integrator"]) for r in rows] == [("cpu", "direct"),
+                                                              ("cpu", "path")]
+    for r in rows:
+        assert (r["width"], r["height"], r["spp"]) == (24, 16, 1)
+        assert r["msamples_per_s"] > 0 and r["mrays_per_s"] >= r["msamples_per_s"]
+        assert r["stages"]["camera rays"] >= 0 and len(r["stages"]) == 5
+    with pytest.raises(frepray.RenderError, match="auto"):
+        frepray.bench(many_lights, spp=1, backends=["auto"], **SMALL)
+    with pytest.raises(ValueError, match="backend"):
+        frepray.bench(many_lights, spp=1, backends=["tpu"], **SMALL)
