@@ -111,7 +111,9 @@ impl SphereBins {
     /// four, down to 14 levels; this resolves discontinuities (light silhouettes) and
     /// integrable singularities (grazing area sampling).
     pub fn integrate_adaptive(&self, eps: f64, pdf: &dyn Fn(DVec3) -> f64) -> Vec<f64> {
-        fn rec(pdf: &dyn Fn(DVec3) -> f64, r: [f64; 4], eps: f64, depth: u32) -> f64 {
+        // `coarse` is the 4 × 4 midpoint estimate of `r`, which the caller has already
+        // computed (a parent's fine estimate is made of its children's coarse ones).
+        fn rec(pdf: &dyn Fn(DVec3) -> f64, r: [f64; 4], coarse: f64, eps: f64, depth: u32) -> f64 {
             let [t0, t1, p0, p1] = r;
             let (tm, pm) = ((t0 + t1) / 2.0, (p0 + p1) / 2.0);
             let quads = [
@@ -120,17 +122,15 @@ impl SphereBins {
                 [tm, t1, p0, pm],
                 [tm, t1, pm, p1],
             ];
-            let coarse = midpoint(pdf, t0, t1, p0, p1, 4);
-            let fine: f64 = quads
-                .iter()
-                .map(|q| midpoint(pdf, q[0], q[1], q[2], q[3], 4))
-                .sum();
+            let parts = quads.map(|q| midpoint(pdf, q[0], q[1], q[2], q[3], 4));
+            let fine: f64 = parts.iter().sum();
             if (fine - coarse).abs() <= eps || depth == 14 {
                 fine
             } else {
                 quads
                     .iter()
-                    .map(|&q| rec(pdf, q, eps / 2.0, depth + 1))
+                    .zip(parts)
+                    .map(|(&q, c)| rec(pdf, q, c, eps / 2.0, depth + 1))
                     .sum()
             }
         }
@@ -147,7 +147,8 @@ impl SphereBins {
                             p0 + b as f64 * dp,
                             p0 + (b + 1) as f64 * dp,
                         ];
-                        sum += rec(pdf, r, eps / 16.0, 0);
+                        let coarse = midpoint(pdf, r[0], r[1], r[2], r[3], 4);
+                        sum += rec(pdf, r, coarse, eps / 16.0, 0);
                     }
                 }
                 sum

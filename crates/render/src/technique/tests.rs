@@ -100,9 +100,9 @@ fn trained_table(lights: &Lights) -> TrainedSelection {
 /// tolerance 3e-3 plus 4 binomial σ), and a sample's pdf equals pdf(wi). Scene A has
 /// a sphere, a rectangle, a disk and an environment map; light-area sampling, whose
 /// direction pdf is singular at a sphere's silhouette (see the light tests), is
-/// checked on scene B of overlapping planar lights, with light sampling.
-#[test]
-fn techniques_match_pdfs() {
+/// checked on scene B of overlapping planar lights, with light sampling. Four tests
+/// (each BSDF, the first and second half of the cases), so that they run in parallel.
+fn techniques_match_pdfs(bsdf: usize, half: usize) {
     let a = scene_lights();
     let b = planar_lights();
     let cases = [
@@ -134,47 +134,67 @@ fn techniques_match_pdfs() {
             Bxdf::Diffuse(DiffuseBxdf { r: Rgb::ONE }),
         ),
     ];
+    let bsdf = &bsdfs[bsdf];
     let bins = SphereBins::new(32, 64);
     let n = 300_000;
-    for bsdf in &bsdfs {
-        for (lights, t) in cases {
-            let table = trained_table(lights);
-            let ctx = ShadingPoint {
-                p: DVec3::new(0.1, 0.0, 0.0),
-                n: bsdf.frame.n,
-                wo: DVec3::new(0.3, -0.4, 0.8).normalize(),
-                bsdf,
-                lights,
-                trained: Some(&table),
-            };
-            let r = sphere_chi2(
-                &bins,
-                n,
-                31,
-                |u| {
-                    let s = t.sample(&ctx, u[0], DVec2::new(u[1], u[2]))?;
-                    if s.specular {
-                        return None;
-                    }
-                    let pdf = t.pdf(&ctx, s.wi);
-                    assert!(
-                        (s.pdf - pdf).abs() <= 1e-9 * pdf,
-                        "{}: {} vs {pdf}",
-                        t.name(),
-                        s.pdf
-                    );
-                    Some(s.wi)
-                },
-                |w| t.pdf(&ctx, w),
-            );
-            let tol = 4.0 * (r.valid * (1.0 - r.valid) / n as f64).sqrt() + 3e-3;
-            assert!(r.p_value > 1e-3, "{}: {r:?}", t.name());
-            assert!((r.mass - r.valid).abs() < tol, "{}: {r:?}", t.name());
-            if t != Technique::Bsdf {
-                assert_eq!(r.valid, 1.0, "{}", t.name());
-            }
+    let m = cases.len() / 2;
+    for &(lights, t) in &cases[half * m..(half + 1) * m] {
+        let table = trained_table(lights);
+        let ctx = ShadingPoint {
+            p: DVec3::new(0.1, 0.0, 0.0),
+            n: bsdf.frame.n,
+            wo: DVec3::new(0.3, -0.4, 0.8).normalize(),
+            bsdf,
+            lights,
+            trained: Some(&table),
+        };
+        let r = sphere_chi2(
+            &bins,
+            n,
+            31,
+            |u| {
+                let s = t.sample(&ctx, u[0], DVec2::new(u[1], u[2]))?;
+                if s.specular {
+                    return None;
+                }
+                let pdf = t.pdf(&ctx, s.wi);
+                assert!(
+                    (s.pdf - pdf).abs() <= 1e-9 * pdf,
+                    "{}: {} vs {pdf}",
+                    t.name(),
+                    s.pdf
+                );
+                Some(s.wi)
+            },
+            |w| t.pdf(&ctx, w),
+        );
+        let tol = 4.0 * (r.valid * (1.0 - r.valid) / n as f64).sqrt() + 3e-3;
+        assert!(r.p_value > 1e-3, "{}: {r:?}", t.name());
+        assert!((r.mass - r.valid).abs() < tol, "{}: {r:?}", t.name());
+        if t != Technique::Bsdf {
+            assert_eq!(r.valid, 1.0, "{}", t.name());
         }
     }
+}
+
+#[test]
+fn techniques_match_pdfs_on_plastic_first_half() {
+    techniques_match_pdfs(0, 0);
+}
+
+#[test]
+fn techniques_match_pdfs_on_plastic_second_half() {
+    techniques_match_pdfs(0, 1);
+}
+
+#[test]
+fn techniques_match_pdfs_on_a_tilted_diffuse_first_half() {
+    techniques_match_pdfs(1, 0);
+}
+
+#[test]
+fn techniques_match_pdfs_on_a_tilted_diffuse_second_half() {
+    techniques_match_pdfs(1, 1);
 }
 
 /// Monte Carlo irradiance E = ∫ L cos θ dω at the origin (normal +z) with `n`
