@@ -4,6 +4,13 @@
 # dependency arrows (DESIGN.md §3), the whole Rust test suite, then the Python package's
 # tests (pytest, Ray on a local 2-CPU cluster). The long comparisons are in
 # scripts/long-test.sh.
+#
+# One build serves every step: clippy's lints run inside the test build (clippy-driver
+# as the workspace's compiler, with `-D warnings`: what `cargo clippy --workspace
+# --all-targets -- -D warnings` checks, without checking every crate a second time), the
+# Python package is set up beside that build and compiles the extension on its
+# dependencies, and the docs build beside the test run, at a lower priority. Afterwards a
+# plain `cargo build` recompiles the workspace's own crates once (the compiler differs).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 # Each step's wall time goes to stderr, and a summary at the end.
@@ -16,18 +23,67 @@ step() {
   times+=("$(printf '%5d s  %s' $((SECONDS - t0)) "$name")")
 }
 summary() { [ ${#times[@]} -gt 0 ] && printf 'test: %s\n' "${times[@]}" >&2; }
-trap summary EXIT
-step "setup (lavapipe, .venv with the Python package)" bash scripts/setup.sh --dev
+# Background jobs stop with the script.
+trap 'summary; kill $(jobs -p) 2>/dev/null || true' EXIT
+logs=$(mktemp -d)
+# Waits for a background job; on failure prints its log and fails.
+await() {
+  local pid=$1 log=$2 what=$3
+  if ! wait "$pid"; then
+    cat "$log" >&2
+    echo "test: $what failed" >&2
+    return 1
+  fi
+  cat "$log" >&2
+}
+
+step "setup (Rust components, lavapipe)" bash scripts/setup.sh --no-python
 [ -x "$HOME/.cargo/bin/cargo" ] && export PATH="$HOME/.cargo/bin:$PATH"
+driver="$(rustc --print sysroot)/bin/clippy-driver"
+if [ -x "$driver" ]; then
+  export RUSTC_WORKSPACE_WRAPPER="$driver"
+  export CLIPPY_ARGS="-D__CLIPPY_HACKERY__warnings__CLIPPY_HACKERY__"
+  # The lints must fail the build: a crate with one warning-level clippy lint
+  # (`useless_vec`) must not compile, and the same crate without it must.
+  probe() {
+    printf 'pub fn f() -> usize { let v = %s; v.len() }\n' "$1" > "$logs/probe.rs"
+    "$driver" rustc --edition 2021 --crate-type lib --emit=metadata \
+      -o "$logs/probe.rmeta" "$logs/probe.rs" > "$logs/probe.log" 2>&1
+  }
+  if probe 'vec![1u8]' || ! probe '[1u8]'; then
+    cat "$logs/probe.log" >&2
+    echo "test: clippy-driver did not turn a lint into an error; run cargo clippy" >&2
+    exit 1
+  fi
+fi
+# The Python package: a venv, pip (no compiler needed), then maturin, which waits for
+# Cargo's lock and builds the extension on the dependencies the test build made.
+bash scripts/setup.sh --dev --no-gpu > "$logs/setup" 2>&1 &
+python_setup=$!
 step "cargo fmt --check" cargo fmt --all -- --check
-step "cargo clippy" cargo clippy --workspace --all-targets -- -D warnings
-step "cargo doc" env RUSTDOCFLAGS="-D warnings" cargo doc --workspace --no-deps
+if [ -n "${RUSTC_WORKSPACE_WRAPPER:-}" ]; then
+  step "build every target, with clippy's lints" \
+    cargo test --workspace --all-targets --no-run
+else
+  step "cargo clippy" cargo clippy --workspace --all-targets -- -D warnings
+fi
 step "licences" python3 scripts/check-licenses.py
 step "dependency arrows (DESIGN.md §3)" python3 scripts/check-deps.py
+
+# The docs in a target folder of their own (Cargo's lock is held while tests run),
+# niced so that they take only what the tests leave idle.
+env -u RUSTC_WORKSPACE_WRAPPER -u CLIPPY_ARGS RUSTDOCFLAGS="-D warnings" \
+  CARGO_TARGET_DIR=target/doc-check nice -n 15 \
+  cargo doc --workspace --no-deps -q > "$logs/doc" 2>&1 &
+docs=$!
+
 # GPU tests fail, not skip, when no adapter is found (lavapipe comes with setup.sh);
 # Mesa wants a private runtime directory, else it prints a harmless error per device.
 export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-$(mktemp -d)}"
-# Examples are not built here (clippy checked them); doctests run in a second call.
+# Examples and benchmarks were built above; doctests run in a second call.
 step "cargo test" env FREPRAY_REQUIRE_GPU=1 cargo test --workspace --lib --bins --tests
+step "cargo doc (beside the tests)" await "$docs" "$logs/doc" "cargo doc"
 step "cargo test --doc" cargo test --workspace --doc
+step "the Python package (set up beside the build)" \
+  await "$python_setup" "$logs/setup" "the Python package's setup"
 step "pytest" .venv/bin/python -m pytest -q --doctest-modules python/tests python/frepray

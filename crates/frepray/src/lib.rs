@@ -61,6 +61,8 @@ pub use settings::{Settings, Unused};
 pub use render::limits;
 /// Files written whole or not at all (a temporary file renamed into place).
 pub use render::output::write_atomically;
+/// 8-bit RGB PNG files, written and read.
+pub use render::png_io;
 /// Depth and normal images as PNG ([`value_png::Values`]).
 pub use render::value_png;
 /// The technique list of the command line, `bsdf:2,light` (counts 1 when omitted).

@@ -37,6 +37,7 @@ pub mod light;
 pub mod limits;
 pub mod material;
 pub mod output;
+pub mod png_io;
 pub mod render_loop;
 pub mod sampler;
 pub mod scene;

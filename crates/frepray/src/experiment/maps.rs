@@ -88,15 +88,7 @@ pub fn write(
         let bytes: Vec<u8> = ratios.iter().flat_map(|&r| colour(r)).collect();
         let png = stem.with_extension("png");
         render::output::write_atomically(&png, |f| {
-            use image::ImageEncoder;
-            image::codecs::png::PngEncoder::new(f)
-                .write_image(
-                    &bytes,
-                    map.width,
-                    map.height,
-                    image::ExtendedColorType::Rgb8,
-                )
-                .map_err(std::io::Error::other)
+            render::png_io::write_rgb8(f, &bytes, map.width, map.height)
         })
         .map_err(|e| format!("cannot write {}: {e}", png.display()))?;
     }

@@ -69,13 +69,8 @@ pub fn write_plot(stem: &Path, title: &str, x_desc: &str, series: &[Series]) -> 
         let root = BitMapBackend::with_buffer(&mut rgb, (w, h)).into_drawing_area();
         draw(&root, title, x_desc, series).map_err(|e| format!("{}: {e}", png.display()))?;
     }
-    render::output::write_atomically(&png, |f| {
-        use image::ImageEncoder;
-        image::codecs::png::PngEncoder::new(f)
-            .write_image(&rgb, w, h, image::ExtendedColorType::Rgb8)
-            .map_err(std::io::Error::other)
-    })
-    .map_err(|e| format!("cannot write {}: {e}", png.display()))?;
+    render::output::write_atomically(&png, |f| render::png_io::write_rgb8(f, &rgb, w, h))
+        .map_err(|e| format!("cannot write {}: {e}", png.display()))?;
 
     let svg_path = stem.with_extension("svg");
     let mut svg = String::new();
