@@ -10,16 +10,19 @@
 #   --no-gpu      skip Mesa's lavapipe (a CPU-only build needs no Vulkan driver);
 #   --dev         build the extension in the dev profile (optimised, not across crates:
 #                 the build `cargo test` shares, as scripts/test.sh wants) instead of
-#                 release.
+#                 release;
+#   --venv-only   create .venv and stop (scripts/test.sh installs into it beside its
+#                 build).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-python=1 gpu=1 profile=--release
+python=1 gpu=1 profile=--release venv_only=
 for a in "$@"; do
   case $a in
     --no-python) python= ;;
     --no-gpu) gpu= ;;
     --dev) profile= ;;
-    *) echo "setup: unknown option $a (expected --no-python, --no-gpu, --dev)" >&2; exit 2 ;;
+    --venv-only) venv_only=1 ;;
+    *) echo "setup: unknown option $a (expected --no-python, --no-gpu, --dev, --venv-only)" >&2; exit 2 ;;
   esac
 done
 if ! command -v cargo >/dev/null 2>&1; then
@@ -57,6 +60,7 @@ if [ ! -x .venv/bin/python ]; then
   }
   "$PYTHON" -m venv .venv
 fi
+[ -n "$venv_only" ] && exit 0
 .venv/bin/python -m pip install -q --disable-pip-version-check -r python/requirements-dev.txt
 # shellcheck disable=SC2086
 VIRTUAL_ENV="$PWD/.venv" .venv/bin/maturin develop -q $profile -m python/Cargo.toml

@@ -7,10 +7,12 @@
 #
 # One build serves every step: clippy's lints run inside the test build (clippy-driver
 # as the workspace's compiler, with `-D warnings`: what `cargo clippy --workspace
-# --all-targets -- -D warnings` checks, without checking every crate a second time), the
+# --all-targets -- -D warnings` checks, without checking every crate a second time); the
 # Python package is set up beside that build and compiles the extension on its
-# dependencies, and the docs build beside the test run, at a lower priority. Afterwards a
-# plain `cargo build` recompiles the workspace's own crates once (the compiler differs).
+# dependencies (Cargo sees the environment maturin gives it, so pyo3 is built once);
+# the docs build beside both, at a lower priority, in a target folder of their own.
+# Afterwards a plain `cargo build` recompiles the workspace's own crates once (the
+# compiler differs).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 # Each step's wall time goes to stderr, and a summary at the end.
@@ -37,8 +39,17 @@ await() {
   cat "$log" >&2
 }
 
-step "setup (Rust components, lavapipe)" bash scripts/setup.sh --no-python
+step "setup (Rust components, lavapipe, .venv)" bash scripts/setup.sh --venv-only
 [ -x "$HOME/.cargo/bin/cargo" ] && export PATH="$HOME/.cargo/bin:$PATH"
+# What `maturin develop` sets for Cargo (maturin 1.16), so that pyo3's build script
+# gives the tests' build and the extension's the same configuration.
+py="$PWD/.venv/bin/python"
+export VIRTUAL_ENV="$PWD/.venv" PYO3_PYTHON="$py" PYTHON_SYS_EXECUTABLE="$py" \
+  PYO3_BUILD_EXTENSION_MODULE=1
+PYO3_ENVIRONMENT_SIGNATURE=$("$py" -c 'import platform, struct, sys
+print("%s-%d.%d-%dbit" % (platform.python_implementation().lower(), *sys.version_info[:2],
+                          struct.calcsize("P") * 8))')
+export PYO3_ENVIRONMENT_SIGNATURE
 driver="$(rustc --print sysroot)/bin/clippy-driver"
 if [ -x "$driver" ]; then
   export RUSTC_WORKSPACE_WRAPPER="$driver"
@@ -56,11 +67,17 @@ if [ -x "$driver" ]; then
     exit 1
   fi
 fi
-# The Python package: a venv, pip (no compiler needed), then maturin, which waits for
-# Cargo's lock and builds the extension on the dependencies the test build made.
+# The Python package: pip (no compiler needed), then maturin, which waits for Cargo's
+# lock and builds the extension on the dependencies the test build made.
 bash scripts/setup.sh --dev --no-gpu > "$logs/setup" 2>&1 &
 python_setup=$!
 step "cargo fmt --check" cargo fmt --all -- --check
+# The docs in a target folder of their own (Cargo's lock is held while tests run),
+# niced so that they take only what the build and the tests leave idle.
+env -u RUSTC_WORKSPACE_WRAPPER -u CLIPPY_ARGS RUSTDOCFLAGS="-D warnings" \
+  CARGO_TARGET_DIR=target/doc-check nice -n 10 \
+  cargo doc --workspace --no-deps -q > "$logs/doc" 2>&1 &
+docs=$!
 if [ -n "${RUSTC_WORKSPACE_WRAPPER:-}" ]; then
   step "build every target, with clippy's lints" \
     cargo test --workspace --all-targets --no-run
@@ -69,13 +86,6 @@ else
 fi
 step "licences" python3 scripts/check-licenses.py
 step "dependency arrows (DESIGN.md §3)" python3 scripts/check-deps.py
-
-# The docs in a target folder of their own (Cargo's lock is held while tests run),
-# niced so that they take only what the tests leave idle.
-env -u RUSTC_WORKSPACE_WRAPPER -u CLIPPY_ARGS RUSTDOCFLAGS="-D warnings" \
-  CARGO_TARGET_DIR=target/doc-check nice -n 15 \
-  cargo doc --workspace --no-deps -q > "$logs/doc" 2>&1 &
-docs=$!
 
 # GPU tests fail, not skip, when no adapter is found (lavapipe comes with setup.sh);
 # Mesa wants a private runtime directory, else it prints a harmless error per device.
