@@ -14,6 +14,6 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 [ -x "$HOME/.cargo/bin/cargo" ] && export PATH="$HOME/.cargo/bin:$PATH"
 export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-$(mktemp -d)}"
-FREPRAY_LONG=1 FREPRAY_REQUIRE_GPU=1 cargo test -p gpu --test direct_image
+FREPRAY_LONG=1 FREPRAY_REQUIRE_GPU=1 cargo test -p gpu --test gpu_tests direct_image::
 export FREPRAY_CSG_TREES="${FREPRAY_CSG_TREES:-20000}"
-cargo test -p frep --test csg_differential -- --nocapture
+cargo test -p frep --test frep_tests csg_differential:: -- --nocapture

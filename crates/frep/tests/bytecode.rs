@@ -1,7 +1,7 @@
 //! The register bytecode against the expression DAG on every model frep reads: f32
 //! values bit for bit, interval bounds that hold the point values, registers in range.
 
-mod common;
+use crate::common;
 
 use common::*;
 use frep::bytecode::{Bytecode, MAX_REGISTERS};

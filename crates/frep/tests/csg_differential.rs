@@ -21,7 +21,7 @@
 //! Fixed seeds. `FREPRAY_CSG_TREES` sets the number of trees (the long run,
 //! `scripts/long-test.sh`, sets hundreds of thousands); each test prints what it tried.
 
-mod common;
+use crate::common;
 
 use common::random_csg::{plain, point, rays, unit, Gen};
 use frep::interval_trace::resolution;

@@ -2,7 +2,7 @@
 //! part crossing to the next must not skip crossings because a node's bounds are
 //! infinite (issue: a hollow bowl cut by a half-space rendered mostly empty).
 
-mod common;
+use crate::common;
 
 use common::{read_str, Format};
 use frep::ray::Ray;

@@ -2,7 +2,7 @@
 //! every kind of node (unions, differences, intersections of quadrics and expressions),
 //! it equals F ≥ 0 inside the solid's bounds at random points in and around them.
 
-mod common;
+use crate::common;
 
 use common::{read_file, root, Rng, SeedableRng};
 use frep::solid::Solid;

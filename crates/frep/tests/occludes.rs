@@ -3,7 +3,7 @@
 //! grid) and in Bernstein form, a perturbed quadric and CSG, from three eyes and over
 //! sub-ranges of each ray, so that rays starting and ending inside solids count too.
 
-mod common;
+use crate::common;
 
 use common::{model_file, read_file, root};
 use frep::solid::Solid;

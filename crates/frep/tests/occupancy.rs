@@ -3,7 +3,7 @@
 //! grazing rays give the same hits with the grid as without it, and the grid is sound:
 //! every crossing of a dense march lies in an occupied cell.
 
-mod common;
+use crate::common;
 
 use frep::interval_trace::ExprView;
 use frep::occupancy::{FINE_GRID, GRID, MARGIN};

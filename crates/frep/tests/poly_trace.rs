@@ -4,7 +4,7 @@
 //! crossing along rays from several eyes, grazing rays and rays from inside is the same
 //! with the polynomial search as with the interval search.
 
-mod common;
+use crate::common;
 
 use frep::interval_trace::{ExprSurface, ExprView};
 use frep::read::read_file;

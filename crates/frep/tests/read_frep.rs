@@ -1,7 +1,7 @@
 //! The frepray `.frep` syntax: the documented examples, the shapes each construct
 //! builds, and errors with positions.
 
-mod common;
+use crate::common;
 use common::*;
 
 /// The code blocks marked `frep` in docs/frep-syntax.md.

@@ -1,7 +1,7 @@
 //! The HyperFun reader: the canonical scenes, the common library against its
 //! definitions, the language core, and errors with positions.
 
-mod common;
+use crate::common;
 use common::*;
 
 fn hf(text: &str) -> Model {

@@ -1,7 +1,7 @@
 //! The Fidget `.vm` reader and writer: every opcode, every Fidget model, errors with
 //! positions, and write-then-read round trips.
 
-mod common;
+use crate::common;
 use common::*;
 
 #[test]

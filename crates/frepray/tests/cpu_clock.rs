@@ -13,20 +13,30 @@ fn work() {
 }
 
 /// The same work on two threads costs twice the processor time of one: the clock
-/// counts every thread, whatever else the machine runs.
+/// counts every thread, whatever else the machine runs. Each is the least of three
+/// measurements: a busy sibling of a virtual CPU slows a thread's work, which then
+/// costs more processor time, and that noise only adds.
 #[test]
 fn the_clock_counts_every_thread() {
-    let Some(t0) = process_cpu_seconds() else {
+    if process_cpu_seconds().is_none() {
         return;
+    }
+    let least = |f: &dyn Fn()| {
+        (0..3)
+            .map(|_| {
+                let t0 = process_cpu_seconds().unwrap();
+                f();
+                process_cpu_seconds().unwrap() - t0
+            })
+            .fold(f64::INFINITY, f64::min)
     };
-    work();
-    let t1 = process_cpu_seconds().unwrap();
-    std::thread::scope(|s| {
-        s.spawn(work);
-        s.spawn(work);
+    let one = least(&work);
+    let two = least(&|| {
+        std::thread::scope(|s| {
+            s.spawn(work);
+            s.spawn(work);
+        })
     });
-    let t2 = process_cpu_seconds().unwrap();
-    let (one, two) = (t1 - t0, t2 - t1);
     assert!(one > 0.0, "{one}");
     assert!(
         (1.5..2.6).contains(&(two / one)),

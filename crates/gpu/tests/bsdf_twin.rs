@@ -11,7 +11,7 @@
 //! - the twin's own identities: a sample's pdf and f are `eval` at its direction, and its
 //!   weight is f·|cos θi|/pdf, exactly.
 
-mod common;
+use crate::common;
 use common::Rng;
 
 use glam::{DVec2, DVec3, Vec2, Vec3};
@@ -28,7 +28,13 @@ use render::bsdf::{
 /// Triples per material.
 const N: usize = 4096;
 
-impl Rng {
+/// The shapes of random input this file's tests draw.
+trait Inputs {
+    fn dir(&mut self) -> Vec3;
+    fn unit(&mut self) -> f32;
+}
+
+impl Inputs for Rng {
     /// A unit f32 direction, uniform on the sphere.
     fn dir(&mut self) -> Vec3 {
         let z = 1.0 - 2.0 * self.next();

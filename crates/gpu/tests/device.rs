@@ -1,6 +1,6 @@
 //! The device: adapter choice, forced-off features, and errors instead of panics.
 
-mod common;
+use crate::common;
 
 use gpu::{GpuError, GpuOptions, Kernel};
 

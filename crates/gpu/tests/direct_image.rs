@@ -11,7 +11,7 @@
 //!   away from CPU [0, 2N), and its record sums are the two renders' sums.
 //! - Every kernel's loop count per invocation stays below 30 000 (GPU.md §3.1).
 
-mod common;
+use crate::common;
 // frep's random CSG trees and rays (its differential tests' generator).
 #[path = "../../frep/tests/common/random_csg.rs"]
 mod random_csg;

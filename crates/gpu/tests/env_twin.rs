@@ -2,7 +2,7 @@
 //! §9 "light sample/pdf"); the twin agrees with `render::light::Environment` (f64) to
 //! f32 accuracy, and its samples' pdfs equal its pdf at the sampled directions.
 
-mod common;
+use crate::common;
 use common::Rng;
 
 use glam::{DMat3, DVec2, DVec3};

@@ -2,7 +2,7 @@
 //! index (f32 fields as the index, u32 fields as 100 + index) and the bytes read back are
 //! the Rust structs with those values, field for field (GPU.md §5.1).
 
-mod common;
+use crate::common;
 
 use gpu::layout::{GpuBvhNode, GpuItemBox, GpuObject, GpuPerturbation, GpuQuadric, LAYOUT_WGSL};
 use gpu::{GpuOptions, Kernel};

@@ -2,7 +2,7 @@
 //! "light sample/pdf"); the twin agrees with `render::light::AreaLight` (f64) to f32
 //! accuracy, and its samples' pdfs equal its pdf functions at the sampled directions.
 
-mod common;
+use crate::common;
 use common::Rng;
 
 use glam::{DVec2, DVec3};
@@ -19,7 +19,12 @@ const IN: usize = 10;
 /// wi2).
 const OUT: usize = 27;
 
-impl Rng {
+/// The shapes of random input this file's tests draw.
+trait Inputs {
+    fn vec(&mut self, s: f64) -> DVec3;
+}
+
+impl Inputs for Rng {
     fn vec(&mut self, s: f64) -> DVec3 {
         DVec3::new(self.next() - 0.5, self.next() - 0.5, self.next() - 0.5) * (2.0 * s)
     }

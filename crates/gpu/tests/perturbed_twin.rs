@@ -10,7 +10,7 @@
 //! plane (an unbounded base, and a half-space perturbation, an unbounded BVH item) has
 //! rays from t = −∞ and to ∞, which the scan cuts into Cauchy-bounded sub-pieces.
 
-mod common;
+use crate::common;
 use common::Rng;
 
 use frep::{PerturbedQuadric, PerturbedSurface, Quadric, Ray};
@@ -21,7 +21,12 @@ use gpu::FLOAT_WGSL;
 use gpu::{GpuOptions, Kernel};
 use std::sync::OnceLock;
 
-impl Rng {
+/// The shapes of random input this file's tests draw.
+trait Inputs {
+    fn unit(&mut self) -> DVec3;
+}
+
+impl Inputs for Rng {
     fn unit(&mut self) -> DVec3 {
         loop {
             let v = DVec3::new(self.next(), self.next(), self.next()) * 2.0 - 1.0;

@@ -1,7 +1,7 @@
 //! The quadric kernel equals its CPU f32 twin bit for bit on lavapipe (GPU.md §3.5), and
 //! the twin finds the f64 crossings of frep's quadrics to f32 accuracy.
 
-mod common;
+use crate::common;
 use common::Rng;
 
 use frep::Quadric;
@@ -10,7 +10,12 @@ use gpu::layout::{GpuQuadric, LAYOUT_WGSL};
 use gpu::quadric::{first_crossing, QUADRIC_WGSL};
 use gpu::{GpuOptions, Kernel};
 
-impl Rng {
+/// The shapes of random input this file's tests draw.
+trait Inputs {
+    fn vec(&mut self, s: f64) -> DVec3;
+}
+
+impl Inputs for Rng {
     fn vec(&mut self, s: f64) -> DVec3 {
         DVec3::new(self.next() - 0.5, self.next() - 0.5, self.next() - 0.5) * (2.0 * s)
     }

@@ -6,7 +6,7 @@
 //! integrators. The waves are synthetic: random statuses, flags, pdfs (a fifth zero)
 //! and integrands, paths ending at random depths, a few overflowing slots.
 
-mod common;
+use crate::common;
 
 use common::Rng;
 use gpu::direct::{add_slot, DRAW_WORDS, HIT_WORDS};

@@ -2,7 +2,7 @@
 //! operations only against `render::sampler`, over a grid of pixels, sample indices and
 //! dimension blocks, with the seed's two halves both non-zero.
 
-mod common;
+use crate::common;
 
 use gpu::sampler::{unit_f32, PHILOX_WGSL};
 use gpu::{GpuOptions, Kernel};

@@ -2,7 +2,7 @@
 //! the per-pixel MIS sums, f64 (`SHADER_F64`) and double-float (f64 forced off), and the
 //! double-float kernel against its CPU twin bit for bit (GPU.md §3.5).
 
-mod common;
+use crate::common;
 use common::Rng;
 
 use gpu::sums::{df_add, df_value, Accumulate, Sums};

@@ -6,7 +6,7 @@
 //! Models: shipped ones whose ops the interpreter has (tanglecube.vm, s2_csg.hf,
 //! s3_blend.hf, bumpy_ball.frep, machined_part.frep, table.frep: thin plates and legs).
 
-mod common;
+use crate::common;
 use common::Rng;
 
 use frep::bytecode::Bytecode;
@@ -20,7 +20,13 @@ use gpu::{Gpu, GpuOptions, Kernel};
 use std::path::PathBuf;
 use std::time::Instant;
 
-impl Rng {
+/// The shapes of random input this file's tests draw.
+trait Inputs {
+    fn unit(&mut self) -> DVec3;
+    fn in_box(&mut self, b: &Aabb) -> DVec3;
+}
+
+impl Inputs for Rng {
     fn unit(&mut self) -> DVec3 {
         loop {
             let v = DVec3::new(self.next(), self.next(), self.next()) * 2.0 - 1.0;

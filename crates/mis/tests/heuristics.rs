@@ -2,7 +2,7 @@
 //! the multi-sample and one-sample models. Fixed seeds; "within 4.5 se" bounds fail by
 //! chance with probability < 1e-5 each under the normal approximation.
 
-mod common;
+use crate::common;
 
 use common::*;
 use mis::{AnyEstimator, Estimator, Heuristic, Layout, OneSample, Weighted};

@@ -4,7 +4,7 @@
 //! probability < 1e-5 each under the normal approximation, and variance-ratio bounds leave
 //! at least 5 standard deviations of the ratio's sampling error (relative sd √(2/R)).
 
-mod common;
+use crate::common;
 
 use std::sync::Arc;
 

@@ -1,7 +1,7 @@
 //! Merging, singular technique matrices, channels and signs, and the measured small-sample
 //! behaviour of the direct estimator (tests/common holds the 1-D problem).
 
-mod common;
+use crate::common;
 
 use std::sync::Arc;
 

@@ -5,8 +5,7 @@
 //! `std / √P`; the bound is 4.5 standard errors (two-sided false-alarm probability 7e-6
 //! per check for a correct renderer, so below 1e-3 over this file's checks).
 
-#[path = "integrators/common.rs"]
-mod common;
+use crate::common;
 
 use common::*;
 use glam::{DVec2, DVec3};

@@ -1,9 +1,7 @@
 //! `min_depth`: a render of depth d alone (`min_depth = max_depth = d`), and the sum of
 //! every depth's image is the image of all depths.
 
-#[path = "integrators/common.rs"]
-#[allow(dead_code)]
-mod common;
+use crate::common;
 
 use common::*;
 use mis::Method;

@@ -2,9 +2,7 @@
 //! analytic image and the sum of single-light renders. The statistical bound is that of
 //! `integrators.rs`: 4.5 standard errors of the mean over pixels.
 
-#[path = "integrators/common.rs"]
-#[allow(dead_code)]
-mod common;
+use crate::common;
 
 use common::*;
 use mis::Method;

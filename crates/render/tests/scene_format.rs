@@ -537,7 +537,7 @@ fn unreadable_scene_files_are_errors() {
 
 /// Writes scenes/sky.exr, the procedural sky of scenes/environment.toml: a zenith-to-
 /// horizon gradient, a dim ground and a sun of radius 3° at 35° elevation. Run with
-/// `cargo test -p render --test scene_format -- --ignored generate_sky_map`.
+/// `cargo test -p render --test render_tests -- --ignored generate_sky_map`.
 #[test]
 #[ignore]
 fn generate_sky_map() {
@@ -585,7 +585,7 @@ fn generate_sky_map() {
 }
 
 /// Prints each scene as seen by its camera, one character per object (for eyeballing
-/// a composition): `cargo test -p render --test scene_format -- --ignored --nocapture ascii`.
+/// a composition): `cargo test -p render --test render_tests -- --ignored --nocapture ascii`.
 #[test]
 #[ignore]
 fn ascii_previews() {

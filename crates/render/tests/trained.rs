@@ -1,9 +1,7 @@
 //! The trained light selection (`light-trained`): what it learns, and that its training
 //! pass keeps renders deterministic and mergeable.
 
-#[path = "integrators/common.rs"]
-#[allow(dead_code)]
-mod common;
+use crate::common;
 
 use common::*;
 use glam::DVec3;

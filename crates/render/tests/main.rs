@@ -1,0 +1,11 @@
+//! The render crate's integration tests in one binary (one link instead of 6; the
+//! tests of every module run in parallel).
+
+#[path = "integrators/common.rs"]
+mod common;
+mod integrators;
+mod min_depth;
+mod per_light;
+mod scene_format;
+mod state_merge;
+mod trained;
