@@ -52,6 +52,17 @@ pub enum Op {
     Binary = 48,
 }
 
+/// The opcode of a unary operation: [`Op::Unary`] plus its number (the GPU's
+/// interpreter takes its `case` labels from here).
+pub fn unary_opcode(op: UnaryOp) -> u8 {
+    Op::Unary as u8 + op as u8
+}
+
+/// The opcode of a binary operation: [`Op::Binary`] plus its number.
+pub fn binary_opcode(op: BinaryOp) -> u8 {
+    Op::Binary as u8 + op as u8
+}
+
 const UNARY: [UnaryOp; 16] = [
     UnaryOp::Neg,
     UnaryOp::Abs,
@@ -210,11 +221,11 @@ impl Bytecode {
             let (op, a, b, imm) = match *node {
                 Node::Const(b) => (Op::Const as u8, 0, 0, (f64::from_bits(b) as f32).to_bits()),
                 Node::Var(v) => (Op::Var as u8, v as u8, 0, 0),
-                Node::Unary(op, a) => (Op::Unary as u8 + op as u8, reg[a as usize], 0, 0),
+                Node::Unary(op, a) => (unary_opcode(op), reg[a as usize], 0, 0),
                 Node::PowI(a, k) => (Op::PowI as u8, reg[a as usize], 0, k as u32),
                 Node::Binary(op, a, b) => {
                     let ((ra, ia), (rb, ib)) = (operand(a), operand(b));
-                    (Op::Binary as u8 + op as u8, ra, rb, ia | ib)
+                    (binary_opcode(op), ra, rb, ia | ib)
                 }
             };
             // Operands whose last use this is give their registers back first.

@@ -43,7 +43,8 @@ pub fn wave_consts_wgsl() -> String {
 
 /// The terms kernel's WGSL constants from this module's and the record's: the wave's
 /// records ([`wave_consts_wgsl`]), the record's words `OUTSIDE` and `AOV`
-/// ([`Record`]), [`TALLY_LIST`] and how draws enter the record (`C_AOV`, …).
+/// ([`Record`]), [`TALLY_LIST`], how draws enter the record (`C_AOV`, …) and the
+/// heuristics (`H_BALANCE`, …).
 pub fn record_consts_wgsl() -> String {
     let u = |name: &str, v: usize| format!("const {name}: u32 = {v}u;\n");
     let codes = [
@@ -53,6 +54,10 @@ pub fn record_consts_wgsl() -> String {
         ("C_DIRECT", code::DIRECT),
         ("C_UNCORRELATED", code::UNCORRELATED),
         ("C_PROGRESSIVE", code::PROGRESSIVE),
+        ("H_BALANCE", heuristic::BALANCE),
+        ("H_POWER", heuristic::POWER),
+        ("H_MAXIMUM", heuristic::MAXIMUM),
+        ("H_CUTOFF", heuristic::CUTOFF),
     ];
     let mut s = wave_consts_wgsl();
     s += &u("OUTSIDE", Record::OUTSIDE);
@@ -72,6 +77,14 @@ mod code {
     pub const DIRECT: u32 = 3;
     pub const UNCORRELATED: u32 = 4;
     pub const PROGRESSIVE: u32 = 5;
+}
+
+/// The heuristic of a heuristic record (`RecordParams::heuristic`; `H_*` in the shader).
+mod heuristic {
+    pub const BALANCE: u32 = 0;
+    pub const POWER: u32 = 1;
+    pub const MAXIMUM: u32 = 2;
+    pub const CUTOFF: u32 = 3;
 }
 
 /// The kernel's uniform block (`RecordParams` in record.wgsl).
@@ -140,10 +153,10 @@ impl RecordParams {
             (None, LinearMis::Progressive(_)) => (code::PROGRESSIVE, None),
         };
         let (heuristic, param) = match h {
-            None | Some(mis::Heuristic::Balance) => (0, 0.0),
-            Some(mis::Heuristic::Power { beta }) => (1, beta as f32),
-            Some(mis::Heuristic::Maximum) => (2, 0.0),
-            Some(mis::Heuristic::Cutoff { c }) => (3, c as f32),
+            None | Some(mis::Heuristic::Balance) => (heuristic::BALANCE, 0.0),
+            Some(mis::Heuristic::Power { beta }) => (heuristic::POWER, beta as f32),
+            Some(mis::Heuristic::Maximum) => (heuristic::MAXIMUM, 0.0),
+            Some(mis::Heuristic::Cutoff { c }) => (heuristic::CUTOFF, c as f32),
         };
         let mut counts = [[0.0; 4]; 2];
         for (k, &n) in linear.counts.iter().enumerate() {
@@ -255,7 +268,7 @@ impl Slot<'_> {
         }
     }
     fn scale(&self, at: usize, k: u32, s: f32) -> f32 {
-        if self.p.heuristic == 0 {
+        if self.p.heuristic == heuristic::BALANCE {
             return 1.0 / s;
         }
         let qt = self.q(at, k);
@@ -263,7 +276,7 @@ impl Slot<'_> {
         let mut w = 0.0f32;
         if qt.is_nan() || qt <= 0.0 {
             w = 0.0;
-        } else if self.p.heuristic == 2 {
+        } else if self.p.heuristic == heuristic::MAXIMUM {
             w = 1.0;
             for t in 0..tt {
                 let below = if t < k {
@@ -280,7 +293,7 @@ impl Slot<'_> {
             for t in 0..tt {
                 m = m.max(self.q(at, t));
             }
-            if self.p.heuristic == 1 {
+            if self.p.heuristic == heuristic::POWER {
                 let mut sum = 0.0f32;
                 for t in 0..tt {
                     sum += self.power(self.q(at, t) / m);
@@ -959,10 +972,29 @@ mod tests {
             "const TALLY_LIST: u32 = 8u;",
             "const C_AOV: u32 = 0u;",
             "const C_PROGRESSIVE: u32 = 5u;",
+            "const H_BALANCE: u32 = 0u;",
+            "const H_POWER: u32 = 1u;",
+            "const H_MAXIMUM: u32 = 2u;",
         ] {
             assert!(record.contains(line), "{line}");
         }
-        for (shader, consts) in [(RECORD_WGSL, &record), (crate::direct::DIRECT_WGSL, &wave)] {
+        let tape = crate::tape::tape_consts_wgsl();
+        for line in [
+            "const OP_VAR: u32 = 0u;",
+            "const OP_POWI: u32 = 2u;",
+            "const OP_NEG: u32 = 16u;",
+            "const OP_SQUARE: u32 = 19u;",
+            "const OP_ADD: u32 = 48u;",
+            "const OP_MAX: u32 = 53u;",
+            "const IMM: u32 = 255u;",
+        ] {
+            assert!(tape.contains(line), "{line}");
+        }
+        for (shader, consts) in [
+            (RECORD_WGSL, &record),
+            (crate::direct::DIRECT_WGSL, &wave),
+            (crate::tape::TAPE_WGSL, &tape),
+        ] {
             for line in consts.lines() {
                 let declared = line.split(':').next().expect("a declaration");
                 assert!(

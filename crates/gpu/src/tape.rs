@@ -20,8 +20,34 @@ use frep::{BinaryOp, UnaryOp};
 use std::fmt;
 
 /// The interpreter's WGSL (`eval_point`, `eval_interval`, interval helpers); see
-/// [`GpuTape::wgsl`] for the constants it needs.
+/// [`GpuTape::wgsl`] for the constants it needs, [`tape_consts_wgsl`] among them.
 pub const TAPE_WGSL: &str = include_str!("shaders/tape.wgsl");
+
+/// The interpreter's opcodes (`OP_VAR`, `OP_ADD`, …: its `case` labels) and the
+/// operand register that reads the immediate (`IMM`), from frep's encoding
+/// ([`frep::bytecode`]), so that no shader repeats them by hand.
+pub fn tape_consts_wgsl() -> String {
+    use frep::bytecode::{binary_opcode, unary_opcode, Op};
+    let ops = [
+        ("OP_VAR", Op::Var as u8),
+        ("OP_CONST", Op::Const as u8),
+        ("OP_POWI", Op::PowI as u8),
+        ("OP_NEG", unary_opcode(UnaryOp::Neg)),
+        ("OP_ABS", unary_opcode(UnaryOp::Abs)),
+        ("OP_SQRT", unary_opcode(UnaryOp::Sqrt)),
+        ("OP_SQUARE", unary_opcode(UnaryOp::Square)),
+        ("OP_ADD", binary_opcode(BinaryOp::Add)),
+        ("OP_SUB", binary_opcode(BinaryOp::Sub)),
+        ("OP_MUL", binary_opcode(BinaryOp::Mul)),
+        ("OP_DIV", binary_opcode(BinaryOp::Div)),
+        ("OP_MIN", binary_opcode(BinaryOp::Min)),
+        ("OP_MAX", binary_opcode(BinaryOp::Max)),
+        ("IMM", IMM),
+    ];
+    ops.iter()
+        .map(|(name, v)| format!("const {name}: u32 = {v}u;\n"))
+        .collect()
+}
 
 /// The largest `powi` exponent the interpreter unrolls (four bits).
 pub const MAX_POWI: i32 = 15;
@@ -135,10 +161,11 @@ impl GpuTape {
     /// `TAPE_LEN` (GPU.md §3.4). The kernel declares `tape: array<u32>`.
     pub fn wgsl(&self) -> String {
         format!(
-            "const REG_COUNT: u32 = {}u;\nconst TAPE_LEN: u32 = {}u;\n{}{TAPE_WGSL}",
+            "const REG_COUNT: u32 = {}u;\nconst TAPE_LEN: u32 = {}u;\n{}{}{TAPE_WGSL}",
             self.registers.max(1),
             self.len(),
-            crate::FLOAT_WGSL
+            crate::FLOAT_WGSL,
+            tape_consts_wgsl()
         )
     }
 

@@ -35,11 +35,8 @@ struct RecordParams {
 // HIT_WORDS, DRAW_WORDS (vec4s of a hit and a draw record), the record's words OUTSIDE
 // and AOV, TALLY_LIST and how draws enter the record (C_AOV, C_OUTSIDE, C_WEIGHTED,
 // C_DIRECT, C_UNCORRELATED, C_PROGRESSIVE) come from gpu::record's constants, prepended
-// by gpu::record::record_consts_wgsl.
-// Heuristics (mis::Heuristic).
-const H_BALANCE: u32 = 0u;
-const H_POWER: u32 = 1u;
-const H_MAXIMUM: u32 = 2u;
+// by gpu::record::record_consts_wgsl, and so do the heuristics' codes (H_BALANCE, H_POWER,
+// H_MAXIMUM, H_CUTOFF).
 
 var<private> base: u32;
 var<private> half: u32;

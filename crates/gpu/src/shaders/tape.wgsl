@@ -5,7 +5,8 @@
 // (lo, hi, dlo, dhi), widened outward after every op, §6.2.3). The CPU twins are in
 // gpu::tape. Supported ops: var, const, powi (0 ≤ n ≤ 15), neg, abs, sqrt, square, add,
 // sub, mul, div, min, max; gpu::tape::GpuTape refuses others.
-// The kernel prepends REG_COUNT and TAPE_LEN (per pipeline, §3.4) and binds `tape:
+// The kernel prepends the opcodes (OP_VAR, …) and IMM from frep's encoding
+// (gpu::tape::tape_consts_wgsl), REG_COUNT and TAPE_LEN (per pipeline, §3.4) and binds `tape:
 // array<u32>`. Each loop iteration runs four instructions and adds one to `loops` (§3.1):
 // an evaluation costs EVAL_LOOPS.
 
@@ -16,7 +17,6 @@ var<private> tape_base: u32;
 const EVAL_LOOPS: u32 = (TAPE_LEN + 3u) / 4u;
 
 const MIN_POS: f32 = 0x1p-126f; // f32::MIN_POSITIVE
-const IMM: u32 = 255u;
 
 // The next f32 above x, where zero and subnormals step to the smallest normal, so that a
 // GPU flushing subnormals still widens (§6.2.3). NaN and +∞ stay.
@@ -107,24 +107,24 @@ fn point_op(k: u32, p: vec3<f32>) -> u32 {
         let ia = (w >> 16u) & 0xffu;
         let ib = w >> 24u;
         var a = imm;
-        if (op != 0u && ia != IMM) { a = preg[ia]; }
+        if (op != OP_VAR && ia != IMM) { a = preg[ia]; }
         var b = imm;
         if (ib != IMM) { b = preg[ib]; }
         var v = 0.0;
         switch op {
-            case 0u: { v = p[ia]; }
-            case 1u: { v = imm; }
-            case 2u: { v = powi(a, tape[tape_base + 2u * k + 1u]); }
-            case 16u: { v = -a; }
-            case 17u: { v = abs(a); }
-            case 18u: { v = sqrt(a); }
-            case 19u: { v = a * a; }
-            case 48u: { v = a + b; }
-            case 49u: { v = a - b; }
-            case 50u: { v = a * b; }
-            case 51u: { v = a / b; }
-            case 52u: { v = rmin(a, b); }
-            case 53u: { v = rmax(a, b); }
+            case OP_VAR: { v = p[ia]; }
+            case OP_CONST: { v = imm; }
+            case OP_POWI: { v = powi(a, tape[tape_base + 2u * k + 1u]); }
+            case OP_NEG: { v = -a; }
+            case OP_ABS: { v = abs(a); }
+            case OP_SQRT: { v = sqrt(a); }
+            case OP_SQUARE: { v = a * a; }
+            case OP_ADD: { v = a + b; }
+            case OP_SUB: { v = a - b; }
+            case OP_MUL: { v = a * b; }
+            case OP_DIV: { v = a / b; }
+            case OP_MIN: { v = rmin(a, b); }
+            case OP_MAX: { v = rmax(a, b); }
             default: { v = nan(); }
         }
         preg[o] = v;
@@ -158,21 +158,21 @@ fn interval_op(k: u32, x: vec4<f32>, y: vec4<f32>, z: vec4<f32>) -> u32 {
         let ia = (w >> 16u) & 0xffu;
         let ib = w >> 24u;
         var a = vec4<f32>(imm, imm, 0.0, 0.0);
-        if (op != 0u && ia != IMM) { a = ireg[ia]; }
+        if (op != OP_VAR && ia != IMM) { a = ireg[ia]; }
         var b = vec4<f32>(imm, imm, 0.0, 0.0);
         if (ib != IMM) { b = ireg[ib]; }
         var v = vec2<f32>(0.0, 0.0);
         var d = vec2<f32>(0.0, 0.0);
         switch op {
-            case 0u: {
+            case OP_VAR: {
                 var c = x;
                 if (ia == 1u) { c = y; }
                 if (ia == 2u) { c = z; }
                 v = c.xy;
                 d = c.zw;
             }
-            case 1u: { v = vec2<f32>(imm, imm); }
-            case 2u: {
+            case OP_CONST: { v = vec2<f32>(imm, imm); }
+            case OP_POWI: {
                 let n = tape[tape_base + 2u * k + 1u];
                 v = i_powi(a.xy, n);
                 if (n > 0u) {
@@ -180,21 +180,21 @@ fn interval_op(k: u32, x: vec4<f32>, y: vec4<f32>, z: vec4<f32>) -> u32 {
                     d = i_mul(i_mul(vec2<f32>(nf, nf), i_powi(a.xy, n - 1u)), a.zw);
                 }
             }
-            case 16u: { v = i_neg(a.xy); d = i_neg(a.zw); }
-            case 17u: {
+            case OP_NEG: { v = i_neg(a.xy); d = i_neg(a.zw); }
+            case OP_ABS: {
                 v = i_abs(a.xy);
                 if (a.x >= 0.0) { d = a.zw; } else if (a.y <= 0.0) { d = i_neg(a.zw); } else { d = hull(a.zw, i_neg(a.zw)); }
             }
-            case 18u: { v = i_sqrt(a.xy); d = i_div(a.zw, 2.0 * v); }
-            case 19u: { v = i_square(a.xy); d = i_mul(2.0 * a.xy, a.zw); }
-            case 48u: { v = i_add(a.xy, b.xy); d = i_add(a.zw, b.zw); }
-            case 49u: { v = i_sub(a.xy, b.xy); d = i_sub(a.zw, b.zw); }
-            case 50u: { v = i_mul(a.xy, b.xy); d = i_add(i_mul(a.zw, b.xy), i_mul(a.xy, b.zw)); }
-            case 51u: { v = i_div(a.xy, b.xy); d = i_div(i_sub(a.zw, i_mul(v, b.zw)), b.xy); }
-            case 52u: {
+            case OP_SQRT: { v = i_sqrt(a.xy); d = i_div(a.zw, 2.0 * v); }
+            case OP_SQUARE: { v = i_square(a.xy); d = i_mul(2.0 * a.xy, a.zw); }
+            case OP_ADD: { v = i_add(a.xy, b.xy); d = i_add(a.zw, b.zw); }
+            case OP_SUB: { v = i_sub(a.xy, b.xy); d = i_sub(a.zw, b.zw); }
+            case OP_MUL: { v = i_mul(a.xy, b.xy); d = i_add(i_mul(a.zw, b.xy), i_mul(a.xy, b.zw)); }
+            case OP_DIV: { v = i_div(a.xy, b.xy); d = i_div(i_sub(a.zw, i_mul(v, b.zw)), b.xy); }
+            case OP_MIN: {
                 if (a.y <= b.x) { v = a.xy; d = a.zw; } else if (b.y <= a.x) { v = b.xy; d = b.zw; } else { v = i_min(a.xy, b.xy); d = hull(a.zw, b.zw); }
             }
-            case 53u: {
+            case OP_MAX: {
                 if (a.x >= b.y) { v = a.xy; d = a.zw; } else if (b.x >= a.y) { v = b.xy; d = b.zw; } else { v = i_max(a.xy, b.xy); d = hull(a.zw, b.zw); }
             }
             default: { v = nan2(); d = nan2(); }
