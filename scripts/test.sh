@@ -10,7 +10,7 @@
 # --all-targets -- -D warnings` checks, without checking every crate a second time); the
 # Python package is set up beside that build and compiles the extension on its
 # dependencies (Cargo sees the environment maturin gives it, so pyo3 is built once);
-# the docs build beside both, at a lower priority, in a target folder of their own.
+# the docs build beside the tests, at a lower priority.
 # Afterwards a plain `cargo build` recompiles the workspace's own crates once (the
 # compiler differs).
 set -euo pipefail
@@ -72,18 +72,21 @@ fi
 bash scripts/setup.sh --dev --no-gpu > "$logs/setup" 2>&1 &
 python_setup=$!
 step "cargo fmt --check" cargo fmt --all -- --check
-# The docs in a target folder of their own (Cargo's lock is held while tests run),
-# niced so that they take only what the build and the tests leave idle.
-env -u RUSTC_WORKSPACE_WRAPPER -u CLIPPY_ARGS RUSTDOCFLAGS="-D warnings" \
-  CARGO_TARGET_DIR=target/doc-check nice -n 10 \
-  cargo doc --workspace --no-deps -q > "$logs/doc" 2>&1 &
-docs=$!
 if [ -n "${RUSTC_WORKSPACE_WRAPPER:-}" ]; then
   step "build every target, with clippy's lints" \
     cargo test --workspace --all-targets --no-run
 else
   step "cargo clippy" cargo clippy --workspace --all-targets -- -D warnings
 fi
+# The docs beside the tests: once the first test binary runs, Cargo's lock is free (it
+# is held while building); the docs reuse the build's proc macros and build scripts, and
+# are niced so that they take what the tests leave idle.
+(
+  until grep -q '^ *Running ' "$logs/test" 2>/dev/null; do sleep 1; done
+  env -u RUSTC_WORKSPACE_WRAPPER -u CLIPPY_ARGS RUSTDOCFLAGS="-D warnings" nice -n 10 \
+    cargo doc --workspace --no-deps -q
+) > "$logs/doc" 2>&1 &
+docs=$!
 step "licences" python3 scripts/check-licenses.py
 step "dependency arrows (DESIGN.md §3)" python3 scripts/check-deps.py
 
@@ -91,7 +94,10 @@ step "dependency arrows (DESIGN.md §3)" python3 scripts/check-deps.py
 # Mesa wants a private runtime directory, else it prints a harmless error per device.
 export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-$(mktemp -d)}"
 # Examples and benchmarks were built above; doctests run in a second call.
-step "cargo test" env FREPRAY_REQUIRE_GPU=1 cargo test --workspace --lib --bins --tests
+run_tests() {
+  env FREPRAY_REQUIRE_GPU=1 cargo test --workspace --lib --bins --tests 2>&1 | tee "$logs/test"
+}
+step "cargo test" run_tests
 step "cargo doc (beside the tests)" await "$docs" "$logs/doc" "cargo doc"
 step "cargo test --doc" cargo test --workspace --doc
 step "the Python package (set up beside the build)" \
