@@ -1,7 +1,7 @@
 //! `frepray.bench`: `frepray bench`'s measurement (the library's
 //! `frepray::bench::bench`): `direct` and `path` on each back end, with the stage times.
 
-use crate::errors::{opt_uint, scene_error, to_py, uint};
+use crate::errors::{opt_uint, to_py, uint};
 use crate::interrupt::{self, Cancel};
 use crate::scene::{keyword, resolved, warn, Scene};
 use pyo3::exceptions::PyValueError;
@@ -40,11 +40,7 @@ pub fn bench<'py>(
     let overrides = frepray::Overrides {
         spp: opt_uint("spp", spp)?,
         estimator,
-        techniques: techniques
-            .as_deref()
-            .map(frepray::parse_technique_list)
-            .transpose()
-            .map_err(|e| scene_error(py, &e))?,
+        techniques: crate::errors::techniques(py, techniques.as_deref())?,
         width: opt_uint("width", width)?,
         height: opt_uint("height", height)?,
         max_depth: opt_uint("max_depth", max_depth)?,

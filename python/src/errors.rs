@@ -33,6 +33,17 @@ create_exception!(
     "A model could not be read or built."
 );
 
+/// `techniques` text (`name:count,…`, as the command line takes it) parsed; a
+/// malformed list is a `frepray.SceneError`.
+pub fn techniques(
+    py: Python<'_>,
+    text: Option<&str>,
+) -> PyResult<Option<Vec<frepray::TechniqueDesc>>> {
+    text.map(frepray::parse_technique_list)
+        .transpose()
+        .map_err(|e| scene_error(py, &e))
+}
+
 /// A [`frepray::SceneError`] as `frepray.SceneError` with its location as attributes.
 pub fn scene_error(py: Python<'_>, e: &frepray::SceneError) -> PyErr {
     let err = SceneError::new_err(e.to_string());

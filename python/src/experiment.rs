@@ -158,11 +158,7 @@ pub fn experiment<'py>(
     let trained_spp = opt_uint("trained_spp", trained_spp)?;
     let threads: usize = uint("threads", threads)?;
     let o = frepray::Overrides {
-        techniques: techniques
-            .as_deref()
-            .map(frepray::parse_technique_list)
-            .transpose()
-            .map_err(|e| crate::errors::scene_error(py, &e))?,
+        techniques: crate::errors::techniques(py, techniques.as_deref())?,
         integrator,
         width,
         height,

@@ -2,7 +2,7 @@
 //! patched into the scene's description as overrides, so that they are validated with
 //! the scene's own values exactly as the CLI's flags are.
 
-use crate::errors::{opt_uint, render_err, scene_error, to_py, uint};
+use crate::errors::{opt_uint, render_err, to_py, uint};
 use crate::interrupt::{self, Cancel};
 use crate::state::RenderState;
 use pyo3::exceptions::PyValueError;
@@ -245,12 +245,8 @@ pub fn render(
     let trained_grid = opt_uint("trained_grid", trained_grid)?;
     let trained_spp = opt_uint("trained_spp", trained_spp)?;
     let backend: frepray::Backend = backend.parse().map_err(PyValueError::new_err)?;
-    let techniques = techniques
-        .map(|t| {
-            let s = technique_text(&t)?;
-            frepray::parse_technique_list(&s).map_err(|e| scene_error(py, &e))
-        })
-        .transpose()?;
+    let text = techniques.map(|t| technique_text(&t)).transpose()?;
+    let techniques = crate::errors::techniques(py, text.as_deref())?;
     let o = frepray::Overrides {
         spp,
         estimator,

@@ -65,10 +65,10 @@ pub use render::output::write_atomically;
 pub use render::png_io;
 /// Depth and normal images as PNG ([`value_png::Values`]).
 pub use render::value_png;
-/// The technique list of the command line, `bsdf:2,light` (counts 1 when omitted).
-pub use scene::parse_technique_list;
 /// A name that is not one of a list's (tone maps, techniques, AOVs).
 pub use scene::UnknownName;
+/// The technique list of the command line, `bsdf:2,light` (counts 1 when omitted).
+pub use scene::{parse_technique_list, TechniqueDesc};
 
 /// Model files and the solids built from them (the `frep` crate's): readers of
 /// `.frep`, HyperFun `.hf` and Fidget `.vm`, the expression evaluator, the solid with

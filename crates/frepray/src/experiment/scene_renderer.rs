@@ -46,19 +46,23 @@ impl ExperimentConfig {
         baseline: &str,
         reference_estimator: Option<&str>,
     ) -> Result<Self, Error> {
-        let mut cfg = ExperimentConfig::new(path, out_dir);
-        cfg.estimators = estimators
+        let parse = |e: &str| {
+            e.parse::<Method>()
+                .map_err(|e| Error::Invalid(e.to_string()))
+        };
+        let methods = estimators
             .iter()
-            .map(|e| canonical(e))
-            .collect::<Result<_, _>>()?;
+            .map(|e| parse(e))
+            .collect::<Result<Vec<_>, _>>()?;
+        let reference = reference_estimator.map(parse).transpose()?;
+        let mut cfg = ExperimentConfig::new(path, out_dir);
+        cfg.estimators = methods.iter().map(|m| m.name().to_string()).collect();
         cfg.baseline = canonical(baseline)?;
-        cfg.reference_estimator = reference_estimator.map(canonical).transpose()?;
+        cfg.reference_estimator = reference.map(|m| m.name().to_string());
         let (width, height) = scene.resolution();
-        for e in cfg.estimators.iter().chain(&cfg.reference_estimator) {
+        for &method in methods.iter().chain(&reference) {
             let o = RenderOptions {
-                method: e
-                    .parse()
-                    .map_err(|e: mis::UnknownMethod| Error::Invalid(e.to_string()))?,
+                method,
                 ..base.clone()
             };
             render::limits::check_memory(width, height, &o)?;
