@@ -51,7 +51,7 @@ pub fn info(path: &Path) -> Result<ModelInfo, Error> {
         perturbed: perturbations(&file.shape),
         by_intervals: degrees.len() - polynomial_degrees.len(),
         polynomial_degrees,
-        planar: !expr.nodes().contains(&frep::Node::Var(frep::Var::Z)),
+        planar: crate::preview::is_planar(&expr),
         bounds: (!b.is_empty()).then(|| (b.lo.to_array(), b.hi.to_array())),
     })
 }

@@ -343,6 +343,12 @@ pub struct Model {
     pub planar: bool,
 }
 
+/// Whether F does not read z: a 2-D model (as Fidget's prospero), which the preview
+/// shows from the top and `check` names as such.
+pub fn is_planar(expr: &Expr) -> bool {
+    !expr.nodes().contains(&frep::Node::Var(frep::Var::Z))
+}
+
 impl Model {
     /// The model of a shape: its solid and view box. Errors as [`Solid::build`].
     ///
@@ -354,11 +360,7 @@ impl Model {
     pub fn new(shape: &Shape) -> Result<Model, String> {
         let solid = Solid::build(shape)?;
         let b = solid.bounds();
-        let planar = shape.to_tree().is_ok_and(|t| {
-            !Expr::new(&t)
-                .nodes()
-                .contains(&frep::Node::Var(frep::Var::Z))
-        });
+        let planar = shape.to_tree().is_ok_and(|t| is_planar(&Expr::new(&t)));
         if planar && !b.is_empty() && b.lo.x.is_finite() && b.hi.y.is_finite() {
             let e = b.extent();
             let h = (0.025 * e.x.max(e.y)).max(1e-6);
