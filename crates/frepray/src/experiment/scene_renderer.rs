@@ -24,9 +24,13 @@ pub struct SceneRenderer<'a> {
 /// The canonical spelling of an estimator (`optimal_direct` → `optimal-direct`), so that
 /// two spellings are one point of the sweep.
 pub fn canonical(estimator: &str) -> Result<String, Error> {
+    method(estimator).map(|m| m.name().to_string())
+}
+
+/// The estimator named `estimator` (an unknown name lists the known ones).
+fn method(estimator: &str) -> Result<Method, Error> {
     estimator
         .parse::<Method>()
-        .map(|m| m.name().to_string())
         .map_err(|e| Error::Invalid(e.to_string()))
 }
 
@@ -46,15 +50,11 @@ impl ExperimentConfig {
         baseline: &str,
         reference_estimator: Option<&str>,
     ) -> Result<Self, Error> {
-        let parse = |e: &str| {
-            e.parse::<Method>()
-                .map_err(|e| Error::Invalid(e.to_string()))
-        };
         let methods = estimators
             .iter()
-            .map(|e| parse(e))
+            .map(|e| method(e))
             .collect::<Result<Vec<_>, _>>()?;
-        let reference = reference_estimator.map(parse).transpose()?;
+        let reference = reference_estimator.map(method).transpose()?;
         let mut cfg = ExperimentConfig::new(path, out_dir);
         cfg.estimators = methods.iter().map(|m| m.name().to_string()).collect();
         cfg.baseline = canonical(baseline)?;
