@@ -29,9 +29,7 @@ LAYER = {
 FRONT_ENDS = {"frepray-cli", "frepray-py"}
 
 # Wrong arrows the code still has, and what removes each.
-DEBT = {
-    ("gpu", "render"): "RenderState, records and coat tables move below both back ends",
-}
+DEBT: dict = {}
 
 
 def allowed(a: str, b: str) -> bool:

@@ -240,7 +240,7 @@ pub fn run(t: Target, input: &[u8], sandbox: &Path) {
 fn with_checksum(bytes: &[u8]) -> Option<Vec<u8>> {
     let body = &bytes[..bytes.len().checked_sub(8)?];
     let mut fixed = body.to_vec();
-    fixed.extend_from_slice(&render::state::fnv1a(body).to_le_bytes());
+    fixed.extend_from_slice(&render::fnv1a(body).to_le_bytes());
     Some(fixed)
 }
 

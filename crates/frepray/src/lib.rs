@@ -131,7 +131,7 @@ pub struct Scene {
 /// FNV-1a 64 of the resolved scene's JSON: it identifies the scene in render states, so
 /// that states of different scenes (or image sizes) refuse to merge.
 pub fn scene_hash(data: &SceneData) -> u64 {
-    render::state::fnv1a(&serde_json::to_vec(data).expect("SceneData serialises"))
+    render::fnv1a(&serde_json::to_vec(data).expect("SceneData serialises"))
 }
 
 impl Scene {

@@ -2,7 +2,7 @@
 //!
 //! The same renderer as the CPU's, on `wgpu` 30 with WGSL compute shaders, reading the same
 //! resolved scene (`scene::SceneData`) and returning the same per-pixel sums
-//! (`render::RenderState`), so that a GPU sample range merges with a CPU one
+//! (`state::RenderState`), so that a GPU sample range merges with a CPU one
 //! (../shared/GPU.md; DESIGN.md §2–§3). It holds GPU.md §12's steps 1–4: the kernel
 //! twins, and the wavefront `direct` and `path` integrators ([`direct`], behind
 //! `frepray render --backend gpu`); docs/gpu.md says what they cover, what they measured
@@ -30,7 +30,7 @@
 //! - [`bsdf`]: BSDF evaluation and sampling of every material kind (diffuse, conductor,
 //!   dielectric, plastic; rough and smooth) in WGSL, equal bit for bit on lavapipe to
 //!   their CPU f32 twin;
-//! - [`sampler`]: the CPU's random numbers (Philox4x32-10, `render::sampler`) in WGSL with
+//! - [`sampler`]: the CPU's random numbers (Philox4x32-10, `state::sampler`) in WGSL with
 //!   32-bit operations only, equal bit for bit on every adapter;
 //! - [`light`]: area lights (sphere, rect, disk) in WGSL: crossings, area and cone
 //!   sampling with their pdfs, and light selection, equal bit for bit on lavapipe to
@@ -47,7 +47,7 @@
 //!   order by a pass per pixel that stops where the CPU must re-solve α;
 //! - [`direct`]: the scene packed into buffers and the `direct` and `path` integrators
 //!   (camera, shade, shadow and continuation passes per wave), their samples summed into
-//!   a `render::RenderState` on the GPU.
+//!   a `state::RenderState` on the GPU.
 //!
 //! On machines without a GPU, tests run on Mesa's lavapipe (`mesa-vulkan-drivers`). They
 //! skip, saying so, where no adapter exists, unless `FREPRAY_REQUIRE_GPU=1` (set by

@@ -405,10 +405,9 @@ pub const IMPORTANCE_WORDS: usize = 12;
 /// What the spatial selection's importance reads of an area light, in the f32 buffer:
 /// its bounding sphere's centre and radius, its normal cone's axis and cos θo, the
 /// luminance of its power and whether it is two-sided (1 or 0), then two words of padding
-/// (`render::light::AreaLight::importance_bounds`, rounded from f64).
-pub fn importance_record(l: &render::light::AreaLight) -> [f32; IMPORTANCE_WORDS] {
-    let b = l.importance_bounds();
-    let phi = render::color::luminance(l.power());
+/// ([`state::LightBounds`], rounded from f64).
+pub fn importance_record(b: &state::LightBounds) -> [f32; IMPORTANCE_WORDS] {
+    let phi = b.power;
     let c = b.center.as_vec3();
     let a = b.axis.as_vec3();
     [

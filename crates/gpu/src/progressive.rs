@@ -2,7 +2,7 @@
 //!
 //! Their Σ F needs the α solved from *earlier* samples (Kondapaneni et al. 2019, §5), so
 //! their records are not plain sums of per-sample terms. The terms kernel writes each
-//! sample's α-free terms (`render::integrator::LinearMis::Progressive`: `G`, `Q`, N and
+//! sample's α-free terms (`state::LinearMis::Progressive`: `G`, `Q`, N and
 //! the moments), and a sequential pass per pixel (`shaders/progressive.wgsl`) adds them
 //! in sample order in f64 or double-float, applying α as `Σ F_c += G_c − Σ_i α_ci Q_i`.
 //! Where a block's N reaches a point of its schedule, the pixel stops after that sample;

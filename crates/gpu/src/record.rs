@@ -3,9 +3,9 @@
 //! per-pixel sums in f64 or double-float by [`crate::sums`]' kernels, so that the
 //! integrators hand the CPU a finished record instead of every draw.
 //!
-//! The terms are what `render::integrator::Accumulator::add` adds for the same hits and
+//! The terms are what `state::Tally::add` adds for the same hits and
 //! draws, for every record that is a plain sum of per-sample terms
-//! ([`render::integrator::LinearRecord`]: the heuristics, optimal-direct and
+//! ([`state::LinearRecord`]: the heuristics, optimal-direct and
 //! optimal-uncorrelated, per light too, AOVs and the AOV integrators), and the
 //! progressive estimators' α-free terms, to which [`crate::progressive`] applies α. The optimal
 //! estimators' moments are formed as `Â_ij += r_i r_j` and `b̂_ci += (f_c/s) r_i` with
@@ -16,7 +16,7 @@
 use crate::progressive::{Blocks, ProgressiveSums};
 use crate::{Gpu, GpuError};
 use bytemuck::{Pod, Zeroable};
-use render::integrator::{LinearMis, LinearRecord, Record};
+use state::{LinearMis, LinearRecord, Record};
 
 /// The terms kernel (after [`record_consts_wgsl`]).
 pub const RECORD_WGSL: &str = include_str!("shaders/record.wgsl");

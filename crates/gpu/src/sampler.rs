@@ -1,6 +1,6 @@
 //! The CPU's random numbers on the GPU: Philox4x32-10 keyed by the seed, counter
 //! `(x, y, sample index, dimension / 4)`, four 32-bit outputs per evaluation
-//! (`render::sampler`, DESIGN.md §4). The WGSL computes the high half of 32 × 32-bit
+//! (`state::sampler`, DESIGN.md §4). The WGSL computes the high half of 32 × 32-bit
 //! products from 16-bit parts, so it needs no `SHADER_INT64` and gives the CPU's integers
 //! on every adapter; a kernel turns them into f32 as `(u >> 8) · 2⁻²⁴`.
 

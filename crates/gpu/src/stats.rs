@@ -1,4 +1,4 @@
-//! What a GPU render did beyond [`render::RenderStats`]: its stage times, waves,
+//! What a GPU render did beyond [`state::RenderStats`]: its stage times, waves,
 //! overflow fallbacks and where its sums were kept, and the one-line and per-stage
 //! forms front ends print.
 
@@ -49,7 +49,7 @@ impl std::fmt::Display for SumsOn {
     }
 }
 
-/// What a GPU render did, beyond [`render::RenderStats`].
+/// What a GPU render did, beyond [`state::RenderStats`].
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct GpuStats {
     /// Stage times.

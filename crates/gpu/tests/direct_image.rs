@@ -18,7 +18,7 @@ mod random_csg;
 
 use gpu::direct::render_range;
 use gpu::GpuOptions;
-use render::integrator::{Record, RenderOptions};
+use render::integrator::{CpuHost, Record, RenderOptions};
 use render::scene::Scene;
 use render::RenderState;
 use scene::{SceneData, SceneFormat};
@@ -228,9 +228,14 @@ fn device() -> Option<&'static gpu::Gpu> {
         .as_ref()
 }
 
+/// The CPU renderer of a loaded scene and its options, as the GPU back end takes it.
+fn host(s: &(SceneData, Scene, RenderOptions)) -> CpuHost<'_> {
+    CpuHost::new(&s.1, &s.2).unwrap()
+}
+
 fn gpu_render(g: &gpu::Gpu, s: &(SceneData, Scene, RenderOptions), r: Range<u32>) -> RenderState {
     let stop = AtomicBool::new(false);
-    let (state, stats, gs) = render_range(g, &s.0, &s.1, &s.2, r, &stop, &|_, _| {}).unwrap();
+    let (state, stats, gs) = render_range(g, &s.0, &host(s), &s.2, r, &stop, &|_, _| {}).unwrap();
     assert!(!state.is_partial() && stats.samples == stats.samples_requested);
     for (k, &n) in gs.max_loops.iter().enumerate() {
         assert!(
@@ -665,7 +670,7 @@ fn gpu_sums_equal_the_cpu_sums_of_the_same_draws() {
         let (state, _, gs) = render_range_with(
             g,
             &s.0,
-            &s.1,
+            &host(s),
             &s.2,
             0..4,
             &stop,
@@ -856,7 +861,7 @@ fn bands_give_the_same_records() {
         let render = |band_pixels| {
             let how = WaveOptions { sums, band_pixels };
             let (state, stats, gs) =
-                render_range_with(g, &s.0, &s.1, &s.2, 0..2, &stop, &|_, _| {}, &how).unwrap();
+                render_range_with(g, &s.0, &host(&s), &s.2, 0..2, &stop, &|_, _| {}, &how).unwrap();
             assert_eq!(stats.samples, u64::from(w * h) * 2);
             (state, gs.waves)
         };
@@ -887,7 +892,11 @@ fn unsupported_scenes_are_refused_by_name() {
     let stop = AtomicBool::new(false);
     let err = |text: &str| {
         let s = load(text);
-        match render_range(g, &s.0, &s.1, &s.2, 0..1, &stop, &|_, _| {}) {
+        let host = match CpuHost::new(&s.1, &s.2) {
+            Ok(h) => h,
+            Err(e) => return gpu::GpuError::Unsupported(e).to_string(),
+        };
+        match render_range(g, &s.0, &host, &s.2, 0..1, &stop, &|_, _| {}) {
             Err(e) => e.to_string(),
             Ok(_) => panic!("rendered"),
         }
@@ -985,7 +994,8 @@ fn ray_batch_matches_the_cpu_intersection() {
     }
     let f = |v: [f64; 3]| v.map(|x| x as f32);
     let gpu_rays: Vec<([f32; 3], [f32; 3])> = rays.iter().map(|(o, d)| (f(*o), f(*d))).collect();
-    let got = gpu::direct::probe(g, &data, &gpu_rays).unwrap();
+    let host = CpuHost::new(&scene, &RenderOptions::default()).unwrap();
+    let got = gpu::direct::probe(g, &data, &host, &gpu_rays).unwrap();
     let (mut flips, mut grazing_flips, mut worst) = (0, 0, 0.0f64);
     for ((o, d), (gr, p)) in rays.iter().zip(gpu_rays.iter().zip(&got)) {
         assert!(p.loops < 30_000, "{} loop iterations", p.loops);
@@ -1063,7 +1073,8 @@ fn random_csg_trees_match_the_cpu() {
         let f = |v: glam::DVec3| v.to_array().map(|x| x as f32);
         let gpu_rays: Vec<([f32; 3], [f32; 3])> =
             rays.iter().map(|(r, _)| (f(r.o), f(r.d))).collect();
-        let got = match gpu::direct::probe(g, &data, &gpu_rays) {
+        let host = CpuHost::new(&scene, &RenderOptions::default()).unwrap();
+        let got = match gpu::direct::probe(g, &data, &host, &gpu_rays) {
             Ok(got) => got,
             Err(e) => {
                 eprintln!("tree {i}: refused: {e}");

@@ -1,13 +1,13 @@
 //! The GPU's random numbers are the CPU's, bit for bit: Philox4x32-10 in WGSL with 32-bit
-//! operations only against `render::sampler`, over a grid of pixels, sample indices and
+//! operations only against `state::sampler`, over a grid of pixels, sample indices and
 //! dimension blocks, with the seed's two halves both non-zero.
 
 use crate::common;
 
 use gpu::sampler::{unit_f32, PHILOX_WGSL};
 use gpu::{GpuOptions, Kernel};
-use render::sampler::to_unit;
 use render::Sampler;
+use state::sampler::to_unit;
 
 const SEED: u64 = 0x9e37_79b9_7f4a_7c15;
 const W: u32 = 16;

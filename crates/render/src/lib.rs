@@ -26,27 +26,22 @@
 #![warn(missing_docs)]
 
 pub mod bsdf;
+// What both back ends share, at the paths this crate has always given them.
+pub use state::{color, error, image, limits, output, png_io, sampler, value_png};
 pub mod camera;
-pub mod color;
 pub mod distribution;
-pub mod error;
 pub mod frame;
-pub mod image;
 pub mod integrator;
 pub mod light;
-pub mod limits;
 pub mod material;
-pub mod output;
-pub mod png_io;
 pub mod render_loop;
-pub mod sampler;
+#[cfg(test)]
+mod sampler_tests;
 pub mod scene;
-pub mod state;
 pub mod technique;
 #[cfg(test)]
 mod testutil;
 pub mod texture;
-pub mod value_png;
 pub mod warp;
 
 pub use camera::{Camera, Projection};
@@ -54,8 +49,8 @@ pub use color::Rgb;
 pub use error::Error;
 pub use image::{Film, Image, Tonemap};
 pub use material::Material;
-pub use render_loop::{render, render_range, resume, RenderStats};
+pub use render_loop::{render, render_range, resume};
 pub use sampler::{SampleStream, Sampler};
-pub use state::{RenderState, StateHeader};
-pub use technique::{ShadingPoint, Technique, TechniqueSample};
+pub use state::{fnv1a, RenderState, RenderStats, StateHeader};
+pub use technique::{Sampling, ShadingPoint, Technique, TechniqueSample};
 pub use texture::{TexCoord, Texture};

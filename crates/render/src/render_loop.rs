@@ -27,82 +27,12 @@
 use crate::error::Error;
 use crate::integrator::{Integrator, IntegratorKind, RayCounts, RenderOptions};
 use crate::scene::Scene;
-use crate::state::{RenderState, StateHeader};
 use rayon::prelude::*;
-use std::fmt;
+pub use state::RenderStats;
+use state::{RenderState, StateHeader};
 use std::ops::Range;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
-use std::time::{Duration, Instant};
-
-/// What a render did and how fast.
-#[derive(Clone, Debug, PartialEq)]
-pub struct RenderStats {
-    /// The integrator.
-    pub integrator: IntegratorKind,
-    /// Wall time of the render (passes and film assembly).
-    pub wall: Duration,
-    /// Samples (pixel iterations) rendered.
-    pub samples: u64,
-    /// Samples asked for (pixels × spp).
-    pub samples_requested: u64,
-    /// Rays traced, by kind.
-    pub rays: RayCounts,
-    /// Whether the stop flag ended the render early.
-    pub stopped: bool,
-    /// Worker threads.
-    pub threads: usize,
-}
-
-impl RenderStats {
-    fn per_second(&self, n: u64) -> f64 {
-        let s = self.wall.as_secs_f64();
-        if s > 0.0 {
-            n as f64 / s / 1e6
-        } else {
-            0.0
-        }
-    }
-    /// Millions of samples per second.
-    pub fn msamples_per_s(&self) -> f64 {
-        self.per_second(self.samples)
-    }
-    /// Millions of rays per second, all kinds.
-    pub fn mrays_per_s(&self) -> f64 {
-        self.per_second(self.rays.total())
-    }
-    /// Millions of (camera, secondary, shadow) rays per second.
-    pub fn mrays_per_s_by_kind(&self) -> (f64, f64, f64) {
-        (
-            self.per_second(self.rays.camera),
-            self.per_second(self.rays.secondary),
-            self.per_second(self.rays.shadow),
-        )
-    }
-}
-
-impl fmt::Display for RenderStats {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let (c, s, sh) = self.mrays_per_s_by_kind();
-        write!(
-            f,
-            "{}: {:.3} s on {} threads, {} samples{} ({:.3} MSamples/s); rays: {:.3} MRays/s \
-             (camera {} = {:.3} M/s, secondary {} = {:.3} M/s, shadow {} = {:.3} M/s)",
-            self.integrator,
-            self.wall.as_secs_f64(),
-            self.threads,
-            self.samples,
-            if self.stopped { " (stopped)" } else { "" },
-            self.msamples_per_s(),
-            self.mrays_per_s(),
-            self.rays.camera,
-            c,
-            self.rays.secondary,
-            s,
-            self.rays.shadow,
-            sh
-        )
-    }
-}
+use std::time::Instant;
 
 /// A rectangle of pixels with their records.
 struct Tile {

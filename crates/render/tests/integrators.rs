@@ -473,7 +473,7 @@ fn ray_counts_and_aovs() {
             assert_eq!(film.aov(x, y, nz), 1.0);
             assert!((film.aov(x, y, ar) - ALBEDO.x).abs() < 1e-12);
             // The mean of 1/cos over the pixel's four sample positions (dimensions 0
-            // and 1 of each sample's stream, `integrator/dims.rs`).
+            // and 1 of each sample's stream, `state::dims`).
             let depth = (0..4)
                 .map(|i| {
                     let u = Sampler::new(101).stream(x, y, i).get_2d(0);

@@ -260,7 +260,7 @@ fn craft(bytes: &[u8], edit: impl Fn(&mut serde_json::Value), words: Option<&[f6
             }
         }
     }
-    let hash = render::state::fnv1a(&crafted);
+    let hash = render::fnv1a(&crafted);
     crafted.extend_from_slice(&hash.to_le_bytes());
     crafted
 }

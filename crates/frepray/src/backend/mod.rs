@@ -121,7 +121,11 @@ fn gpu_range(
 ) -> Result<(RenderState, RenderStats, GpuStats), GpuError> {
     let g = shared_gpu()?;
     #[cfg(feature = "gpu")]
-    return gpu::direct::render_range(g, data, scene, options, samples, stop, progress);
+    {
+        let host =
+            render::integrator::CpuHost::new(scene, options).map_err(GpuError::Unsupported)?;
+        gpu::direct::render_range(g, data, &host, options, samples, stop, progress)
+    }
     #[cfg(not(feature = "gpu"))]
     {
         let _ = (g, data, scene, options, samples, stop, progress);

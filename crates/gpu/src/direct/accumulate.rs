@@ -1,16 +1,16 @@
 //! The render's sums on the CPU: a read-back wave's hit and draw records added to the
-//! pixels' records through the CPU integrator's [`Accumulator`].
+//! pixels' records through the render's [`Tally`].
 
 use crate::record::DRAW_WORDS;
-use render::integrator::{Accumulator, RayCounts, ShadedDraw, ShadedVertex};
+use state::{RayCounts, ShadedDraw, ShadedVertex, Tally};
 
 /// Adds one slot's hit record `hw` and its draw records (`vertex(depth)`: the
-/// `per_slot` records of that depth) to its pixel's record `rec` through the CPU's
-/// [`Accumulator`] (the render's sums on the CPU), and counts its rays. `pdfs` is
+/// `per_slot` records of that depth) to its pixel's record `rec` through the render's
+/// [`Tally`] (the render's sums on the CPU), and counts its rays. `pdfs` is
 /// scratch of `depths · n_draws · T` words. The slot must not have overflowed.
 #[allow(clippy::too_many_arguments)]
 pub fn add_slot<'v>(
-    acc: &Accumulator,
+    acc: &Tally,
     rec: &mut [f64],
     index: u32,
     hw: &[f32],

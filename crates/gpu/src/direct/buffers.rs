@@ -8,7 +8,7 @@ use super::{SumsOn, WaveOptions, WAVE_DRAWS};
 use crate::record::{DRAW_WORDS, HIT_WORDS};
 use crate::tape_trace::TapeSolid;
 use crate::{Gpu, GpuError};
-use render::integrator::{Accumulator, LinearRecord};
+use state::{LinearRecord, Tally};
 use wgpu::util::DeviceExt;
 
 /// The scene's read-only buffers in binding order (1–9, then 14–15: CSG and tape).
@@ -93,7 +93,7 @@ impl WaveShape {
     /// keeps them: the record returned) within one binding.
     pub(super) fn new(
         gpu: &Gpu,
-        acc: &Accumulator,
+        acc: &Tally,
         pack: &DirectScene,
         how: &WaveOptions,
         (width, height): (u32, u32),

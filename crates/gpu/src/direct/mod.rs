@@ -14,17 +14,17 @@
 //! ([`crate::record`]): each slot's f32 terms, then the sums in f64 (`SHADER_F64`) or
 //! double-float, pixel by pixel in sample order; only a small tally (ray counts,
 //! overflowing slots) is read back per wave, and the sums once at the end, into the
-//! same [`RenderState`](render::RenderState) as the CPU's. The progressive estimators'
+//! same [`RenderState`](state::RenderState) as the CPU's. The progressive estimators'
 //! second pass applies α and stops each pixel where its schedule re-solves α, which the
 //! CPU does between passes ([`crate::progressive`]). Otherwise (`FREPRAY_GPU_SUMS=off`;
 //! sums too large for one binding or the loop budget) the hits and draws are read back
-//! and added by [`render::integrator::Accumulator`], the CPU integrator's own
+//! and added by [`state::Tally`], the CPU integrator's own
 //! bookkeeping, in f64.
 //! Either way the optimal estimators' solves are the CPU's and a GPU sample range
 //! merges with a CPU one.
 //!
 //! **Same numbers, not the same image.** The kernels draw the CPU's random numbers
-//! (`render::sampler`, truncated to 24 bits) in the CPU's dimension layout, Russian
+//! (`state::sampler`, truncated to 24 bits) in the CPU's dimension layout, Russian
 //! roulette included, so a GPU render follows the CPU's paths closely, but in f32:
 //! images agree statistically (GPU.md §9), tested by `tests/direct_image.rs`.
 //!

@@ -14,11 +14,8 @@ use crate::{f4, GpuError};
 use bytemuck::{Pod, Zeroable};
 use frep::flat::CsgOp;
 use frep::LeafView;
-use render::bsdf::CoatTable;
-use render::integrator::{IntegratorKind, RenderOptions};
-use render::light::TrainedSelection;
-use render::Technique;
 use scene::{CameraKind, LightKind, MaterialData, SceneData, TextureData, TextureSpace};
+use state::{Host, IntegratorKind, RenderOptions, Technique, TrainedSelection};
 
 /// One object: a leaf or an intersection of plain-quadric leaves (the WGSL `GpuShape`).
 #[repr(C)]
@@ -145,21 +142,18 @@ fn f3(v: [f64; 3]) -> [f32; 3] {
 }
 
 impl DirectScene {
-    /// Packs `data` for a `direct` render with `o` (and the light selection trained
-    /// for it, if any), or says what the GPU cannot do.
-    pub fn new(
-        data: &SceneData,
-        o: &RenderOptions,
-        trained: Option<&TrainedSelection>,
-    ) -> Result<Self, GpuError> {
+    /// Packs `data` for a render with `o`, with the tables of `host` (the CPU renderer
+    /// of the same scene and options: coat albedos, light bounds, the trained light
+    /// selection), or says what the GPU cannot do.
+    pub fn new(data: &SceneData, o: &RenderOptions, host: &dyn Host) -> Result<Self, GpuError> {
         let mut s = DirectScene::default();
         s.pack_lights(data)?;
-        s.pack_materials(data)?;
+        s.pack_materials(data, host)?;
         for obj in &data.objects {
             s.pack_object(data, obj)?;
         }
-        s.pack_frame(data, o)?;
-        s.pack_trained(trained);
+        s.pack_frame(data, o, host)?;
+        s.pack_trained(host.trained());
         Ok(s)
     }
 
@@ -314,7 +308,7 @@ impl DirectScene {
         Ok(())
     }
 
-    fn pack_materials(&mut self, data: &SceneData) -> Result<(), GpuError> {
+    fn pack_materials(&mut self, data: &SceneData, host: &dyn Host) -> Result<(), GpuError> {
         for (m, name) in data.materials.iter().zip(&data.material_names) {
             let constant = |id: scene::TextureId| -> Result<[f64; 3], GpuError> {
                 match &data.textures[id.index()] {
@@ -372,11 +366,12 @@ impl DirectScene {
                     eta,
                     roughness,
                 } => {
-                    let coat = CoatTable::new(eta, roughness);
+                    let mu: Vec<f64> = (0..COAT_TABLE_LEN)
+                        .map(|j| (j as f64 / 64.0).powi(2))
+                        .collect();
+                    let coat = host.coat_albedo(eta, roughness, &mu);
                     let at = self.tables.len() as u32;
-                    self.tables.extend(
-                        (0..COAT_TABLE_LEN).map(|j| coat.albedo((j as f64 / 64.0).powi(2)) as f32),
-                    );
+                    self.tables.extend(coat.albedo.iter().map(|&a| a as f32));
                     GpuBsdf::plastic(rgb(diffuse), eta, roughness, coat.r_int, at)
                 }
             };
@@ -435,7 +430,12 @@ impl DirectScene {
         }
     }
 
-    fn pack_frame(&mut self, data: &SceneData, o: &RenderOptions) -> Result<(), GpuError> {
+    fn pack_frame(
+        &mut self,
+        data: &SceneData,
+        o: &RenderOptions,
+        host: &dyn Host,
+    ) -> Result<(), GpuError> {
         let f = &mut self.frame;
         f.power_off = self.tables.len() as u32;
         if let Some(d) = &data.lights.by_power {
@@ -449,8 +449,8 @@ impl DirectScene {
         // tables after the selection tables (`sel_buf`).
         f.spatial_off = self.tables.len() as u32;
         for l in &data.lights.area {
-            if let Some(a) = render::light::AreaLight::from_data(l) {
-                self.tables.extend(light::importance_record(&a));
+            if let Some(b) = host.light_bounds(l) {
+                self.tables.extend(light::importance_record(&b));
             }
         }
         f.env = GpuEnv::pack(data, &mut self.tables);
@@ -522,7 +522,7 @@ impl DirectScene {
             f.count[k / 4][k % 4] = n;
             f.n_draws += n;
         }
-        // render::integrator::dims: the vertex stride, and the draw that extends a path
+        // state::dims: the vertex stride, and the draw that extends a path
         // (the BSDF technique's first, else the extra draw).
         f.stride = (3 * (f.n_draws + 1) + 1).div_ceil(4) * 4;
         f.per_slot = f.n_draws + 1 + f.n_delta;

@@ -7,8 +7,8 @@ use super::pipelines::kernels;
 use crate::readback::read_back;
 use crate::record::{DRAW_WORDS, HIT_WORDS};
 use crate::{Gpu, GpuError};
-use render::integrator::RenderOptions;
 use scene::SceneData;
+use state::{Host, RenderOptions};
 use wgpu::util::DeviceExt;
 
 /// One ray of [`probe`]: what the kernels' nearest-hit query found.
@@ -26,13 +26,15 @@ pub struct Probe {
 }
 
 /// The nearest object hit of each ray `(origin, direction)` against the objects of
-/// `data`, by the render kernels' own query (a ray batch, GPU.md §9).
+/// `data`, by the render kernels' own query (a ray batch, GPU.md §9). `host` is the CPU
+/// renderer of the same scene (with the default options), for its tables.
 pub fn probe(
     gpu: &Gpu,
     data: &SceneData,
+    host: &dyn Host,
     rays: &[([f32; 3], [f32; 3])],
 ) -> Result<Vec<Probe>, GpuError> {
-    let mut pack = DirectScene::new(data, &RenderOptions::default(), None)?;
+    let mut pack = DirectScene::new(data, &RenderOptions::default(), host)?;
     let p = kernels(gpu, &pack)?;
     let scene = scene_buffers(gpu, &pack)?;
     let n = rays.len().max(1) as u32;

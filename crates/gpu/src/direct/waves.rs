@@ -11,31 +11,31 @@ use super::{GpuStats, SumsOn};
 use crate::readback::read_back;
 use crate::record::{GpuSums, WaveTally, DRAW_WORDS, HIT_WORDS};
 use crate::{Gpu, GpuError};
-use render::integrator::{Accumulator, RayCounts, RenderOptions};
-use render::scene::Scene;
-use render::{RenderState, RenderStats, StateHeader};
 use scene::SceneData;
+use state::{Host, RayCounts, RenderOptions, RenderState, RenderStats, StateHeader};
 use std::ops::Range;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-/// Renders samples `samples` of every pixel of `scene` (resolved as `data`) with the
-/// `direct` integrator on `gpu`, into a [`RenderState`] that merges with CPU ones.
+/// Renders samples `samples` of every pixel of the scene resolved as `data` with the
+/// integrator of `options` on `gpu`, into a [`RenderState`] that merges with CPU ones.
+/// `host` is the CPU renderer of the same scene and options (its tables, and the
+/// samples the GPU cannot finish: [`Host`]).
 /// `progress(done, total)` is called after each wave; `stop` is read between waves (a
 /// stopped render keeps its whole waves and is marked partial). Errors, before any
 /// work, on what the GPU back end does not implement ([`GpuError::Unsupported`]).
 pub fn render_range(
     gpu: &Gpu,
     data: &SceneData,
-    scene: &Scene,
+    host: &dyn Host,
     options: &RenderOptions,
     samples: Range<u32>,
     stop: &AtomicBool,
     progress: &dyn Fn(u64, u64),
 ) -> Result<(RenderState, RenderStats, GpuStats), GpuError> {
     let how = WaveOptions::for_device(gpu);
-    render_range_with(gpu, data, scene, options, samples, stop, progress, &how)
+    render_range_with(gpu, data, host, options, samples, stop, progress, &how)
 }
 
 /// How [`render_range_with`] runs its waves.
@@ -74,7 +74,7 @@ impl WaveOptions {
 pub fn render_range_with(
     gpu: &Gpu,
     data: &SceneData,
-    scene: &Scene,
+    host: &dyn Host,
     options: &RenderOptions,
     samples: Range<u32>,
     stop: &AtomicBool,
@@ -85,7 +85,7 @@ pub fn render_range_with(
     // wgpu's default handler.
     let invalid = gpu.device.push_error_scope(wgpu::ErrorFilter::Validation);
     let memory = gpu.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
-    let out = render_waves(gpu, data, scene, options, samples, stop, progress, how);
+    let out = render_waves(gpu, data, host, options, samples, stop, progress, how);
     let errors = [memory.pop(), invalid.pop()].map(pollster::block_on);
     match errors.into_iter().flatten().next() {
         Some(e) => Err(GpuError::Run(e.to_string())),
@@ -97,7 +97,7 @@ pub fn render_range_with(
 fn render_waves(
     gpu: &Gpu,
     data: &SceneData,
-    scene: &Scene,
+    host: &dyn Host,
     options: &RenderOptions,
     samples: Range<u32>,
     stop: &AtomicBool,
@@ -108,7 +108,7 @@ fn render_waves(
         spp: samples.end.saturating_sub(samples.start),
         ..options.clone()
     };
-    let (mut waves, mut totals) = Waves::new(gpu, data, scene, &o, &samples, how)?;
+    let (mut waves, mut totals) = Waves::new(gpu, data, host, &o, &samples, how)?;
     let pixels = waves.shape.pixels;
     let mut base = 0;
     while base < pixels {
@@ -146,8 +146,7 @@ struct WaveRead {
 /// wave uses, and the sums on the GPU where they are kept there.
 struct Waves<'a> {
     gpu: &'a Gpu,
-    scene: &'a Scene,
-    acc: Accumulator,
+    host: &'a dyn Host,
     pack: DirectScene,
     kernels: Arc<Pipelines>,
     shape: WaveShape,
@@ -167,13 +166,13 @@ impl<'a> Waves<'a> {
     fn new(
         gpu: &'a Gpu,
         data: &SceneData,
-        scene: &'a Scene,
+        host: &'a dyn Host,
         o: &RenderOptions,
         samples: &Range<u32>,
         how: &WaveOptions,
     ) -> Result<(Self, Totals), GpuError> {
-        let acc = Accumulator::new(scene, o).map_err(GpuError::Unsupported)?;
-        let mut pack = DirectScene::new(data, o, acc.trained())?;
+        let acc = host.tally();
+        let mut pack = DirectScene::new(data, o, host)?;
         let started = Instant::now();
         let kernels = kernels(gpu, &pack)?;
         let mut stats = GpuStats::default();
@@ -181,7 +180,7 @@ impl<'a> Waves<'a> {
         let header = StateHeader::new(w, h, o);
         let state = RenderState::new(header, samples.clone())
             .map_err(|e| GpuError::Unsupported(e.to_string()))?;
-        let (mut shape, linear) = WaveShape::new(gpu, &acc, &pack, how, (w, h));
+        let (mut shape, linear) = WaveShape::new(gpu, acc, &pack, how, (w, h));
         let buffers = WaveBuffers::new(gpu, &mut pack, &shape)?;
         let sums = match linear {
             Some(linear) => GpuSums::new(
@@ -224,8 +223,7 @@ impl<'a> Waves<'a> {
         };
         let waves = Self {
             gpu,
-            scene,
-            acc,
+            host,
             pack,
             kernels,
             shape,
@@ -480,8 +478,8 @@ impl<'a> Waves<'a> {
             let index = start + slot / band_len;
             let rec = &mut data_words[pix as usize * stride..(pix as usize + 1) * stride];
             t.stats.cpu_fallbacks += 1;
-            self.acc
-                .cpu_sample(self.scene, pix % w, pix / w, index, rec, &mut t.rays);
+            self.host
+                .cpu_sample(pix % w, pix / w, index, rec, &mut t.rays);
         }
     }
 
@@ -510,7 +508,7 @@ impl<'a> Waves<'a> {
         let s = &self.shape;
         let (w, stride, nd1, depths, n_draws) = (s.width, s.stride, s.nd1, s.depths, s.n_draws);
         let (hv, dv) = (words(hit_data), words(draw_data));
-        let t_count = self.acc.techniques().len();
+        let t_count = self.host.tally().techniques.len();
         let mut pdfs = vec![0.0f64; (depths * n_draws) as usize * t_count];
         let data_words = t.state.data_mut();
         for slot in 0..slots as usize {
@@ -528,13 +526,11 @@ impl<'a> Waves<'a> {
                 || (0..depths).any(|k| vertex(k).chunks_exact(DRAW_WORDS).any(|d| d[7] == 12.0));
             if overflow {
                 t.stats.cpu_fallbacks += 1;
-                self.acc
-                    .cpu_sample(self.scene, x, y, index, rec, &mut t.rays);
+                self.host.cpu_sample(x, y, index, rec, &mut t.rays);
                 continue;
             }
-            let acc = &self.acc;
             add_slot(
-                acc,
+                self.host.tally(),
                 rec,
                 index,
                 hw,

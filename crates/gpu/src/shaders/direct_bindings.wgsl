@@ -9,7 +9,7 @@
 //                   to the outside-MIS sum.
 //   shade           one invocation per (slot at depth 0, live slot after it; draw
 //                   j ≤ Σ n_k): the draw of its
-//                   technique at the vertex (dimensions of render::integrator::dims),
+//                   technique at the vertex (dimensions of state::dims),
 //                   every technique's pdf in its direction, β·f_s·|cos| and the nearest
 //                   light's emission along it, a shadow ray (queued) where both are
 //                   non-zero. The draw that extends the path (the BSDF technique's first,
@@ -21,7 +21,7 @@
 //                   joins the next depth's live queue).
 //
 // The wave's draws are then added to the per-pixel records: on the GPU (gpu::record) or
-// by the CPU (render::integrator::Accumulator).
+// by the CPU (state::Tally).
 // Trace is one entry point for both modes so that the costly intersectors compile once.
 // Every loop iteration counts against `loops` (GPU.md §3.1); the maximum per invocation
 // and kernel goes to stats[mode].

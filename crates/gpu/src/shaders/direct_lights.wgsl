@@ -77,7 +77,7 @@ fn spatial_select(p: vec3<f32>, n: vec3<f32>, uc: f32) -> u32 {
     return last;
 }
 
-// The trained selection (render::light::TrainedSelection): whether its table covers the
+// The trained selection (state::TrainedSelection): whether its table covers the
 // MIS lights, and the offset of the pmf row of p's cell (points outside the grid go to
 // the nearest cell).
 fn trained_usable() -> bool {

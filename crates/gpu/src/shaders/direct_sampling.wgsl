@@ -1,4 +1,4 @@
-// --- random numbers: render::sampler, truncated to 24 bits ---------------------------
+// --- random numbers: state::sampler, truncated to 24 bits ---------------------------
 
 fn rnd(px: u32, py: u32, index: u32, dim: u32) -> f32 {
     let b = philox4x32_10(vec4<u32>(px, py, index, dim / 4u), vec2<u32>(frame.seed_lo, frame.seed_hi));

@@ -1,6 +1,6 @@
 // Philox4x32-10 (Salmon et al. 2011) with 32-bit operations only: the high half of a
 // 32 × 32-bit product from 16-bit partial products, so no adapter needs SHADER_INT64.
-// The twin of crates/render/src/sampler.rs, bit for bit.
+// The twin of crates/state/src/sampler.rs, bit for bit.
 
 const PHILOX_M0: u32 = 0xD2511F53u;
 const PHILOX_M1: u32 = 0xCD9E8D57u;

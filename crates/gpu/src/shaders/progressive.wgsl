@@ -1,6 +1,6 @@
 // The progressive optimal estimators' per-pixel sums (GPU.md §8): a sequential pass per
 // pixel over a wave's terms (record.wgsl, code 5), in sample order, that applies each
-// block's α as the CPU would (render::integrator::LinearMis::Progressive): Σ F_c +=
+// block's α as the CPU would (state::LinearMis::Progressive): Σ F_c +=
 // G_c − Σ_i α_ci Q_i, every other word of the record += its term, and the α words left
 // alone. Where a block's N reaches a point of the schedule (mis::Schedule::solves_at)
 // the pixel stops after that sample, so that the CPU re-solves α before the next

@@ -1,5 +1,5 @@
-// One sample's terms of its pixel's record (GPU.md §8): what render::integrator's
-// Accumulator::add would add to the record's words for the slot's hits and draws, in
+// One sample's terms of its pixel's record (GPU.md §8): what state::Tally::add
+// would add to the record's words for the slot's hits and draws, in
 // f32, so that sums.wgsl can add them to the per-pixel f64 or double-float sums. One
 // invocation per slot; its `stride` words of `terms` (cleared before the pass) start at
 // (pixel · samples + sample) · stride, the layout sums.wgsl reads. The twin is
@@ -9,7 +9,7 @@
 // overflow list (tally[8 + q]) for the CPU to render. tally[0] counts that list, tally[1..4]
 // the camera, shadow and continuation rays the other slots traced.
 //
-// Record words (render::integrator::Record): [N | outside rgb | 7 AOVs, if kept | blocks],
+// Record words (state::Record): [N | outside rgb | 7 AOVs, if kept | blocks],
 // block (d, l) of depth d and light l at 4 + aov + (d · lights + l) · block; the blocks
 // are mis::block's: heuristic [N | Σ rgb], optimal-direct [N | Â packed, b̂], uncorrelated
 // [N_A, N_B | Â, b̂ of A | of B], progressive [N | Σ F (3) | α (3T) | Â, b̂], whose terms are
@@ -141,7 +141,7 @@ fn block_sample(b: u32, k: u32, f: vec3<f32>, at: u32) {
     } else if (rp.code == C_DIRECT) {
         moments_add(b + 1u, k, f, at);
     } else if (rp.code == C_PROGRESSIVE) {
-        // The α-free terms (render::integrator::LinearMis::Progressive): G_c = f_c / s in
+        // The α-free terms (state::LinearMis::Progressive): G_c = f_c / s in
         // the Σ F words, Q_i = p_i / s in the first T α words; a failed draw 1/n_k in Q_k.
         moments_add(b + 4u + 3u * rp.n_tech, k, f, at);
         let s = mixture(at, k);
@@ -173,7 +173,7 @@ fn block_end(b: u32) {
     }
 }
 
-// render::integrator::Pixel::add_draw: `light` is the per-light block the draw feeds
+// state::Pixel::add_draw: `light` is the per-light block the draw feeds
 // (lights + 1: none).
 fn add_draw(depth: u32, k: u32, f: vec3<f32>, at: u32, light: u32) {
     if (rp.code == C_OUTSIDE) {

@@ -11,65 +11,15 @@
 //! its random numbers from dimensions of its own ([`super::dims`]), so that asking for
 //! AOVs changes no other random number of the render.
 
-use super::dims::ALBEDO;
-use super::state::RayLog;
+use super::ray_log::RayLog;
 use super::vertex::{trace, Trace, Vertex};
 use super::{Integrator, IntegratorKind, Pixel, RayKind};
 use crate::color::Rgb;
 use crate::sampler::SampleStream;
 use crate::scene::Scene;
 use frep::Ray;
-
-/// An extra film channel group.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum Aov {
-    /// Channel `depth`.
-    Depth,
-    /// Channels `normal.X`, `normal.Y`, `normal.Z`.
-    Normal,
-    /// Channels `albedo.R`, `albedo.G`, `albedo.B`.
-    Albedo,
-}
-
-impl Aov {
-    /// Every AOV.
-    pub const ALL: [Aov; 3] = [Aov::Depth, Aov::Normal, Aov::Albedo];
-    /// The name (for scene files and the CLI).
-    pub const fn name(self) -> &'static str {
-        match self {
-            Aov::Depth => "depth",
-            Aov::Normal => "normal",
-            Aov::Albedo => "albedo",
-        }
-    }
-    /// Its film channel names.
-    pub const fn channels(self) -> &'static [&'static str] {
-        match self {
-            Aov::Depth => &["depth"],
-            Aov::Normal => &["normal.X", "normal.Y", "normal.Z"],
-            Aov::Albedo => &["albedo.R", "albedo.G", "albedo.B"],
-        }
-    }
-    /// Index of its first value in the per-pixel AOV sums.
-    pub(crate) const fn offset(self) -> usize {
-        match self {
-            Aov::Depth => 0,
-            Aov::Normal => 1,
-            Aov::Albedo => 4,
-        }
-    }
-}
-
-impl std::str::FromStr for Aov {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
-        let key = s.trim().to_ascii_lowercase();
-        Self::ALL
-            .into_iter()
-            .find(|a| a.name() == key || (key == "normals" && *a == Aov::Normal))
-            .ok_or_else(|| format!("unknown AOV {s:?}; valid names: depth, normal, albedo"))
-    }
-}
+use state::dims::ALBEDO;
+pub use state::Aov;
 
 /// Depth, normal and albedo of a camera ray's first hit.
 fn first_hit(scene: &Scene, t: &Trace, ray: &Ray, rng: &SampleStream) -> [f64; 7] {

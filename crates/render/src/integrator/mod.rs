@@ -53,199 +53,29 @@
 
 mod accumulate;
 mod aov;
-mod dims;
 mod path;
-mod state;
+mod ray_log;
 mod train;
 mod vertex;
 
-pub use accumulate::{Accumulator, LinearMis, LinearRecord, ShadedDraw, ShadedVertex};
+use ::state::{dims, Combine, Pixel, Tally};
+pub use ::state::{
+    uses_mis, CpuStages, LinearMis, LinearRecord, RayCounts, RayKind, Record, RenderOptions,
+    ShadedDraw, ShadedVertex, MAX_TECHNIQUES, TIMED_EVERY,
+};
+pub use accumulate::{Accumulator, CpuHost};
 pub use aov::Aov;
-pub(crate) use dims::Dims;
-pub(crate) use state::Pixel;
-use state::RayLog;
-pub use state::{CpuStages, RayCounts, RayKind, Record, TIMED_EVERY};
+use ray_log::RayLog;
 pub use train::TRAIN_SPP;
 
 use crate::light::TrainedSelection;
 use crate::sampler::Sampler;
 pub use crate::scene::IntegratorKind;
-use crate::scene::{RenderSettings, Scene};
+use crate::scene::Scene;
 use crate::technique::Technique;
-use mis::{Kernel, Layout, Method, Params};
+#[cfg(doc)]
+use mis::Kernel;
 use std::sync::Arc;
-
-/// Whether the integrator draws techniques and combines them by MIS.
-pub const fn uses_mis(kind: IntegratorKind) -> bool {
-    matches!(kind, IntegratorKind::Direct | IntegratorKind::Path)
-}
-
-/// Everything a render needs besides the scene.
-#[derive(Clone, Debug, PartialEq)]
-pub struct RenderOptions {
-    /// The integrator.
-    pub integrator: IntegratorKind,
-    /// Samples (iterations) per pixel.
-    pub spp: u32,
-    /// Seed of the random streams (DESIGN.md §4: the image depends on it alone).
-    pub seed: u64,
-    /// How the techniques' draws are combined.
-    pub method: Method,
-    /// The method's parameters.
-    pub params: Params,
-    /// The techniques with their draws per iteration `n_i` ≥ 1, each at most once.
-    pub techniques: Vec<(Technique, u32)>,
-    /// Maximum number of scattering vertices of `path` (1: direct lighting only; 0: only
-    /// what the camera sees directly).
-    pub max_depth: u32,
-    /// Only light carried by paths of at least this many scattering vertices reaches the
-    /// image (pbrt-style minimum depth; 0: all). Emitters seen by the camera have depth
-    /// 0, the direct lighting of the d-th vertex (its MIS draws, delta lights and delta
-    /// lobes) depth d; with `min_depth = max_depth = d` the image holds depth d alone, and
-    /// the images of depths 0…D sum to the image of `max_depth = D`. Shallower vertices
-    /// still draw (the same random numbers) and extend the path; they add nothing.
-    pub min_depth: u32,
-    /// Russian roulette is played after this many vertices.
-    pub rr_depth: u32,
-    /// Leave emitters (area lights, environment) seen directly by the camera out of the
-    /// image, as Mitsuba's `hide_emitters`: their pixels then carry no emitter noise.
-    pub hide_emitters: bool,
-    /// Extra film channels.
-    pub aovs: Vec<Aov>,
-    /// Trace every camera ray through its pixel's centre instead of a uniform point of
-    /// the pixel (a diagnostic: the variance left is the directions' alone, without the
-    /// pixel footprint's; the image converges to point samples, not pixel averages).
-    pub pixel_center: bool,
-    /// How `light-trained` is trained: grid, floor, training rays per pixel
-    /// (`integrator/train.rs`).
-    pub training: scene::Training,
-    /// Per-light mode: 0 for one MIS estimator per pixel and depth; n (the scene's
-    /// number of MIS lights, [`crate::light::Lights::count`]) for one per pixel, depth
-    /// and light, each fed only the radiance of the light its draws reach (module docs).
-    pub per_light: u32,
-    /// Tile side in pixels.
-    pub tile_size: u32,
-    /// Samples per pixel per pass (0: spp/16 rounded up). The progress callback acts
-    /// between tiles of a pass, the stop flag between samples.
-    pub pass_spp: u32,
-    /// Worker threads (0: the current rayon pool); at most
-    /// [`crate::limits::max_threads`].
-    pub threads: usize,
-    /// The memory a render may take, in bytes (0: what the system has available;
-    /// [`crate::limits`]).
-    pub max_memory: u64,
-    /// A hash of the scene, recorded in the [`crate::RenderState`] so that states of
-    /// different scenes refuse to merge (0: unknown).
-    pub scene_hash: u64,
-    /// Time the render's stages ([`RayCounts::stages`]; `frepray bench` does). Off by
-    /// default: the timers cost a few per cent on small scenes.
-    pub stage_times: bool,
-}
-
-impl Default for RenderOptions {
-    /// `direct`, 16 spp, balance heuristic over one BSDF and one light draw, depth 5 with
-    /// roulette after 3, 16-pixel tiles.
-    fn default() -> Self {
-        Self {
-            integrator: IntegratorKind::Direct,
-            spp: 16,
-            seed: 0,
-            method: Method::Balance,
-            params: Params::default(),
-            techniques: vec![(Technique::Bsdf, 1), (Technique::LightPower, 1)],
-            max_depth: 5,
-            min_depth: 0,
-            rr_depth: 3,
-            hide_emitters: false,
-            aovs: Vec::new(),
-            pixel_center: false,
-            training: scene::Training::default(),
-            per_light: 0,
-            tile_size: 16,
-            pass_spp: 0,
-            threads: 0,
-            max_memory: 0,
-            scene_hash: 0,
-            stage_times: false,
-        }
-    }
-}
-
-impl RenderOptions {
-    /// The options of a scene file's `[render]` table, with the loop's own settings (tile
-    /// size, passes, threads) at their defaults. Errors on an AOV name other than
-    /// `depth`, `normal` or `albedo`.
-    pub fn from_settings(s: &RenderSettings) -> Result<Self, String> {
-        Ok(Self {
-            integrator: s.integrator,
-            spp: s.spp,
-            seed: s.seed,
-            method: s.method,
-            params: s.params,
-            techniques: s.techniques.iter().map(|&(t, n)| (t.into(), n)).collect(),
-            max_depth: s.max_depth,
-            min_depth: s.min_depth,
-            rr_depth: s.rr_depth,
-            hide_emitters: s.hide_emitters,
-            aovs: s.aovs.iter().map(|a| a.parse()).collect::<Result<_, _>>()?,
-            per_light: s.per_light,
-            training: s.training,
-            ..Self::default()
-        })
-    }
-
-    /// Checks the options: spp, tile size, techniques (non-empty for MIS integrators,
-    /// counts ≥ 1, none twice, at most [`MAX_TECHNIQUES`]), method parameters, AOVs once.
-    pub fn validate(&self) -> Result<(), String> {
-        if self.spp == 0 {
-            return Err("spp must be at least 1".into());
-        }
-        if self.tile_size == 0 {
-            return Err("tile size must be at least 1".into());
-        }
-        if uses_mis(self.integrator) && self.techniques.is_empty() {
-            return Err(format!(
-                "integrator {} needs at least one technique",
-                self.integrator
-            ));
-        }
-        if self.techniques.len() > MAX_TECHNIQUES {
-            return Err(format!("at most {MAX_TECHNIQUES} techniques"));
-        }
-        for (i, (t, n)) in self.techniques.iter().enumerate() {
-            if *n == 0 {
-                return Err(format!("technique {} needs at least 1 draw", t.name()));
-            }
-            if self.techniques[..i].iter().any(|(u, _)| u == t) {
-                return Err(format!("technique {} listed twice", t.name()));
-            }
-        }
-        for (i, a) in self.aovs.iter().enumerate() {
-            if self.aovs[..i].contains(a) {
-                return Err(format!("AOV {} listed twice", a.name()));
-            }
-        }
-        self.training
-            .validate()
-            .map_err(|(key, e)| format!("{key}: {e}"))?;
-        let deepest = match self.integrator {
-            IntegratorKind::Direct => 1,
-            _ => self.max_depth,
-        };
-        if uses_mis(self.integrator) && self.min_depth > deepest {
-            return Err(format!(
-                "min_depth {} exceeds the deepest vertex {deepest} ({}): the image would be black",
-                self.min_depth,
-                if self.integrator == IntegratorKind::Direct {
-                    "direct shades one vertex"
-                } else {
-                    "max_depth"
-                }
-            ));
-        }
-        self.params.validate()
-    }
-}
 
 /// The trained light selection a render of `scene` with `o` would use (None when no
 /// technique needs one): the training pass of `integrator/train.rs`, for inspection.
@@ -257,11 +87,6 @@ pub fn trained_selection(
     it.prepare(scene)?;
     Ok(it.trained.map(|t| (*t).clone()))
 }
-
-/// At most this many techniques. Each costs a pdf evaluation for every draw of every
-/// technique (O(T²) per vertex) and, for the optimal estimators, `T(T+1)/2 + 3T` words
-/// of state per pixel and depth (at 32: 624 words, 4.9 KiB; docs/render-state.md).
-pub const MAX_TECHNIQUES: usize = 32;
 
 #[cfg(test)]
 thread_local! {
@@ -280,28 +105,12 @@ fn forced_zero_draws() -> bool {
     false
 }
 
-/// How the draws at a vertex are combined.
-#[derive(Clone, Debug)]
-pub(crate) enum Combine {
-    /// Heuristic weights applied per draw, summed into the pixel (path, heuristics).
-    Heuristic(mis::Heuristic),
-    /// One [`mis`] estimator block per pixel and depth, run by this kernel.
-    Estimator(Kernel),
-}
-
-/// An integrator ready to run: the options digested once per render.
+/// An integrator ready to run: the options digested once per render, the records'
+/// bookkeeping ([`Tally`], through `Deref`) and what only the CPU integrator needs.
 #[derive(Clone, Debug)]
 pub(crate) struct Integrator {
-    pub kind: IntegratorKind,
+    pub tally: Tally,
     pub sampler: Sampler,
-    pub techniques: Vec<Technique>,
-    pub counts: Vec<u32>,
-    pub layout: Arc<Layout>,
-    pub combine: Combine,
-    /// Where each sum lives in a pixel's record.
-    pub record: Record,
-    /// Which random dimension each draw uses.
-    pub dims: Dims,
     /// Index of [`Technique::Bsdf`] in the list.
     pub bsdf_index: Option<usize>,
     /// Whether a technique needs the lights' by-area pdfs ([`Technique::LightArea`]).
@@ -310,13 +119,9 @@ pub(crate) struct Integrator {
     /// estimators); else it is skipped before its pdfs are found ([`Kernel::counts_zero_samples`]).
     pub zero_draws_count: bool,
     pub max_depth: u32,
-    /// Vertices shallower than this add nothing ([`RenderOptions::min_depth`]).
-    pub min_depth: u32,
     pub rr_depth: u32,
     /// Whether emitters seen by the camera are left out.
     pub hide_emitters: bool,
-    /// Whether AOVs are gathered.
-    pub aovs: bool,
     /// Whether camera rays go through pixel centres ([`RenderOptions::pixel_center`]).
     pub pixel_center: bool,
     /// Per-light mode: the number of MIS lights (0: off).
@@ -329,75 +134,30 @@ pub(crate) struct Integrator {
     pub trained: Option<Arc<TrainedSelection>>,
 }
 
+impl std::ops::Deref for Integrator {
+    type Target = Tally;
+    fn deref(&self) -> &Tally {
+        &self.tally
+    }
+}
+
 impl Integrator {
     /// Digests validated options.
     pub fn new(o: &RenderOptions) -> Result<Self, String> {
-        o.validate()?;
-        let techniques: Vec<Technique> = o.techniques.iter().map(|t| t.0).collect();
-        let counts: Vec<u32> = o.techniques.iter().map(|t| t.1).collect();
-        // A layout needs one technique; AOV integrators never use it.
-        let layout = if counts.is_empty() {
-            Layout::new(&[1], 3)
-        } else {
-            Layout::new(&counts, 3)
-        };
-        // `direct` always keeps the per-pixel estimator (the paper's setting); `path`
-        // applies heuristic weights per draw and keeps estimators only for optimal MIS.
-        let combine = match (o.integrator, o.method.heuristic(&o.params)) {
-            (IntegratorKind::Path, Some(h)) => Combine::Heuristic(h),
-            _ => Combine::Estimator(Kernel::new(o.method, &layout, &o.params)?),
-        };
-        let depths = match (&combine, o.integrator) {
-            (Combine::Estimator(_), IntegratorKind::Direct) => 1,
-            (Combine::Estimator(_), IntegratorKind::Path) => o.max_depth.max(1) as usize,
-            _ => 0,
-        };
-        let record = Record {
-            aov: if o.aovs.is_empty() { 0 } else { 7 },
-            depths,
-            lights: if depths > 0 && o.per_light > 0 {
-                o.per_light as usize
-            } else {
-                1
-            },
-            block: match &combine {
-                Combine::Estimator(k) => k.block_len(),
-                Combine::Heuristic(_) => 0,
-            },
-        };
-        // Every later `record.stride()` is then free of overflow.
-        record
-            .blocks_checked()
-            .and_then(|b| b.checked_mul(record.block))
-            .and_then(|w| w.checked_add(Record::AOV + record.aov))
-            .ok_or_else(|| {
-                format!(
-                    "{} depths × {} lights of MIS estimators are more than a pixel's record can hold",
-                    record.depths, record.lights
-                )
-            })?;
-        let dims = Dims::new(&counts, o.max_depth)?;
+        let tally = Tally::new(o)?;
         Ok(Self {
-            kind: o.integrator,
             sampler: Sampler::new(o.seed),
-            bsdf_index: techniques.iter().position(|&t| t == Technique::Bsdf),
-            area_pdfs: techniques.contains(&Technique::LightArea),
+            bsdf_index: tally.techniques.iter().position(|&t| t == Technique::Bsdf),
+            area_pdfs: tally.techniques.contains(&Technique::LightArea),
             zero_draws_count: forced_zero_draws()
-                || match &combine {
+                || match &tally.combine {
                     Combine::Estimator(k) => k.counts_zero_samples(),
                     Combine::Heuristic(_) => false,
                 },
-            techniques,
-            counts,
-            layout,
-            combine,
-            record,
-            dims,
+            tally,
             max_depth: o.max_depth,
-            min_depth: o.min_depth,
             rr_depth: o.rr_depth,
             hide_emitters: o.hide_emitters,
-            aovs: !o.aovs.is_empty(),
             pixel_center: o.pixel_center,
             per_light: o.per_light as usize,
             seed: o.seed,
@@ -459,15 +219,6 @@ impl Integrator {
         scene.camera.ray(x, y, u)
     }
 
-    /// The MIS kernel of the per-pixel estimators (None when heuristic weights go straight
-    /// into the outside sum, or for AOV integrators).
-    pub fn kernel(&self) -> Option<&Kernel> {
-        match &self.combine {
-            Combine::Estimator(k) if self.record.depths > 0 => Some(k),
-            _ => None,
-        }
-    }
-
     /// Runs sample `index` of pixel (x, y) into the pixel's record `rec`.
     pub fn sample(
         &self,
@@ -479,7 +230,7 @@ impl Integrator {
         rays: &mut RayCounts,
     ) {
         if rays.timing {
-            self.sample_with(scene, x, y, index, rec, &mut state::Timed(rays, None));
+            self.sample_with(scene, x, y, index, rec, &mut ray_log::Timed(rays, None));
         } else {
             self.sample_with(scene, x, y, index, rec, rays);
         }
@@ -516,6 +267,8 @@ impl Integrator {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::scene::RenderSettings;
+    use mis::Method;
 
     #[test]
     fn options_validate_and_map_from_settings() {

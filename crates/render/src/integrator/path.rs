@@ -40,7 +40,7 @@
 //! the α minimising the variance is the optimum for the paths that do, which is what the
 //! per-depth state estimates. Memory: one estimator per pixel for each depth reached.
 
-use super::state::RayLog;
+use super::ray_log::RayLog;
 use super::vertex::{trace, Trace, Vertex};
 use super::{Integrator, IntegratorKind, Pixel, RayKind};
 use crate::color::Rgb;

@@ -1,13 +1,14 @@
 //! One scattering vertex: delta lights, the MIS draws of every technique, delta lobes and
 //! the path's continuation (module docs of [`crate::integrator`]).
 
-use super::state::RayLog;
+use super::ray_log::RayLog;
 use super::{Integrator, Pixel, RayKind, MAX_TECHNIQUES};
 use crate::bsdf::{Bsdf, BsdfSample};
 use crate::color::Rgb;
 use crate::light::{Along, LightHit};
 use crate::sampler::SampleStream;
 use crate::scene::{Scene, SurfaceHit};
+use crate::technique::Sampling;
 use crate::technique::{ShadingPoint, Technique};
 use frep::Ray;
 use glam::DVec3;

@@ -10,13 +10,12 @@ mod area;
 mod delta;
 mod environment;
 mod select;
-mod trained;
 
 pub use area::{AreaLight, Crossing, Shape};
 pub use delta::DeltaLight;
 pub use environment::{EnvMap, Environment};
 pub use select::{importance, Along, Crossed, ImportanceBounds, Selection};
-pub use trained::{TrainedSelection, TRAIN_FLOOR, TRAIN_GRID};
+pub use state::trained::{TrainedSelection, TRAIN_FLOOR, TRAIN_GRID};
 
 use crate::color::{luminance, Rgb};
 use crate::distribution::Distribution1D;

@@ -4,7 +4,7 @@
 //!
 //! **Memory.** A render holds every pixel's record twice (the [`crate::RenderState`]
 //! and the tiles' own copies, `width × height × stride × 8` bytes each, the stride from
-//! [`crate::integrator::Record::stride`]: estimator, techniques, depth and AOVs), then the
+//! [`crate::Record::stride`]: estimator, techniques, depth and AOVs), then the
 //! resolved [`crate::Image`] (`width × height × (3 + AOV channels) × 8` bytes) and one
 //! encoded copy of it while a file is written (at most as large again). The estimate
 //! is compared with a limit: the caller's, else the memory the system reports available
@@ -12,7 +12,8 @@
 //! [`FALLBACK_MEMORY`].
 
 use crate::error::Error;
-use crate::integrator::{Integrator, RenderOptions};
+use crate::options::RenderOptions;
+use crate::tally::Tally;
 
 /// The limit where the available memory cannot be read (not Linux, or no `/proc`):
 /// 16 GiB; `--max-memory` sets another.
@@ -25,7 +26,7 @@ pub const THREADS_PER_CORE: usize = 8;
 /// Bytes a render of `width × height` pixels with `o` needs (module docs); errors when
 /// the options are invalid. Saturates rather than overflows.
 pub fn render_bytes(width: u32, height: u32, o: &RenderOptions) -> Result<u64, Error> {
-    let it = Integrator::new(o)?;
+    let it = Tally::new(o)?;
     let pixels = u64::from(width) * u64::from(height);
     let stride = it.record.stride() as u64;
     let channels = 3 + o
@@ -110,7 +111,7 @@ pub fn check_memory(width: u32, height: u32, o: &RenderOptions) -> Result<u64, E
              ({}); lower the resolution, the AOVs or the depth, or raise --max-memory",
             bytes(need),
             need,
-            Integrator::new(o)?.record.stride(),
+            Tally::new(o)?.record.stride(),
             what,
             bytes(limit)
         )));
@@ -183,7 +184,7 @@ pub fn parse_bytes(s: &str) -> Result<u64, String> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::integrator::Aov;
+    use crate::aov::Aov;
 
     #[test]
     fn estimate_grows_with_size_aovs_and_refuses_beyond_the_limit() {

@@ -4,9 +4,9 @@
 //! **What is stored.** One record per pixel, row by row, of [`Record::stride`] words:
 //! `[N | outside-MIS Σ (R, G, B) | AOV Σ (7 or 0) | one MIS block per vertex depth (per
 //! vertex depth and MIS light in per-light mode, block d·L + l for depth d and light l)]`
-//! (`integrator/state.rs`, [`mis::Kernel`]). Sums, never estimates (DESIGN.md §4); an
+//! ([`crate::record`], [`mis::Kernel`]). Sums, never estimates (DESIGN.md §4); an
 //! estimate is resolved from them only by [`RenderState::image`]: per pixel
-//! `Σ_outside/N + Σ_blocks (N_b/N)·estimate_b` (module docs of [`crate::integrator`]).
+//! `Σ_outside/N + Σ_blocks (N_b/N)·estimate_b` (module docs of `render::integrator`).
 //!
 //! **Merging.** Two states of the same scene and settings ([`StateHeader`] equal) over
 //! disjoint sample ranges merge by adding their records ([`mis::Kernel::merge`] for the MIS
@@ -30,12 +30,16 @@
 //! | 8W | the records, f64 |
 //! | 8 | FNV-1a 64 hash of every byte before it, u64 |
 
+use crate::aov::Aov;
 use crate::error::Error;
 use crate::image::Image;
-use crate::integrator::{Aov, Integrator, IntegratorKind, Record, RenderOptions};
+use crate::options::RenderOptions;
 use crate::output::write_atomically;
+use crate::record::Record;
+use crate::tally::Tally;
 use crate::{Rgb, Technique};
 use mis::{Kernel, Method, Params};
+use scene::IntegratorKind;
 use serde_json::{json, Value};
 use std::fmt::Write as _;
 use std::io::Write as _;
@@ -257,7 +261,7 @@ impl StateHeader {
     }
 
     /// The first field in which two headers differ, for messages.
-    pub(crate) fn difference(&self, o: &StateHeader) -> String {
+    pub fn difference(&self, o: &StateHeader) -> String {
         let (a, b) = (self.to_json(), o.to_json());
         let (a, b) = (a.as_object().unwrap(), b.as_object().unwrap());
         a.iter()
@@ -427,7 +431,7 @@ impl RenderState {
     /// allocated for the sums (so that a file's header can be checked against its size
     /// before they are).
     fn layout(header: &StateHeader) -> Result<(Record, Option<Kernel>, usize), Error> {
-        let it = Integrator::new(&header.options())?;
+        let it = Tally::new(&header.options())?;
         let record = it.record;
         let kernel = it.kernel().cloned();
         let n = header.width as usize * header.height as usize;

@@ -20,15 +20,15 @@ use crate::sampler::SampleStream;
 use glam::DVec2;
 
 /// Dimensions of the position in the pixel.
-pub(crate) const PIXEL: u32 = 0;
+pub const PIXEL: u32 = 0;
 /// First dimension of the albedo AOV's draw.
-pub(crate) const ALBEDO: u32 = 2;
+pub const ALBEDO: u32 = 2;
 /// First dimension of vertex 0.
 const FIRST_VERTEX: u32 = 8;
 
 /// The dimension layout of one integrator configuration (module docs).
 #[derive(Clone, Debug, PartialEq, Eq)]
-pub(crate) struct Dims {
+pub struct Dims {
     /// First draw slot of each technique.
     first_slot: Vec<u32>,
     /// Draws per vertex D.
@@ -39,7 +39,7 @@ pub(crate) struct Dims {
 
 /// The three numbers of one draw.
 #[derive(Clone, Copy, Debug)]
-pub(crate) struct Draw {
+pub struct Draw {
     /// Picks a lobe or a light.
     pub uc: f64,
     /// Picks a direction or a point.

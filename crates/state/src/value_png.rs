@@ -12,7 +12,7 @@
 //! surface's.
 
 use crate::image::Image;
-use crate::integrator::IntegratorKind;
+use scene::IntegratorKind;
 
 /// What an image's colour channels hold.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
