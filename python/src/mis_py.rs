@@ -61,9 +61,11 @@ pub fn mis_estimate<'py>(
         warmup,
         train,
     };
-    params.validate().map_err(bad)?;
+    params.validate().map_err(|e| bad(e.to_string()))?;
     let layout = Layout::new(&counts, c);
-    let mut e = method.build(&layout, &params).map_err(bad)?;
+    let mut e = method
+        .build(&layout, &params)
+        .map_err(|e| bad(e.to_string()))?;
     let out = py.detach(|| {
         let (mut fv, mut pv) = (vec![0.0; c], vec![0.0; t]);
         for i in 0..n {

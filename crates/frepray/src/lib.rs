@@ -119,6 +119,12 @@ pub enum Error {
     Gpu(#[from] backend::GpuError),
 }
 
+impl From<render::integrator::OptionsError> for Error {
+    fn from(e: render::integrator::OptionsError) -> Self {
+        Error::Render(e.into())
+    }
+}
+
 /// A resolved scene, ready to render on the CPU: the flat [`SceneData`], the settings of
 /// its file (after overrides), and the renderer's own structures built from them.
 pub struct Scene {
@@ -170,9 +176,9 @@ impl Scene {
     /// pass to [`Scene::render`]. Errors when the settings ask for techniques the scene
     /// cannot use.
     pub fn options(&self) -> Result<RenderOptions, Error> {
-        let mut o = RenderOptions::from_settings(&self.settings).map_err(Error::Invalid)?;
+        let mut o = RenderOptions::from_settings(&self.settings)?;
         o.scene_hash = self.hash;
-        o.validate().map_err(Error::Invalid)?;
+        o.validate()?;
         Ok(o)
     }
     /// `options` recording this scene's hash (so that its states merge only with its own).

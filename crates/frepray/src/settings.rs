@@ -159,13 +159,13 @@ impl Scene {
     /// and memory limits, and the overrides of `s` that have no effect on them. The
     /// scene must have been loaded with `s.overrides` ([`crate::load_with`]).
     pub fn options_with(&self, s: &Settings) -> Result<(RenderOptions, Vec<Unused>), Error> {
-        let mut o = RenderOptions::from_settings(self.settings()).map_err(Error::Invalid)?;
+        let mut o = RenderOptions::from_settings(self.settings())?;
         o.scene_hash = self.hash();
         o.threads = s.threads;
         o.pixel_center = s.pixel_center;
         o.stage_times = s.stage_times;
         o.max_memory = s.max_memory;
-        o.validate().map_err(Error::Invalid)?;
+        o.validate()?;
         render::limits::check_threads(o.threads)?;
         let (width, height) = self.resolution();
         render::limits::check_memory(width, height, &o)?;

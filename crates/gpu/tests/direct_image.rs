@@ -894,7 +894,7 @@ fn unsupported_scenes_are_refused_by_name() {
         let s = load(text);
         let host = match CpuHost::new(&s.1, &s.2) {
             Ok(h) => h,
-            Err(e) => return gpu::GpuError::Unsupported(e).to_string(),
+            Err(e) => return gpu::GpuError::Unsupported(e.to_string()).to_string(),
         };
         match render_range(g, &s.0, &host, &s.2, 0..1, &stop, &|_, _| {}) {
             Err(e) => e.to_string(),

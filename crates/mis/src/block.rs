@@ -51,7 +51,7 @@ use std::sync::Arc;
 
 use crate::progressive::Schedule;
 use crate::{direct, progressive, uncorrelated, weighted};
-use crate::{Heuristic, Layout, Method, Moments, Params};
+use crate::{Heuristic, Layout, Method, Moments, ParamError, Params};
 
 /// Adds block `b` to block `a` word by word.
 pub(crate) fn add(a: &mut [f64], b: &[f64]) {
@@ -82,7 +82,11 @@ pub struct Kernel {
 
 impl Kernel {
     /// The kernel of `method` with `params` (checked) for `layout`.
-    pub fn new(method: Method, layout: &Arc<Layout>, params: &Params) -> Result<Kernel, String> {
+    pub fn new(
+        method: Method,
+        layout: &Arc<Layout>,
+        params: &Params,
+    ) -> Result<Kernel, ParamError> {
         params.validate()?;
         // The ridge made explicit: `params()` and the blocks' solves use the same λ.
         let params = &params.resolved(method);

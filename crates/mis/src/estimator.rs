@@ -11,7 +11,7 @@ use std::fmt;
 use std::str::FromStr;
 use std::sync::Arc;
 
-use crate::{Direct, Heuristic, Layout, Progressive, Schedule, Uncorrelated, Weighted};
+use crate::{Direct, Heuristic, Layout, ParamError, Progressive, Schedule, Uncorrelated, Weighted};
 
 /// A multi-sample Monte Carlo estimator of `F = ∫ f` (per channel) from several techniques.
 pub trait Estimator {
@@ -145,7 +145,7 @@ impl Method {
     }
 
     /// A fresh (empty) estimator of this method for one pixel (or one integral).
-    pub fn build(self, layout: &Arc<Layout>, params: &Params) -> Result<AnyEstimator, String> {
+    pub fn build(self, layout: &Arc<Layout>, params: &Params) -> Result<AnyEstimator, ParamError> {
         params.validate()?;
         let layout = Arc::clone(layout);
         let ridge = params.ridge_for(self);
@@ -251,13 +251,11 @@ impl Default for Params {
 
 impl Params {
     /// Checks every parameter's range.
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> Result<(), ParamError> {
         Heuristic::Power { beta: self.beta }.validate()?;
         Heuristic::Cutoff { c: self.cutoff }.validate()?;
         match self.ridge {
-            Some(r) if !(r >= 0.0 && r.is_finite()) => {
-                Err(format!("ridge λ must be finite and ≥ 0, got {r}"))
-            }
+            Some(r) if !(r >= 0.0 && r.is_finite()) => Err(ParamError::Ridge(r)),
             _ => Ok(()),
         }
     }

@@ -7,6 +7,7 @@
 //! non-negative and sum to 1, which makes every multi-sample estimator built on them
 //! unbiased (Veach 1997, Theorem 9.2); where all `q_k = 0` every weight is 0.
 
+use crate::ParamError;
 use std::fmt;
 
 /// A heuristic weighting function.
@@ -30,14 +31,12 @@ pub enum Heuristic {
 
 impl Heuristic {
     /// Checks the parameter: β finite and > 0, c in [0, 1].
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> Result<(), ParamError> {
         match *self {
             Heuristic::Power { beta } if !(beta > 0.0 && beta.is_finite()) => {
-                Err(format!("power heuristic needs a finite β > 0, got {beta}"))
+                Err(ParamError::Beta(beta))
             }
-            Heuristic::Cutoff { c } if !(0.0..=1.0).contains(&c) => {
-                Err(format!("cutoff heuristic needs c in [0, 1], got {c}"))
-            }
+            Heuristic::Cutoff { c } if !(0.0..=1.0).contains(&c) => Err(ParamError::Cutoff(c)),
             _ => Ok(()),
         }
     }

@@ -119,7 +119,7 @@ pub fn resume(
     let range = match partial.samples() {
         [r] => r.clone(),
         r => {
-            return Err(Error::Options(format!(
+            return Err(Error::Resume(format!(
                 "a state to resume holds the one sample range of a stopped render, not {}",
                 if r.is_empty() {
                     "none".to_string()
@@ -130,7 +130,7 @@ pub fn resume(
         }
     };
     if !partial.is_partial() {
-        return Err(Error::Options(format!(
+        return Err(Error::Resume(format!(
             "nothing to resume: the state holds all of samples {}..{}",
             range.start, range.end
         )));
@@ -160,7 +160,7 @@ fn render_into(
         ..options.clone()
     };
     let mut it = Integrator::new(&o)?;
-    it.prepare(scene).map_err(Error::Options)?;
+    it.prepare(scene)?;
     let (width, height) = (scene.camera.width, scene.camera.height);
     crate::limits::check_threads(o.threads)?;
     crate::limits::check_memory(width, height, &o)?;
@@ -226,7 +226,7 @@ fn render_into(
         rayon::ThreadPoolBuilder::new()
             .num_threads(o.threads)
             .build()
-            .map_err(|e| Error::Options(format!("thread pool: {e}")))?
+            .map_err(|e| Error::ThreadPool(e.to_string()))?
             .install(|| run(&mut tiles))
     } else {
         run(&mut tiles)

@@ -68,10 +68,19 @@ fn per_depth_images_sum_to_the_full_image() {
         ..options(IntegratorKind::Path, Method::Balance, &techniques, 1, 1)
     };
     let e = too_deep.validate().unwrap_err();
-    assert!(e.contains("min_depth 5 exceeds"), "{e}");
+    assert_eq!(
+        e,
+        render::integrator::OptionsError::MinDepth {
+            min_depth: 5,
+            deepest: 4,
+            integrator: IntegratorKind::Path
+        }
+    );
+    assert!(e.to_string().contains("min_depth 5 exceeds"), "{e}");
     let direct = RenderOptions {
         min_depth: 2,
         ..options(IntegratorKind::Direct, Method::Balance, &techniques, 1, 1)
     };
-    assert!(direct.validate().is_err());
+    let e = direct.validate().unwrap_err();
+    assert!(e.to_string().contains("direct shades one vertex"), "{e}");
 }

@@ -165,5 +165,15 @@ fn training_options_change_what_is_learned() {
         ..base
     };
     let e = bad.validate().unwrap_err();
-    assert!(e.starts_with("trained_floor:"), "{e}");
+    assert!(
+        matches!(
+            e,
+            render::integrator::OptionsError::Training {
+                key: "trained_floor",
+                ..
+            }
+        ),
+        "{e}"
+    );
+    assert!(e.to_string().starts_with("trained_floor:"), "{e}");
 }

@@ -447,7 +447,7 @@ pub(crate) fn settings(
     ];
     for (key, one) in each {
         one.validate()
-            .map_err(|e| src.at_value(&kp!["render", key], e))?;
+            .map_err(|e| src.at_value(&kp!["render", key], e.to_string()))?;
     }
     match &r.techniques {
         Some(list) => {

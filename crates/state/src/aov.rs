@@ -2,6 +2,8 @@
 //! render keeps, and where their sums lie in a pixel's record (how they are computed:
 //! `render::integrator::aov`).
 
+use crate::options_error::OptionsError;
+
 /// An extra film channel group.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Aov {
@@ -43,12 +45,12 @@ impl Aov {
 }
 
 impl std::str::FromStr for Aov {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
+    type Err = OptionsError;
+    fn from_str(s: &str) -> Result<Self, OptionsError> {
         let key = s.trim().to_ascii_lowercase();
         Self::ALL
             .into_iter()
             .find(|a| a.name() == key || (key == "normals" && *a == Aov::Normal))
-            .ok_or_else(|| format!("unknown AOV {s:?}; valid names: depth, normal, albedo"))
+            .ok_or_else(|| OptionsError::UnknownAov(s.to_string()))
     }
 }

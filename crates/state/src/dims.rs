@@ -16,6 +16,7 @@
 //! with the stride `S = 3(D + 1) + 1` rounded up to a multiple of 4, so that each vertex
 //! starts a new Philox block ([`crate::sampler`]).
 
+use crate::options_error::OptionsError;
 use crate::sampler::SampleStream;
 use glam::DVec2;
 
@@ -49,16 +50,16 @@ pub struct Draw {
 impl Dims {
     /// The layout for techniques drawn `counts[k]` times per vertex and paths of at most
     /// `max_depth` vertices; errors when the dimensions would not fit in 32 bits.
-    pub fn new(counts: &[u32], max_depth: u32) -> Result<Dims, String> {
+    pub fn new(counts: &[u32], max_depth: u32) -> Result<Dims, OptionsError> {
         let draws: u64 = counts.iter().map(|&n| u64::from(n)).sum();
         let stride = (3 * (draws + 1) + 1).div_ceil(4) * 4;
         let last = u64::from(FIRST_VERTEX) + u64::from(max_depth.max(1)) * stride;
         if last > u64::from(u32::MAX) {
-            return Err(format!(
-                "{draws} draws per vertex at depth {max_depth} need {last} random dimensions \
-                 per sample; at most {} are available",
-                u32::MAX
-            ));
+            return Err(OptionsError::TooManyDimensions {
+                draws,
+                max_depth,
+                needed: last,
+            });
         }
         let mut first_slot = Vec::with_capacity(counts.len());
         let mut at = 0;

@@ -1,14 +1,22 @@
 //! The errors of rendering and of render states, typed at the crate's boundary.
 
+use crate::options_error::OptionsError;
 use std::ops::Range;
 use std::path::PathBuf;
 
 /// What can go wrong in a render or with a render state.
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
-    /// The render options are invalid (the message says which and why).
+    /// The render options are invalid.
+    #[error(transparent)]
+    Options(#[from] OptionsError),
+    /// A state that cannot be resumed: not the one sample range of a stopped render,
+    /// or a whole one.
     #[error("{0}")]
-    Options(String),
+    Resume(String),
+    /// The worker threads could not be started.
+    #[error("thread pool: {0}")]
+    ThreadPool(String),
     /// A render that would exceed a resource limit (memory, threads): the message gives
     /// the estimate and the limit.
     #[error("{0}")]
@@ -44,10 +52,4 @@ pub enum Error {
         /// What is wrong with it.
         source: Box<Error>,
     },
-}
-
-impl From<String> for Error {
-    fn from(s: String) -> Self {
-        Error::Options(s)
-    }
 }

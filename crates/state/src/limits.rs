@@ -13,6 +13,7 @@
 
 use crate::error::Error;
 use crate::options::RenderOptions;
+use crate::options_error::OptionsError;
 use crate::tally::Tally;
 
 /// The limit where the available memory cannot be read (not Linux, or no `/proc`):
@@ -156,8 +157,8 @@ pub fn bytes(n: u64) -> String {
 
 /// Parses a byte size: a number with an optional unit `K`, `M`, `G`, `T` (powers of
 /// 1024; `KiB`, `GB` and the like read the same), e.g. `512M`, `4G`, `1.5GiB`.
-pub fn parse_bytes(s: &str) -> Result<u64, String> {
-    let bad = || format!("{s:?}: expected a size such as 512M, 4G or 1073741824");
+pub fn parse_bytes(s: &str) -> Result<u64, OptionsError> {
+    let bad = || OptionsError::BadSize(s.to_string());
     let t = s.trim();
     let split = t
         .find(|c: char| !(c.is_ascii_digit() || c == '.'))

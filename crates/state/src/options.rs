@@ -2,6 +2,7 @@
 //! takes it.
 
 use crate::aov::Aov;
+use crate::options_error::OptionsError;
 use crate::technique::Technique;
 use mis::{Method, Params};
 use scene::{IntegratorKind, RenderSettings};
@@ -111,7 +112,7 @@ impl RenderOptions {
     /// The options of a scene file's `[render]` table, with the loop's own settings (tile
     /// size, passes, threads) at their defaults. Errors on an AOV name other than
     /// `depth`, `normal` or `albedo`.
-    pub fn from_settings(s: &RenderSettings) -> Result<Self, String> {
+    pub fn from_settings(s: &RenderSettings) -> Result<Self, OptionsError> {
         Ok(Self {
             integrator: s.integrator,
             spp: s.spp,
@@ -132,53 +133,46 @@ impl RenderOptions {
 
     /// Checks the options: spp, tile size, techniques (non-empty for MIS integrators,
     /// counts ≥ 1, none twice, at most [`MAX_TECHNIQUES`]), method parameters, AOVs once.
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> Result<(), OptionsError> {
         if self.spp == 0 {
-            return Err("spp must be at least 1".into());
+            return Err(OptionsError::ZeroSpp);
         }
         if self.tile_size == 0 {
-            return Err("tile size must be at least 1".into());
+            return Err(OptionsError::ZeroTileSize);
         }
         if uses_mis(self.integrator) && self.techniques.is_empty() {
-            return Err(format!(
-                "integrator {} needs at least one technique",
-                self.integrator
-            ));
+            return Err(OptionsError::NoTechniques(self.integrator));
         }
         if self.techniques.len() > MAX_TECHNIQUES {
-            return Err(format!("at most {MAX_TECHNIQUES} techniques"));
+            return Err(OptionsError::TooManyTechniques(self.techniques.len()));
         }
         for (i, (t, n)) in self.techniques.iter().enumerate() {
             if *n == 0 {
-                return Err(format!("technique {} needs at least 1 draw", t.name()));
+                return Err(OptionsError::ZeroDraws(t.name().into_owned()));
             }
             if self.techniques[..i].iter().any(|(u, _)| u == t) {
-                return Err(format!("technique {} listed twice", t.name()));
+                return Err(OptionsError::TechniqueTwice(t.name().into_owned()));
             }
         }
         for (i, a) in self.aovs.iter().enumerate() {
             if self.aovs[..i].contains(a) {
-                return Err(format!("AOV {} listed twice", a.name()));
+                return Err(OptionsError::AovTwice(a.name()));
             }
         }
         self.training
             .validate()
-            .map_err(|(key, e)| format!("{key}: {e}"))?;
+            .map_err(|(key, message)| OptionsError::Training { key, message })?;
         let deepest = match self.integrator {
             IntegratorKind::Direct => 1,
             _ => self.max_depth,
         };
         if uses_mis(self.integrator) && self.min_depth > deepest {
-            return Err(format!(
-                "min_depth {} exceeds the deepest vertex {deepest} ({}): the image would be black",
-                self.min_depth,
-                if self.integrator == IntegratorKind::Direct {
-                    "direct shades one vertex"
-                } else {
-                    "max_depth"
-                }
-            ));
+            return Err(OptionsError::MinDepth {
+                min_depth: self.min_depth,
+                deepest,
+                integrator: self.integrator,
+            });
         }
-        self.params.validate()
+        Ok(self.params.validate()?)
     }
 }

@@ -198,7 +198,10 @@ impl StateHeader {
             .collect::<Result<_, String>>()?;
         let aovs = list("aovs")?
             .iter()
-            .map(|a| a.as_str().ok_or("AOV names are strings")?.parse())
+            .map(|a| {
+                let name = a.as_str().ok_or("AOV names are strings")?;
+                name.parse::<Aov>().map_err(|e| e.to_string())
+            })
             .collect::<Result<_, String>>()?;
         Ok(Self {
             width: u32_("width")?,
@@ -437,7 +440,7 @@ impl RenderState {
         let n = header.width as usize * header.height as usize;
         let words = n
             .checked_mul(record.stride())
-            .ok_or_else(|| Error::Options("the render state would not fit in memory".into()))?;
+            .ok_or_else(|| Error::Limit("the render state would not fit in memory".into()))?;
         Ok((record, kernel, words))
     }
 

@@ -6,6 +6,7 @@
 
 use crate::dims::Dims;
 use crate::options::RenderOptions;
+use crate::options_error::OptionsError;
 use crate::record::Record;
 use crate::technique::Technique;
 use mis::{Kernel, Layout};
@@ -46,7 +47,7 @@ pub struct Tally {
 
 impl Tally {
     /// Digests `o` (validated first).
-    pub fn new(o: &RenderOptions) -> Result<Self, String> {
+    pub fn new(o: &RenderOptions) -> Result<Self, OptionsError> {
         o.validate()?;
         let techniques: Vec<Technique> = o.techniques.iter().map(|t| t.0).collect();
         let counts: Vec<u32> = o.techniques.iter().map(|t| t.1).collect();
@@ -85,11 +86,9 @@ impl Tally {
             .blocks_checked()
             .and_then(|b| b.checked_mul(record.block))
             .and_then(|w| w.checked_add(Record::AOV + record.aov))
-            .ok_or_else(|| {
-                format!(
-                    "{} depths × {} lights of MIS estimators are more than a pixel's record can hold",
-                    record.depths, record.lights
-                )
+            .ok_or(OptionsError::RecordTooLarge {
+                depths: record.depths,
+                lights: record.lights,
             })?;
         let dims = Dims::new(&counts, o.max_depth)?;
         Ok(Self {

@@ -122,8 +122,8 @@ fn gpu_range(
     let g = shared_gpu()?;
     #[cfg(feature = "gpu")]
     {
-        let host =
-            render::integrator::CpuHost::new(scene, options).map_err(GpuError::Unsupported)?;
+        let host = render::integrator::CpuHost::new(scene, options)
+            .map_err(|e| GpuError::Unsupported(e.to_string()))?;
         gpu::direct::render_range(g, data, &host, options, samples, stop, progress)
     }
     #[cfg(not(feature = "gpu"))]

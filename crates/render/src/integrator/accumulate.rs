@@ -8,7 +8,7 @@ use crate::bsdf::CoatTable;
 use crate::color::luminance;
 use crate::light::{AreaLight, TrainedSelection};
 use crate::scene::Scene;
-use state::{CoatAlbedo, Host, LightBounds, Tally};
+use state::{CoatAlbedo, Host, LightBounds, OptionsError, Tally};
 
 /// The `direct` and `path` integrators' bookkeeping for samples shaded elsewhere: a
 /// [`Tally`] (through `Deref`) and the CPU integrator behind it.
@@ -27,7 +27,7 @@ impl std::ops::Deref for Accumulator {
 impl Accumulator {
     /// The accumulator of a render of `scene` with `options` (the options are validated
     /// and checked against the scene as a CPU render would).
-    pub fn new(scene: &Scene, options: &RenderOptions) -> Result<Self, String> {
+    pub fn new(scene: &Scene, options: &RenderOptions) -> Result<Self, OptionsError> {
         let mut it = Integrator::new(options)?;
         it.prepare(scene)?;
         Ok(Self { it })
@@ -64,7 +64,7 @@ pub struct CpuHost<'a> {
 impl<'a> CpuHost<'a> {
     /// The host of a render of `scene` with `options` (validated, checked against the
     /// scene and trained as a CPU render would be).
-    pub fn new(scene: &'a Scene, options: &RenderOptions) -> Result<Self, String> {
+    pub fn new(scene: &'a Scene, options: &RenderOptions) -> Result<Self, OptionsError> {
         Ok(Self {
             scene,
             acc: Accumulator::new(scene, options)?,

@@ -58,6 +58,7 @@ mod ray_log;
 mod train;
 mod vertex;
 
+pub use ::state::OptionsError;
 use ::state::{dims, Combine, Pixel, Tally};
 pub use ::state::{
     uses_mis, CpuStages, LinearMis, LinearRecord, RayCounts, RayKind, Record, RenderOptions,
@@ -82,7 +83,7 @@ use std::sync::Arc;
 pub fn trained_selection(
     scene: &Scene,
     o: &RenderOptions,
-) -> Result<Option<TrainedSelection>, String> {
+) -> Result<Option<TrainedSelection>, OptionsError> {
     let mut it = Integrator::new(o)?;
     it.prepare(scene)?;
     Ok(it.trained.map(|t| (*t).clone()))
@@ -143,7 +144,7 @@ impl std::ops::Deref for Integrator {
 
 impl Integrator {
     /// Digests validated options.
-    pub fn new(o: &RenderOptions) -> Result<Self, String> {
+    pub fn new(o: &RenderOptions) -> Result<Self, OptionsError> {
         let tally = Tally::new(o)?;
         Ok(Self {
             sampler: Sampler::new(o.seed),
@@ -169,23 +170,21 @@ impl Integrator {
     /// Checks the options against the scene's lights: `light#k` needs k below the
     /// number of MIS lights (area lights, then the environment), per-light mode their
     /// number.
-    pub fn check_scene(&self, scene: &Scene) -> Result<(), String> {
+    pub fn check_scene(&self, scene: &Scene) -> Result<(), OptionsError> {
         let count = scene.lights.count();
         if self.per_light > 0 && self.per_light != count {
-            return Err(format!(
-                "per-light mode for {} lights, but the scene has {count} MIS lights",
-                self.per_light
-            ));
+            return Err(OptionsError::PerLightMismatch {
+                per_light: self.per_light,
+                lights: count,
+            });
         }
         for t in &self.techniques {
             if let Technique::Light(k) = *t {
                 if k >= count {
-                    return Err(format!(
-                        "technique {}: the scene has {count} MIS light{} (area lights, then \
-                         the environment), numbered from 0",
-                        t.name(),
-                        if count == 1 { "" } else { "s" }
-                    ));
+                    return Err(OptionsError::NoSuchLight {
+                        technique: t.name().into_owned(),
+                        lights: count,
+                    });
                 }
             }
         }
@@ -194,7 +193,7 @@ impl Integrator {
 
     /// Checks the options against `scene` ([`Self::check_scene`]) and runs the training
     /// pass of `light-trained` if it is listed (`integrator/train.rs`).
-    pub fn prepare(&mut self, scene: &Scene) -> Result<(), String> {
+    pub fn prepare(&mut self, scene: &Scene) -> Result<(), OptionsError> {
         self.check_scene(scene)?;
         self.trained = self.train(scene).map(Arc::new);
         Ok(())
@@ -278,7 +277,10 @@ mod tests {
             techniques: vec![(Technique::Bsdf, 1), (Technique::Bsdf, 2)],
             ..ok.clone()
         };
-        assert!(twice.validate().unwrap_err().contains("twice"));
+        assert!(matches!(
+            twice.validate().unwrap_err(),
+            OptionsError::TechniqueTwice(name) if name == "bsdf"
+        ));
         let zero = RenderOptions {
             techniques: vec![(Technique::Bsdf, 0)],
             ..ok.clone()
@@ -422,7 +424,8 @@ mod tests {
         let e = many(MAX_TECHNIQUES + 1, Method::Balance, 0)
             .validate()
             .unwrap_err();
-        assert!(e.contains("at most 32"), "{e}");
+        assert_eq!(e, OptionsError::TooManyTechniques(33));
+        assert!(e.to_string().contains("at most 32"), "{e}");
         let stride = |t, m, l| Integrator::new(&many(t, m, l)).unwrap().record.stride();
         assert_eq!(stride(32, Method::OptimalDirect, 0), 4 + 1 + 528 + 96);
         assert_eq!(stride(3, Method::OptimalDirect, 0), 4 + 1 + 6 + 9);
