@@ -38,7 +38,7 @@ pub fn measure<'py>(
     reference: PyReadonlyArray3<'py, f64>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let (m, _) = exp::measure(&array_image(&image)?, &array_image(&reference)?)
-        .map_err(PyValueError::new_err)?;
+        .map_err(|e| PyValueError::new_err(e.to_string()))?;
     let d = PyDict::new(py);
     d.set_item("mse", m.mse)?;
     d.set_item("rmse", m.mse.sqrt())?;

@@ -90,7 +90,7 @@ pub fn run(a: ExperimentArgs) -> Result<(), String> {
     };
     let stop = crate::stop_on_ctrl_c();
     let mut r = SceneRenderer::new(&scene, base, &stop, &note);
-    let summary = experiment::run(&cfg, &mut r, &note)?;
+    let summary = experiment::run(&cfg, &mut r, &note).map_err(|e| e.to_string())?;
     if summary.interrupted {
         note!("interrupted: rerun the same command to resume");
     } else {

@@ -15,6 +15,16 @@ pub use scene::Tonemap;
 use std::io;
 use std::path::Path;
 
+/// An EXR file that does not read as an image ([`Image::read_exr`]).
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("{}: {message}", .path.display())]
+pub struct ReadExrError {
+    /// The file.
+    pub path: std::path::PathBuf,
+    /// What is wrong with it.
+    pub message: String,
+}
+
 /// Pixel values of R, G, B and the AOV channels (module docs).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Image {
@@ -200,9 +210,12 @@ impl Image {
     /// Reads the first layer of an EXR file: channels R, G, B (required) and every other
     /// channel as an AOV, in the file's (alphabetical) order. Errors name the file and
     /// what is wrong; a decoder panic on a malformed file is caught and reported.
-    pub fn read_exr(path: impl AsRef<Path>) -> Result<Image, String> {
+    pub fn read_exr(path: impl AsRef<Path>) -> Result<Image, ReadExrError> {
         let path = path.as_ref();
-        let at = |e: String| format!("{}: {e}", path.display());
+        let at = |message: String| ReadExrError {
+            path: path.to_path_buf(),
+            message,
+        };
         let exr = scene::read_exr(path).map_err(at)?;
         let (width, height) = (
             u32::try_from(exr.width).map_err(|_| at("too wide".into()))?,
@@ -281,8 +294,10 @@ mod tests {
         let bad = d.join("bad.exr");
         fs::write(&bad, b"not an exr").unwrap();
         let e = Image::read_exr(&bad).unwrap_err();
+        assert_eq!(e.path, bad);
+        assert!(e.message.contains("not a readable EXR"), "{e}");
         assert!(
-            e.contains("bad.exr") && e.contains("not a readable EXR"),
+            e.to_string().starts_with(&format!("{}: ", bad.display())),
             "{e}"
         );
         fs::remove_dir_all(&d).unwrap();

@@ -13,7 +13,7 @@
 //! help at all?").
 
 use super::manifest::{Manifest, RenderRecord, Row};
-use super::{exr_io, image_file, Image, Plan, Renderer};
+use super::{exr_io, image_file, ExperimentError, Image, Plan, Renderer};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
@@ -58,7 +58,7 @@ pub(super) fn render_missing(
     manifest: &mut Manifest,
     plan: &Plan,
     progress: &dyn Fn(&str),
-) -> Result<bool, String> {
+) -> Result<bool, ExperimentError> {
     let mut todo = Vec::new();
     for &spp in &plan.spp {
         for &seed in &plan.seeds {
@@ -85,7 +85,7 @@ pub(super) fn render_missing(
             progress(&format!("{head}: interrupted"));
             return Ok(true);
         };
-        img.validate().map_err(|e| format!("{head}: {e}"))?;
+        img.validate().map_err(ExperimentError::image(&head))?;
         exr_io::write(&out.join(file), &img, None)?;
         manifest.centered.retain(|r| &r.file != file);
         manifest.centered.push(RenderRecord {
@@ -106,7 +106,7 @@ pub(super) fn render_missing(
 }
 
 /// Fills [`Row::variance`] of every row whose jittered and centred images are all there.
-pub(super) fn fill(out: &Path, rows: &mut [Row]) -> Result<(), String> {
+pub(super) fn fill(out: &Path, rows: &mut [Row]) -> Result<(), ExperimentError> {
     for row in rows.iter_mut() {
         let read = |f: String| exr_io::read(&out.join(f)).ok();
         let jit: Option<Vec<Image>> = row

@@ -1,6 +1,6 @@
 //! Reading a reference EXR and writing rendered images with their per-pixel error.
 
-use super::Image;
+use super::{ExperimentError, Image, ImageError};
 use render::Rgb;
 use std::path::Path;
 
@@ -10,8 +10,19 @@ pub const ERROR_CHANNELS: [&str; 3] = ["error.R", "error.G", "error.B"];
 
 /// Writes `img` as a linear f32 EXR with channels R, G, B and, if given, the squared
 /// error in [`ERROR_CHANNELS`]; whole or not at all.
-pub fn write(path: &Path, img: &Image, error: Option<&[[f64; 3]]>) -> Result<(), String> {
-    img.validate()?;
+pub fn write(path: &Path, img: &Image, error: Option<&[[f64; 3]]>) -> Result<(), ExperimentError> {
+    let what = || path.display().to_string();
+    img.validate().map_err(ExperimentError::image(what()))?;
+    if let Some(e) = error.filter(|e| e.len() != img.rgb.len()) {
+        return Err(ExperimentError::Image {
+            what: what(),
+            source: ImageError::Values {
+                width: img.width,
+                height: img.height,
+                values: e.len(),
+            },
+        });
+    }
     let aovs: &[&str] = if error.is_some() {
         &ERROR_CHANNELS
     } else {
@@ -24,20 +35,22 @@ pub fn write(path: &Path, img: &Image, error: Option<&[[f64; 3]]>) -> Result<(),
             let p = img.rgb[i];
             film.set_rgb(x, y, Rgb::new(p[0], p[1], p[2]));
             if let Some(e) = error {
-                let e = e.get(i).ok_or("error image smaller than the image")?;
-                for (c, v) in e.iter().enumerate() {
+                for (c, v) in e[i].iter().enumerate() {
                     film.set_aov(x, y, c, *v);
                 }
             }
         }
     }
     film.write_exr(path)
-        .map_err(|e| format!("cannot write {}: {e}", path.display()))
+        .map_err(ExperimentError::io("write", path))
 }
 
 /// Reads channels R, G and B of the first layer of an EXR file.
-pub fn read(path: &Path) -> Result<Image, String> {
-    let img = render::Image::read_exr(path)?;
+pub fn read(path: &Path) -> Result<Image, ExperimentError> {
+    let img = render::Image::read_exr(path).map_err(|e| ExperimentError::File {
+        path: e.path,
+        message: e.message,
+    })?;
     let (width, height) = (img.width(), img.height());
     let rgb = (0..height)
         .flat_map(|y| (0..width).map(move |x| (x, y)))
@@ -45,6 +58,6 @@ pub fn read(path: &Path) -> Result<Image, String> {
         .collect();
     let img = Image { width, height, rgb };
     img.validate()
-        .map_err(|e| format!("{}: {e}", path.display()))?;
+        .map_err(ExperimentError::image(path.display().to_string()))?;
     Ok(img)
 }

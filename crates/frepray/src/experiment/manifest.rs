@@ -1,6 +1,7 @@
 //! `results.json`: the numbers of an experiment and the manifest that lets a rerun
 //! skip finished renders. Rewritten whole (temp + rename) after every render.
 
+use super::ExperimentError;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
@@ -210,36 +211,38 @@ impl Manifest {
 
     /// Reads `path`: `Ok(None)` if there is no such file, an error if it is not a
     /// manifest of this format.
-    pub fn load(path: &Path) -> Result<Option<Manifest>, String> {
+    pub fn load(path: &Path) -> Result<Option<Manifest>, ExperimentError> {
         let bytes = match std::fs::read(path) {
             Ok(b) => b,
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
-            Err(e) => return Err(format!("cannot read {}: {e}", path.display())),
+            Err(e) => return Err(ExperimentError::io("read", path)(e)),
         };
-        let m: Manifest = serde_json::from_slice(&bytes).map_err(|e| {
-            format!(
-                "{} is not a frepray experiment manifest ({e}); remove it or choose another --out",
-                path.display()
-            )
+        let m: Manifest = serde_json::from_slice(&bytes).map_err(|e| ExperimentError::File {
+            path: path.to_path_buf(),
+            message: format!(
+                "not a frepray experiment manifest ({e}); remove it or choose another --out"
+            ),
         })?;
         if m.format != FORMAT {
-            return Err(format!(
-                "{} has format {} (this frepray writes {FORMAT}); choose another --out",
-                path.display(),
-                m.format
-            ));
+            return Err(ExperimentError::File {
+                path: path.to_path_buf(),
+                message: format!(
+                    "format {} (this frepray writes {FORMAT}); choose another --out",
+                    m.format
+                ),
+            });
         }
         Ok(Some(m))
     }
 
     /// Writes the manifest as pretty JSON, whole or not at all.
-    pub fn save(&self, path: &Path) -> Result<(), String> {
-        let json = serde_json::to_vec_pretty(self).map_err(|e| e.to_string())?;
+    pub fn save(&self, path: &Path) -> Result<(), ExperimentError> {
+        let json = serde_json::to_vec_pretty(self).expect("a manifest serialises");
         render::output::write_atomically(path, |w| {
             std::io::Write::write_all(w, &json)?;
             std::io::Write::write_all(w, b"\n")
         })
-        .map_err(|e| format!("cannot write {}: {e}", path.display()))
+        .map_err(ExperimentError::io("write", path))
     }
 }
 

@@ -2,7 +2,7 @@
 //! A ratio of whole-image MSEs can be carried by a few pixels; the median of the
 //! per-pixel ratios and the map show whether most of the image gains.
 
-use super::{exr_io, image_file, metrics, stats, Image};
+use super::{exr_io, image_file, metrics, stats, ExperimentError, Image};
 use std::collections::HashMap;
 use std::path::Path;
 
@@ -45,9 +45,9 @@ pub fn write(
     seeds: &[u64],
     baseline: &str,
     reference: &Image,
-) -> Result<HashMap<(String, u32), f64>, String> {
+) -> Result<HashMap<(String, u32), f64>, ExperimentError> {
     let dir = out.join("maps");
-    std::fs::create_dir_all(&dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
+    std::fs::create_dir_all(&dir).map_err(ExperimentError::io("create", &dir))?;
     let files = |est: &str, spp: u32| -> Vec<String> {
         seeds.iter().map(|&s| image_file(est, spp, s)).collect()
     };
@@ -90,7 +90,7 @@ pub fn write(
         render::output::write_atomically(&png, |f| {
             render::png_io::write_rgb8(f, &bytes, map.width, map.height)
         })
-        .map_err(|e| format!("cannot write {}: {e}", png.display()))?;
+        .map_err(ExperimentError::io("write", &png))?;
     }
     Ok(medians)
 }

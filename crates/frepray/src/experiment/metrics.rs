@@ -1,7 +1,7 @@
 //! Error of an image against the reference, in f64 over all pixels and channels,
 //! unclamped (negative pixel values are legitimate for optimal MIS, RESEARCH.md §2).
 
-use super::Image;
+use super::{Image, ImageError};
 
 /// The ε of relMSE = mean over pixels and channels of (x − ref)² / (ref² + ε): it keeps
 /// near-black pixels from dominating the relative error.
@@ -26,18 +26,20 @@ pub struct Metrics {
 
 impl Image {
     /// An error unless the image has at least one pixel and `width × height` of them.
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> Result<(), ImageError> {
         let n = self.width as u64 * self.height as u64;
         if n == 0 {
-            return Err(format!("empty image ({}x{})", self.width, self.height));
+            return Err(ImageError::Empty {
+                width: self.width,
+                height: self.height,
+            });
         }
         if self.rgb.len() as u64 != n {
-            return Err(format!(
-                "image of {}x{} pixels holds {} values",
-                self.width,
-                self.height,
-                self.rgb.len()
-            ));
+            return Err(ImageError::Values {
+                width: self.width,
+                height: self.height,
+                values: self.rgb.len(),
+            });
         }
         Ok(())
     }
@@ -81,14 +83,15 @@ impl Image {
 
 /// The metrics of `img` against `reference` and the per-pixel squared error
 /// (x − ref)² of each channel; an error if the sizes differ.
-pub fn measure(img: &Image, reference: &Image) -> Result<(Metrics, Vec<[f64; 3]>), String> {
+pub fn measure(img: &Image, reference: &Image) -> Result<(Metrics, Vec<[f64; 3]>), ImageError> {
     img.validate()?;
     reference.validate()?;
     if (img.width, img.height) != (reference.width, reference.height) {
-        return Err(format!(
-            "image is {}x{} but the reference is {}x{}",
-            img.width, img.height, reference.width, reference.height
-        ));
+        return Err(ImageError::Sizes {
+            image: (img.width, img.height),
+            what: "reference",
+            other: (reference.width, reference.height),
+        });
     }
     let mut sq = Vec::with_capacity(img.rgb.len());
     let (mut sum, mut rel, mut nonfinite) = (0.0, 0.0, 0u64);

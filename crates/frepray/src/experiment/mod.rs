@@ -15,6 +15,7 @@
 
 mod cpu_time;
 pub mod decompose;
+mod error;
 mod exr_io;
 mod manifest;
 mod maps;
@@ -29,6 +30,7 @@ mod summarize;
 mod tests;
 
 pub use cpu_time::process_cpu_seconds;
+pub use error::{ExperimentError, ImageError};
 pub use manifest::{Comparison, Row};
 pub use metrics::{measure, Metrics, REL_EPSILON, TRIM_FRACTION};
 pub use scene_renderer::{canonical, to_image, SceneRenderer, REFERENCE_CHUNKS};
@@ -60,7 +62,7 @@ pub trait Renderer {
         estimator: &str,
         spp: u32,
         seed: u64,
-    ) -> Result<Option<(Image, f64)>, String>;
+    ) -> Result<Option<(Image, f64)>, crate::Error>;
 
     /// Renders the reference like [`Renderer::render`], keeping what a stopped render
     /// got in `checkpoint` and continuing from it when it holds samples of the same
@@ -72,7 +74,7 @@ pub trait Renderer {
         spp: u32,
         seed: u64,
         checkpoint: &Path,
-    ) -> Result<Option<(Image, f64)>, String> {
+    ) -> Result<Option<(Image, f64)>, crate::Error> {
         let _ = checkpoint;
         self.render(estimator, spp, seed)
     }
@@ -93,9 +95,9 @@ pub trait Renderer {
         estimator: &str,
         spp: u32,
         seed: u64,
-    ) -> Result<Option<(Image, f64)>, String> {
+    ) -> Result<Option<(Image, f64)>, ExperimentError> {
         let _ = (estimator, spp, seed);
-        Err("this renderer cannot trace rays through pixel centres".into())
+        Err(ExperimentError::NoPixelCenters)
     }
 }
 
@@ -193,7 +195,7 @@ pub struct Summary {
 }
 
 /// An estimator name: it becomes part of file names.
-fn check_name(what: &str, name: &str) -> Result<(), String> {
+fn check_name(what: &'static str, name: &str) -> Result<(), ExperimentError> {
     let ok = !name.is_empty()
         && name.len() <= 64
         && name
@@ -203,9 +205,10 @@ fn check_name(what: &str, name: &str) -> Result<(), String> {
     if ok {
         Ok(())
     } else {
-        Err(format!(
-            "{what} {name:?}: use letters, digits, '-', '_' and '.' (at most 64)"
-        ))
+        Err(ExperimentError::Name {
+            what,
+            name: name.to_string(),
+        })
     }
 }
 
@@ -217,7 +220,7 @@ struct Plan {
 }
 
 impl Plan {
-    fn new(cfg: &ExperimentConfig) -> Result<Plan, String> {
+    fn new(cfg: &ExperimentConfig) -> Result<Plan, ExperimentError> {
         check_name("baseline", &cfg.baseline)?;
         let mut estimators = vec![cfg.baseline.clone()];
         for e in &cfg.estimators {
@@ -233,16 +236,16 @@ impl Plan {
         spp.sort_unstable();
         spp.dedup();
         if spp.is_empty() || spp[0] == 0 {
-            return Err("give at least one sample count, each at least 1".into());
+            return Err(ExperimentError::NoSampleCounts);
         }
         if cfg.repeats == 0 {
-            return Err("repeats must be at least 1".into());
+            return Err(ExperimentError::NoRepeats);
         }
         if cfg.decompose && cfg.repeats < 2 {
-            return Err("the variance decomposition needs two or more repeats".into());
+            return Err(ExperimentError::DecomposeNeedsRepeats);
         }
         if cfg.reference.is_none() && cfg.reference_spp == 0 {
-            return Err("the reference needs at least 1 sample per pixel".into());
+            return Err(ExperimentError::NoReferenceSamples);
         }
         let seeds = (0..cfg.repeats as u64)
             .map(|r| cfg.seed.wrapping_add(r))
@@ -322,7 +325,7 @@ fn render_reference(
     spp: u32,
     seed: u64,
     progress: &dyn Fn(&str),
-) -> Result<Option<(Image, ReferenceInfo)>, String> {
+) -> Result<Option<(Image, ReferenceInfo)>, ExperimentError> {
     let checkpoints = [REFERENCE_CHECKPOINT, REFERENCE_CHECKPOINT_2];
     let mut parts = Vec::new();
     let mut time = 0.0;
@@ -334,7 +337,8 @@ fn render_reference(
         else {
             return Ok(None);
         };
-        img.validate().map_err(|e| format!("reference: {e}"))?;
+        img.validate()
+            .map_err(ExperimentError::image("reference"))?;
         progress(&format!(
             "reference: part {} done in {}",
             k + 1,
@@ -351,7 +355,14 @@ fn render_reference(
     let mut noise = None;
     if let Some((nb, second)) = parts.get(1) {
         if (second.width, second.height) != (first.width, first.height) {
-            return Err("reference: its two parts differ in size".into());
+            return Err(ExperimentError::Image {
+                what: "reference".into(),
+                source: ImageError::Sizes {
+                    image: (first.width, first.height),
+                    what: "reference's other part",
+                    other: (second.width, second.height),
+                },
+            });
         }
         let mut diff = 0.0;
         for (a, b) in img.rgb.iter_mut().zip(&second.rgb) {
@@ -393,11 +404,11 @@ pub fn run(
     cfg: &ExperimentConfig,
     renderer: &mut dyn Renderer,
     progress: &dyn Fn(&str),
-) -> Result<Summary, String> {
+) -> Result<Summary, ExperimentError> {
     let plan = Plan::new(cfg)?;
     let out = &cfg.out_dir;
     std::fs::create_dir_all(out.join("images"))
-        .map_err(|e| format!("cannot create {}: {e}", out.join("images").display()))?;
+        .map_err(ExperimentError::io("create", &out.join("images")))?;
     let manifest_path = out.join("results.json");
     let mut old = Manifest::load(&manifest_path)?;
     let scene = absolute(&cfg.scene);
@@ -423,12 +434,11 @@ pub fn run(
         Some(path) => {
             let img = exr_io::read(path)?;
             if let Some((w, h)) = cfg.size.filter(|&s| s != (img.width, img.height)) {
-                return Err(format!(
-                    "{}: the reference is {}×{}, the renders would be {w}×{h}",
-                    path.display(),
-                    img.width,
-                    img.height
-                ));
+                return Err(ExperimentError::ReferenceSize {
+                    path: path.clone(),
+                    found: (img.width, img.height),
+                    wanted: (w, h),
+                });
             }
             let info = ReferenceInfo {
                 source: ReferenceSource::File {
@@ -553,7 +563,7 @@ pub fn run(
             progress(&format!("{head}: interrupted"));
             break;
         };
-        let (m, err) = metrics::measure(&img, &reference).map_err(|e| format!("{head}: {e}"))?;
+        let (m, err) = metrics::measure(&img, &reference).map_err(ExperimentError::image(&head))?;
         let file = image_file(est, *spp, *seed);
         exr_io::write(&out.join(&file), &img, Some(&err))?;
         manifest.upsert(RenderRecord {

@@ -3,6 +3,7 @@
 //! DejaVu Sans embedded from the `dejavu` crate, so no system font is needed.
 
 use super::manifest::Row;
+use super::ExperimentError;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use std::path::Path;
@@ -14,13 +15,12 @@ pub const SIZE: (u32, u32) = (1024, 720);
 /// The font family the plots use, registered with plotters on first use.
 const FONT: &str = "sans-serif";
 
-fn register_font() -> Result<(), String> {
-    static DONE: OnceLock<Result<(), String>> = OnceLock::new();
-    DONE.get_or_init(|| {
-        plotters::style::register_font(FONT, FontStyle::Normal, dejavu::sans::regular())
-            .map_err(|_| "the embedded DejaVu Sans font is unreadable".to_string())
+/// Registers the embedded font once; false if it does not read.
+fn register_font() -> bool {
+    static DONE: OnceLock<bool> = OnceLock::new();
+    *DONE.get_or_init(|| {
+        plotters::style::register_font(FONT, FontStyle::Normal, dejavu::sans::regular()).is_ok()
     })
-    .clone()
 }
 
 /// One line of a plot: the estimator and its (x, y) points, x ascending.
@@ -28,7 +28,7 @@ pub type Series = (String, Vec<(f64, f64)>);
 
 /// Writes `rmse_vs_spp` and `rmse_vs_time` (.png and .svg) into `dir`, one line per
 /// estimator in `estimators` order.
-pub fn write_all(dir: &Path, rows: &[Row], estimators: &[String]) -> Result<(), String> {
+pub fn write_all(dir: &Path, rows: &[Row], estimators: &[String]) -> Result<(), ExperimentError> {
     let series = |x: &dyn Fn(&Row) -> f64| -> Vec<Series> {
         estimators
             .iter()
@@ -60,23 +60,37 @@ pub fn write_all(dir: &Path, rows: &[Row], estimators: &[String]) -> Result<(), 
 }
 
 /// Writes `stem.png` and `stem.svg`, each whole or not at all.
-pub fn write_plot(stem: &Path, title: &str, x_desc: &str, series: &[Series]) -> Result<(), String> {
-    register_font()?;
+pub fn write_plot(
+    stem: &Path,
+    title: &str,
+    x_desc: &str,
+    series: &[Series],
+) -> Result<(), ExperimentError> {
     let (w, h) = SIZE;
     let png = stem.with_extension("png");
+    let failed = |path: &Path| {
+        let path = path.to_path_buf();
+        move |e: &dyn std::fmt::Display| ExperimentError::Plot {
+            path,
+            message: e.to_string(),
+        }
+    };
+    if !register_font() {
+        return Err(failed(&png)(&"the embedded DejaVu Sans font is unreadable"));
+    }
     let mut rgb = vec![0u8; w as usize * h as usize * 3];
     {
         let root = BitMapBackend::with_buffer(&mut rgb, (w, h)).into_drawing_area();
-        draw(&root, title, x_desc, series).map_err(|e| format!("{}: {e}", png.display()))?;
+        draw(&root, title, x_desc, series).map_err(|e| failed(&png)(&e))?;
     }
     render::output::write_atomically(&png, |f| render::png_io::write_rgb8(f, &rgb, w, h))
-        .map_err(|e| format!("cannot write {}: {e}", png.display()))?;
+        .map_err(ExperimentError::io("write", &png))?;
 
     let svg_path = stem.with_extension("svg");
     let mut svg = String::new();
     {
         let root = SVGBackend::with_string(&mut svg, (w, h)).into_drawing_area();
-        draw(&root, title, x_desc, series).map_err(|e| format!("{}: {e}", svg_path.display()))?;
+        draw(&root, title, x_desc, series).map_err(|e| failed(&svg_path)(&e))?;
     }
     super::report::write_text(&svg_path, &svg)
 }

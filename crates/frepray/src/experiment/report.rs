@@ -4,6 +4,7 @@
 use super::manifest::{Comparison, Manifest, ReferenceSource, Row};
 use super::metrics::{REL_EPSILON, TRIM_FRACTION};
 use super::stats;
+use super::ExperimentError;
 use std::fmt::Write as _;
 use std::path::Path;
 
@@ -103,7 +104,7 @@ pub fn compare(m: &Manifest, rows: &[Row], baseline: &str, noise: Option<f64>) -
 }
 
 /// Writes `results.csv`: one line per point; floats in shortest round-trip form.
-pub fn write_csv(path: &Path, rows: &[Row]) -> Result<(), String> {
+pub fn write_csv(path: &Path, rows: &[Row]) -> Result<(), ExperimentError> {
     let mut s = String::from(
         "estimator,spp,repeats,seeds,time_s,mse,rmse,relmse,mse_lo,mse_hi,relmse_lo,\
          relmse_hi,trimmed_mse,net_mse,cpu_s\n",
@@ -135,9 +136,9 @@ pub fn write_csv(path: &Path, rows: &[Row]) -> Result<(), String> {
 }
 
 /// Writes `text` to `path`, whole or not at all.
-pub fn write_text(path: &Path, text: &str) -> Result<(), String> {
+pub fn write_text(path: &Path, text: &str) -> Result<(), ExperimentError> {
     render::output::write_atomically(path, |w| std::io::Write::write_all(w, text.as_bytes()))
-        .map_err(|e| format!("cannot write {}: {e}", path.display()))
+        .map_err(ExperimentError::io("write", path))
 }
 
 fn opt(v: Option<f64>, f: impl Fn(f64) -> String) -> String {

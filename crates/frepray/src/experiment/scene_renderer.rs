@@ -4,7 +4,7 @@
 //! keeps what it finished in a checkpoint that a rerun continues from. The command line,
 //! Python and Ray all run experiments through it.
 
-use super::{ExperimentConfig, Image, Renderer};
+use super::{ExperimentConfig, ExperimentError, Image, Renderer};
 use crate::{Error, Method, RenderOptions, RenderState, Scene, StateHeader};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
@@ -98,11 +98,11 @@ impl<'a> SceneRenderer<'a> {
         }
     }
 
-    fn options(&self, estimator: &str, spp: u32, seed: u64) -> Result<RenderOptions, String> {
+    fn options(&self, estimator: &str, spp: u32, seed: u64) -> Result<RenderOptions, Error> {
         Ok(RenderOptions {
             method: estimator
                 .parse()
-                .map_err(|e: mis::UnknownMethod| e.to_string())?,
+                .map_err(|e: mis::UnknownMethod| Error::Invalid(e.to_string()))?,
             spp,
             seed,
             ..self.base.clone()
@@ -110,11 +110,8 @@ impl<'a> SceneRenderer<'a> {
     }
 
     /// One render of `o`: its image and wall time, or `None` if stopped.
-    fn run(&self, o: &RenderOptions) -> Result<Option<(Image, f64)>, String> {
-        let (state, stats) = self
-            .scene
-            .render_with(o, 0..o.spp, self.stop, &|_, _| {})
-            .map_err(|e| e.to_string())?;
+    fn run(&self, o: &RenderOptions) -> Result<Option<(Image, f64)>, Error> {
+        let (state, stats) = self.scene.render_with(o, 0..o.spp, self.stop, &|_, _| {})?;
         if stats.stopped {
             return Ok(None);
         }
@@ -143,7 +140,7 @@ impl Renderer for SceneRenderer<'_> {
         estimator: &str,
         spp: u32,
         seed: u64,
-    ) -> Result<Option<(Image, f64)>, String> {
+    ) -> Result<Option<(Image, f64)>, Error> {
         let o = self.options(estimator, spp, seed)?;
         self.run(&o)
     }
@@ -153,12 +150,12 @@ impl Renderer for SceneRenderer<'_> {
         estimator: &str,
         spp: u32,
         seed: u64,
-    ) -> Result<Option<(Image, f64)>, String> {
+    ) -> Result<Option<(Image, f64)>, ExperimentError> {
         let o = RenderOptions {
             pixel_center: true,
             ..self.options(estimator, spp, seed)?
         };
-        self.run(&o)
+        Ok(self.run(&o)?)
     }
 
     /// Renders the reference in [`REFERENCE_CHUNKS`] sample ranges merged as they
@@ -170,7 +167,7 @@ impl Renderer for SceneRenderer<'_> {
         spp: u32,
         seed: u64,
         checkpoint: &Path,
-    ) -> Result<Option<(Image, f64)>, String> {
+    ) -> Result<Option<(Image, f64)>, Error> {
         let o = RenderOptions {
             scene_hash: self.scene.hash(),
             ..self.options(estimator, spp, seed)?
@@ -195,12 +192,11 @@ impl Renderer for SceneRenderer<'_> {
             let end = next.saturating_add(chunk).min(spp);
             let (state, stats) = self
                 .scene
-                .render_with(&o, next..end, self.stop, &|_, _| {})
-                .map_err(|e| e.to_string())?;
+                .render_with(&o, next..end, self.stop, &|_, _| {})?;
             wall += stats.wall.as_secs_f64();
             if stats.stopped {
                 if let Some(s) = &acc {
-                    s.write(checkpoint).map_err(|e| e.to_string())?;
+                    s.write(checkpoint)?;
                     (self.note)(&format!(
                         "reference: {} of {spp} samples kept in {}",
                         s.samples()[0].end,
@@ -211,7 +207,7 @@ impl Renderer for SceneRenderer<'_> {
             }
             match &mut acc {
                 None => acc = Some(state),
-                Some(a) => a.merge(&state).map_err(|e| e.to_string())?,
+                Some(a) => a.merge(&state)?,
             }
             next = end;
         }

@@ -74,7 +74,12 @@ struct Synth {
 }
 
 impl Renderer for Synth {
-    fn render(&mut self, est: &str, spp: u32, seed: u64) -> Result<Option<(Image, f64)>, String> {
+    fn render(
+        &mut self,
+        est: &str,
+        spp: u32,
+        seed: u64,
+    ) -> Result<Option<(Image, f64)>, crate::Error> {
         if self.stop_at == Some(self.calls.len()) {
             return Ok(None);
         }
@@ -96,7 +101,7 @@ impl Renderer for Synth {
         est: &str,
         spp: u32,
         seed: u64,
-    ) -> Result<Option<(Image, f64)>, String> {
+    ) -> Result<Option<(Image, f64)>, ExperimentError> {
         self.calls.push((format!("{est} centred"), spp, seed));
         let (mut img, t) = synthetic(est, spp, seed ^ 0xC3A5_C85C_97CB_3127);
         for (i, p) in img.rgb.iter_mut().enumerate() {
@@ -137,7 +142,7 @@ fn config(dir: &Path) -> ExperimentConfig {
     c
 }
 
-fn run_quiet(cfg: &ExperimentConfig, r: &mut Synth) -> Result<Summary, String> {
+fn run_quiet(cfg: &ExperimentConfig, r: &mut Synth) -> Result<Summary, ExperimentError> {
     run(cfg, r, &|_| {})
 }
 
@@ -538,7 +543,10 @@ fn bad_input_is_an_error() {
     let mut cfg = config(&d);
     cfg.reference = Some(garbage.clone());
     let e = run_quiet(&cfg, &mut Synth::default()).unwrap_err();
-    assert!(e.contains("garbage.exr"), "{e}");
+    assert!(
+        matches!(&e, ExperimentError::File { path, .. } if path.ends_with("garbage.exr")),
+        "{e}"
+    );
     // A truncated real EXR.
     let good = d.join("good.exr");
     exr_io::write(&good, &truth_image(), None).unwrap();
@@ -546,7 +554,8 @@ fn bad_input_is_an_error() {
     fs::write(&garbage, &bytes[..bytes.len() / 2]).unwrap();
     assert!(run_quiet(&cfg, &mut Synth::default()).is_err());
     cfg.reference = Some(d.join("missing.exr"));
-    assert!(run_quiet(&cfg, &mut Synth::default()).is_err());
+    let e = run_quiet(&cfg, &mut Synth::default()).unwrap_err();
+    assert!(e.to_string().contains("missing.exr"), "{e}");
     // A reference of another size than the renders.
     let small = Image {
         width: 3,
@@ -556,25 +565,62 @@ fn bad_input_is_an_error() {
     exr_io::write(&good, &small, None).unwrap();
     cfg.reference = Some(good);
     let e = run_quiet(&cfg, &mut Synth::default()).unwrap_err();
-    assert!(e.contains("3x2"), "{e}");
+    assert!(
+        matches!(
+            &e,
+            ExperimentError::Image {
+                source: ImageError::Sizes { other: (3, 2), .. },
+                ..
+            }
+        ),
+        "{e}"
+    );
+    assert!(e.to_string().contains("3x2"), "{e}");
 
     let bad = |f: &dyn Fn(&mut ExperimentConfig)| {
         let mut c = config(&d);
         f(&mut c);
         run_quiet(&c, &mut Synth::default()).unwrap_err()
     };
-    bad(&|c| c.spp = vec![4, 0]);
-    bad(&|c| c.spp.clear());
-    bad(&|c| c.repeats = 0);
-    bad(&|c| c.reference_spp = 0);
-    bad(&|c| c.estimators.push("../evil".into()));
-    bad(&|c| c.baseline = String::new());
+    assert!(matches!(
+        bad(&|c| c.spp = vec![4, 0]),
+        ExperimentError::NoSampleCounts
+    ));
+    assert!(matches!(
+        bad(&|c| c.spp.clear()),
+        ExperimentError::NoSampleCounts
+    ));
+    assert!(matches!(
+        bad(&|c| c.repeats = 0),
+        ExperimentError::NoRepeats
+    ));
+    assert!(matches!(
+        bad(&|c| c.reference_spp = 0),
+        ExperimentError::NoReferenceSamples
+    ));
+    assert!(matches!(
+        bad(&|c| c.estimators.push("../evil".into())),
+        ExperimentError::Name {
+            what: "estimator",
+            ..
+        }
+    ));
+    assert!(matches!(
+        bad(&|c| c.baseline = String::new()),
+        ExperimentError::Name {
+            what: "baseline",
+            ..
+        }
+    ));
     // A corrupt manifest is reported, not overwritten.
     let c = config(&d);
     fs::create_dir_all(&c.out_dir).unwrap();
     fs::write(c.out_dir.join("results.json"), b"{ not json").unwrap();
     let e = run_quiet(&c, &mut Synth::default()).unwrap_err();
-    assert!(e.contains("results.json"), "{e}");
+    assert!(
+        matches!(&e, ExperimentError::File { path, .. } if path.ends_with("results.json")),
+        "{e}"
+    );
     assert_eq!(read(&c.out_dir.join("results.json")), "{ not json");
     fs::remove_dir_all(&d).unwrap();
 }
@@ -583,7 +629,12 @@ fn bad_input_is_an_error() {
 struct Broken(bool);
 
 impl Renderer for Broken {
-    fn render(&mut self, est: &str, spp: u32, seed: u64) -> Result<Option<(Image, f64)>, String> {
+    fn render(
+        &mut self,
+        est: &str,
+        spp: u32,
+        seed: u64,
+    ) -> Result<Option<(Image, f64)>, crate::Error> {
         let (mut img, t) = synthetic(est, spp, seed);
         if self.0 && est == "optimal" {
             img.rgb[5] = [f64::NAN, 0.0, 0.0];
@@ -599,7 +650,11 @@ fn broken_renders() {
     let d = scratch("broken");
     let cfg = config(&d);
     let e = run(&cfg, &mut Broken(false), &|_| {}).unwrap_err();
-    assert!(e.contains("optimal"), "{e}");
+    assert!(
+        matches!(&e, ExperimentError::Image { what, source: ImageError::Values { .. } }
+            if what.contains("optimal")),
+        "{e}"
+    );
     // NaN pixels: the error is NaN, stored as null, shown as "—", and read back.
     let cfg = config(&d.join("nan"));
     let s = run(&cfg, &mut Broken(true), &|_| {}).unwrap();
@@ -657,8 +712,9 @@ fn variance_decomposition() {
     assert_eq!(again.rows, s.rows);
     // One repeat cannot estimate a variance.
     cfg.repeats = 1;
-    assert!(run_quiet(&cfg, &mut Synth::default())
-        .unwrap_err()
-        .contains("two or more repeats"));
+    assert!(matches!(
+        run_quiet(&cfg, &mut Synth::default()).unwrap_err(),
+        ExperimentError::DecomposeNeedsRepeats
+    ));
     fs::remove_dir_all(&d).unwrap();
 }
