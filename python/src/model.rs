@@ -165,11 +165,14 @@ pub fn model(py: Python<'_>, source: &str, format: Option<&str>) -> PyResult<Mod
         read_str(source, f, "<text>")
     };
     let m = read.map_err(|e| ModelError::new_err(e.to_string()))?;
-    let tree = m.shape.to_tree().map_err(ModelError::new_err)?;
+    let tree = m
+        .shape
+        .to_tree()
+        .map_err(|e| ModelError::new_err(e.to_string()))?;
     let expr = Expr::new(&tree);
     let solid = py
         .detach(|| Solid::build(&m.shape))
-        .map_err(ModelError::new_err)?;
+        .map_err(|e| ModelError::new_err(e.to_string()))?;
     Ok(Model {
         name: m.name,
         expr,

@@ -99,8 +99,8 @@ struct RenderArgs {
     /// uninterrupted. Give the scene and options of the stopped render; on the CPU.
     #[arg(long, value_name = "NAME.partial.state", conflicts_with = "samples")]
     resume: Option<PathBuf>,
-    /// Write the resolved scene (after overrides) as JSON to this file, for debugging
-    /// and GPU tests (scenes); without -o nothing is rendered.
+    /// Write the resolved scene (after overrides; a model's preview scene) as JSON to
+    /// this file, for debugging and GPU tests; without -o nothing is rendered.
     #[arg(long, value_name = "FILE.json")]
     dump_scene: Option<PathBuf>,
     /// Scenes: direct, path, depth, normals or albedo. Models: shaded, depth or normals.
@@ -140,9 +140,9 @@ struct RenderArgs {
     /// the image.
     #[arg(long)]
     orthographic: bool,
-    /// Where to render (scenes): cpu; gpu (wgpu: `direct` and `path` on scenes of
-    /// quadrics, CSG of plain quadrics and one expression, area lights and rough
-    /// materials; docs/gpu.md); or auto (the GPU where it can, else the CPU).
+    /// Where to render: cpu; gpu (wgpu: `direct` and `path` on scenes of quadrics, CSG
+    /// of plain quadrics and one expression, area lights and rough materials, and a
+    /// model's preview; docs/gpu.md); or auto (the GPU where it can, else the CPU).
     #[arg(long, value_enum, default_value_t = scene_render::Backend::Cpu)]
     backend: scene_render::Backend,
     /// GPU features, comma-separated, each `=on` or `=off` (a bare name: on): f64,
@@ -359,20 +359,18 @@ fn render(args: RenderArgs) -> Result<(), String> {
         ("--stage-times", args.stage_times),
         ("--samples", args.samples.is_some()),
         ("--resume", args.resume.is_some()),
-        ("--dump-scene", args.dump_scene.is_some()),
-        ("--backend gpu", args.backend == scene_render::Backend::Gpu),
-        ("--gpu-options", args.gpu_options.is_some()),
     ];
     let transport = args.scene.transport_flags();
     if let Some((flag, _)) = scene_only.iter().chain(&transport).find(|(_, set)| *set) {
         return Err(format!(
-            "{flag} applies to scene files (.toml, .json); {} is a model \
-             (bare models render on the CPU: name it as an object's `model` in a scene for the GPU)",
+            "{flag} applies to scene files (.toml, .json); {} is a model (name it as an \
+             object's `model` in a scene for the full set of options)",
             args.input.display()
         ));
     }
-    if args.backend == scene_render::Backend::Auto && !args.quiet {
-        note!("note: --backend auto renders on the CPU: bare models render on the CPU only");
+    configure_gpu(args.gpu_options.as_deref())?;
+    if let Some(d) = &args.dump_scene {
+        output::check_writable(d)?;
     }
     let look = match args.integrator.as_deref() {
         None | Some("shaded") => preview::Look::Shaded,
@@ -457,12 +455,38 @@ fn render(args: RenderArgs) -> Result<(), String> {
         look,
         spp,
     };
-    let result = preview::render_model(model, &o, &stop, &|done, total| {
-        bar.set_length(total);
-        bar.set_position(done);
-    });
+    let scene = preview::model_scene(model, &o).map_err(|e| e.to_string())?;
+    if let Some(path) = &args.dump_scene {
+        scene_render::dump(scene.data(), path)?;
+        note!("resolved scene written to {}", path.display());
+        if args.output.is_empty() {
+            return Ok(());
+        }
+    }
+    if args.backend == scene_render::Backend::Gpu {
+        if let Ok(g) = frepray::backend::shared_gpu() {
+            note!("GPU: {}", g.info());
+        }
+    }
+    let result = scene.render_on(
+        args.backend.into(),
+        &preview::options(look, spp, 0),
+        0..spp,
+        &stop,
+        &|done, total| {
+            bar.set_length(total);
+            bar.set_position(done);
+        },
+    );
     bar.finish_and_clear();
-    let (state, stats) = result.map_err(|e| e.to_string())?;
+    let r = result.map_err(|e| e.to_string())?;
+    if let Some(why) = &r.fallback {
+        note!("note: --backend auto renders on the CPU: {why}");
+    }
+    if let Some(g) = &r.gpu {
+        note!("{g}");
+    }
+    let (state, stats) = (r.state, r.stats);
     note!(
         "{}: setup {:.2} s; {stats}",
         args.input.display(),

@@ -196,9 +196,9 @@ impl Flat {
     }
 
     /// Appends an expression leaf with its bytecode; returns its index.
-    pub(crate) fn push_expr(&mut self, s: &crate::ExprSurface) -> Result<u32, String> {
+    pub(crate) fn push_expr(&mut self, s: &crate::ExprSurface) -> Result<u32, crate::BuildError> {
         let v = s.view();
-        let code = crate::bytecode::Bytecode::compile(s.expr()).map_err(|e| e.to_string())?;
+        let code = crate::bytecode::Bytecode::compile(s.expr())?;
         let t0 = self.tapes.len();
         self.tapes.extend_from_slice(v.tape);
         let c0 = self.bytecode.len();

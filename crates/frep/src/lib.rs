@@ -21,6 +21,7 @@
 #![warn(missing_docs)]
 
 pub mod bounds;
+pub mod build_error;
 pub mod bvh;
 pub mod bytecode;
 pub mod csg;
@@ -44,6 +45,7 @@ pub mod surface;
 pub mod transform;
 pub mod tree;
 
+pub use build_error::BuildError;
 pub use bvh::{Bvh, BvhRef};
 pub use bytecode::Bytecode;
 pub use dual::Dual;

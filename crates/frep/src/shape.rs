@@ -4,6 +4,7 @@
 //! stays one; min/max CSG stays CSG so that crossings combine exactly along a ray) and
 //! lowers to the single representation, an expression tree, with [`Shape::to_tree`].
 
+use crate::build_error::BuildError;
 use crate::csg;
 use crate::perturbed::PerturbedQuadric;
 use crate::ray::Aabb;
@@ -41,7 +42,7 @@ impl Shape {
 
     /// The shape as one expression tree (F ≥ 0 inside). Fails only for a transform whose
     /// matrix is singular.
-    pub fn to_tree(&self) -> Result<Tree, String> {
+    pub fn to_tree(&self) -> Result<Tree, BuildError> {
         Ok(match self {
             Shape::Function { tree, .. } => tree.clone(),
             Shape::Perturbed(p) => p.to_tree(),
@@ -50,16 +51,14 @@ impl Shape {
             Shape::Difference(a, b) => csg::difference(&a.to_tree()?, &b.to_tree()?),
             Shape::Transformed(m, s) => m
                 .apply(&s.to_tree()?)
-                .ok_or_else(|| format!("singular transform {m:?}"))?,
+                .ok_or(BuildError::SingularTransform(*m))?,
         })
     }
 }
 
-fn fold(v: &[Shape], op: fn(&Tree, &Tree) -> Tree) -> Result<Tree, String> {
+fn fold(v: &[Shape], op: fn(&Tree, &Tree) -> Tree) -> Result<Tree, BuildError> {
     let mut it = v.iter();
-    let first = it
-        .next()
-        .ok_or_else(|| "a set operation needs at least one shape".to_string())?;
+    let first = it.next().ok_or(BuildError::EmptySetOperation)?;
     let mut acc = first.to_tree()?;
     for s in it {
         acc = op(&acc, &s.to_tree()?);

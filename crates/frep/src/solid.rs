@@ -10,6 +10,7 @@
 //! are split at build, deeper ones are a build error), so no ray allocates.
 
 use crate::bounds::{expr_bounds, DEFAULT_DOMAIN};
+use crate::build_error::BuildError;
 use crate::expr::Expr;
 use crate::flat::{CsgNode, CsgOp, Flat, Leaf, LeafView, Span, MAX_DEPTH, MAX_PARTS};
 use crate::interval_trace::ExprSurface;
@@ -127,13 +128,11 @@ impl Solid {
     /// Builds a solid from a shape. Expression leaves are bounded inside their declared
     /// domain, else inside ±[`DEFAULT_DOMAIN`]. Errors for a singular transform, an
     /// expression the bytecode cannot hold, or CSG nested deeper than [`MAX_DEPTH`].
-    pub fn build(shape: &Shape) -> Result<Solid, String> {
+    pub fn build(shape: &Shape) -> Result<Solid, BuildError> {
         let mut flat = Flat::default();
         let (_, depth) = Self::build_moved(shape, &Affine::IDENTITY, &mut flat)?;
         if depth > MAX_DEPTH {
-            return Err(format!(
-                "CSG nested {depth} deep; at most {MAX_DEPTH} levels are supported"
-            ));
+            return Err(BuildError::TooDeep(depth));
         }
         let polytopes = Polytopes::new(&flat);
         let scales = walk_scales(&flat);
@@ -147,15 +146,13 @@ impl Solid {
     }
 
     /// Appends the nodes of `shape` moved by `m`; returns the root's index and depth.
-    fn build_moved(shape: &Shape, m: &Affine, flat: &mut Flat) -> Result<(u32, usize), String> {
+    fn build_moved(shape: &Shape, m: &Affine, flat: &mut Flat) -> Result<(u32, usize), BuildError> {
         let leaf = |flat: &mut Flat, k: u32, bounds: Aabb| {
             push_node(flat, CsgOp::Leaf, Span { first: k, count: 1 }, bounds)
         };
         Ok(match shape {
             Shape::Function { tree, domain } => {
-                let moved = m
-                    .apply(tree)
-                    .ok_or_else(|| format!("singular transform {m:?}"))?;
+                let moved = m.apply(tree).ok_or(BuildError::SingularTransform(*m))?;
                 let domain = domain.map(|d| transform_box(&d, m)).unwrap_or(Aabb::new(
                     DVec3::splat(-DEFAULT_DOMAIN),
                     DVec3::splat(DEFAULT_DOMAIN),
@@ -169,7 +166,7 @@ impl Solid {
                 // A moved quadric is a quadric: the exact path survives any transform.
                 let moved = p
                     .transformed(m)
-                    .ok_or_else(|| format!("singular transform {m:?}"))?
+                    .ok_or(BuildError::SingularTransform(*m))?
                     .surface();
                 let k = flat.push_perturbed(&moved);
                 (leaf(flat, k, moved.bounds()), 1)
@@ -695,13 +692,13 @@ fn interior(
 /// A CSG node's bounds from its parts can be infinite (half-spaces cut into a box);
 /// then the whole node's expression is bounded by interval octree refinement, which
 /// sees how the parts combine.
-fn tighten(shape: &Shape, m: &Affine, from_parts: Aabb) -> Result<Aabb, String> {
+fn tighten(shape: &Shape, m: &Affine, from_parts: Aabb) -> Result<Aabb, BuildError> {
     if from_parts.is_finite() || from_parts.is_empty() {
         return Ok(from_parts);
     }
     let tree = m
         .apply(&shape.to_tree()?)
-        .ok_or_else(|| format!("singular transform {m:?}"))?;
+        .ok_or(BuildError::SingularTransform(*m))?;
     let domain = Aabb::new(DVec3::splat(-DEFAULT_DOMAIN), DVec3::splat(DEFAULT_DOMAIN));
     let b = expr_bounds(&Expr::new(&tree), domain.intersection(&from_parts));
     // What touches the search domain's faces may go on beyond it: keep it unbounded.
@@ -1354,7 +1351,8 @@ mod tests {
             };
         }
         let err = Solid::build(&deep).unwrap_err();
-        assert!(err.contains("nested"), "{err}");
+        assert_eq!(err, BuildError::TooDeep(2 * MAX_DEPTH + 1));
+        assert!(err.to_string().contains("nested"), "{err}");
     }
 
     /// A solid's leaves, intersected in place over the pools, give what the owning

@@ -103,12 +103,12 @@ pub enum Error {
     #[error(transparent)]
     Read(#[from] frep::read::ReadError),
     /// A model could not be built.
-    #[error("{path}: {message}")]
+    #[error("{}: {source}", .path.display())]
     Model {
         /// The model file.
         path: PathBuf,
         /// What is wrong.
-        message: String,
+        source: Box<frep::BuildError>,
     },
     /// Invalid arguments (the message says which).
     #[error("{0}")]
@@ -143,8 +143,17 @@ pub fn scene_hash(data: &SceneData) -> u64 {
 impl Scene {
     /// A scene from resolved data and settings.
     pub fn from_data(data: SceneData, settings: RenderSettings) -> Self {
-        let cpu = render::scene::Scene::from_data(&data);
         let hash = scene_hash(&data);
+        Self::with_hash(data, settings, hash)
+    }
+    /// A scene whose render states carry no scene hash (0: unknown), for a picture that
+    /// writes no state (a model's preview): hashing a large model's resolved data can
+    /// cost more than its preview.
+    pub fn unhashed(data: SceneData, settings: RenderSettings) -> Self {
+        Self::with_hash(data, settings, 0)
+    }
+    fn with_hash(data: SceneData, settings: RenderSettings, hash: u64) -> Self {
+        let cpu = render::scene::Scene::from_data(&data);
         Scene {
             data,
             settings,

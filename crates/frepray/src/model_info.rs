@@ -28,9 +28,9 @@ pub struct ModelInfo {
 
 /// Reads, lowers and bounds a model file (.frep, .hf, .vm) and summarises it.
 pub fn info(path: &Path) -> Result<ModelInfo, Error> {
-    let model = |message: String| Error::Model {
+    let model = |source| Error::Model {
         path: path.into(),
-        message,
+        source: Box::new(source),
     };
     let file = frep::read::read_file(path)?;
     let tree = file.shape.to_tree().map_err(model)?;

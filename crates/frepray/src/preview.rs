@@ -18,10 +18,11 @@ use frep::shape::Shape;
 use frep::{Aabb, Expr, Solid, Surface};
 use glam::DVec3;
 use render::integrator::{Aov, IntegratorKind, RenderOptions};
-use render::light::{DeltaLight, Environment, Lights};
-use render::scene::{Object, Scene};
-use render::{Camera, Material, Rgb, Technique, Texture};
-use render::{RenderState, RenderStats};
+use render::{RenderState, RenderStats, Technique};
+use scene::{
+    CameraData, CameraKind, EnvironmentData, Light, LightData, MaterialData, MaterialId,
+    ObjectData, RenderSettings, SceneData, SolidPool, TextureData, TextureId,
+};
 use std::sync::atomic::AtomicBool;
 
 /// The vertical axis of a model.
@@ -153,7 +154,7 @@ pub fn camera(
     orthographic: bool,
     width: u32,
     height: u32,
-) -> Camera {
+) -> CameraData {
     if view == View::Iso && !orthographic {
         return framing(b, up, width, height);
     }
@@ -174,18 +175,36 @@ pub fn camera(
             h = h.max(2.0 * p.dot(screen_up).abs());
         }
         let view_height = (1.05 * h.max(w / aspect)).max(1e-9);
-        return Camera::orthographic(c + dir * 2.0 * r, c, vup, view_height, width, height);
+        return CameraData {
+            kind: CameraKind::Orthographic,
+            scale: Some(view_height),
+            ..look_at(c + dir * 2.0 * r, c, vup, fov, width, height)
+        };
     }
     let half = (fov.to_radians() * 0.5).tan();
     let half_min = if aspect < 1.0 { half * aspect } else { half };
     let dist = r / half_min.atan().sin();
-    Camera::look_at(c + dir * dist, c, vup, fov, width, height)
+    look_at(c + dir * dist, c, vup, fov, width, height)
+}
+
+/// A perspective camera at `eye` looking at `target`.
+fn look_at(eye: DVec3, target: DVec3, up: DVec3, fov: f64, width: u32, height: u32) -> CameraData {
+    CameraData {
+        kind: CameraKind::Perspective,
+        scale: None,
+        eye: eye.to_array(),
+        target: target.to_array(),
+        up: up.to_array(),
+        fov,
+        width,
+        height,
+    }
 }
 
 /// A camera that frames a box: from the front-right-above diagonal (with `up` the
 /// vertical axis), far enough that the box's bounding sphere fits the narrower field of
 /// view.
-pub fn framing(b: &Aabb, up: DVec3, width: u32, height: u32) -> Camera {
+pub fn framing(b: &Aabb, up: DVec3, width: u32, height: u32) -> CameraData {
     let fov = 30.0f64;
     let c = b.center();
     let r = (0.5 * b.extent().length()).max(1e-9);
@@ -201,45 +220,55 @@ pub fn framing(b: &Aabb, up: DVec3, width: u32, height: u32) -> Camera {
     };
     let right = front.cross(up).normalize();
     let offset = (0.55 * right + front + 0.6 * up).normalize();
-    Camera::look_at(c + offset * dist, c, up, fov, width, height)
+    look_at(c + offset * dist, c, up, fov, width, height)
 }
 
 /// The base colour of the preview material (a warm grey).
-const BASE: Rgb = Rgb::new(0.85, 0.78, 0.62);
+const BASE: [f64; 3] = [0.85, 0.78, 0.62];
 
-/// The preview scene of a solid seen by `cam`, framing the box `b`: the solid in a
-/// diffuse material, a key point light above the camera's left shoulder at twice the
-/// camera's distance from the box, and a dim constant sky; `up` is the image's up
-/// direction (the model's vertical axis, except from the top and bottom).
-pub fn scene(solid: Solid, cam: Camera, b: &Aabb, up: DVec3) -> Scene {
+/// The preview scene of a solid seen by `cam`, framing the box `b`, as resolved data:
+/// the solid in a diffuse material, a key point light above the camera's left shoulder at
+/// twice the camera's distance from the box, and a dim constant sky; `up` is the image's
+/// up direction (the model's vertical axis, except from the top and bottom). Rendered,
+/// dumped or sent to the GPU as a scene file's data is.
+pub fn scene_data(solid: Solid, cam: CameraData, b: &Aabb, up: DVec3) -> SceneData {
     let (c, r) = (b.center(), (0.5 * b.extent().length()).max(1e-9));
-    let to_eye = cam.eye - c;
+    let to_eye = DVec3::from_array(cam.eye) - c;
     let left = up.cross(to_eye).normalize_or_zero();
     let key = c + 2.0 * to_eye + to_eye.length() * (0.8 * up + 0.6 * left);
     // Irradiance at the model ≈ I/d²: aim for about 2.5 (a bright but unclipped white).
     let d2 = (key - c).length_squared();
-    let lights = Lights::new(
+    let sky = EnvironmentData::Constant {
+        radiance: [0.25; 3],
+    };
+    let lights = LightData::new(
         vec![],
-        vec![DeltaLight::Point {
-            position: key,
-            intensity: Rgb::splat(2.5 * d2),
-        }],
-        Some(Environment::Constant(Rgb::splat(0.25))),
+        vec![Light::point(key, DVec3::splat(2.5 * d2))],
+        Some(&sky),
+        &[],
         r,
     );
-    let material = Material::Diffuse {
-        reflectance: Texture::Constant(BASE),
-    };
-    Scene::new(
-        cam,
-        vec![material],
-        vec![Object {
+    let mut solids = SolidPool::default();
+    let solid = solids.push(solid);
+    SceneData {
+        camera: cam,
+        textures: vec![TextureData::Constant { rgb: BASE }],
+        materials: vec![MaterialData::Diffuse {
+            reflectance: TextureId(0),
+        }],
+        material_names: vec!["preview".into()],
+        solids,
+        objects: vec![ObjectData {
             name: "model".into(),
             solid,
-            material: 0,
+            material: MaterialId(0),
         }],
         lights,
-    )
+        environment: Some(sky),
+        maps: vec![],
+        scene_radius: r,
+        inputs: vec![],
+    }
 }
 
 /// The render options of a look: `direct` with BSDF and environment draws under the
@@ -268,6 +297,23 @@ pub fn options(look: Look, spp: u32, seed: u64) -> RenderOptions {
             aovs: vec![Aov::Normal],
             ..base
         },
+    }
+}
+
+/// [`options`] as a scene file's settings would give them.
+pub fn settings(look: Look, spp: u32, seed: u64) -> RenderSettings {
+    let o = options(look, spp, seed);
+    RenderSettings {
+        integrator: o.integrator,
+        spp,
+        seed,
+        method: o.method,
+        params: o.params,
+        techniques: o.techniques.iter().map(|&(t, n)| (t.kind(), n)).collect(),
+        max_depth: o.max_depth,
+        rr_depth: o.rr_depth,
+        aovs: o.aovs.iter().map(|a| a.name().to_string()).collect(),
+        ..RenderSettings::default()
     }
 }
 
@@ -304,16 +350,11 @@ pub fn render(
     render_model(model, &o, stop, progress)
 }
 
-/// Renders the preview of a model with `o`: the camera of `o.view` (perspective or
-/// orthographic) framing the model's [`ViewBox`], the scene and render options above,
-/// through the normal render loop (so the same picture at any thread count, and `stop`
-/// ends it early with what it has).
-pub fn render_model(
-    model: Model,
-    o: &PreviewOptions,
-    stop: &AtomicBool,
-    progress: &(dyn Fn(u64, u64) + Sync),
-) -> Result<(RenderState, RenderStats), Error> {
+/// The preview of a model with `o` as a scene: the camera of `o.view` (perspective or
+/// orthographic) framing the model's [`ViewBox`], the scene of [`scene_data`] and the
+/// settings of `o.look` ([`settings`]). It renders on either back end, and dumps, as a
+/// scene file's scene does; its states carry no scene hash ([`crate::Scene::unhashed`]).
+pub fn model_scene(model: Model, o: &PreviewOptions) -> Result<crate::Scene, Error> {
     if o.width == 0 || o.height == 0 || o.spp == 0 {
         return Err(Error::Invalid(
             "width, height and spp must be at least 1".into(),
@@ -322,13 +363,21 @@ pub fn render_model(
     let b = model.view_box.bounds;
     let up = o.up.vector();
     let cam = camera(&b, up, o.view, o.orthographic, o.width, o.height);
-    let scene = scene(model.solid, cam, &b, o.view.directions(up).1);
-    Ok(render::render(
-        &scene,
-        &options(o.look, o.spp, 0),
-        stop,
-        progress,
-    )?)
+    let data = scene_data(model.solid, cam, &b, o.view.directions(up).1);
+    Ok(crate::Scene::unhashed(data, settings(o.look, o.spp, 0)))
+}
+
+/// Renders the preview of a model with `o` ([`model_scene`]) on the CPU, through the
+/// normal render loop (so the same picture at any thread count, and `stop` ends it
+/// early with what it has).
+pub fn render_model(
+    model: Model,
+    o: &PreviewOptions,
+    stop: &AtomicBool,
+    progress: &(dyn Fn(u64, u64) + Sync),
+) -> Result<(RenderState, RenderStats), Error> {
+    let scene = model_scene(model, o)?;
+    scene.render_with(&options(o.look, o.spp, 0), 0..o.spp, stop, progress)
 }
 
 /// A bare model ready to picture: its solid and the box a view frames.
@@ -357,7 +406,7 @@ impl Model {
     /// along z would see nothing. It is shown as a slab |z| ≤ h, the intersection with
     /// a plane pair 2h = 1/20 of its larger x or y extent thick, whose faces are real
     /// surfaces.
-    pub fn new(shape: &Shape) -> Result<Model, String> {
+    pub fn new(shape: &Shape) -> Result<Model, frep::BuildError> {
         let solid = Solid::build(shape)?;
         let b = solid.bounds();
         let planar = shape.to_tree().is_ok_and(|t| is_planar(&Expr::new(&t)));
@@ -485,9 +534,9 @@ pub fn load_model(path: &std::path::Path) -> Result<Solid, Error> {
 /// Reads a model file (.frep, .hf, .vm): its solid and view box ([`Model::new`]).
 pub fn load(path: &std::path::Path) -> Result<Model, Error> {
     let model = frep::read::read_file(path)?;
-    Model::new(&model.shape).map_err(|message| Error::Model {
+    Model::new(&model.shape).map_err(|source| Error::Model {
         path: path.into(),
-        message,
+        source: Box::new(source),
     })
 }
 
@@ -511,6 +560,11 @@ mod tests {
     use super::*;
     use frep::read::{read_str, Format};
     use glam::DVec2;
+
+    /// The camera the renderer makes of `c`.
+    fn cpu(c: CameraData) -> render::Camera {
+        render::Camera::from_data(&c)
+    }
 
     const R_UNION: &str = "m(x[3], a[1]) {
             b1 = 0.36 - (x[1] - 1)^2 - x[2]^2 - x[3]^2;
@@ -577,7 +631,7 @@ mod tests {
             (b.center().z - 0.5).abs() < 0.05 && b.extent().z < 0.1,
             "{b:?}"
         );
-        let cam = camera(&b, DVec3::Z, View::Iso, false, 64, 64);
+        let cam = cpu(camera(&b, DVec3::Z, View::Iso, false, 64, 64));
         let d = (cam.eye - b.center()).length();
         assert!(d > 2.0 && d < 10.0, "{d}");
     }
@@ -597,7 +651,7 @@ mod tests {
         assert!(m.planar);
         let b = m.view_box.bounds;
         assert!(b.extent().z < 0.06 && b.extent().x > 0.99, "{b:?}");
-        let cam = camera(&b, DVec3::Z, View::Top, true, 16, 16);
+        let cam = cpu(camera(&b, DVec3::Z, View::Top, true, 16, 16));
         let hit = m
             .solid
             .intersect(&cam.ray(8, 8, DVec2::ZERO), 0.0, f64::INFINITY);
@@ -621,11 +675,11 @@ mod tests {
         ];
         for (view, d) in along {
             for ortho in [false, true] {
-                let cam = camera(&b, DVec3::Z, view, ortho, 40, 20);
+                let cam = cpu(camera(&b, DVec3::Z, view, ortho, 40, 20));
                 assert!((cam.forward() - d).length() < 1e-12, "{view:?}");
             }
         }
-        let top = camera(&b, DVec3::Z, View::Top, true, 40, 20);
+        let top = cpu(camera(&b, DVec3::Z, View::Top, true, 40, 20));
         let (tl, br) = (top.ray(0, 0, DVec2::ZERO).o, top.ray(39, 19, DVec2::ONE).o);
         assert!(tl.x < 0.0 && tl.y > 0.0 && br.x > 0.0 && br.y < 0.0);
         // The 4 × 2 outline in a 2:1 image: 5 % margin on both axes.
@@ -634,7 +688,7 @@ mod tests {
         let d = top.ray(5, 7, DVec2::new(0.5, 0.5)).d;
         assert_eq!(d, top.forward());
         // y up: front looks along −z with x right and y up, as Fidget's 2-D view.
-        let front = camera(&b, DVec3::Y, View::Front, true, 40, 20);
+        let front = cpu(camera(&b, DVec3::Y, View::Front, true, 40, 20));
         assert!((front.forward() + DVec3::Z).length() < 1e-12);
         let tl = front.ray(0, 0, DVec2::ZERO).o;
         assert!(tl.x < 0.0 && tl.y > 0.0);

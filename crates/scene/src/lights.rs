@@ -271,10 +271,7 @@ fn light(src: &Source, i: usize, l: &LightDesc) -> Result<Light, SceneError> {
             )?;
             if kind == "point" {
                 let intensity = emission(src, &at, "intensity", &l.intensity, l, 4.0 * PI)?;
-                return Ok(Light {
-                    power: (4.0 * PI * intensity).to_array(),
-                    ..delta(LightKind::Point, position, DVec3::ZERO, intensity)
-                });
+                return Ok(Light::point(position, intensity));
             }
             let target = match (l.direction, l.target) {
                 (Some(d), None) => position + unit(src, &key("direction"), d)?,
@@ -374,6 +371,31 @@ fn delta(kind: LightKind, position: DVec3, axis: DVec3, intensity: DVec3) -> Lig
         area: 0.0,
         power: [0.0; 3],
         selection_pmf: 0.0,
+    }
+}
+
+impl Light {
+    /// An isotropic point light at `position` of radiant intensity `intensity` (W/sr),
+    /// with its power 4π I.
+    pub fn point(position: DVec3, intensity: DVec3) -> Light {
+        Light {
+            power: (4.0 * PI * intensity).to_array(),
+            ..delta(LightKind::Point, position, DVec3::ZERO, intensity)
+        }
+    }
+}
+
+impl LightData {
+    /// The lights with their selection distributions (as a scene file's), for a scene of
+    /// radius `scene_radius` built without a scene file (a model's preview).
+    pub fn new(
+        area: Vec<Light>,
+        delta: Vec<Light>,
+        environment: Option<&EnvironmentData>,
+        maps: &[EnvMapTable],
+        scene_radius: f64,
+    ) -> LightData {
+        select(area, delta, environment, maps, scene_radius)
     }
 }
 

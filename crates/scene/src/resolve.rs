@@ -383,7 +383,7 @@ fn object(
     if let Some(t) = &o.transform {
         shape = Shape::Transformed(transform(src, &tp, t)?, Box::new(shape));
     }
-    let solid = Solid::build(&shape).map_err(|e| src.at_value(&tp, e))?;
+    let solid = Solid::build(&shape).map_err(|e| src.at_value(&tp, e.to_string()))?;
     Ok((MaterialId(material as u32), solid))
 }
 

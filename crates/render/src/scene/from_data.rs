@@ -111,14 +111,20 @@ fn environment(data: &SceneData, e: &EnvironmentData) -> Environment {
 }
 
 /// The CPU scene of `data` (see the module docs).
-pub(super) fn build(data: &SceneData) -> Scene {
-    let c = &data.camera;
-    let camera = match (c.kind, c.scale) {
-        (::scene::CameraKind::Orthographic, Some(h)) => {
-            Camera::orthographic(v3(c.eye), v3(c.target), v3(c.up), h, c.width, c.height)
+impl Camera {
+    /// The camera of a resolved scene's data.
+    pub fn from_data(c: &::scene::CameraData) -> Camera {
+        match (c.kind, c.scale) {
+            (::scene::CameraKind::Orthographic, Some(h)) => {
+                Camera::orthographic(v3(c.eye), v3(c.target), v3(c.up), h, c.width, c.height)
+            }
+            _ => Camera::look_at(v3(c.eye), v3(c.target), v3(c.up), c.fov, c.width, c.height),
         }
-        _ => Camera::look_at(v3(c.eye), v3(c.target), v3(c.up), c.fov, c.width, c.height),
-    };
+    }
+}
+
+pub(super) fn build(data: &SceneData) -> Scene {
+    let camera = Camera::from_data(&data.camera);
     let materials = data.materials.iter().map(|m| material(data, m)).collect();
     let objects = data
         .objects

@@ -72,7 +72,10 @@ impl V {
             V::Field(t) => t.clone(),
             V::Quadric(q) => q.to_tree(),
             V::Term(f, q) => *f * q.to_tree().powi(3),
-            V::Solid(s, l) => l.0.get_or_init(|| s.to_tree()).clone()?,
+            V::Solid(s, l) => {
+                l.0.get_or_init(|| s.to_tree().map_err(|e| e.to_string()))
+                    .clone()?
+            }
             V::List(_) => {
                 return Err("expected a number or a function of x, y, z, found a list".into())
             }
