@@ -53,13 +53,18 @@ impl GpuOptions {
     /// These options with `list`'s features turned off or on: comma-separated
     /// `f64`, `int64`, `subgroups`, `sums` (on by default) and `checked` (off), each
     /// optionally `=on` or `=off` (a bare name turns it on), e.g. `f64=off,checked`.
-    pub fn with(mut self, list: &str) -> Result<Self, String> {
+    pub fn with(mut self, list: &str) -> Result<Self, GpuOptionError> {
         for item in list.split(',').map(str::trim).filter(|s| !s.is_empty()) {
             let (name, value) = item.split_once('=').unwrap_or((item, "on"));
             let value = match value.trim() {
                 "on" | "1" | "true" => true,
                 "off" | "0" | "false" => false,
-                v => return Err(format!("GPU option {item:?}: {v:?} is not on or off")),
+                v => {
+                    return Err(GpuOptionError::Value {
+                        item: item.to_string(),
+                        value: v.to_string(),
+                    })
+                }
             };
             let field = match name.trim() {
                 "f64" => &mut self.f64,
@@ -67,16 +72,28 @@ impl GpuOptions {
                 "subgroups" => &mut self.subgroups,
                 "sums" => &mut self.sums,
                 "checked" => &mut self.checked,
-                n => {
-                    return Err(format!(
-                        "GPU option {n:?}: expected f64, int64, subgroups, sums or checked"
-                    ))
-                }
+                n => return Err(GpuOptionError::Unknown(n.to_string())),
             };
             *field = value;
         }
         Ok(self)
     }
+}
+
+/// A `--gpu-options` list that does not read ([`GpuOptions::with`]).
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum GpuOptionError {
+    /// A value other than on or off.
+    #[error("GPU option {item:?}: {value:?} is not on or off")]
+    Value {
+        /// The list's item.
+        item: String,
+        /// Its value.
+        value: String,
+    },
+    /// A name that is no option.
+    #[error("GPU option {0:?}: expected f64, int64, subgroups, sums or checked")]
+    Unknown(String),
 }
 
 /// Why no GPU could be used.

@@ -17,33 +17,23 @@ use std::f64::consts::PI;
 use std::path::Path;
 
 /// Why an environment map could not be read.
-#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
-#[error("{0}")]
-pub struct MapError(pub String);
+pub use crate::exr_file::ExrError as MapError;
 
 /// Reads the R, G, B channels of the first layer of a lat-long EXR file, times `scale`,
 /// into row-major pixels (row 0 at the top): (width, height, pixels).
 pub fn read_exr_rgb(file: &Path, scale: f64) -> Result<(usize, usize, Vec<[f64; 3]>), MapError> {
-    read_exr(file, scale).map_err(MapError)
-}
-
-fn read_exr(file: &Path, scale: f64) -> Result<(usize, usize, Vec<[f64; 3]>), String> {
     let img = crate::exr_file::read_exr(file)?;
     let (w, h) = (img.width, img.height);
-    let channel = |name: &str| -> Result<&Vec<f32>, String> { Ok(&img.values[img.find(name)?]) };
+    let channel = |name: &str| -> Result<&Vec<f32>, MapError> { Ok(&img.values[img.find(name)?]) };
     let (r, g, b) = (channel("R")?, channel("G")?, channel("B")?);
     if w == 0 || h == 0 {
-        return Err("the image is empty".into());
+        return Err(MapError::Empty);
     }
     let mut pixels = Vec::with_capacity(w * h);
     for i in 0..w * h {
         let p = DVec3::new(r[i] as f64, g[i] as f64, b[i] as f64) * scale;
         if !(p.is_finite() && p.min_element() >= 0.0) {
-            return Err(format!(
-                "pixel ({}, {}) is negative or not finite",
-                i % w,
-                i / w
-            ));
+            return Err(MapError::BadPixel { x: i % w, y: i / w });
         }
         pixels.push(p.to_array());
     }

@@ -70,7 +70,7 @@ pub use desc::{
 pub use distribution::{Distribution1D, Distribution2D};
 pub use environment::{read_exr_rgb, MapError};
 pub use error::SceneError;
-pub use exr_file::{read_exr, ExrChannels};
+pub use exr_file::{read_exr, ExrChannels, ExrError};
 pub use load::{
     description_from_value, load, load_value, load_with, parse, parse_description, parse_with,
     resolve, SceneFormat,
@@ -78,7 +78,8 @@ pub use load::{
 pub use overrides::{parse_technique_list, Overrides};
 pub use resolve::METALS;
 pub use settings::{
-    Emitters, IntegratorKind, RenderSettings, TechniqueKind, Tonemap, UnknownName, AOV_NAMES,
+    Emitters, IntegratorKind, RenderSettings, TechniqueError, TechniqueKind, Tonemap, UnknownName,
+    AOV_NAMES,
 };
 pub use solids::SolidPool;
 pub use training::{Training, MAX_TRAINED_GRID};

@@ -335,11 +335,37 @@ impl Default for RenderSettings {
     }
 }
 
+/// A technique the scene cannot serve ([`RenderSettings::check_techniques`]).
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum TechniqueError {
+    /// `light#k` with k past the scene's MIS lights.
+    #[error(
+        "technique \"{technique}\": the scene has {lights} MIS light{} (area lights, then the \
+         environment), numbered from 0",
+        if *.lights == 1 { "" } else { "s" }
+    )]
+    NoSuchLight {
+        /// The technique.
+        technique: TechniqueKind,
+        /// The scene's MIS lights.
+        lights: usize,
+    },
+    /// A technique that samples what the scene does not have.
+    #[error("technique \"{technique}\" needs {missing}")]
+    Needs {
+        /// The technique.
+        technique: TechniqueKind,
+        /// What it needs: "an area light or an environment", "an area light", "an
+        /// environment".
+        missing: &'static str,
+    },
+}
+
 impl RenderSettings {
     /// Why the techniques cannot work in `scene`, if they cannot: light sampling needs an
     /// area light or an environment, area sampling an area light, environment sampling
     /// an environment (point and spot lights are sampled outside MIS).
-    pub fn check_techniques(&self, scene: impl Into<Emitters>) -> Result<(), String> {
+    pub fn check_techniques(&self, scene: impl Into<Emitters>) -> Result<(), TechniqueError> {
         let Emitters {
             area,
             environment: env,
@@ -348,11 +374,10 @@ impl RenderSettings {
         for &(t, _) in &self.techniques {
             if let TechniqueKind::Light(k) = t {
                 if k as usize >= lights {
-                    return Err(format!(
-                        "technique \"{t}\": the scene has {lights} MIS light{} (area lights, \
-                         then the environment), numbered from 0",
-                        if lights == 1 { "" } else { "s" }
-                    ));
+                    return Err(TechniqueError::NoSuchLight {
+                        technique: t,
+                        lights,
+                    });
                 }
                 continue;
             }
@@ -369,7 +394,10 @@ impl RenderSettings {
                 TechniqueKind::Environment if !env => "an environment",
                 _ => continue,
             };
-            return Err(format!("technique \"{t}\" needs {missing}"));
+            return Err(TechniqueError::Needs {
+                technique: t,
+                missing,
+            });
         }
         Ok(())
     }
@@ -480,7 +508,7 @@ pub(crate) fn settings(
                 }
             }
             s.check_techniques(scene)
-                .map_err(|e| src.at_value(&kp!["render", "techniques"], e))?;
+                .map_err(|e| src.at_value(&kp!["render", "techniques"], e.to_string()))?;
         }
         None => {
             s.techniques = vec![(TechniqueKind::Bsdf, 1)];

@@ -17,12 +17,12 @@ use std::path::Path;
 
 /// An EXR file that does not read as an image ([`Image::read_exr`]).
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
-#[error("{}: {message}", .path.display())]
+#[error("{}: {source}", .path.display())]
 pub struct ReadExrError {
     /// The file.
     pub path: std::path::PathBuf,
     /// What is wrong with it.
-    pub message: String,
+    pub source: scene::ExrError,
 }
 
 /// Pixel values of R, G, B and the AOV channels (module docs).
@@ -212,14 +212,14 @@ impl Image {
     /// what is wrong; a decoder panic on a malformed file is caught and reported.
     pub fn read_exr(path: impl AsRef<Path>) -> Result<Image, ReadExrError> {
         let path = path.as_ref();
-        let at = |message: String| ReadExrError {
+        let at = |source| ReadExrError {
             path: path.to_path_buf(),
-            message,
+            source,
         };
         let exr = scene::read_exr(path).map_err(at)?;
         let (width, height) = (
-            u32::try_from(exr.width).map_err(|_| at("too wide".into()))?,
-            u32::try_from(exr.height).map_err(|_| at("too tall".into()))?,
+            u32::try_from(exr.width).map_err(|_| at(scene::ExrError::TooLarge("wide")))?,
+            u32::try_from(exr.height).map_err(|_| at(scene::ExrError::TooLarge("tall")))?,
         );
         let rgb = [
             exr.find("R").map_err(at)?,
@@ -295,7 +295,8 @@ mod tests {
         fs::write(&bad, b"not an exr").unwrap();
         let e = Image::read_exr(&bad).unwrap_err();
         assert_eq!(e.path, bad);
-        assert!(e.message.contains("not a readable EXR"), "{e}");
+        assert!(matches!(e.source, scene::ExrError::Unreadable(_)), "{e}");
+        assert!(e.to_string().contains("not a readable EXR"), "{e}");
         assert!(
             e.to_string().starts_with(&format!("{}: ", bad.display())),
             "{e}"

@@ -86,7 +86,9 @@ pub fn shared_gpu() -> Result<&'static Gpu, GpuError> {
 /// An error once the GPU has opened with other options (it opens once per process).
 #[cfg(feature = "gpu")]
 pub fn configure_gpu(list: &str) -> Result<GpuOptions, Error> {
-    let want = GpuOptions::from_env().with(list).map_err(Error::Invalid)?;
+    let want = GpuOptions::from_env()
+        .with(list)
+        .map_err(|e| Error::Invalid(e.to_string()))?;
     let have = *GPU_OPTIONS.get_or_init(|| want);
     if have != want {
         return Err(Error::Invalid(format!(

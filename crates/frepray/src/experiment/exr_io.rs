@@ -49,7 +49,7 @@ pub fn write(path: &Path, img: &Image, error: Option<&[[f64; 3]]>) -> Result<(),
 pub fn read(path: &Path) -> Result<Image, ExperimentError> {
     let img = render::Image::read_exr(path).map_err(|e| ExperimentError::File {
         path: e.path,
-        message: e.message,
+        message: e.source.to_string(),
     })?;
     let (width, height) = (img.width(), img.height());
     let rgb = (0..height)
