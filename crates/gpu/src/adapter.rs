@@ -1,6 +1,8 @@
 //! Choosing an adapter and opening a device with the features frepray can use.
 
+use std::any::{Any, TypeId};
 use std::fmt;
+use std::sync::{Arc, Mutex, PoisonError};
 
 /// Which optional features frepray may use; each can be forced off so that CI on lavapipe
 /// (which has them all) also tests the paths other adapters take (GPU.md §2.2, §3.3).
@@ -184,22 +186,45 @@ impl fmt::Display for GpuInfo {
     }
 }
 
-/// Compiled kernels kept by a [`Gpu`] for every later render, by the part of their
-/// source that tells them apart; the module that compiles them names their type (so that
-/// this one names none, and depends on none of them).
-pub(crate) type KernelCache =
-    std::sync::Mutex<Vec<(String, std::sync::Arc<dyn std::any::Any + Send + Sync>)>>;
+/// Compiled kernels kept by a [`Gpu`] for every later render, by their type and the part
+/// of their source that tells them apart. The module that compiles them names their type
+/// (so that this one names none, and depends on none of them); the type is part of the
+/// key, so that what comes back is always of the type asked for.
+#[derive(Default)]
+pub(crate) struct KernelCache(Mutex<Vec<CachedKernels>>);
+
+/// One entry of a [`KernelCache`]: the kernels' type, their key, the kernels.
+type CachedKernels = (TypeId, String, Arc<dyn Any + Send + Sync>);
+
+impl KernelCache {
+    /// The kernels of type `T` for `key`, made by `make` the first time they are asked
+    /// for (compiling them can take minutes on llvmpipe; others asking meanwhile wait).
+    pub(crate) fn get_or_make<T: Any + Send + Sync, E>(
+        &self,
+        key: &str,
+        make: impl FnOnce() -> Result<T, E>,
+    ) -> Result<Arc<T>, E> {
+        let mut cache = self.0.lock().unwrap_or_else(PoisonError::into_inner);
+        let id = TypeId::of::<T>();
+        if let Some((_, _, k)) = cache.iter().find(|(t, s, _)| *t == id && s == key) {
+            return Ok(Arc::clone(k)
+                .downcast()
+                .unwrap_or_else(|_| unreachable!("entries are keyed by their type")));
+        }
+        let k = Arc::new(make()?);
+        cache.push((id, key.to_string(), k.clone()));
+        Ok(k)
+    }
+}
 
 /// An opened device with its queue.
 pub struct Gpu {
     pub(crate) device: wgpu::Device,
     pub(crate) queue: wgpu::Queue,
     info: GpuInfo,
-    /// The `direct` kernels by the scene part of their source (its expression tape),
-    /// compiled on first use (seconds to minutes on llvmpipe).
-    pub(crate) direct: KernelCache,
-    /// The record-terms and sums kernels, compiled on first use.
-    pub(crate) record: KernelCache,
+    /// The kernels compiled so far: the `direct` kernels by the scene part of their
+    /// source (its expression tape), the record-terms and sums kernels.
+    pub(crate) kernels: KernelCache,
 }
 
 impl Gpu {
@@ -257,8 +282,7 @@ impl Gpu {
             device,
             queue,
             info,
-            direct: Default::default(),
-            record: Default::default(),
+            kernels: KernelCache::default(),
         })
     }
 

@@ -649,27 +649,17 @@ impl SumKernels {
 }
 
 fn sum_kernels(gpu: &Gpu) -> Result<std::sync::Arc<SumKernels>, GpuError> {
-    let mut cache = gpu
-        .record
-        .lock()
-        .map_err(|e| GpuError::Run(e.to_string()))?;
-    if let Some((_, k)) = cache.first() {
-        return k
-            .clone()
-            .downcast()
-            .map_err(|_| GpuError::Run("the sums kernels' cache holds another type".into()));
-    }
-    let k = std::sync::Arc::new(SumKernels {
-        terms: RecordTerms::new(gpu)?,
-        df: crate::sums::Accumulate::with_f64(gpu, false)?,
-        f64: match gpu.info().f64 {
-            true => Some(crate::sums::Accumulate::with_f64(gpu, true)?),
-            false => None,
-        },
-        progressive: crate::progressive::Kernels::new(gpu, gpu.info().f64)?,
-    });
-    cache.push((String::new(), k.clone()));
-    Ok(k)
+    gpu.kernels.get_or_make("", || {
+        Ok(SumKernels {
+            terms: RecordTerms::new(gpu)?,
+            df: crate::sums::Accumulate::with_f64(gpu, false)?,
+            f64: match gpu.info().f64 {
+                true => Some(crate::sums::Accumulate::with_f64(gpu, true)?),
+                false => None,
+            },
+            progressive: crate::progressive::Kernels::new(gpu, gpu.info().f64)?,
+        })
+    })
 }
 
 /// What a wave's tally says: the slots the CPU must render (sorted) and the rays the

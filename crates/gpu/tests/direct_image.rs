@@ -16,7 +16,7 @@ use crate::common;
 #[path = "../../frep/tests/common/random_csg.rs"]
 mod random_csg;
 
-use gpu::direct::render_range;
+use gpu::direct::{render_range, RenderJob};
 use gpu::GpuOptions;
 use render::integrator::{CpuHost, Record, RenderOptions};
 use render::scene::Scene;
@@ -233,9 +233,24 @@ fn host(s: &(SceneData, Scene, RenderOptions)) -> CpuHost<'_> {
     CpuHost::new(&s.1, &s.2).unwrap()
 }
 
+/// The GPU render of samples `r` of a loaded scene, with `host` its CPU renderer.
+fn job<'a>(
+    s: &'a (SceneData, Scene, RenderOptions),
+    host: &'a CpuHost,
+    r: Range<u32>,
+) -> RenderJob<'a> {
+    RenderJob {
+        data: &s.0,
+        host,
+        options: &s.2,
+        samples: r,
+    }
+}
+
 fn gpu_render(g: &gpu::Gpu, s: &(SceneData, Scene, RenderOptions), r: Range<u32>) -> RenderState {
     let stop = AtomicBool::new(false);
-    let (state, stats, gs) = render_range(g, &s.0, &host(s), &s.2, r, &stop, &|_, _| {}).unwrap();
+    let h = host(s);
+    let (state, stats, gs) = render_range(g, &job(s, &h, r), &stop, &|_, _| {}).unwrap();
     assert!(!state.is_partial() && stats.samples == stats.samples_requested);
     for (k, &n) in gs.max_loops.iter().enumerate() {
         assert!(
@@ -667,12 +682,10 @@ fn gpu_sums_equal_the_cpu_sums_of_the_same_draws() {
     let Some(g) = device() else { return };
     let stop = AtomicBool::new(false);
     let render = |s: &(SceneData, Scene, RenderOptions), on: SumsOn| {
+        let h = host(s);
         let (state, _, gs) = render_range_with(
             g,
-            &s.0,
-            &host(s),
-            &s.2,
-            0..4,
+            &job(s, &h, 0..4),
             &stop,
             &|_, _| {},
             &WaveOptions {
@@ -861,7 +874,7 @@ fn bands_give_the_same_records() {
         let render = |band_pixels| {
             let how = WaveOptions { sums, band_pixels };
             let (state, stats, gs) =
-                render_range_with(g, &s.0, &host(&s), &s.2, 0..2, &stop, &|_, _| {}, &how).unwrap();
+                render_range_with(g, &job(&s, &host(&s), 0..2), &stop, &|_, _| {}, &how).unwrap();
             assert_eq!(stats.samples, u64::from(w * h) * 2);
             (state, gs.waves)
         };
@@ -896,7 +909,7 @@ fn unsupported_scenes_are_refused_by_name() {
             Ok(h) => h,
             Err(e) => return gpu::GpuError::Unsupported(e.to_string()).to_string(),
         };
-        match render_range(g, &s.0, &host, &s.2, 0..1, &stop, &|_, _| {}) {
+        match render_range(g, &job(&s, &host, 0..1), &stop, &|_, _| {}) {
             Err(e) => e.to_string(),
             Ok(_) => panic!("rendered"),
         }

@@ -126,7 +126,13 @@ fn gpu_range(
     {
         let host = render::integrator::CpuHost::new(scene, options)
             .map_err(|e| GpuError::Unsupported(e.to_string()))?;
-        gpu::direct::render_range(g, data, &host, options, samples, stop, progress)
+        let job = gpu::direct::RenderJob {
+            data,
+            host: &host,
+            options,
+            samples,
+        };
+        gpu::direct::render_range(g, &job, stop, progress)
     }
     #[cfg(not(feature = "gpu"))]
     {

@@ -65,7 +65,7 @@ pub use crate::stats::{GpuStats, StageTimes, SumsOn};
 pub use accumulate::add_slot;
 pub use pack::{DirectScene, GpuMaterial, GpuShape};
 pub use probe::{probe, Probe};
-pub use waves::{render_range, render_range_with, WaveOptions};
+pub use waves::{render_range, render_range_with, RenderJob, WaveOptions};
 
 /// The WGSL of the three kernels (without the helpers they include and the wave records'
 /// constants, [`crate::record::wave_consts_wgsl`]), by stage: the bindings and record

@@ -201,17 +201,6 @@ pub(super) fn kernels(
     pack: &DirectScene,
 ) -> Result<std::sync::Arc<Pipelines>, GpuError> {
     let tape_wgsl = pack.tape_wgsl();
-    let mut cache = gpu
-        .direct
-        .lock()
-        .map_err(|e| GpuError::Run(e.to_string()))?;
-    if let Some((_, p)) = cache.iter().find(|(src, _)| *src == tape_wgsl) {
-        return p
-            .clone()
-            .downcast()
-            .map_err(|_| GpuError::Run("the direct kernels' cache holds another type".into()));
-    }
-    let p = std::sync::Arc::new(compile(gpu, &tape_wgsl)?);
-    cache.push((tape_wgsl, p.clone()));
-    Ok(p)
+    gpu.kernels
+        .get_or_make(&tape_wgsl, || compile(gpu, &tape_wgsl))
 }

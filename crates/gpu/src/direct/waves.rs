@@ -18,24 +18,33 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-/// Renders samples `samples` of every pixel of the scene resolved as `data` with the
-/// integrator of `options` on `gpu`, into a [`RenderState`] that merges with CPU ones.
-/// `host` is the CPU renderer of the same scene and options (its tables, and the
-/// samples the GPU cannot finish: [`Host`]).
+/// What a GPU render renders: samples `samples` of every pixel of the scene resolved as
+/// `data`, with `options`; `host` is the CPU renderer of the same scene and options (its
+/// tables, and the samples the GPU cannot finish: [`Host`]).
+#[derive(Clone)]
+pub struct RenderJob<'a> {
+    /// The resolved scene.
+    pub data: &'a SceneData,
+    /// The CPU renderer of the same scene and options.
+    pub host: &'a dyn Host,
+    /// The render options.
+    pub options: &'a RenderOptions,
+    /// The sample range of every pixel.
+    pub samples: Range<u32>,
+}
+
+/// Renders `job` on `gpu` into a [`RenderState`] that merges with CPU ones.
 /// `progress(done, total)` is called after each wave; `stop` is read between waves (a
 /// stopped render keeps its whole waves and is marked partial). Errors, before any
 /// work, on what the GPU back end does not implement ([`GpuError::Unsupported`]).
 pub fn render_range(
     gpu: &Gpu,
-    data: &SceneData,
-    host: &dyn Host,
-    options: &RenderOptions,
-    samples: Range<u32>,
+    job: &RenderJob,
     stop: &AtomicBool,
     progress: &dyn Fn(u64, u64),
 ) -> Result<(RenderState, RenderStats, GpuStats), GpuError> {
     let how = WaveOptions::for_device(gpu);
-    render_range_with(gpu, data, host, options, samples, stop, progress, &how)
+    render_range_with(gpu, job, stop, progress, &how)
 }
 
 /// How [`render_range_with`] runs its waves.
@@ -70,13 +79,9 @@ impl WaveOptions {
 }
 
 /// [`render_range`] with the waves run as `how` says.
-#[allow(clippy::too_many_arguments)]
 pub fn render_range_with(
     gpu: &Gpu,
-    data: &SceneData,
-    host: &dyn Host,
-    options: &RenderOptions,
-    samples: Range<u32>,
+    job: &RenderJob,
     stop: &AtomicBool,
     progress: &dyn Fn(u64, u64),
     how: &WaveOptions,
@@ -85,7 +90,7 @@ pub fn render_range_with(
     // wgpu's default handler.
     let invalid = gpu.device.push_error_scope(wgpu::ErrorFilter::Validation);
     let memory = gpu.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
-    let out = render_waves(gpu, data, host, options, samples, stop, progress, how);
+    let out = render_waves(gpu, job, stop, progress, how);
     let errors = [memory.pop(), invalid.pop()].map(pollster::block_on);
     match errors.into_iter().flatten().next() {
         Some(e) => Err(GpuError::Run(e.to_string())),
@@ -93,22 +98,19 @@ pub fn render_range_with(
     }
 }
 
-#[allow(clippy::too_many_arguments)]
 fn render_waves(
     gpu: &Gpu,
-    data: &SceneData,
-    host: &dyn Host,
-    options: &RenderOptions,
-    samples: Range<u32>,
+    job: &RenderJob,
     stop: &AtomicBool,
     progress: &dyn Fn(u64, u64),
     how: &WaveOptions,
 ) -> Result<(RenderState, RenderStats, GpuStats), GpuError> {
+    let samples = job.samples.clone();
     let o = RenderOptions {
         spp: samples.end.saturating_sub(samples.start),
-        ..options.clone()
+        ..job.options.clone()
     };
-    let (mut waves, mut totals) = Waves::new(gpu, data, host, &o, &samples, how)?;
+    let (mut waves, mut totals) = Waves::new(gpu, job.data, job.host, &o, &samples, how)?;
     let pixels = waves.shape.pixels;
     let mut base = 0;
     while base < pixels {
@@ -120,6 +122,16 @@ fn render_waves(
         base += band_len;
     }
     waves.finish(totals, &o)
+}
+
+/// The slots of one wave: slot s is pixel `base + s % band_len` of the band's
+/// `band_len` pixels, at sample index `start + s / band_len`.
+#[derive(Clone, Copy, Debug)]
+struct WaveSlots {
+    base: u32,
+    band_len: u32,
+    start: u32,
+    slots: u32,
 }
 
 /// What a render has done so far.
@@ -285,11 +297,17 @@ impl<'a> Waves<'a> {
         let read = self.read_wave(t, slots, run)?;
         t.stats.stages.readback += t0.elapsed().saturating_sub(read.passes_time);
         let t1 = Instant::now();
+        let wave = WaveSlots {
+            base,
+            band_len,
+            start,
+            slots,
+        };
         if let Some(tally) = read.tally {
-            self.add_tally(t, tally, base, band_len, start);
+            self.add_tally(t, tally, &wave);
         }
         if self.readbacks.is_some() {
-            self.add_on_cpu(t, &read.hits, &read.draws, base, band_len, start, slots);
+            self.add_on_cpu(t, &read.hits, &read.draws, &wave);
         }
         t.stats.stages.accumulate += t1.elapsed();
         t.stats.waves += 1;
@@ -467,7 +485,13 @@ impl<'a> Waves<'a> {
     /// A wave's tally where the GPU keeps the sums: its rays counted, and its
     /// overflowing slots' samples rendered by the CPU into the records to which the
     /// GPU's sums are added at the end (their rays counted there).
-    fn add_tally(&self, t: &mut Totals, tally: WaveTally, base: u32, band_len: u32, start: u32) {
+    fn add_tally(&self, t: &mut Totals, tally: WaveTally, wave: &WaveSlots) {
+        let WaveSlots {
+            base,
+            band_len,
+            start,
+            ..
+        } = *wave;
         t.rays.camera += tally.camera;
         t.rays.shadow += tally.shadow;
         t.rays.secondary += tally.secondary;
@@ -486,17 +510,13 @@ impl<'a> Waves<'a> {
     /// A read-back wave's hits and draws added to its pixels' records by the CPU
     /// ([`add_slot`]); a slot that overflowed has its whole sample rendered by the CPU
     /// (its rays counted there).
-    #[allow(clippy::too_many_arguments)]
-    fn add_on_cpu(
-        &self,
-        t: &mut Totals,
-        hit_data: &[u8],
-        draw_data: &[u8],
-        base: u32,
-        band_len: u32,
-        start: u32,
-        slots: u32,
-    ) {
+    fn add_on_cpu(&self, t: &mut Totals, hit_data: &[u8], draw_data: &[u8], wave: &WaveSlots) {
+        let WaveSlots {
+            base,
+            band_len,
+            start,
+            slots,
+        } = *wave;
         // (An empty Vec<u8> need not be aligned for f32.)
         fn words(v: &[u8]) -> &[f32] {
             if v.is_empty() {
