@@ -10,7 +10,9 @@ fn rnd(px: u32, py: u32, index: u32, dim: u32) -> f32 {
 struct Basis { s: vec3<f32>, t: vec3<f32>, n: vec3<f32> }
 
 fn basis(n: vec3<f32>) -> Basis {
-    let sign = select(-1.0, 1.0, n.z >= 0.0);
+    // The sign bit, as the CPU's copysign: a normal with z = −0.0 takes the −z branch on
+    // both back ends (the same frame, so the same directions from the same seed).
+    let sign = select(1.0, -1.0, l_neg_bit(n.z));
     let a = -1.0 / (sign + n.z);
     let b = n.x * n.y * a;
     let s = vec3<f32>(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x);
