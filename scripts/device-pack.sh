@@ -1,21 +1,22 @@
 #!/usr/bin/env bash
-# Prepares the real-GPU check for a lent device machine (the `device` tool of this
-# workplace): the release `frepray` and the GPU test binaries, stripped, in .device/
-# (git-ignored), with Vulkan's loader packages in .gl/ (the device machine reaches no
-# package registry). Then, in one `run` call carrying .device and .gl:
+# Prepares the real-GPU check for a lent device machine: the release `frepray` and the
+# GPU test binary (`gpu_tests`: the kernel twins and the image tests), stripped, in
+# .device/ (git-ignored), with Vulkan's loader package in .gl/ (the device machine
+# reaches no package registry). Then, in one call carrying .device and .gl:
 #
-#   for f in .gl/*.deb; do dpkg -x $f /; done; ldconfig; bash scripts/device-check.sh
+#   bash scripts/device-check.sh
 #
-# which writes its figures under $OUT (docs/gpu.md, "On a real GPU").
+# which unpacks the loader without root, reports what the machine lacks, runs the
+# benches first and the tests while its time budget lasts, and writes everything under
+# $OUT (docs/gpu.md, "On a real GPU").
 set -euo pipefail
 cd "$(dirname "$0")/.."
 mkdir -p .device .gl
 cargo build --release -p frepray-cli
-# The test binaries cargo builds (their names carry a hash): the GPU images against the
+# The test binary cargo builds (its name carries a hash): the GPU images against the
 # CPU's, and the kernel twins whose bit-equality lavapipe shows (a real GPU may fuse or
 # reorder: what it does is a finding, not a failure to hide).
-tests=(direct_image record_twin sums_twin bsdf_twin light_twin sampler_twin)
-cargo test --release -p gpu "${tests[@]/#/--test=}" --no-run --message-format=json 2>/dev/null |
+cargo test --release --workspace --test gpu_tests --no-run --message-format=json 2>/dev/null |
     python3 -c 'import json,sys
 for l in sys.stdin:
     m = json.loads(l)
