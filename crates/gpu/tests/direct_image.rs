@@ -636,8 +636,17 @@ fn environments_and_light_selections_agree() {
             ) + "\n" + &map,
             false,
         ),
+        (
+            "cosine-weighted directions, bsdf + cosine + light",
+            techniques(
+                "{ technique = \"bsdf\", samples = 1 }, { technique = \"cosine\", samples = 1 }, { technique = \"light\", samples = 1 }",
+            ),
+            false,
+        ),
     ];
-    let quick = [true, false, false, false, false, false, false, false, true];
+    let quick = [
+        true, false, false, false, false, false, false, false, true, true,
+    ];
     for (_, (label, text, path)) in cases
         .into_iter()
         .enumerate()

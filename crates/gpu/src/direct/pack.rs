@@ -516,6 +516,7 @@ impl DirectScene {
                 Technique::Environment => 5,
                 Technique::LightSpatial => 6,
                 Technique::LightTrained => 7,
+                Technique::CosineHemisphere => 8,
                 t => return Err(unsupported(format!("technique {}", t.name()))),
             };
             f.tech[k / 4][k % 4] = code;

@@ -135,5 +135,6 @@ const T_ONE: u32 = 4u;
 const T_ENV: u32 = 5u;
 const T_SPATIAL: u32 = 6u;
 const T_TRAINED: u32 = 7u;
+const T_COSINE: u32 = 8u;
 
 fn bsdf_table(i: u32) -> f32 { return sel_buf[i]; }

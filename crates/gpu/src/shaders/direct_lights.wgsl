@@ -122,9 +122,11 @@ fn pmf_at(off: u32, i: u32) -> f32 {
 }
 
 // The solid-angle pdf of technique `code` (light index `one` for T_ONE) at wi, the
-// BSDF's being `bsdf_pdf` (render::technique::Technique::pdf).
-fn tech_pdf(code: u32, one: u32, p: vec3<f32>, n: vec3<f32>, wi: vec3<f32>, bsdf_pdf: f32) -> f32 {
+// BSDF's being `bsdf_pdf`, `nf` the normal on the viewer's side
+// (render::technique::Technique::pdf).
+fn tech_pdf(code: u32, one: u32, p: vec3<f32>, n: vec3<f32>, nf: vec3<f32>, wi: vec3<f32>, bsdf_pdf: f32) -> f32 {
     if (code == T_BSDF) { return bsdf_pdf; }
+    if (code == T_COSINE) { return max(dot(nf, wi), 0.0) * BSDF_INV_PI; }
     if (code == T_ENV) { return env_pdf(frame.env, wi); }
     if (code == T_TRAINED) {
         if (!trained_usable()) { return 0.0; }

@@ -51,6 +51,8 @@ fn shade(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
     }
     let f = basis(n);
     let wo_l = to_local(f, wo);
+    // The normal turned toward the viewer (Technique::CosineHemisphere's axis).
+    let nf = select(n, -n, dot(n, wo) < 0.0);
     if (frame.depth == 0u && j == 0u && (frame.flags & FLAG_AOVS) != 0u) {
         // The albedo AOV: one BSDF draw's weight, from its own dimensions
         // (integrator/aov.rs, dims::ALBEDO).
@@ -112,6 +114,13 @@ fn shade(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
             ok = ls.ok != 0u;
             wi = ls.wi;
         }
+    } else if (code == T_COSINE) {
+        // Cosine-weighted about the normal on the viewer's side, in that normal's own
+        // frame (Technique::CosineHemisphere, Malley's method); it fails where the
+        // density is 0.
+        let d = disk_concentric(u);
+        wi = from_local(basis(nf), vec3<f32>(d, sqrt(max(0.0, 1.0 - dot(d, d)))));
+        ok = dot(nf, wi) > 0.0;
     } else if (n_mis() > 0u) {
         var li = tech_light(k);
         if (code == T_SPATIAL) {
@@ -187,7 +196,7 @@ fn shade(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
         fc = ev.xyz * abs(dot(wi, n));
         for (var t = 0u; t < frame.n_tech; t++) {
             loops++;
-            pdfs[t] = tech_pdf(tech_code(t), tech_light(t), p, n, wi, ev.w);
+            pdfs[t] = tech_pdf(tech_code(t), tech_light(t), p, n, nf, wi, ev.w);
         }
         // A light draw's own density is the mixture's, and it fails where that is not
         // positive (Lights::sample_selected, sample_by_area).
