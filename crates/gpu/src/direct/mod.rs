@@ -42,8 +42,8 @@
 //! rough or smooth (delta lobes outside MIS, as the CPU), with constant or point-space checker colours; sphere,
 //! rectangle and disk lights, point and spot lights, a constant or mapped environment
 //! ([`crate::env`]); the techniques `bsdf`, `light`, `light-uniform`, `light-area`,
-//! `light-spatial`, `light-trained` (the table the CPU trained), `light#k` and
-//! `environment`; every MIS method, per light too; AOVs and the AOV integrators; `path` up to depth
+//! `light-spatial`, `light-trained` (the table the CPU trained), `light#k`,
+//! `environment` and `cosine`; every MIS method, per light too; AOVs and the AOV integrators; `path` up to depth
 //! [`MAX_GPU_DEPTH`]. Anything else is a
 //! [`GpuError::Unsupported`](crate::GpuError::Unsupported) naming it, before any work.
 //!
@@ -100,4 +100,4 @@ pub const MAX_GPU_TECHNIQUES: usize = 8;
 pub const MAX_GPU_TAPES: usize = 16;
 
 /// The deepest `path` the GPU renders (a uniform block per depth and pass).
-pub const MAX_GPU_DEPTH: u32 = 16;
+pub const MAX_GPU_DEPTH: u32 = 64;
