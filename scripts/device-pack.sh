@@ -15,8 +15,10 @@ mkdir -p .device .gl
 cargo build --release -p frepray-cli
 # The test binary cargo builds (its name carries a hash): the GPU images against the
 # CPU's, and the kernel twins whose bit-equality lavapipe shows (a real GPU may fuse or
-# reorder: what it does is a finding, not a failure to hide).
-cargo test --release --workspace --test gpu_tests --no-run --message-format=json 2>/dev/null |
+# reorder: what it does is a finding, not a failure to hide). The test profile is the
+# optimised dev build the test command already made, not a second link-time optimised
+# one: the tests' time is the GPU's.
+cargo test --workspace --test gpu_tests --no-run --message-format=json 2>/dev/null |
     python3 -c 'import json,sys
 for l in sys.stdin:
     m = json.loads(l)
