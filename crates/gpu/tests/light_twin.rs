@@ -255,15 +255,7 @@ fn tables(ls: &[(AreaLight, GpuAreaLight)]) -> (Vec<f32>, u32) {
     sel.extend(light::table(&scene::Distribution1D::new(&area)));
     assert_eq!(sel.len(), importance_off(ls.len()));
     for (l, _) in ls {
-        let b = l.importance_bounds();
-        sel.extend(light::importance_record(&state::LightBounds {
-            center: b.center,
-            radius: b.radius,
-            axis: b.axis,
-            cos_o: b.cos_o,
-            two_sided: b.two_sided,
-            power: render::color::luminance(l.power()),
-        }));
+        sel.extend(light::importance_record(&state::LightBounds::from(l)));
     }
     (sel, off)
 }

@@ -53,6 +53,22 @@ impl Accumulator {
     }
 }
 
+impl From<&AreaLight> for LightBounds {
+    /// What the spatial selection's importance reads of `l`: its
+    /// [`AreaLight::importance_bounds`] and the luminance of its power.
+    fn from(l: &AreaLight) -> Self {
+        let b = l.importance_bounds();
+        LightBounds {
+            center: b.center,
+            radius: b.radius,
+            axis: b.axis,
+            cos_o: b.cos_o,
+            two_sided: b.two_sided,
+            power: luminance(l.power()),
+        }
+    }
+}
+
 /// The CPU renderer of `scene` with one set of options, as the GPU back end takes it
 /// ([`state::Host`]): the [`Accumulator`], the tables computed by the CPU's own code, and
 /// the samples the GPU hands back.
@@ -90,16 +106,7 @@ impl Host for CpuHost<'_> {
     }
 
     fn light_bounds(&self, light: &scene::Light) -> Option<LightBounds> {
-        let l = AreaLight::from_data(light)?;
-        let b = l.importance_bounds();
-        Some(LightBounds {
-            center: b.center,
-            radius: b.radius,
-            axis: b.axis,
-            cos_o: b.cos_o,
-            two_sided: b.two_sided,
-            power: luminance(l.power()),
-        })
+        AreaLight::from_data(light).map(|l| LightBounds::from(&l))
     }
 
     fn cpu_sample(&self, x: u32, y: u32, index: u32, rec: &mut [f64], rays: &mut RayCounts) {
