@@ -198,6 +198,7 @@ fn look_at(eye: DVec3, target: DVec3, up: DVec3, fov: f64, width: u32, height: u
         fov,
         width,
         height,
+        lens: None,
     }
 }
 

@@ -1053,6 +1053,8 @@ fn unsupported_scenes_are_refused_by_name() {
     );
     let e = err(&SCENE.replace("scale = 1.0 } }", "scale = 1.0, space = \"uv\" } }"));
     assert!(e.contains("uv"), "{e}");
+    let e = err(&SCENE.replace("fov = 40\n", "fov = 40\naperture = 0.05\n"));
+    assert!(e.contains("thin-lens"), "{e}");
     let e = err(&SCENE.replace(
         "sphere([0, 0, 0], 0.22)",
         "sphere([0, 0, 0], 0.22) + 0.01 * sin(x)",

@@ -32,6 +32,8 @@ pub struct Camera {
     right: DVec3,
     up: DVec3,
     projection: Projection,
+    /// A thin lens: its radius and the distance of the plane in focus (None: a pinhole).
+    lens: Option<(f64, f64)>,
     /// Image width in pixels.
     pub width: u32,
     /// Image height in pixels.
@@ -63,6 +65,7 @@ impl Camera {
             projection: Projection::Perspective {
                 tan_half_fov: (vfov_degrees.to_radians() / 2.0).tan(),
             },
+            lens: None,
             width,
             height,
         }
@@ -114,6 +117,39 @@ impl Camera {
             self.eye,
             (self.forward + sx * self.right + sy * self.up).normalize(),
         )
+    }
+
+    /// This perspective camera with a thin lens of `radius` focused at `focus_distance`
+    /// along the view direction (pbrt-v4 §5.2.3).
+    pub fn with_lens(self, radius: f64, focus_distance: f64) -> Self {
+        assert!(
+            matches!(self.projection, Projection::Perspective { .. }),
+            "a thin lens needs a perspective camera"
+        );
+        assert!(radius > 0.0 && focus_distance > 0.0, "lens");
+        Self {
+            lens: Some((radius, focus_distance)),
+            ..self
+        }
+    }
+
+    /// The thin lens's radius and focus distance, if the camera has one.
+    pub fn lens(&self) -> Option<(f64, f64)> {
+        self.lens
+    }
+
+    /// [`Self::ray`] through the lens point `lens_u` ∈ [0,1)² (concentric disk map): from
+    /// that point of the lens toward where the pinhole ray meets the plane in focus. A
+    /// pinhole camera ignores `lens_u`.
+    pub fn ray_through_lens(&self, x: u32, y: u32, offset: DVec2, lens_u: DVec2) -> Ray {
+        let r = self.ray(x, y, offset);
+        let Some((radius, focus)) = self.lens else {
+            return r;
+        };
+        let focus_point = r.o + r.d * (focus / r.d.dot(self.forward));
+        let d = radius * crate::warp::uniform_disk_concentric(lens_u);
+        let o = self.eye + d.x * self.right + d.y * self.up;
+        Ray::new(o, (focus_point - o).normalize())
     }
 }
 

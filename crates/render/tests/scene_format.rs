@@ -718,3 +718,74 @@ fn scenes_built_from_data_match_the_renderers_formulas() {
         }
     }
 }
+
+/// A thin lens: `aperture` (the lens's radius) with `focus_distance` (default the
+/// target's distance); every ray of a pixel point, whatever its lens point, meets the
+/// pinhole ray on the plane in focus; the lens's keys are checked where they stand.
+#[test]
+fn a_thin_lens_focuses_on_its_plane() {
+    let lens = |keys: &str| BASE.replace("fov = 40\n", &format!("fov = 40\n{keys}\n"));
+    let (s, _) = toml(&lens("aperture = 0.1\nfocus_distance = 3.0")).unwrap();
+    assert_eq!(s.camera.lens(), Some((0.1, 3.0)));
+    let (s, _) = toml(&lens("aperture = 0.1")).unwrap();
+    assert_eq!(
+        s.camera.lens(),
+        Some((0.1, 4.0)),
+        "default: the target's distance"
+    );
+    let eye = DVec3::new(0.0, -4.0, 1.0);
+    let forward = DVec3::Y;
+    for (x, y, off) in [
+        (0, 0, DVec2::ZERO),
+        (31, 20, DVec2::splat(0.5)),
+        (63, 47, DVec2::new(0.9, 0.1)),
+    ] {
+        let pin = s.camera.ray(x, y, off);
+        let focus = pin.o + pin.d * (4.0 / pin.d.dot(forward));
+        for k in 0..16 {
+            let u = DVec2::new((k % 4) as f64 / 4.0 + 0.1, (k / 4) as f64 / 4.0 + 0.05);
+            let r = s.camera.ray_through_lens(x, y, off, u);
+            assert!((r.d.length() - 1.0).abs() < 1e-12);
+            assert!((r.o - eye).dot(forward).abs() < 1e-12, "on the lens plane");
+            assert!((r.o - eye).length() <= 0.1 + 1e-12, "inside the lens");
+            let t = (focus - r.o).dot(forward) / r.d.dot(forward);
+            assert!(
+                (r.o + r.d * t - focus).length() < 1e-9,
+                "meets the focus point"
+            );
+        }
+    }
+    // No aperture: a pinhole, whatever the lens point.
+    let (p, _) = toml(BASE).unwrap();
+    assert_eq!(p.camera.lens(), None);
+    let u = DVec2::new(0.3, 0.7);
+    assert_eq!(p.camera.ray_through_lens(5, 6, u, u), p.camera.ray(5, 6, u));
+    let t = lens("focus_distance = 3");
+    expect(
+        toml(&t),
+        pos(&t, "focus_distance = 3", 17),
+        "camera.focus_distance",
+        "give aperture",
+    );
+    let t = lens("aperture = -1");
+    expect(
+        toml(&t),
+        pos(&t, "aperture = -1", 11),
+        "camera.aperture",
+        "",
+    );
+    let t = lens("aperture = 0.1\nfocus_distance = 0");
+    expect(
+        toml(&t),
+        pos(&t, "focus_distance = 0", 17),
+        "camera.focus_distance",
+        "",
+    );
+    let t = lens("aperture = 0.1\ntype = \"orthographic\"");
+    expect(
+        toml(&t),
+        pos(&t, "aperture = 0.1", 11),
+        "camera.aperture",
+        "perspective",
+    );
+}

@@ -114,6 +114,20 @@ pub struct CameraData {
     pub width: u32,
     /// Image height in pixels (≥ 1).
     pub height: u32,
+    /// A thin lens (left out of the JSON for a pinhole, so that scenes without one keep
+    /// their hash).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub lens: Option<Lens>,
+}
+
+/// A thin lens (pbrt-v4 §5.2.3): rays leave a disk of this radius around the eye and
+/// meet, for each point of the image, on the plane in focus.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct Lens {
+    /// The lens's radius (> 0).
+    pub radius: f64,
+    /// The distance along the view direction of the plane in focus (> 0).
+    pub focus_distance: f64,
 }
 
 /// The domain of a checker texture.

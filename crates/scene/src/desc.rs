@@ -62,6 +62,11 @@ pub struct CameraDesc {
     pub fov: Option<f64>,
     /// Width and height in pixels (default 320 × 240).
     pub resolution: Option<[u32; 2]>,
+    /// Thin lens: the lens's radius in scene units (default 0, a pinhole).
+    pub aperture: Option<f64>,
+    /// Thin lens: the distance along the view direction that is in focus (default the
+    /// target's distance).
+    pub focus_distance: Option<f64>,
 }
 
 /// Render settings; every key is optional.

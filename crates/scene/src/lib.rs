@@ -59,7 +59,7 @@ mod solids;
 mod training;
 
 pub use data::{
-    CameraData, CameraKind, EnvMapTable, EnvironmentData, Light, LightData, LightKind, MapId,
+    CameraData, CameraKind, EnvMapTable, EnvironmentData, Lens, Light, LightData, LightKind, MapId,
     MaterialData, MaterialId, ObjectData, SceneData, SolidId, TextureData, TextureId, TextureSpace,
 };
 pub use desc::{

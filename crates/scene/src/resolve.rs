@@ -4,7 +4,7 @@
 
 use crate::check::{check_keys, number, transform, vec3};
 use crate::data::{
-    CameraData, CameraKind, MaterialData, MaterialId, ObjectData, SceneData, TextureData,
+    CameraData, CameraKind, Lens, MaterialData, MaterialId, ObjectData, SceneData, TextureData,
     TextureId, TextureSpace,
 };
 use crate::desc::{CameraDesc, ColorDesc, MaterialDesc, ObjectDesc, SceneDescription};
@@ -93,6 +93,38 @@ fn camera(src: &Source, c: &CameraDesc) -> Result<CameraData, SceneError> {
             Some(2.0 * forward.length() * (fov.to_radians() / 2.0).tan())
         }
     };
+    let lens = match (c.aperture, c.focus_distance) {
+        (None | Some(0.0), None) => None,
+        (None | Some(0.0), Some(_)) => {
+            return Err(src.at_value(
+                &kp!["camera", "focus_distance"],
+                "focus_distance applies to a thin lens: give aperture (the lens's radius) too",
+            ))
+        }
+        (Some(a), f) => {
+            let radius = number(src, &kp!["camera", "aperture"], a, 0.0, f64::INFINITY)?;
+            if kind == CameraKind::Orthographic {
+                return Err(src.at_value(
+                    &kp!["camera", "aperture"],
+                    "a thin lens needs a perspective camera",
+                ));
+            }
+            let focus_distance = match f {
+                Some(f) => number(
+                    src,
+                    &kp!["camera", "focus_distance"],
+                    f,
+                    f64::MIN_POSITIVE,
+                    f64::INFINITY,
+                )?,
+                None => forward.length(),
+            };
+            Some(Lens {
+                radius,
+                focus_distance,
+            })
+        }
+    };
     Ok(CameraData {
         kind,
         scale,
@@ -102,6 +134,7 @@ fn camera(src: &Source, c: &CameraDesc) -> Result<CameraData, SceneError> {
         fov,
         width: w,
         height: h,
+        lens,
     })
 }
 

@@ -10,6 +10,7 @@
 //! |---|---|
 //! | 0, 1 | position in the pixel |
 //! | 2, 3, 4 | the albedo AOV's BSDF draw |
+//! | 5, 6 | the point on a thin lens |
 //! | 8 + d·S + 3j … +2 | draw slot j of vertex d: `(uc, u.x, u.y)`; slots 0…D−1 are the techniques' draws in list order, slot D the extra BSDF draw (delta lobes and the continuation when no BSDF technique is listed) |
 //! | 8 + d·S + 3(D + 1) | Russian roulette after vertex d |
 //!
@@ -24,6 +25,8 @@ use glam::DVec2;
 pub const PIXEL: u32 = 0;
 /// First dimension of the albedo AOV's draw.
 pub const ALBEDO: u32 = 2;
+/// Dimensions of the point on a thin lens.
+pub const LENS: u32 = 5;
 /// First dimension of vertex 0.
 const FIRST_VERTEX: u32 = 8;
 

@@ -462,6 +462,9 @@ impl DirectScene {
         let n_mis = data.lights.area.len() + usize::from(data.environment.is_some());
         f.n_shapes = self.shapes.len() as u32;
         let c = &data.camera;
+        if c.lens.is_some() {
+            return Err(unsupported("a thin-lens camera (aperture)"));
+        }
         let (w, h) = (c.width, c.height);
         (f.width, f.height, f.pixels) = (w, h, w * h);
         f.seed_lo = o.seed as u32;

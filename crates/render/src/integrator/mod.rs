@@ -201,7 +201,8 @@ impl Integrator {
 
     /// The camera ray's position in pixel (x, y) of sample stream `rng`: uniform in the
     /// pixel, or its centre. The random dimensions are drawn either way, so the rest of
-    /// the sample is the same.
+    /// the sample is the same; a thin lens takes its point from dimensions of its own
+    /// ([`dims::LENS`]).
     pub fn camera_ray(
         &self,
         scene: &Scene,
@@ -215,7 +216,12 @@ impl Integrator {
         } else {
             u
         };
-        scene.camera.ray(x, y, u)
+        match scene.camera.lens() {
+            Some(_) => scene
+                .camera
+                .ray_through_lens(x, y, u, rng.get_2d(dims::LENS)),
+            None => scene.camera.ray(x, y, u),
+        }
     }
 
     /// Runs sample `index` of pixel (x, y) into the pixel's record `rec`.

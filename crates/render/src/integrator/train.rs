@@ -50,7 +50,12 @@ impl Integrator {
             for x in 0..w {
                 for i in 0..self.training.spp {
                     let rng = sampler.stream(x, y, i);
-                    let ray = scene.camera.ray(x, y, rng.get_2d(0));
+                    let ray = scene.camera.ray_through_lens(
+                        x,
+                        y,
+                        rng.get_2d(state::dims::PIXEL),
+                        rng.get_2d(state::dims::LENS),
+                    );
                     let Some(hit) = scene.intersect(&ray, 0.0, f64::INFINITY) else {
                         continue;
                     };

@@ -114,11 +114,15 @@ fn environment(data: &SceneData, e: &EnvironmentData) -> Environment {
 impl Camera {
     /// The camera of a resolved scene's data.
     pub fn from_data(c: &::scene::CameraData) -> Camera {
-        match (c.kind, c.scale) {
+        let camera = match (c.kind, c.scale) {
             (::scene::CameraKind::Orthographic, Some(h)) => {
                 Camera::orthographic(v3(c.eye), v3(c.target), v3(c.up), h, c.width, c.height)
             }
             _ => Camera::look_at(v3(c.eye), v3(c.target), v3(c.up), c.fov, c.width, c.height),
+        };
+        match c.lens {
+            Some(l) => camera.with_lens(l.radius, l.focus_distance),
+            None => camera,
         }
     }
 }
