@@ -462,9 +462,6 @@ impl DirectScene {
         let n_mis = data.lights.area.len() + usize::from(data.environment.is_some());
         f.n_shapes = self.shapes.len() as u32;
         let c = &data.camera;
-        if c.lens.is_some() {
-            return Err(unsupported("a thin-lens camera (aperture)"));
-        }
         let (w, h) = (c.width, c.height);
         (f.width, f.height, f.pixels) = (w, h, w * h);
         f.seed_lo = o.seed as u32;
@@ -481,8 +478,10 @@ impl DirectScene {
         };
         f.eye = f4(eye.to_array(), scale);
         f.right = f4(right.to_array(), f64::from(w) / f64::from(h));
-        f.up = f4(up.to_array(), 0.0);
-        f.forward = f4(forward.to_array(), 0.0);
+        // A thin lens: its radius in up.w (0: a pinhole), its focus distance in forward.w.
+        let (radius, focus) = c.lens.map_or((0.0, 0.0), |l| (l.radius, l.focus_distance));
+        f.up = f4(up.to_array(), radius);
+        f.forward = f4(forward.to_array(), focus);
         f.flags = u32::from(o.hide_emitters)
             | (u32::from(o.pixel_center) << 1)
             | (u32::from(c.kind == CameraKind::Orthographic) << 2)

@@ -16,7 +16,16 @@ fn camera_ray(px: vec3<u32>) -> array<vec3<f32>, 2> {
     if ((frame.flags & FLAG_ORTHO) != 0u) {
         return array<vec3<f32>, 2>(frame.eye.xyz + sx * frame.right.xyz + sy * frame.up.xyz, frame.forward.xyz);
     }
-    return array<vec3<f32>, 2>(frame.eye.xyz, normalize(frame.forward.xyz + sx * frame.right.xyz + sy * frame.up.xyz));
+    let d = normalize(frame.forward.xyz + sx * frame.right.xyz + sy * frame.up.xyz);
+    if (frame.up.w > 0.0) {
+        // A thin lens (render::camera::Camera::ray_through_lens): from the lens point of
+        // dimensions 5 and 6 toward where the pinhole ray meets the plane in focus.
+        let focus = frame.eye.xyz + d * (frame.forward.w / dot(d, frame.forward.xyz));
+        let l = frame.up.w * disk_concentric(vec2<f32>(rnd(px.x, px.y, px.z, 5u), rnd(px.x, px.y, px.z, 6u)));
+        let o = frame.eye.xyz + l.x * frame.right.xyz + l.y * frame.up.xyz;
+        return array<vec3<f32>, 2>(o, normalize(focus - o));
+    }
+    return array<vec3<f32>, 2>(frame.eye.xyz, d);
 }
 
 // Draw records per slot and depth: the techniques' Σ n_k, the extra BSDF draw, then one
