@@ -925,7 +925,7 @@ fn check_progressive(
     let schedule = kernel.schedule().unwrap();
     let r = cpu.record();
     let (stride, first) = (r.stride(), Record::AOV + r.aov);
-    let t = acc.techniques().len();
+    let t = acc.techniques.len();
     let alpha = 4..4 + 3 * t;
     let mut worst = [0f64; 3];
     let mut solved = 0;

@@ -204,7 +204,7 @@ fn build() -> Vec<Case> {
         .map(|(label, o)| {
             let acc = Accumulator::new(&scene, &o).unwrap_or_else(|e| panic!("{label}: {e}"));
             let linear = acc.linear().expect("a linear record");
-            let n_draws: u32 = acc.counts().iter().sum();
+            let n_draws: u32 = acc.counts.iter().sum();
             // Vertex depths as the `direct` kernels record them.
             let depths = match o.integrator {
                 IntegratorKind::Path => o.max_depth,
@@ -296,7 +296,7 @@ fn twin_adds_what_the_cpu_accumulator_adds() {
         }
         let mut cpu = vec![0f64; p.pixels as usize * stride];
         let mut rays = RayCounts::default();
-        let t = c.acc.techniques().len();
+        let t = c.acc.techniques.len();
         let mut pdfs = vec![0f64; (p.max_depth * p.n_draws) as usize * t];
         for slot in 0..p.slots {
             let hw = &c.hits[slot as usize * HIT_WORDS..(slot as usize + 1) * HIT_WORDS];
@@ -335,7 +335,7 @@ fn twin_adds_what_the_cpu_accumulator_adds() {
         );
         // The progressive records' α words hold the terms' Q (checked against the CPU's
         // α in tests/direct_image.rs, where α is applied); the CPU's α is 0 here.
-        let r = c.acc.record();
+        let r = c.acc.record;
         let alpha_word = |k: usize| {
             let w = k % stride;
             p.code == 5

@@ -17,7 +17,6 @@ use crate::color::Rgb;
 use crate::options::MAX_TECHNIQUES;
 use crate::record::{Pixel, Record};
 use crate::tally::{Combine, Tally};
-use crate::technique::Technique;
 use scene::IntegratorKind;
 
 /// One technique draw at the first vertex, as shaded elsewhere.
@@ -101,25 +100,10 @@ impl Tally {
         self.record.stride()
     }
 
-    /// The techniques, in the order draws are handed over.
-    pub fn techniques(&self) -> &[Technique] {
-        &self.techniques
-    }
-
-    /// Draws per technique per vertex.
-    pub fn counts(&self) -> &[u32] {
-        &self.counts
-    }
-
     /// Whether the render is one of the AOV integrators (`depth`, `normals`, `albedo`),
     /// whose samples go to [`Self::add_aov_sample`].
     pub fn aov_integrator(&self) -> bool {
         !matches!(self.kind, IntegratorKind::Direct | IntegratorKind::Path)
-    }
-
-    /// Where each sum lives in a pixel's record.
-    pub fn record(&self) -> Record {
-        self.record
     }
 
     /// The record as sums of per-sample terms ([`LinearRecord`]).
@@ -145,11 +129,6 @@ impl Tally {
                 IntegratorKind::Albedo => Some(2),
             },
         })
-    }
-
-    /// Whether the render keeps AOVs beside its image ([`crate::RenderOptions::aovs`]).
-    pub fn keeps_aovs(&self) -> bool {
-        self.aovs
     }
 
     /// Adds sample `index` of a pixel of an AOV integrator: the first hit's depth, normal

@@ -20,7 +20,7 @@ pub fn add_slot<'v>(
     pdfs: &mut [f64],
     rays: &mut RayCounts,
 ) {
-    let t_count = acc.techniques().len();
+    let t_count = acc.techniques.len();
     rays.camera += 1;
     // The first hit's depth, normal and albedo (words 8 and 9).
     let aovs = [hw[35], hw[32], hw[33], hw[34], hw[36], hw[37], hw[38]].map(f64::from);
