@@ -149,7 +149,7 @@ impl Kernel {
 
     /// One sample of `technique` in the iteration with global key `key` (the sample
     /// index: it picks the uncorrelated estimator's set); see [`crate::Estimator::add_sample`].
-    #[inline]
+    #[inline(always)]
     pub fn add_sample(
         &self,
         block: &mut [f64],

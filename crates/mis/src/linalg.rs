@@ -76,6 +76,19 @@ pub enum SolveMethod {
 /// `a` is packed symmetric (see [`packed_index`]), `rhs` and `alpha` hold one length-`t`
 /// column per channel (`rhs[c·t + i]`). Always writes finite values to `alpha`.
 pub fn solve(a: &[f64], t: usize, ridge: f64, rhs: &[f64], alpha: &mut [f64]) -> SolveMethod {
+    // The common sizes with constant bounds, so that the factorisation's loops unroll
+    // (the same operations in the same order: bit for bit).
+    match t {
+        2 => solve_sized(a, 2, ridge, rhs, alpha),
+        3 => solve_sized(a, 3, ridge, rhs, alpha),
+        4 => solve_sized(a, 4, ridge, rhs, alpha),
+        _ => solve_sized(a, t, ridge, rhs, alpha),
+    }
+}
+
+/// [`solve`], inlined where `t` is a constant.
+#[inline(always)]
+fn solve_sized(a: &[f64], t: usize, ridge: f64, rhs: &[f64], alpha: &mut [f64]) -> SolveMethod {
     assert_eq!(a.len(), packed_len(t), "packed matrix length");
     assert_eq!(rhs.len(), alpha.len(), "rhs and alpha lengths");
     assert!(
@@ -89,35 +102,54 @@ pub fn solve(a: &[f64], t: usize, ridge: f64, rhs: &[f64], alpha: &mut [f64]) ->
         return SolveMethod::Zero;
     }
     let mu = ridge * trace / t as f64;
-    with_scratch(a.len(), |m| {
-        let ridged = |m: &mut [f64]| {
-            m.copy_from_slice(a);
-            for i in 0..t {
-                m[packed_index(i, i)] += mu;
-            }
-        };
-        ridged(m);
-        if cholesky_in_place(m, t) {
-            for (col, out) in rhs.chunks_exact(t).zip(alpha.chunks_exact_mut(t)) {
-                cholesky_solve(m, t, col, out);
-            }
-            if alpha.iter().all(|v| v.is_finite()) {
-                return SolveMethod::Cholesky;
-            }
+    // Up to T = 4 on the stack here, not through `with_scratch`'s closure: compiled once
+    // for every T, that closure kept the loops general.
+    if a.len() <= packed_len(4) {
+        let mut m = [0.0; packed_len(4)];
+        return factor_and_solve(&mut m[..a.len()], a, t, mu, rhs, alpha);
+    }
+    with_scratch(a.len(), |m| factor_and_solve(m, a, t, mu, rhs, alpha))
+}
+
+/// [`solve`]'s factorisation of `Â + μI` in scratch `m` (`a.len()` words), with the
+/// pseudo-inverse where Cholesky fails.
+#[inline(always)]
+fn factor_and_solve(
+    m: &mut [f64],
+    a: &[f64],
+    t: usize,
+    mu: f64,
+    rhs: &[f64],
+    alpha: &mut [f64],
+) -> SolveMethod {
+    let ridged = |m: &mut [f64]| {
+        m.copy_from_slice(a);
+        for i in 0..t {
+            m[packed_index(i, i)] += mu;
         }
-        // The factorisation overwrote `m` (fully or up to the failing pivot): rebuild it.
-        ridged(m);
-        if pseudo_inverse_solve(m, t, rhs, alpha) {
-            SolveMethod::PseudoInverse
-        } else {
-            alpha.fill(0.0);
-            SolveMethod::Zero
+    };
+    ridged(m);
+    if cholesky_in_place(m, t) {
+        for (col, out) in rhs.chunks_exact(t).zip(alpha.chunks_exact_mut(t)) {
+            cholesky_solve(m, t, col, out);
         }
-    })
+        if alpha.iter().all(|v| v.is_finite()) {
+            return SolveMethod::Cholesky;
+        }
+    }
+    // The factorisation overwrote `m` (fully or up to the failing pivot): rebuild it.
+    ridged(m);
+    if pseudo_inverse_solve(m, t, rhs, alpha) {
+        SolveMethod::PseudoInverse
+    } else {
+        alpha.fill(0.0);
+        SolveMethod::Zero
+    }
 }
 
 /// Overwrites packed `m` with its Cholesky factor L (lower, `m = L Lᵀ`). Returns false
 /// when a pivot falls below [`PIVOT_TOL`] times its diagonal entry (numerically singular).
+#[inline(always)]
 fn cholesky_in_place(m: &mut [f64], t: usize) -> bool {
     for j in 0..t {
         let diag = m[packed_index(j, j)];
@@ -143,6 +175,7 @@ fn cholesky_in_place(m: &mut [f64], t: usize) -> bool {
 }
 
 /// Solves `L Lᵀ x = b` with the packed factor from [`cholesky_in_place`].
+#[inline(always)]
 fn cholesky_solve(l: &[f64], t: usize, b: &[f64], x: &mut [f64]) {
     for i in 0..t {
         let mut v = b[i];
@@ -225,6 +258,7 @@ fn symmetric_eigen_in(m: &[f64], t: usize, a: &mut [f64], values: &mut [f64], v:
 
 /// Minimum-norm least-squares solution `x = M⁺ b` for each column of `rhs`, eigenvalues
 /// below [`PIVOT_TOL`]·max treated as zero. Returns false if the result is not finite.
+#[inline(never)]
 fn pseudo_inverse_solve(m: &[f64], t: usize, rhs: &[f64], alpha: &mut [f64]) -> bool {
     with_scratch(t + 2 * t * t, |buf| {
         let (values, rest) = buf.split_at_mut(t);
@@ -264,6 +298,34 @@ fn pseudo_inverse_apply(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The sizes `solve` unrolls (T = 2, 3, 4) give bit for bit the general loops' α.
+    #[test]
+    fn unrolled_sizes_solve_as_the_general_loops() {
+        for t in 2..=4 {
+            // A well-conditioned matrix and one whose Cholesky fails (rank one).
+            for rank_one in [false, true] {
+                let mut a = vec![0.0; packed_len(t)];
+                for i in 0..t {
+                    for j in 0..=i {
+                        let v = if rank_one {
+                            (i + 1) as f64 * (j + 1) as f64
+                        } else {
+                            1.0 / (1.0 + i as f64 + j as f64) + f64::from(u8::from(i == j))
+                        };
+                        a[packed_index(i, j)] = v;
+                    }
+                }
+                let rhs: Vec<f64> = (0..3 * t).map(|i| (i as f64 * 0.37).sin()).collect();
+                let (mut fast, mut general) = (vec![0.0; 3 * t], vec![0.0; 3 * t]);
+                let m1 = solve(&a, t, 1e-3, &rhs, &mut fast);
+                let m2 = solve_sized(&a, std::hint::black_box(t), 1e-3, &rhs, &mut general);
+                assert_eq!(m1, m2);
+                let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                assert_eq!(bits(&fast), bits(&general), "T = {t}, rank one: {rank_one}");
+            }
+        }
+    }
 
     fn pack(full: &[&[f64]]) -> Vec<f64> {
         let t = full.len();

@@ -97,7 +97,7 @@ impl Pixel<'_> {
     /// (nearest along it, objects ignored): in per-light mode its block gets the draw
     /// and every other light's block a failed draw (the draw lies outside that light's
     /// domain); None (no light) fails in every block. Ignored otherwise.
-    #[inline]
+    #[inline(always)]
     pub fn add_draw(
         &mut self,
         it: &Tally,
@@ -124,20 +124,36 @@ impl Pixel<'_> {
                     self.add(f * scale);
                 }
             }
-            Combine::Estimator(kernel) => {
-                if it.record.lights == 1 {
-                    let r = it.record.depth_light(depth, 0);
-                    kernel.add_sample(&mut self.rec[r], self.key, k, &f.to_array(), pdfs);
-                    return;
-                }
-                for l in 0..it.record.lights {
-                    let r = it.record.depth_light(depth, l);
-                    if Some(l) == light {
-                        kernel.add_sample(&mut self.rec[r], self.key, k, &f.to_array(), pdfs);
-                    } else {
-                        kernel.add_failed(&mut self.rec[r], self.key, k);
-                    }
-                }
+            Combine::Estimator(kernel) => self.add_estimated(it, kernel, depth, k, f, pdfs, light),
+        }
+    }
+
+    /// [`Pixel::add_draw`] into an estimator's blocks: one call that holds the estimator's
+    /// sums inlined, outside the heuristics' short path (which stays inlined in the
+    /// caller's loop).
+    #[inline(never)]
+    #[allow(clippy::too_many_arguments)]
+    fn add_estimated(
+        &mut self,
+        it: &Tally,
+        kernel: &mis::Kernel,
+        depth: usize,
+        k: usize,
+        f: Rgb,
+        pdfs: &[f64],
+        light: Option<usize>,
+    ) {
+        if it.record.lights == 1 {
+            let r = it.record.depth_light(depth, 0);
+            kernel.add_sample(&mut self.rec[r], self.key, k, &f.to_array(), pdfs);
+            return;
+        }
+        for l in 0..it.record.lights {
+            let r = it.record.depth_light(depth, l);
+            if Some(l) == light {
+                kernel.add_sample(&mut self.rec[r], self.key, k, &f.to_array(), pdfs);
+            } else {
+                kernel.add_failed(&mut self.rec[r], self.key, k);
             }
         }
     }

@@ -179,6 +179,19 @@ fn pdf_over(t: Technique, ctx: &ShadingPoint, wi: DVec3, crossed: Option<&Crosse
     }
 }
 
+/// Whether `t` mixes over the area lights a direction crosses (with the environment):
+/// the selections by power, uniformly, spatially and trained, and by area.
+fn mixes(t: Technique) -> bool {
+    matches!(
+        t,
+        Technique::LightPower
+            | Technique::LightUniform
+            | Technique::LightSpatial
+            | Technique::LightTrained
+            | Technique::LightArea
+    )
+}
+
 /// Fills `out[k]` with `techniques[k].pdf(ctx, wi)`, the light mixtures' over the lights
 /// `crossed` lists where the caller found them ([`Lights::along`]), and the BSDF's
 /// `bsdf_pdf` where the caller has it ([`crate::bsdf::Bsdf::f_pdf`]). Otherwise, where
@@ -192,10 +205,16 @@ pub fn pdfs(
     bsdf_pdf: Option<f64>,
     out: &mut [f64],
 ) {
+    // A direction that crosses no area light (most BSDF draws), without an environment:
+    // the mixtures over the lights have no term to sum, 0.0 exactly. The optimal
+    // estimators need the pdfs of such draws too, where the heuristics skip them.
+    let none_crossed =
+        crossed.is_some_and(|c| c.lights().is_empty()) && ctx.lights.environment().is_none();
     let fill = |out: &mut [f64], crossed: Option<&Crossed>| {
         for (o, &t) in out.iter_mut().zip(techniques) {
             *o = match (t, bsdf_pdf) {
                 (Technique::Bsdf, Some(p)) => p,
+                _ if none_crossed && mixes(t) => 0.0,
                 _ => pdf_over(t, ctx, wi, crossed),
             };
         }
@@ -203,17 +222,7 @@ pub fn pdfs(
     if crossed.is_some() {
         return fill(out, crossed);
     }
-    let mixes = |t: &&Technique| {
-        matches!(
-            t,
-            Technique::LightPower
-                | Technique::LightUniform
-                | Technique::LightSpatial
-                | Technique::LightTrained
-                | Technique::LightArea
-        )
-    };
-    if techniques.iter().filter(mixes).count() >= 2 {
+    if techniques.iter().filter(|&&t| mixes(t)).count() >= 2 {
         let area = techniques.contains(&Technique::LightArea);
         if let Some(c) = ctx.lights.crossed(ctx.p, wi, area) {
             return fill(out, Some(&c));
