@@ -437,7 +437,8 @@ fn render(args: RenderArgs) -> Result<(), String> {
         None if model.planar => {
             if !args.quiet {
                 note!(
-                    "note: a 2-D model (F does not depend on z): seen from the top with                      parallel rays (--view chooses another side)"
+                    "note: a 2-D model (F does not depend on z): seen from the top with parallel rays \
+                     (--view chooses another side)"
                 );
             }
             (ViewArg::Top, true)

@@ -793,6 +793,104 @@ mod tests {
         }
     }
 
+    /// A model that does not depend on z gets its grid as a quadtree of columns: a disc
+    /// union (min/max, in the plane) has the fine grid, each column one occupancy and one
+    /// tape along z, and every ray's first crossing agrees with a dense march.
+    #[test]
+    fn planar_models_get_a_grid_of_columns() {
+        let (x, y) = (Tree::x(), Tree::y());
+        let disc = |a: f64, b: f64, r: f64| r * r - ((&x - a).square() + (&y - b).square());
+        let t = disc(0.0, 0.0, 0.5)
+            .max(&disc(0.6, 0.2, 0.25))
+            .min(&(0.45 - (&x + 0.3).abs()).max(&disc(-0.5, -0.5, 0.2)));
+        let s = surface(&t);
+        let g = s.grid.view();
+        assert_eq!(
+            g.n,
+            occupancy::FINE_GRID,
+            "a planar model gets the fine grid"
+        );
+        let n = g.n;
+        let (mut occupied, mut columns) = (0, 0);
+        for yx in 0..n * n {
+            let at = |z: usize| z * n * n + yx;
+            let occ = |k: usize| g.words[k / 64] >> (k % 64) & 1 == 1;
+            assert!((0..n).all(|z| occ(at(z)) == occ(at(0)) && g.cells[at(z)] == g.cells[at(0)]));
+            occupied += usize::from(occ(at(0)));
+            columns += 1;
+        }
+        assert!(
+            occupied > 50 && occupied < columns / 2,
+            "{occupied} of {columns}"
+        );
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(21);
+        let mut hits = 0;
+        for k in 0..300 {
+            let o = DVec3::new(rng.gen_range(-2.0..2.0), rng.gen_range(-2.0..2.0), 2.0);
+            // Down the columns, steep and oblique.
+            let target = if k % 2 == 0 {
+                DVec3::new(o.x, o.y, -2.0) + 0.05 * DVec3::new(rng.gen(), rng.gen(), 0.0)
+            } else {
+                DVec3::new(rng.gen_range(-1.0..1.0), rng.gen_range(-1.0..1.0), -1.0)
+            };
+            let ray = Ray::new(o, (target - o).normalize());
+            let got = s.first_crossing(&ray, 0.0, 5.0);
+            let want = march(&s, &ray, 0.0, 5.0, 40_000);
+            match (got, want) {
+                (Some(a), Some(b)) => {
+                    hits += 1;
+                    assert!((a - b).abs() < 5.0 / 40_000.0, "{a} vs {b}");
+                }
+                (None, None) => {}
+                _ => panic!("{got:?} vs march {want:?} for {ray:?}"),
+            }
+        }
+        assert!(hits > 60, "only {hits} hits");
+    }
+
+    /// Fidget's prospero (text in the plane, 7 592 nodes), which had no grid (its octree
+    /// ran past the build budget): with its grid of columns, rays from the top and
+    /// oblique ones find the crossings of the whole tape searched without a grid.
+    #[test]
+    fn prospero_gets_a_grid_and_the_same_hits() {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+        let model = crate::read::read_file(&root.join("models/fidget/prospero.vm")).unwrap();
+        let crate::Shape::Function { tree, .. } = &model.shape else {
+            panic!("prospero: not one expression");
+        };
+        let e = Expr::new(tree);
+        let b = expr_bounds(&e, Aabb::new(DVec3::splat(-1.0), DVec3::splat(1.0)));
+        let s = ExprSurface::new(e, b);
+        let with = s.view();
+        assert_eq!(with.grid.n, occupancy::FINE_GRID);
+        let without = ExprView {
+            grid: GridView::default(),
+            ..with
+        };
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(34);
+        let mut hits = 0;
+        for k in 0..160 {
+            let o = DVec3::new(rng.gen_range(-1.0..1.0), rng.gen_range(-1.0..1.0), 1.0);
+            let d = if k % 2 == 0 {
+                -DVec3::Z
+            } else {
+                DVec3::new(rng.gen_range(-1.0..1.0), rng.gen_range(-1.0..1.0), -1.0).normalize()
+            };
+            let ray = Ray::new(o, d);
+            let got = with.trace(&ray, 0.0, 3.0, false).map(|(t, _)| t);
+            let want = without.trace(&ray, 0.0, 3.0, false).map(|(t, _)| t);
+            match (got, want) {
+                (Some(a), Some(b)) => {
+                    hits += 1;
+                    assert!((a - b).abs() < 1e-9, "{a} vs {b} for {ray:?}");
+                }
+                (None, None) => {}
+                _ => panic!("{got:?} with the grid, {want:?} without, for {ray:?}"),
+            }
+        }
+        assert!(hits > 20, "only {hits} hits");
+    }
+
     /// A half-space (its solid cut by the search domain) is hit at its plane, not
     /// missed for the domain's far face; a prism cut by its declared domain is capped
     /// there, entering and leaving.

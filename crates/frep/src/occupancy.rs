@@ -15,6 +15,7 @@ use crate::dual::Dual;
 use crate::expr::{eval_choices_nodes, eval_nodes, simplify_into, Choice, Node};
 use crate::interval::Interval;
 use crate::ray::{Aabb, Ray};
+use crate::tree::Var;
 use glam::DVec3;
 
 /// Cells per axis of a coarse grid (a power of two: the octree halves it each level).
@@ -227,15 +228,16 @@ fn build_split(tape: &[Node], b: &Aabb, n: usize, levels: usize) -> Option<(Grid
         hi: b.hi,
         cell: (b.hi - b.lo) / n as f64,
         n,
+        used: used_axes(tape),
     };
     // The top levels, breadth first: what they split becomes the parallel subtrees.
     let mut top = Builder::new(tape.to_vec(), TAPE_BUDGET);
-    let mut frontier = vec![([0usize; 3], n, [0u32, tape.len() as u32])];
+    let mut frontier = vec![([0usize; 3], [n; 3], [0u32, tape.len() as u32])];
     for _ in 0..levels {
         let mut next = Vec::new();
         for (c, size, span) in frontier {
             if let Some(own) = top.node(&geometry, c, size, span) {
-                next.extend(children(c, size, own));
+                next.extend(geometry.children(c, size, own));
             }
         }
         frontier = next;
@@ -276,16 +278,16 @@ fn build_split(tape: &[Node], b: &Aabb, n: usize, levels: usize) -> Option<(Grid
     let mut leaves = |builder: &Builder, rebase: &dyn Fn([u32; 2]) -> [u32; 2]| {
         for leaf in &builder.leaves {
             let (c, size) = (leaf.corner, leaf.size);
-            for z in c[2]..c[2] + size {
-                for y in c[1]..c[1] + size {
-                    for x in c[0]..c[0] + size {
+            for z in c[2]..c[2] + size[2] {
+                for y in c[1]..c[1] + size[1] {
+                    for x in c[0]..c[0] + size[0] {
                         cells[bit(n, x, y, z)] = rebase(leaf.span);
                         inside[bit(n, x, y, z)] = leaf.excluded && leaf.positive;
+                        // An occupied leaf is one cell, or a column along an axis F
+                        // does not depend on.
+                        occupied[bit(n, x, y, z)] = !leaf.excluded;
                     }
                 }
-            }
-            if !leaf.excluded {
-                occupied[bit(n, c[0], c[1], c[2])] = true;
             }
         }
     };
@@ -350,25 +352,58 @@ struct Octree {
     hi: DVec3,
     cell: DVec3,
     n: usize,
+    /// The axes F depends on: boxes are split along these only. Along another axis
+    /// every box spans the grid, so that a model that does not depend on z (Fidget's
+    /// prospero, text in the plane) costs a quadtree of columns, not an octree of cells.
+    used: [bool; 3],
 }
 
-/// The eight children of the octree box at corner cell `c`, `size` cells wide, all
-/// given the tape `own`.
-fn children(c: [usize; 3], size: usize, own: [u32; 2]) -> impl Iterator<Item = OctBox> {
-    let h = size / 2;
-    (0..8).map(move |k| {
-        let d = [(k & 1) * h, (k >> 1 & 1) * h, (k >> 2 & 1) * h];
-        ([c[0] + d[0], c[1] + d[1], c[2] + d[2]], h, own)
-    })
+impl Octree {
+    /// The children of the box at corner cell `c`, `size` cells wide per axis, all given
+    /// the tape `own`: halved along each axis F depends on (eight children in an
+    /// octree, four in a quadtree of columns).
+    fn children(&self, c: [usize; 3], size: [usize; 3], own: [u32; 2]) -> Vec<OctBox> {
+        let half = |k: usize| if self.used[k] { size[k] / 2 } else { 0 };
+        let h = [half(0), half(1), half(2)];
+        let size = [0, 1, 2].map(|k| if self.used[k] { h[k] } else { size[k] });
+        (0..8)
+            .filter(|&k: &usize| (0..3).all(|a| self.used[a] || k >> a & 1 == 0))
+            .map(|k| {
+                let d = [(k & 1) * h[0], (k >> 1 & 1) * h[1], (k >> 2 & 1) * h[2]];
+                ([c[0] + d[0], c[1] + d[1], c[2] + d[2]], size, own)
+            })
+            .collect()
+    }
+
+    /// Whether a box `size` cells wide is a finest box: one cell along every axis F
+    /// depends on.
+    fn finest(&self, size: [usize; 3]) -> bool {
+        (0..3).all(|k| !self.used[k] || size[k] == 1)
+    }
 }
 
-/// An octree box to evaluate: corner cell, size in cells, the tape that holds over it.
-type OctBox = ([usize; 3], usize, [u32; 2]);
+/// The axes (x, y, z) that `tape` reads.
+fn used_axes(tape: &[Node]) -> [bool; 3] {
+    let mut used = [false; 3];
+    for node in tape {
+        match node {
+            Node::Var(Var::X) => used[0] = true,
+            Node::Var(Var::Y) => used[1] = true,
+            Node::Var(Var::Z) => used[2] = true,
+            _ => {}
+        }
+    }
+    used
+}
 
-/// An octree box that is not split: empty (`excluded`, with F's sign) or a finest cell.
+/// An octree box to evaluate: corner cell, size in cells per axis, the tape that holds
+/// over it.
+type OctBox = ([usize; 3], [usize; 3], [u32; 2]);
+
+/// An octree box that is not split: empty (`excluded`, with F's sign) or a finest box.
 struct Leaf {
     corner: [usize; 3],
-    size: usize,
+    size: [usize; 3],
     span: [u32; 2],
     excluded: bool,
     positive: bool,
@@ -403,11 +438,11 @@ impl Builder {
 
     /// Depth first below box `c` until every box is a leaf, or until more than
     /// `budget` evaluations are spent.
-    fn walk(&mut self, g: &Octree, c: [usize; 3], size: usize, span: [u32; 2], budget: usize) {
+    fn walk(&mut self, g: &Octree, c: [usize; 3], size: [usize; 3], span: [u32; 2], budget: usize) {
         let mut stack = vec![(c, size, span)];
         while let Some((c, size, span)) = stack.pop() {
             if let Some(own) = self.node(g, c, size, span) {
-                stack.extend(children(c, size, own));
+                stack.extend(g.children(c, size, own));
             }
             if self.spent > budget {
                 return;
@@ -417,16 +452,23 @@ impl Builder {
 
     /// Evaluates one box: records it as a leaf (None) or returns the tape its children
     /// inherit.
-    fn node(&mut self, g: &Octree, c: [usize; 3], size: usize, span: [u32; 2]) -> Option<[u32; 2]> {
+    fn node(
+        &mut self,
+        g: &Octree,
+        c: [usize; 3],
+        size: [usize; 3],
+        span: [u32; 2],
+    ) -> Option<[u32; 2]> {
         let (s, e) = (span[0] as usize, span[1] as usize);
         self.spent = self.spent.saturating_add(e - s);
         let lo = g.lo + DVec3::new(c[0] as f64, c[1] as f64, c[2] as f64) * g.cell;
-        let hi = if c.iter().all(|&k| k + size == g.n) {
+        let cells = DVec3::new(size[0] as f64, size[1] as f64, size[2] as f64);
+        let hi = if (0..3).all(|k| c[k] + size[k] == g.n) {
             g.hi
         } else {
-            lo + g.cell * size as f64
+            lo + g.cell * cells
         };
-        let m = g.cell * (size as f64 * MARGIN);
+        let m = g.cell * (cells * MARGIN);
         let iv = |k: usize| Interval::new(lo[k] - m[k], hi[k].max(lo[k]) + m[k]);
         let v = eval_choices_nodes(
             &self.nodes[s..e],
@@ -448,7 +490,8 @@ impl Builder {
                 own = [start as u32, self.nodes.len() as u32];
             }
         }
-        if !excluded && size <= MEAN_VALUE_SIZE {
+        let widest = (0..3).filter(|&k| g.used[k]).map(|k| size[k]).max();
+        if !excluded && widest.unwrap_or(0) <= MEAN_VALUE_SIZE {
             let tape = &self.nodes[own[0] as usize..own[1] as usize];
             self.spent = self.spent.saturating_add(4 * tape.len());
             let scratch = (&mut self.scratch, &mut self.duals);
@@ -456,7 +499,7 @@ impl Builder {
                 (excluded, positive) = (true, sign);
             }
         }
-        if excluded || size == 1 {
+        if excluded || g.finest(size) {
             self.leaves.push(Leaf {
                 corner: c,
                 size,
