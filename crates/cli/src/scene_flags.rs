@@ -10,7 +10,8 @@ use std::path::Path;
 pub struct SceneFlags {
     /// Sampling techniques and samples of each (scenes), e.g. `light:1,bsdf:1`; names:
     /// bsdf, light-power (alias light), light-uniform, light-area, light-spatial,
-    /// light-trained (trained per spatial cell in a pass before the render),
+    /// light-bvh (light-spatial's pmf from a light BVH, O(log n)), light-trained
+    /// (trained per spatial cell in a pass before the render),
     /// light#k (MIS light k: area lights in file order, then the environment), light#*
     /// (every MIS light), environment, cosine; at most 32.
     #[arg(long)]

@@ -34,6 +34,7 @@ fn every_technique_and_method_converges_to_the_analytic_image() {
         Technique::LightUniform,
         Technique::LightArea,
         Technique::LightSpatial,
+        Technique::LightBvh,
         Technique::LightTrained,
         Technique::CosineHemisphere,
     ]

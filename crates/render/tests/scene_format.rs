@@ -338,7 +338,7 @@ fn malformed_toml_is_located() {
         pos(&t, "\"lights\"", 0),
         "render.techniques[1].technique",
         "valid names: bsdf, light-power, light (= light-power), light-uniform, light-area, \
-         light-spatial, light-trained, light#k (MIS light k, 0-based), light#* (every MIS \
+         light-spatial, light-bvh, light-trained, light#k (MIS light k, 0-based), light#* (every MIS \
          light), environment, cosine",
     );
     // Bad MIS name.

@@ -167,6 +167,10 @@ pub enum TechniqueKind {
     /// A light chosen ∝ a bound on its unoccluded contribution at the shading point
     /// (pbrt-v4's `LightBounds::Importance`), then sampled.
     LightSpatial,
+    /// [`TechniqueKind::LightSpatial`]'s selection ∝ importance, drawn from a BVH over the
+    /// lights in O(log n) per draw and per pmf (pbrt-v4's `BVHLightSampler`), then
+    /// sampled (`light-bvh`).
+    LightBvh,
     /// A light chosen by a pmf learned per spatial cell from contributions measured in a
     /// training pass (visibility included), mixed with a uniform floor, then sampled.
     LightTrained,
@@ -182,12 +186,13 @@ pub enum TechniqueKind {
 impl TechniqueKind {
     /// Every technique without a parameter, in the order of their names (`light#k` is
     /// one per light).
-    pub const ALL: [TechniqueKind; 8] = [
+    pub const ALL: [TechniqueKind; 9] = [
         TechniqueKind::Bsdf,
         TechniqueKind::LightPower,
         TechniqueKind::LightUniform,
         TechniqueKind::LightArea,
         TechniqueKind::LightSpatial,
+        TechniqueKind::LightBvh,
         TechniqueKind::LightTrained,
         TechniqueKind::Environment,
         TechniqueKind::CosineHemisphere,
@@ -200,6 +205,7 @@ impl TechniqueKind {
             TechniqueKind::LightUniform => "light-uniform",
             TechniqueKind::LightArea => "light-area",
             TechniqueKind::LightSpatial => "light-spatial",
+            TechniqueKind::LightBvh => "light-bvh",
             TechniqueKind::LightTrained => "light-trained",
             TechniqueKind::Light(k) => return Cow::Owned(format!("light#{k}")),
             TechniqueKind::Environment => "environment",
@@ -222,8 +228,9 @@ impl fmt::Display for TechniqueKind {
 fn technique_names() -> String {
     let mut v: Vec<String> = TechniqueKind::ALL.iter().map(|t| t.name().into()).collect();
     v.insert(2, "light (= light-power)".into());
-    v.insert(7, "light#k (MIS light k, 0-based)".into());
-    v.insert(8, "light#* (every MIS light)".into());
+    let after = v.iter().position(|n| n == "light-trained").map_or(v.len(), |i| i + 1);
+    v.insert(after, "light#k (MIS light k, 0-based)".into());
+    v.insert(after + 1, "light#* (every MIS light)".into());
     v.join(", ")
 }
 
@@ -385,6 +392,7 @@ impl RenderSettings {
                 TechniqueKind::LightPower
                 | TechniqueKind::LightUniform
                 | TechniqueKind::LightSpatial
+                | TechniqueKind::LightBvh
                 | TechniqueKind::LightTrained
                     if !area && !env =>
                 {

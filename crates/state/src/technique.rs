@@ -18,6 +18,9 @@ pub enum Technique {
     /// A light chosen ∝ a bound on its contribution at the shading point
     /// (`render::light::importance`), then sampled.
     LightSpatial,
+    /// [`Technique::LightSpatial`]'s selection drawn from a light BVH in O(log n)
+    /// (`render::light::LightTree`), then sampled.
+    LightBvh,
     /// MIS light k alone (area lights in file order, then the environment).
     Light(usize),
     /// A light chosen by the pmf trained for the shading point's cell
@@ -37,6 +40,7 @@ impl From<scene::TechniqueKind> for Technique {
             scene::TechniqueKind::LightUniform => Technique::LightUniform,
             scene::TechniqueKind::LightArea => Technique::LightArea,
             scene::TechniqueKind::LightSpatial => Technique::LightSpatial,
+            scene::TechniqueKind::LightBvh => Technique::LightBvh,
             scene::TechniqueKind::Light(k) => Technique::Light(k as usize),
             scene::TechniqueKind::LightTrained => Technique::LightTrained,
             scene::TechniqueKind::Environment => Technique::Environment,
@@ -47,12 +51,13 @@ impl From<scene::TechniqueKind> for Technique {
 
 impl Technique {
     /// Every technique without a parameter (`light#k` is one per light).
-    pub const ALL: [Technique; 8] = [
+    pub const ALL: [Technique; 9] = [
         Technique::Bsdf,
         Technique::LightPower,
         Technique::LightUniform,
         Technique::LightArea,
         Technique::LightSpatial,
+        Technique::LightBvh,
         Technique::LightTrained,
         Technique::Environment,
         Technique::CosineHemisphere,
@@ -71,6 +76,7 @@ impl Technique {
             Technique::LightUniform => scene::TechniqueKind::LightUniform,
             Technique::LightArea => scene::TechniqueKind::LightArea,
             Technique::LightSpatial => scene::TechniqueKind::LightSpatial,
+            Technique::LightBvh => scene::TechniqueKind::LightBvh,
             Technique::Light(k) => scene::TechniqueKind::Light(k as u32),
             Technique::LightTrained => scene::TechniqueKind::LightTrained,
             Technique::Environment => scene::TechniqueKind::Environment,

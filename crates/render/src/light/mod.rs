@@ -10,12 +10,14 @@ mod area;
 mod delta;
 mod environment;
 mod select;
+mod tree;
 
 pub use area::{AreaLight, Crossing, Shape};
 pub use delta::DeltaLight;
 pub use environment::{EnvMap, Environment};
-pub use select::{importance, Along, Crossed, ImportanceBounds, Selection};
+pub use select::{importance, importance_of, Along, Crossed, ImportanceBounds, Selection};
 pub use state::trained::{TrainedSelection, TRAIN_FLOOR, TRAIN_GRID};
+pub use tree::LightTree;
 
 use crate::color::{luminance, Rgb};
 use crate::distribution::Distribution1D;
@@ -53,6 +55,15 @@ pub struct LightHit {
     pub radiance: Rgb,
 }
 
+/// The light BVH over area lights, by their importance bounds and power.
+fn light_tree(area: &[AreaLight]) -> Option<LightTree> {
+    let lights: Vec<_> = area
+        .iter()
+        .map(|l| (l.importance_bounds(), luminance(l.power())))
+        .collect();
+    LightTree::new(&lights)
+}
+
 /// All lights of a scene, with the distributions used to choose among them.
 #[derive(Clone, Debug)]
 pub struct Lights {
@@ -66,6 +77,8 @@ pub struct Lights {
     /// A BVH over the area lights' boxes: a ray meets, and a direction has density
     /// under, only the lights whose box it crosses, so queries cost O(log n).
     bvh: Bvh,
+    /// The light BVH of [`Selection::Bvh`] (None without an area light).
+    tree: Option<LightTree>,
 }
 
 impl Lights {
@@ -86,6 +99,7 @@ impl Lights {
         let by_area = (!areas.is_empty()).then(|| Distribution1D::new(&areas));
         Self {
             bvh: Bvh::new(&area.iter().map(AreaLight::bounds).collect::<Vec<_>>()),
+            tree: light_tree(&area),
             area,
             delta,
             environment,
@@ -112,6 +126,7 @@ impl Lights {
         );
         Self {
             bvh: Bvh::new(&area.iter().map(AreaLight::bounds).collect::<Vec<_>>()),
+            tree: light_tree(&area),
             area,
             delta,
             environment,

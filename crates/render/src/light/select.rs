@@ -26,6 +26,10 @@ pub enum Selection<'a> {
     /// BVH): the environment, if any, with probability ½ (pbrt-v4's share for infinite
     /// lights), the area lights with the rest ∝ their importance.
     Spatial,
+    /// ∝ the same importance, drawn from the light BVH ([`super::LightTree`]): O(log n)
+    /// per draw and per pmf, where [`Selection::Spatial`] sums over every light. The
+    /// environment as there.
+    Bvh,
     /// MIS light k alone.
     One(usize),
     /// The trained table's pmf at the shading point ([`TrainedSelection`]); no light
@@ -62,14 +66,20 @@ fn sin_sub_clamped(sin_a: f64, cos_a: f64, sin_b: f64, cos_b: f64) -> f64 {
 /// and `|diagonal|/2` as the least distance), the bound uses the light's bounding
 /// sphere and its radius squared.
 pub fn importance(l: &AreaLight, p: DVec3, n: DVec3) -> f64 {
+    importance_of(&l.importance_bounds(), luminance(l.power()), p, n)
+}
+
+/// [`importance`] of anything bounded by `b` with power of luminance `phi`: a light, or
+/// a node of the light BVH ([`super::LightTree`]).
+#[inline]
+pub fn importance_of(b: &ImportanceBounds, phi: f64, p: DVec3, n: DVec3) -> f64 {
     let ImportanceBounds {
         center,
         radius,
         axis,
         cos_o,
         two_sided,
-    } = l.importance_bounds();
-    let phi = luminance(l.power());
+    } = *b;
     let v = p - center;
     let dist2 = v.length_squared();
     let d2 = dist2.max(radius * radius);
@@ -198,6 +208,14 @@ impl Lights {
                     0.0
                 }
             }
+            Selection::Bvh => {
+                let pe = self.spatial_env();
+                match &self.tree {
+                    _ if k == self.area.len() => pe,
+                    Some(tree) => (1.0 - pe) * tree.pmf(p, n, k),
+                    None => 0.0,
+                }
+            }
         }
     }
 
@@ -234,6 +252,14 @@ impl Lights {
                     }
                 }
                 pmf.iter().rposition(|&w| w > 0.0)
+            }
+            Selection::Bvh => {
+                let pe = self.spatial_env();
+                if uc < pe {
+                    return Some(self.area.len());
+                }
+                let u = ((uc - pe) / (1.0 - pe)).min(1.0 - f64::EPSILON / 2.0);
+                self.tree.as_ref()?.sample(p, n, u).map(|(k, _)| k)
             }
             Selection::Spatial => {
                 let pe = self.spatial_env();

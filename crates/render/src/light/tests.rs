@@ -326,6 +326,7 @@ fn selection_pmfs() {
         Selection::Power,
         Selection::Uniform,
         Selection::Spatial,
+        Selection::Bvh,
         Selection::One(2),
         Selection::Trained(&table),
     ] {
@@ -359,6 +360,14 @@ fn selection_pmfs() {
             // Φ ∝ L, d² = 4 and 16, cos terms 1: importance 1/4 and 3/16.
             assert!((pm[0] / pm[1] - (1.0 / 4.0) / (3.0 / 16.0)).abs() < 1e-12);
         }
+    }
+    // Two lights compete where the third is dark: the light BVH's pmf is the spatial one.
+    for k in 0..4 {
+        let (s, b) = (
+            lights.selection_pmf(Selection::Spatial, p, n, k),
+            lights.selection_pmf(Selection::Bvh, p, n, k),
+        );
+        assert!((s - b).abs() < 1e-12, "light {k}: spatial {s}, BVH {b}");
     }
     assert_eq!(lights.selection_pmf(Selection::One(2), p, n, 2), 1.0);
     let trained: Vec<f64> = (0..4)

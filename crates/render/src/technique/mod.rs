@@ -86,6 +86,7 @@ impl Sampling for Technique {
             Technique::LightPower => Some(Selection::Power),
             Technique::LightUniform => Some(Selection::Uniform),
             Technique::LightSpatial => Some(Selection::Spatial),
+            Technique::LightBvh => Some(Selection::Bvh),
             Technique::Light(k) => Some(Selection::One(k)),
             Technique::LightTrained => ctx.trained.map(Selection::Trained),
             _ => None,
@@ -120,6 +121,7 @@ impl Sampling for Technique {
             Technique::LightPower
             | Technique::LightUniform
             | Technique::LightSpatial
+            | Technique::LightBvh
             | Technique::LightTrained
             | Technique::Light(_) => ctx
                 .lights
@@ -169,6 +171,7 @@ fn pdf_over(t: Technique, ctx: &ShadingPoint, wi: DVec3, crossed: Option<&Crosse
         Technique::LightPower
         | Technique::LightUniform
         | Technique::LightSpatial
+        | Technique::LightBvh
         | Technique::LightTrained
         | Technique::Light(_) => t.selection(ctx).map_or(0.0, |sel| {
             ctx.lights.pdf_selected_over(sel, ctx.p, ctx.n, wi, crossed)
@@ -187,6 +190,7 @@ fn mixes(t: Technique) -> bool {
         Technique::LightPower
             | Technique::LightUniform
             | Technique::LightSpatial
+            | Technique::LightBvh
             | Technique::LightTrained
             | Technique::LightArea
     )

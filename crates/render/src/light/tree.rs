@@ -1,0 +1,242 @@
+//! A light BVH: light selection ∝ importance at the shading point in O(log n) per draw
+//! and per pmf (Conty Estevez & Kulla 2018; pbrt-v4's `BVHLightSampler`, §12.6.3).
+//!
+//! Every node bounds its lights by a bounding sphere, a cone of normals and their total
+//! power; a draw descends from the root, choosing each child with probability ∝ its
+//! [`importance_of`] at the shading point (p, n), and the pmf of a light is the product
+//! of the probabilities along its path, which every light keeps as a bit trail. The same
+//! importance bounds the single lights of `light-spatial` (which sums it over every light,
+//! O(n)): with one light per leaf and both children's importances exact, the two agree
+//! wherever only two lights compete.
+//!
+//! The tree is built by median splits of the lights' centres along the widest axis of
+//! their bounds (pbrt-v4 splits by a surface-area-orientation cost; a median split keeps
+//! the depth at ⌈log₂ n⌉, which bounds the trail to 64 levels for any count).
+
+use super::select::{importance_of, ImportanceBounds};
+use glam::DVec3;
+
+/// One node: its bounds and power, and its children or its light.
+#[derive(Clone, Copy, Debug)]
+struct Node {
+    bounds: ImportanceBounds,
+    /// Σ luminance of power of the lights below.
+    phi: f64,
+    /// Leaf: the light's index. Inner node: the second child's index (the first child
+    /// follows its parent).
+    index: u32,
+    leaf: bool,
+}
+
+/// A light BVH over the area lights (module docs).
+#[derive(Clone, Debug)]
+pub struct LightTree {
+    nodes: Vec<Node>,
+    /// Per light: the path from the root to its leaf, bit d set where it takes the second
+    /// child at depth d, and the path's length.
+    trails: Vec<(u64, u8)>,
+}
+
+/// The largest u below 1: a remapped uniform number stays in [0, 1).
+const ONE_MINUS_EPSILON: f64 = 1.0 - f64::EPSILON / 2.0;
+
+impl LightTree {
+    /// The tree over lights given by their importance bounds and the luminance of their
+    /// power; None without a light.
+    pub fn new(lights: &[(ImportanceBounds, f64)]) -> Option<LightTree> {
+        if lights.is_empty() {
+            return None;
+        }
+        let mut tree = LightTree {
+            nodes: Vec::with_capacity(2 * lights.len()),
+            trails: vec![(0, 0); lights.len()],
+        };
+        let mut order: Vec<usize> = (0..lights.len()).collect();
+        tree.build(lights, &mut order, 0, 0);
+        Some(tree)
+    }
+
+    /// Builds the subtree over `order` at depth `depth` with trail `trail`; returns its
+    /// node index.
+    fn build(
+        &mut self,
+        lights: &[(ImportanceBounds, f64)],
+        order: &mut [usize],
+        trail: u64,
+        depth: u8,
+    ) -> usize {
+        let at = self.nodes.len();
+        if let [k] = order {
+            let (bounds, phi) = lights[*k];
+            self.trails[*k] = (trail, depth);
+            self.nodes.push(Node {
+                bounds,
+                phi,
+                index: *k as u32,
+                leaf: true,
+            });
+            return at;
+        }
+        // Median split along the widest axis of the centres (ties by index: the tree does
+        // not depend on the sort's stability).
+        let (lo, hi) = order.iter().fold(
+            (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+            |(lo, hi), &k| (lo.min(lights[k].0.center), hi.max(lights[k].0.center)),
+        );
+        let axis = (hi - lo).max_position();
+        order.sort_by(|&a, &b| {
+            let (ca, cb) = (lights[a].0.center[axis], lights[b].0.center[axis]);
+            ca.total_cmp(&cb).then(a.cmp(&b))
+        });
+        let mid = order.len() / 2;
+        self.nodes.push(Node {
+            bounds: lights[order[0]].0,
+            phi: 0.0,
+            index: 0,
+            leaf: false,
+        });
+        let (first, second) = order.split_at_mut(mid);
+        let a = self.build(lights, first, trail, depth + 1);
+        let b = self.build(lights, second, trail | 1 << depth, depth + 1);
+        let (na, nb) = (self.nodes[a], self.nodes[b]);
+        self.nodes[at] = Node {
+            bounds: union(&na.bounds, &nb.bounds),
+            phi: na.phi + nb.phi,
+            index: b as u32,
+            leaf: false,
+        };
+        at
+    }
+
+    /// The importance of node `i` at (p, n).
+    #[inline]
+    fn importance(&self, i: usize, p: DVec3, n: DVec3) -> f64 {
+        let node = &self.nodes[i];
+        importance_of(&node.bounds, node.phi, p, n)
+    }
+
+    /// The probabilities of the two children of inner node `i` at (p, n); None where
+    /// neither can shine on p.
+    #[inline]
+    fn split(&self, i: usize, p: DVec3, n: DVec3) -> Option<[f64; 2]> {
+        let (a, b) = (i + 1, self.nodes[i].index as usize);
+        let (wa, wb) = (self.importance(a, p, n), self.importance(b, p, n));
+        let total = wa + wb;
+        (total > 0.0 && total.is_finite()).then(|| [wa / total, wb / total])
+    }
+
+    /// A light drawn with `u` ∈ [0, 1) and its probability; None where no light can
+    /// shine on (p, n).
+    pub fn sample(&self, p: DVec3, n: DVec3, u: f64) -> Option<(usize, f64)> {
+        let (mut i, mut u, mut pmf) = (0, u, 1.0);
+        loop {
+            let node = &self.nodes[i];
+            if node.leaf {
+                return (self.importance(i, p, n) > 0.0).then_some((node.index as usize, pmf));
+            }
+            let [pa, pb] = self.split(i, p, n)?;
+            if u < pa {
+                (u, pmf, i) = ((u / pa).min(ONE_MINUS_EPSILON), pmf * pa, i + 1);
+            } else {
+                let next = node.index as usize;
+                (u, pmf, i) = (((u - pa) / pb).min(ONE_MINUS_EPSILON), pmf * pb, next);
+            }
+        }
+    }
+
+    /// The probability that [`LightTree::sample`] draws light `k` at (p, n): the product
+    /// of the same branch probabilities, bit for bit.
+    pub fn pmf(&self, p: DVec3, n: DVec3, k: usize) -> f64 {
+        let Some(&(trail, depth)) = self.trails.get(k) else {
+            return 0.0;
+        };
+        let (mut i, mut pmf) = (0, 1.0);
+        for d in 0..depth {
+            let Some([pa, pb]) = self.split(i, p, n) else {
+                return 0.0;
+            };
+            if trail >> d & 1 == 0 {
+                (pmf, i) = (pmf * pa, i + 1);
+            } else {
+                (pmf, i) = (pmf * pb, self.nodes[i].index as usize);
+            }
+        }
+        if self.importance(i, p, n) > 0.0 {
+            pmf
+        } else {
+            0.0
+        }
+    }
+}
+
+/// Bounds of two nodes together: the sphere around both spheres, the cone around both
+/// cones (pbrt-v4 `DirectionCone::Union`), two-sided if either is.
+fn union(a: &ImportanceBounds, b: &ImportanceBounds) -> ImportanceBounds {
+    let (center, radius) = sphere_union(a.center, a.radius, b.center, b.radius);
+    let (axis, cos_o) = cone_union(a.axis, a.cos_o, b.axis, b.cos_o);
+    ImportanceBounds {
+        center,
+        radius,
+        axis,
+        cos_o,
+        two_sided: a.two_sided || b.two_sided,
+    }
+}
+
+/// The smallest sphere around two spheres.
+fn sphere_union(ca: DVec3, ra: f64, cb: DVec3, rb: f64) -> (DVec3, f64) {
+    let d = (cb - ca).length();
+    if d + rb <= ra {
+        return (ca, ra);
+    }
+    if d + ra <= rb {
+        return (cb, rb);
+    }
+    let r = (d + ra + rb) / 2.0;
+    // Grown by a few ulps: the enclosure must hold after rounding.
+    let c = ca + (cb - ca) * ((r - ra) / d);
+    (c, r * (1.0 + 4.0 * f64::EPSILON))
+}
+
+/// The cone around two cones given by axis and cos of half-angle (pbrt-v4
+/// `DirectionCone::Union`).
+fn cone_union(wa: DVec3, cos_a: f64, wb: DVec3, cos_b: f64) -> (DVec3, f64) {
+    let theta_a = cos_a.clamp(-1.0, 1.0).acos();
+    let theta_b = cos_b.clamp(-1.0, 1.0).acos();
+    let theta_d = angle_between(wa, wb);
+    if (theta_d + theta_b).min(std::f64::consts::PI) <= theta_a {
+        return (wa, cos_a);
+    }
+    if (theta_d + theta_a).min(std::f64::consts::PI) <= theta_b {
+        return (wb, cos_b);
+    }
+    let theta_o = (theta_a + theta_d + theta_b) / 2.0;
+    if theta_o >= std::f64::consts::PI {
+        return (wa, -1.0);
+    }
+    let theta_r = theta_o - theta_a;
+    let wr = wa.cross(wb);
+    if wr.length_squared() == 0.0 {
+        return (wa, -1.0);
+    }
+    // wa rotated by θr about wr (Rodrigues; wr ⟂ wa).
+    let k = wr.normalize();
+    let w = wa * theta_r.cos() + k.cross(wa) * theta_r.sin();
+    // Widened by a little: the enclosure must hold after rounding.
+    (
+        w.normalize(),
+        (theta_o + 1e-9).min(std::f64::consts::PI).cos(),
+    )
+}
+
+/// The angle between two unit vectors, accurate near 0 and π (pbrt-v4 `AngleBetween`).
+fn angle_between(a: DVec3, b: DVec3) -> f64 {
+    if a.dot(b) < 0.0 {
+        std::f64::consts::PI - 2.0 * ((a + b).length() / 2.0).clamp(-1.0, 1.0).asin()
+    } else {
+        2.0 * ((b - a).length() / 2.0).clamp(-1.0, 1.0).asin()
+    }
+}
+
+#[cfg(test)]
+mod tests;
