@@ -203,6 +203,24 @@ pub struct LightDesc {
     pub cone: Option<f64>,
     /// Half-angle where a spot light starts to fall off, degrees (default `cone`).
     pub falloff_start: Option<f64>,
+    /// Copies of the light on a grid, for scenes of many lights.
+    pub array: Option<ArrayDesc>,
+}
+
+/// `array = { count = [nx, ny, nz], step = [dx, dy, dz], power_range = [a, b], seed }`:
+/// the light repeated nx·ny·nz times, copy (i, j, k) moved by (i·dx, j·dy, k·dz), its
+/// emission scaled by a factor drawn log-uniformly from [a, b] per copy (default 1).
+#[derive(Clone, Debug, Default, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct ArrayDesc {
+    /// Copies along x, y and z (each ≥ 1).
+    pub count: [u64; 3],
+    /// Offset between neighbouring copies along each axis.
+    pub step: [f64; 3],
+    /// The range of the per-copy emission factor (0 < a ≤ b; default [1, 1]).
+    pub power_range: Option<[f64; 2]>,
+    /// Seed of the per-copy factors (default 0).
+    pub seed: Option<u64>,
 }
 
 /// A constant dome or a lat-long EXR map.

@@ -3,7 +3,7 @@
 
 use crate::check::{check_keys, number, unit, vec3};
 use crate::data::{EnvMapTable, EnvironmentData, Light, LightData, LightKind};
-use crate::desc::{ColorDesc, LightDesc};
+use crate::desc::{ArrayDesc, ColorDesc, LightDesc};
 use crate::distribution::Distribution1D;
 use crate::error::{kp, SceneError, Seg};
 use crate::locate::Source;
@@ -405,15 +405,96 @@ pub(crate) fn lights(
     list: &[LightDesc],
 ) -> Result<(Vec<Light>, Vec<Light>), SceneError> {
     let (mut area, mut delta) = (Vec::new(), Vec::new());
-    for (i, l) in list.iter().enumerate() {
-        let l = light(src, i, l)?;
-        if l.kind.has_area() {
-            area.push(l);
+    for (i, desc) in list.iter().enumerate() {
+        let l = light(src, i, desc)?;
+        let room = MAX_LIGHTS.saturating_sub(area.len() + delta.len());
+        let out = if l.kind.has_area() {
+            &mut area
         } else {
-            delta.push(l);
+            &mut delta
+        };
+        match &desc.array {
+            None if room == 0 => {
+                return Err(src.at_key(
+                    &kp!["lights", i],
+                    format!("a scene holds at most {MAX_LIGHTS} lights"),
+                ))
+            }
+            None => out.push(l),
+            Some(a) => array(src, i, &l, a, room, out)?,
         }
     }
     Ok((area, delta))
+}
+
+/// The most lights a scene may hold (arrays included): past it, memory and the loading
+/// time grow without bound.
+pub const MAX_LIGHTS: usize = 1_000_000;
+
+/// The copies of light `l` (entry `i`) that `array = {…}` asks for, appended to `out`;
+/// at most `room` of them.
+fn array(
+    src: &Source,
+    i: usize,
+    l: &Light,
+    a: &ArrayDesc,
+    room: usize,
+    out: &mut Vec<Light>,
+) -> Result<(), SceneError> {
+    let key = |k: &str| kp!["lights", i, "array", k];
+    let mut copies: u64 = 1;
+    for &n in &a.count {
+        if n == 0 {
+            return Err(src.at_value(&key("count"), "every count must be at least 1"));
+        }
+        copies = copies.saturating_mul(n);
+    }
+    if copies > room as u64 {
+        return Err(src.at_value(
+            &key("count"),
+            format!("{copies} copies: a scene holds at most {MAX_LIGHTS} lights"),
+        ));
+    }
+    let step = vec3(src, &key("step"), a.step)?;
+    let [lo, hi] = a.power_range.unwrap_or([1.0, 1.0]);
+    let lo = number(
+        src,
+        &key("power_range"),
+        lo,
+        f64::MIN_POSITIVE,
+        f64::INFINITY,
+    )?;
+    let hi = number(src, &key("power_range"), hi, lo, f64::INFINITY)?;
+    let seed = a.seed.unwrap_or(0);
+    let [nx, ny, nz] = a.count;
+    let mut index = 0u64;
+    for z in 0..nz {
+        for y in 0..ny {
+            for x in 0..nx {
+                let offset = step * DVec3::new(x as f64, y as f64, z as f64);
+                // Log-uniform in [lo, hi]: powers spread over orders of magnitude alike.
+                let f = lo * (hi / lo).powf(unit_hash(seed, index));
+                let scale = |c: [f64; 3]| c.map(|v| v * f);
+                out.push(Light {
+                    p0: (DVec3::from_array(l.p0) + offset).to_array(),
+                    emission: scale(l.emission),
+                    power: scale(l.power),
+                    ..l.clone()
+                });
+                index += 1;
+            }
+        }
+    }
+    Ok(())
+}
+
+/// A number in [0, 1) from a seed and an index (SplitMix64's finaliser, Steele et al.
+/// 2014): the same copies on every machine.
+fn unit_hash(seed: u64, index: u64) -> f64 {
+    let mut z = seed.wrapping_add(index.wrapping_add(1).wrapping_mul(0x9e37_79b9_7f4a_7c15));
+    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
 }
 
 /// The environment's power for light selection: π r² ∫ L dω for a scene of radius `r`

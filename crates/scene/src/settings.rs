@@ -228,7 +228,10 @@ impl fmt::Display for TechniqueKind {
 fn technique_names() -> String {
     let mut v: Vec<String> = TechniqueKind::ALL.iter().map(|t| t.name().into()).collect();
     v.insert(2, "light (= light-power)".into());
-    let after = v.iter().position(|n| n == "light-trained").map_or(v.len(), |i| i + 1);
+    let after = v
+        .iter()
+        .position(|n| n == "light-trained")
+        .map_or(v.len(), |i| i + 1);
     v.insert(after, "light#k (MIS light k, 0-based)".into());
     v.insert(after + 1, "light#* (every MIS light)".into());
     v.join(", ")

@@ -15,7 +15,8 @@ fn scenes_dir() -> PathBuf {
 
 /// The scenes shipped in scenes/, named (not globbed: a user's own scene saved there
 /// must not change what the tests check).
-const SCENES: [&str; 8] = [
+const SCENES: [&str; 9] = [
+    "city.toml",
     "cornell.json",
     "cornell.toml",
     "environment.toml",
@@ -422,4 +423,85 @@ fn training_and_min_depth_keys() {
     ] {
         assert_eq!(with(o).unwrap_err().key, key);
     }
+}
+
+/// `array = {…}` repeats a light on a grid: copy (i, j, k) moved by (i, j, k)·step, in
+/// x-fastest order after the lights before it, its emission and power scaled by one
+/// factor from `power_range` (log-uniform, seeded: the same copies every time; without
+/// a range, exact copies); errors name the array's key, with the file's line and column.
+#[test]
+fn light_arrays_repeat_a_light() {
+    let mut v = base();
+    v["lights"][0]["array"] = json!({"count": [3, 2, 1], "step": [1.5, -2, 0]});
+    v["lights"].as_array_mut().unwrap().push(
+        json!({"type": "disk", "center": [0, 0, 6], "radius": 0.2, "power": 4,
+                     "array": {"count": [2, 1, 2], "step": [0, 0, 0.5],
+                               "power_range": [0.5, 8], "seed": 3}}),
+    );
+    let (d, _) = load_value(v.clone(), &scenes_dir()).unwrap();
+    let area = &d.lights.area;
+    assert_eq!(area.len(), 6 + 4);
+    let single = &load_value(base(), &scenes_dir()).unwrap().0.lights.area[0];
+    for (k, l) in area[..6].iter().enumerate() {
+        let (i, j) = ((k % 3) as f64, (k / 3) as f64);
+        assert_eq!(l.p0, [1.5 * i, -2.0 * j, 5.0], "copy {k}");
+        assert_eq!(
+            (l.power, l.emission),
+            (single.power, single.emission),
+            "copy {k}"
+        );
+    }
+    let first_disk = area[6].power[0] / area[6].emission[0];
+    let mut factors = Vec::new();
+    for (k, l) in area[6..].iter().enumerate() {
+        assert_eq!(l.p0, [0.0, 0.0, 6.0 + 0.5 * (k / 2) as f64], "disk {k}");
+        // Power and radiance scale together; the factors lie in the range.
+        assert!((l.power[0] / l.emission[0] - first_disk).abs() < 1e-9 * first_disk);
+        factors.push(l.power[0] / 4.0);
+    }
+    assert!(
+        factors.iter().all(|&f| (0.5..=8.0).contains(&f)),
+        "{factors:?}"
+    );
+    assert!(factors.windows(2).any(|w| w[0] != w[1]), "{factors:?}");
+    assert_eq!(load_value(v.clone(), &scenes_dir()).unwrap().0, d, "seeded");
+    let total: f64 = d.lights.area.iter().map(|l| l.selection_pmf).sum();
+    assert!((total - 1.0).abs() < 1e-12);
+
+    let with = |array: Value| {
+        let mut v = base();
+        v["lights"][0]["array"] = array;
+        v
+    };
+    value_error(
+        with(json!({"count": [3, 0, 1], "step": [1, 1, 1]})),
+        "lights[0].array.count",
+        "every count must be at least 1",
+    );
+    value_error(
+        with(json!({"count": [1000, 1000, 2], "step": [1, 1, 1]})),
+        "lights[0].array.count",
+        "2000000 copies: a scene holds at most 1000000 lights",
+    );
+    value_error(
+        with(json!({"count": [2, 1, 1], "step": [1, 1, 1], "power_range": [2, 1]})),
+        "lights[0].array.power_range",
+        "",
+    );
+    value_error(
+        with(json!({"count": [2, 1, 1], "step": [1, 1, 1], "spacing": 2})),
+        "lights[0].array.spacing",
+        "unknown field `spacing`, expected one of `count`, `step`, `power_range`, `seed`",
+    );
+    // In a file: the line and column of the key.
+    let text = "[camera]\neye = [0, -4, 1]\ntarget = [0, 0, 1]\n\n[[lights]]\ntype = \"sphere\"\n\
+                center = [0, 0, 5]\nradius = 0.5\npower = 10\n\
+                array = { count = [2, 0, 1], step = [1, 1, 1] }\n";
+    let e = parse(text, SceneFormat::Toml, Path::new("a.toml")).expect_err("an error");
+    assert_eq!(
+        (e.line, e.key.as_str()),
+        (10, "lights[0].array.count"),
+        "{e}"
+    );
+    assert!(e.column > 1 && e.message.contains("at least 1"), "{e}");
 }
