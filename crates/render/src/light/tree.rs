@@ -31,6 +31,8 @@ struct Node {
 /// A light BVH over the area lights (module docs).
 #[derive(Clone, Debug)]
 pub struct LightTree {
+    /// Unique per tree built (clones share it: they are equal), for [`Memo`].
+    id: u64,
     nodes: Vec<Node>,
     /// Per light: the path from the root to its leaf, bit d set where it takes the second
     /// child at depth d, and the path's length.
@@ -47,7 +49,9 @@ impl LightTree {
         if lights.is_empty() {
             return None;
         }
+        static NEXT_ID: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
         let mut tree = LightTree {
+            id: NEXT_ID.fetch_add(1, std::sync::atomic::Ordering::Relaxed),
             nodes: Vec::with_capacity(2 * lights.len()),
             trails: vec![(0, 0); lights.len()],
         };
@@ -128,20 +132,25 @@ impl LightTree {
     /// A light drawn with `u` ∈ [0, 1) and its probability; None where no light can
     /// shine on (p, n).
     pub fn sample(&self, p: DVec3, n: DVec3, u: f64) -> Option<(usize, f64)> {
-        let (mut i, mut u, mut pmf) = (0, u, 1.0);
-        loop {
-            let node = &self.nodes[i];
-            if node.leaf {
-                return (self.importance(i, p, n) > 0.0).then_some((node.index as usize, pmf));
+        MEMO.with_borrow_mut(|memo| {
+            memo.start(self.id, p, n);
+            let (mut i, mut u, mut pmf, mut trail) = (0, u, 1.0, 0u64);
+            for d in 0.. {
+                let node = &self.nodes[i];
+                if node.leaf {
+                    return (self.importance(i, p, n) > 0.0).then_some((node.index as usize, pmf));
+                }
+                let [pa, pb] = memo.split(d, trail, || self.split(i, p, n))?;
+                if u < pa {
+                    (u, pmf, i) = ((u / pa).min(ONE_MINUS_EPSILON), pmf * pa, i + 1);
+                } else {
+                    let next = node.index as usize;
+                    (u, pmf, i) = (((u - pa) / pb).min(ONE_MINUS_EPSILON), pmf * pb, next);
+                    trail |= 1 << d;
+                }
             }
-            let [pa, pb] = self.split(i, p, n)?;
-            if u < pa {
-                (u, pmf, i) = ((u / pa).min(ONE_MINUS_EPSILON), pmf * pa, i + 1);
-            } else {
-                let next = node.index as usize;
-                (u, pmf, i) = (((u - pa) / pb).min(ONE_MINUS_EPSILON), pmf * pb, next);
-            }
-        }
+            unreachable!("a path ends at a leaf")
+        })
     }
 
     /// The probability that [`LightTree::sample`] draws light `k` at (p, n): the product
@@ -150,22 +159,82 @@ impl LightTree {
         let Some(&(trail, depth)) = self.trails.get(k) else {
             return 0.0;
         };
-        let (mut i, mut pmf) = (0, 1.0);
-        for d in 0..depth {
-            let Some([pa, pb]) = self.split(i, p, n) else {
-                return 0.0;
-            };
-            if trail >> d & 1 == 0 {
-                (pmf, i) = (pmf * pa, i + 1);
-            } else {
-                (pmf, i) = (pmf * pb, self.nodes[i].index as usize);
+        MEMO.with_borrow_mut(|memo| {
+            memo.start(self.id, p, n);
+            let (mut i, mut pmf) = (0, 1.0);
+            for d in 0..depth as usize {
+                let Some([pa, pb]) = memo.split(d, trail, || self.split(i, p, n)) else {
+                    return 0.0;
+                };
+                if trail >> d & 1 == 0 {
+                    (pmf, i) = (pmf * pa, i + 1);
+                } else {
+                    (pmf, i) = (pmf * pb, self.nodes[i].index as usize);
+                }
             }
+            if self.importance(i, p, n) > 0.0 {
+                pmf
+            } else {
+                0.0
+            }
+        })
+    }
+}
+
+/// The branch probabilities along the last path a thread took through a tree at one
+/// shading point. The draws at a vertex descend the same tree from the same point many
+/// times — a light technique's draw, then the pmf of the light it drew (and of the
+/// lights each other draw's direction crosses) — and their paths share their first
+/// levels or all of them: those levels' importances are evaluated once. The values are
+/// the ones the descent would compute, so results are bit for bit the same.
+struct Memo {
+    /// The tree ([`LightTree`]'s id) and the point (p, n, as bits) the entries hold for.
+    key: (u64, [u64; 6]),
+    /// Entries 0 … depth − 1 are valid.
+    depth: usize,
+    /// The branches of the path the entries lie on (bits below `depth − 1`).
+    trail: u64,
+    /// Per depth, the split at the path's node there.
+    splits: [Option<[f64; 2]>; 64],
+}
+
+thread_local! {
+    static MEMO: std::cell::RefCell<Memo> = const {
+        std::cell::RefCell::new(Memo {
+            key: (u64::MAX, [0; 6]),
+            depth: 0,
+            trail: 0,
+            splits: [None; 64],
+        })
+    };
+}
+
+impl Memo {
+    /// Keeps the entries if they are for this tree and point; else forgets them.
+    #[inline]
+    fn start(&mut self, tree: u64, p: DVec3, n: DVec3) {
+        let key = (tree, [p.x, p.y, p.z, n.x, n.y, n.z].map(f64::to_bits));
+        if self.key != key {
+            (self.key, self.depth) = (key, 0);
         }
-        if self.importance(i, p, n) > 0.0 {
-            pmf
-        } else {
-            0.0
+    }
+
+    /// The split at depth `d` of the path with branches `trail` (bits below d): the
+    /// entry where the memo's path is the same down to d, else `compute`'s, recorded.
+    #[inline]
+    fn split(
+        &mut self,
+        d: usize,
+        trail: u64,
+        compute: impl FnOnce() -> Option<[f64; 2]>,
+    ) -> Option<[f64; 2]> {
+        let below = (1u64 << d) - 1;
+        if d < self.depth && (self.trail ^ trail) & below == 0 {
+            return self.splits[d];
         }
+        let s = compute();
+        (self.depth, self.trail, self.splits[d]) = (d + 1, trail & below, s);
+        s
     }
 }
 

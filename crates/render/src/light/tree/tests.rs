@@ -205,3 +205,53 @@ fn unions_enclose_their_parts() {
         }
     }
 }
+
+/// [`LightTree::pmf`] without the memo: the descent evaluated in full.
+fn pmf_in_full(tree: &LightTree, p: DVec3, n: DVec3, k: usize) -> f64 {
+    let (trail, depth) = tree.trails[k];
+    let (mut i, mut pmf) = (0, 1.0);
+    for d in 0..depth {
+        let Some([pa, pb]) = tree.split(i, p, n) else {
+            return 0.0;
+        };
+        if trail >> d & 1 == 0 {
+            (pmf, i) = (pmf * pa, i + 1);
+        } else {
+            (pmf, i) = (pmf * pb, tree.nodes[i].index as usize);
+        }
+    }
+    if tree.importance(i, p, n) > 0.0 {
+        pmf
+    } else {
+        0.0
+    }
+}
+
+/// The memo of the last descent changes no value: pmfs and draws interleaved across two
+/// trees, several points and many lights equal the descents evaluated in full, bit for
+/// bit.
+#[test]
+fn the_memo_changes_no_value() {
+    let trees = [
+        LightTree::new(&lights(1000, 1)).unwrap(),
+        LightTree::new(&lights(300, 2)).unwrap(),
+    ];
+    let pts = points(4, 9);
+    let mut rng = Mix(12);
+    for step in 0..20_000 {
+        // Runs of a few steps on one tree and point (the memo's single slot reused, over
+        // paths sharing a prefix or not), then another.
+        let tree = &trees[(step / 7) % 2];
+        let (p, n) = pts[(step / 3) % pts.len()];
+        let count = tree.trails.len();
+        if step % 5 == 0 {
+            if let Some((k, pmf)) = tree.sample(p, n, rng.gen()) {
+                assert_eq!(pmf.to_bits(), pmf_in_full(tree, p, n, k).to_bits());
+            }
+        } else {
+            let k = ((rng.gen() * count as f64) as usize).min(count - 1);
+            let want = pmf_in_full(tree, p, n, k);
+            assert_eq!(tree.pmf(p, n, k).to_bits(), want.to_bits(), "step {step}");
+        }
+    }
+}
