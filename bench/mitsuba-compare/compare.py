@@ -49,7 +49,7 @@ HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent.parent
 VARIANTS = ("scalar_rgb", "llvm_ad_rgb")
 RENDERERS = ("frepray",) + VARIANTS
-STATS = re.compile(r"(direct|path): ([\d.]+) s on \d+ threads, (\d+) samples "
+STATS = re.compile(r"(direct|path): ([\d.]+) s on (?:\d+ threads?|the GPU), (\d+) samples "
                    r"\(([\d.]+) MSamples/s\); rays: ([\d.]+) MRays/s")
 
 

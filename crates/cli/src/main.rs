@@ -243,6 +243,7 @@ struct BenchArgs {
 }
 
 fn main() -> ExitCode {
+    runtime_dir();
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Render(args) => render(args),
@@ -261,6 +262,29 @@ fn main() -> ExitCode {
     match interrupt::exit_status() {
         Some(status) => ExitCode::from(status),
         None => code,
+    }
+}
+
+/// Gives Mesa's Vulkan drivers a runtime directory where the session has none (a
+/// container, a CI job, `ssh` without a login session): without one they print
+/// "XDG_RUNTIME_DIR is invalid or not set" on every run that touches the GPU. A private
+/// directory (mode 0700) under the temporary directory, made once per user; nothing
+/// changes when it cannot be made. Run first in `main`, before any thread exists.
+fn runtime_dir() {
+    if std::env::var_os("XDG_RUNTIME_DIR").is_some_and(|d| std::path::Path::new(&d).is_dir()) {
+        return;
+    }
+    use std::os::unix::fs::{DirBuilderExt, MetadataExt};
+    // The real user id, from the owner of a file the process creates its own: /proc's.
+    let Ok(uid) = std::fs::metadata("/proc/self").map(|m| m.uid()) else {
+        return;
+    };
+    let dir = std::env::temp_dir().join(format!("frepray-runtime-{uid}"));
+    // Made now, or by an earlier run; used only where it is this user's own.
+    let _ = std::fs::DirBuilder::new().mode(0o700).create(&dir);
+    let ours = std::fs::metadata(&dir).is_ok_and(|m| m.is_dir() && m.uid() == uid);
+    if ours {
+        std::env::set_var("XDG_RUNTIME_DIR", &dir);
     }
 }
 

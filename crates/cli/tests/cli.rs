@@ -761,3 +761,47 @@ fn render_stage_times() {
         std::fs::read(&plain).unwrap()
     );
 }
+
+/// Without a runtime directory (a container, a CI job), `frepray` makes a private one
+/// under the temporary directory and hands it to Mesa's Vulkan drivers, which otherwise
+/// print "XDG_RUNTIME_DIR is invalid or not set" on every run that touches the GPU.
+#[test]
+fn a_private_runtime_directory_is_made_where_there_is_none() {
+    use std::os::unix::fs::PermissionsExt;
+    let tmp = out_dir("runtime-dir");
+    let _ = std::fs::remove_dir_all(&tmp);
+    std::fs::create_dir_all(&tmp).unwrap();
+    let out = frepray()
+        .env_remove("XDG_RUNTIME_DIR")
+        .env("TMPDIR", &tmp)
+        .arg("check")
+        .arg(root().join("scenes/cornell.toml"))
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let made: Vec<_> = std::fs::read_dir(&tmp)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .collect();
+    assert_eq!(made.len(), 1, "{made:?}");
+    let name = made[0].file_name().unwrap().to_string_lossy().into_owned();
+    assert!(name.starts_with("frepray-runtime-"), "{name}");
+    let mode = std::fs::metadata(&made[0]).unwrap().permissions().mode();
+    assert_eq!(mode & 0o777, 0o700, "{mode:o}");
+    // A runtime directory that exists is left as it is.
+    let own = tmp.join("own");
+    std::fs::create_dir_all(&own).unwrap();
+    let out = frepray()
+        .env("XDG_RUNTIME_DIR", &own)
+        .env("TMPDIR", &own)
+        .arg("check")
+        .arg(root().join("scenes/cornell.toml"))
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    assert_eq!(std::fs::read_dir(&own).unwrap().count(), 0);
+}

@@ -21,7 +21,7 @@ pub struct RenderStats {
     pub rays: RayCounts,
     /// Whether the stop flag ended the render early.
     pub stopped: bool,
-    /// Worker threads.
+    /// Worker threads; 0 where the GPU rendered.
     pub threads: usize,
 }
 
@@ -55,13 +55,18 @@ impl RenderStats {
 impl fmt::Display for RenderStats {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let (c, s, sh) = self.mrays_per_s_by_kind();
+        let on = match self.threads {
+            0 => "the GPU".to_string(),
+            1 => "1 thread".to_string(),
+            n => format!("{n} threads"),
+        };
         write!(
             f,
-            "{}: {:.3} s on {} threads, {} samples{} ({:.3} MSamples/s); rays: {:.3} MRays/s \
+            "{}: {:.3} s on {}, {} samples{} ({:.3} MSamples/s); rays: {:.3} MRays/s \
              (camera {} = {:.3} M/s, secondary {} = {:.3} M/s, shadow {} = {:.3} M/s)",
             self.integrator,
             self.wall.as_secs_f64(),
-            self.threads,
+            on,
             self.samples,
             if self.stopped { " (stopped)" } else { "" },
             self.msamples_per_s(),
@@ -73,5 +78,33 @@ impl fmt::Display for RenderStats {
             self.rays.shadow,
             sh
         )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The line says where the render ran: on the GPU (no worker threads), on 1 thread,
+    /// on n threads.
+    #[test]
+    fn the_line_names_the_back_end_and_threads() {
+        let stats = |threads| RenderStats {
+            integrator: IntegratorKind::Direct,
+            wall: Duration::from_secs(2),
+            samples: 4_000_000,
+            samples_requested: 4_000_000,
+            rays: RayCounts::default(),
+            stopped: false,
+            threads,
+        };
+        let line = |t| stats(t).to_string();
+        assert!(
+            line(0).starts_with("direct: 2.000 s on the GPU, 4000000 samples (2.000 MSamples/s)"),
+            "{}",
+            line(0)
+        );
+        assert!(line(1).contains(" s on 1 thread, "), "{}", line(1));
+        assert!(line(8).contains(" s on 8 threads, "), "{}", line(8));
     }
 }
