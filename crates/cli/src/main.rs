@@ -78,6 +78,20 @@ enum Command {
         /// The scene (.toml, .json) or model (.frep, .hf, .vm) file.
         file: PathBuf,
     },
+    /// The GPU back end's adapters.
+    Gpu {
+        #[command(subcommand)]
+        what: GpuCommand,
+    },
+}
+
+/// What `frepray gpu` does.
+#[derive(clap::Subcommand)]
+enum GpuCommand {
+    /// List the adapters (index, name, backend, type, and whether each has the features
+    /// frepray uses: f64, int64, subgroups, timestamps); `--gpu-options adapter=N`
+    /// chooses one.
+    List,
 }
 
 #[derive(clap::Args)]
@@ -147,7 +161,8 @@ struct RenderArgs {
     backend: scene_render::Backend,
     /// GPU features, comma-separated, each `=on` or `=off` (a bare name: on): f64,
     /// int64, subgroups, sums (on where the adapter has them), checked (runtime bounds
-    /// checks in the kernels, a diagnostic; off) [the `FREPRAY_GPU_*` variables].
+    /// checks in the kernels, a diagnostic; off); and adapter=N, the N-th adapter of
+    /// `frepray gpu list` [the `FREPRAY_GPU_*` variables; the first adapter].
     #[arg(long, value_name = "LIST")]
     gpu_options: Option<String>,
     /// On Ctrl-C, SIGTERM or SIGHUP, write the partial result to the -o names themselves instead of
@@ -233,7 +248,8 @@ struct BenchArgs {
     backend: Vec<scene_render::Backend>,
     /// GPU features, comma-separated, each `=on` or `=off` (a bare name: on): f64,
     /// int64, subgroups, sums (on where the adapter has them), checked (runtime bounds
-    /// checks in the kernels, a diagnostic; off) [the `FREPRAY_GPU_*` variables].
+    /// checks in the kernels, a diagnostic; off); and adapter=N, the N-th adapter of
+    /// `frepray gpu list` [the `FREPRAY_GPU_*` variables; the first adapter].
     #[arg(long, value_name = "LIST")]
     gpu_options: Option<String>,
     /// Also draw the stage times as stacked bars (the paper's Fig. 4–5) into this SVG
@@ -246,6 +262,9 @@ fn main() -> ExitCode {
     runtime_dir();
     let cli = Cli::parse();
     let result = match cli.command {
+        Command::Gpu {
+            what: GpuCommand::List,
+        } => gpu_list(),
         Command::Render(args) => render(args),
         Command::Bench(args) => bench(args),
         Command::Experiment(args) => experiment_cmd::run(args),
@@ -286,6 +305,22 @@ fn runtime_dir() {
     if ours {
         std::env::set_var("XDG_RUNTIME_DIR", &dir);
     }
+}
+
+/// `frepray gpu list`: the adapters, a line each, or why there are none.
+fn gpu_list() -> Result<(), String> {
+    let list = frepray::backend::gpu_adapters().map_err(|e| e.to_string())?;
+    if list.is_empty() {
+        return Err(
+            "no GPU adapter found; on Linux without a GPU install Mesa's lavapipe \
+                    (apt-get install mesa-vulkan-drivers libvulkan1)"
+                .into(),
+        );
+    }
+    for line in list {
+        println!("{line}");
+    }
+    Ok(())
 }
 
 /// Sets the global thread pool's size (0 keeps one thread per core); refuses more

@@ -805,3 +805,54 @@ fn a_private_runtime_directory_is_made_where_there_is_none() {
     assert!(out.status.success());
     assert_eq!(std::fs::read_dir(&own).unwrap().count(), 0);
 }
+
+/// `frepray gpu list` prints the adapters (lavapipe in CI), and `--gpu-options
+/// adapter=N` past them is an error that lists them; a non-number is an error naming the
+/// option. Without any adapter, the list says how to get one.
+#[test]
+fn gpu_adapters_are_listed_and_chosen_by_index() {
+    let list = frepray().args(["gpu", "list"]).output().unwrap();
+    let out = String::from_utf8_lossy(&list.stdout);
+    let err = String::from_utf8_lossy(&list.stderr);
+    if !list.status.success() {
+        assert!(err.contains("no GPU adapter found"), "{err}");
+        return;
+    }
+    let first = out.lines().next().unwrap_or_default();
+    assert!(first.starts_with("0: ") && first.contains("f64 "), "{out}");
+    let count = out.lines().count();
+    let scene = root().join("scenes/cornell.toml");
+    let d = out_dir("gpu-adapter");
+    let render = |options: &str| {
+        frepray()
+            .args(["render", scene.to_str().unwrap(), "--backend", "gpu"])
+            .args([
+                "--gpu-options",
+                options,
+                "--width",
+                "8",
+                "--height",
+                "6",
+                "-o",
+            ])
+            .arg(d.join("x.exr"))
+            .output()
+            .unwrap()
+    };
+    let past = render(&format!("adapter={count}"));
+    let err = String::from_utf8_lossy(&past.stderr);
+    assert!(!past.status.success());
+    assert!(
+        err.contains(&format!(
+            "GPU adapter {count} asked for; the adapters are: 0: "
+        )),
+        "{err}"
+    );
+    let bad = render("adapter=first");
+    let err = String::from_utf8_lossy(&bad.stderr);
+    assert!(
+        !bad.status.success() && err.contains("adapter=first"),
+        "{err}"
+    );
+    assert!(!d.join("x.exr").exists());
+}

@@ -21,6 +21,9 @@ pub struct GpuOptions {
     /// of bounds reads zero or the last element instead of undefined memory): a
     /// diagnostic, up to 20× slower on private arrays (GPU.md §3.4). Off by default.
     pub checked: bool,
+    /// The adapter to open, by its index in [`adapters`]' list (None: the first the
+    /// environment allows, high-performance preferred).
+    pub adapter: Option<usize>,
 }
 
 impl Default for GpuOptions {
@@ -32,6 +35,7 @@ impl Default for GpuOptions {
             subgroups: true,
             sums: true,
             checked: false,
+            adapter: None,
         }
     }
 }
@@ -49,15 +53,25 @@ impl GpuOptions {
             subgroups: on("FREPRAY_GPU_SUBGROUPS"),
             sums: on("FREPRAY_GPU_SUMS"),
             checked: var("FREPRAY_GPU_CHECKED").is_some_and(|v| v == "on" || v == "1"),
+            adapter: None,
         }
     }
 
-    /// These options with `list`'s features turned off or on: comma-separated
+    /// These options with `list`'s features turned off or on, and `adapter=N` (the N-th
+    /// of [`adapters`], counted from 0): comma-separated
     /// `f64`, `int64`, `subgroups`, `sums` (on by default) and `checked` (off), each
     /// optionally `=on` or `=off` (a bare name turns it on), e.g. `f64=off,checked`.
     pub fn with(mut self, list: &str) -> Result<Self, GpuOptionError> {
         for item in list.split(',').map(str::trim).filter(|s| !s.is_empty()) {
             let (name, value) = item.split_once('=').unwrap_or((item, "on"));
+            if name.trim() == "adapter" {
+                let i = value.trim().parse().map_err(|_| GpuOptionError::Value {
+                    item: item.to_string(),
+                    value: value.trim().to_string(),
+                })?;
+                self.adapter = Some(i);
+                continue;
+            }
             let value = match value.trim() {
                 "on" | "1" | "true" => true,
                 "off" | "0" | "false" => false,
@@ -86,7 +100,7 @@ impl GpuOptions {
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
 pub enum GpuOptionError {
     /// A value other than on or off.
-    #[error("GPU option {item:?}: {value:?} is not on or off")]
+    #[error("GPU option {item:?}: {value:?} is not on or off (adapter=: an index)")]
     Value {
         /// The list's item.
         item: String,
@@ -94,7 +108,7 @@ pub enum GpuOptionError {
         value: String,
     },
     /// A name that is no option.
-    #[error("GPU option {0:?}: expected f64, int64, subgroups, sums or checked")]
+    #[error("GPU option {0:?}: expected f64, int64, subgroups, sums, checked or adapter=N")]
     Unknown(String),
 }
 
@@ -108,6 +122,14 @@ pub enum GpuError {
          (apt-get install mesa-vulkan-drivers libvulkan1)"
     )]
     NoAdapter(String),
+    /// `adapter=N` past the adapters there are.
+    #[error("GPU adapter {asked} asked for; the adapters are: {list} (`frepray gpu list`)")]
+    NoSuchAdapter {
+        /// The index asked for.
+        asked: usize,
+        /// The adapters, `index: name`, `;`-separated ("none" without one).
+        list: String,
+    },
     /// The adapter refused the device.
     #[error("the GPU adapter {adapter} refused a device: {message}")]
     Device {
@@ -186,6 +208,76 @@ impl fmt::Display for GpuInfo {
     }
 }
 
+/// A wgpu instance as the environment allows (`WGPU_BACKEND`), and its backends.
+fn instance() -> (wgpu::Instance, wgpu::Backends) {
+    let desc = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
+    let backends = desc.backends;
+    (wgpu::Instance::new(desc), backends)
+}
+
+/// One adapter the environment offers, as `frepray gpu list` prints it: its index (what
+/// `adapter=N` of [`GpuOptions::with`] names), what it is, and which of the features
+/// frepray uses it has.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct AdapterSummary {
+    /// Index in [`adapters`]' list.
+    pub index: usize,
+    /// Adapter name, e.g. `llvmpipe (LLVM 15.0.6, 256 bits)`.
+    pub name: String,
+    /// Backend, e.g. Vulkan.
+    pub backend: String,
+    /// Discrete, integrated, CPU (software), …
+    pub device_type: String,
+    /// Whether it offers `SHADER_F64`.
+    pub f64: bool,
+    /// Whether it offers `SHADER_INT64`.
+    pub int64: bool,
+    /// Whether it offers subgroup operations.
+    pub subgroups: bool,
+    /// Whether it offers timestamp queries (stage times).
+    pub timestamps: bool,
+}
+
+impl fmt::Display for AdapterSummary {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let yes = |b: bool| if b { "yes" } else { "no" };
+        write!(
+            f,
+            "{}: {} ({}, {}); f64 {}, int64 {}, subgroups {}, timestamps {}",
+            self.index,
+            self.name,
+            self.backend,
+            self.device_type,
+            yes(self.f64),
+            yes(self.int64),
+            yes(self.subgroups),
+            yes(self.timestamps)
+        )
+    }
+}
+
+/// Every adapter the environment offers, in the order `adapter=N` counts them.
+pub fn adapters() -> Vec<AdapterSummary> {
+    let (instance, backends) = instance();
+    pollster::block_on(instance.enumerate_adapters(backends))
+        .iter()
+        .enumerate()
+        .map(|(index, a)| {
+            let (i, has) = (a.get_info(), a.features());
+            AdapterSummary {
+                index,
+                name: i.name,
+                backend: format!("{:?}", i.backend),
+                device_type: format!("{:?}", i.device_type),
+                f64: has.contains(wgpu::Features::SHADER_F64),
+                int64: has.contains(wgpu::Features::SHADER_INT64),
+                subgroups: has.contains(wgpu::Features::SUBGROUP),
+                timestamps: has.contains(wgpu::Features::TIMESTAMP_QUERY),
+            }
+        })
+        .collect()
+}
+
 /// Compiled kernels kept by a [`Gpu`] for every later render, by their type and the part
 /// of their source that tells them apart. The module that compiles them names their type
 /// (so that this one names none, and depends on none of them); the type is part of the
@@ -232,13 +324,33 @@ impl Gpu {
     /// pin one) with the features `options` allow and the adapter has, and the adapter's
     /// own limits.
     pub fn new(options: &GpuOptions) -> Result<Gpu, GpuError> {
-        let instance =
-            wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
-        let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
-            power_preference: wgpu::PowerPreference::HighPerformance,
-            ..Default::default()
-        }))
-        .map_err(|e| GpuError::NoAdapter(e.to_string()))?;
+        let (instance, backends) = instance();
+        let adapter = match options.adapter {
+            None => pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
+                power_preference: wgpu::PowerPreference::HighPerformance,
+                ..Default::default()
+            }))
+            .map_err(|e| GpuError::NoAdapter(e.to_string()))?,
+            Some(i) => {
+                let mut all = pollster::block_on(instance.enumerate_adapters(backends));
+                if i >= all.len() {
+                    let names: Vec<String> = all
+                        .iter()
+                        .enumerate()
+                        .map(|(k, a)| format!("{k}: {}", a.get_info().name))
+                        .collect();
+                    return Err(GpuError::NoSuchAdapter {
+                        asked: i,
+                        list: if names.is_empty() {
+                            "none".to_string()
+                        } else {
+                            names.join("; ")
+                        },
+                    });
+                }
+                all.swap_remove(i)
+            }
+        };
         let a = adapter.get_info();
         let offered = adapter.features();
         let mut want = wgpu::Features::empty();

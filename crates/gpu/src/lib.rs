@@ -77,7 +77,7 @@ pub mod sums;
 pub mod tape;
 pub mod tape_trace;
 
-pub use adapter::{Gpu, GpuError, GpuInfo, GpuOptionError, GpuOptions};
+pub use adapter::{adapters, AdapterSummary, Gpu, GpuError, GpuInfo, GpuOptionError, GpuOptions};
 
 /// WGSL float helpers the kernels share (`inf`, `nan`, `is_nan`, `is_finite`, and `rmin`,
 /// `rmax` as Rust's f32 `min`/`max`): prepend once to a kernel that uses

@@ -18,8 +18,17 @@ fn features_can_be_forced_off() {
             subgroups: false,
             sums: false,
             checked: true,
+            adapter: None,
         }
     );
+    assert_eq!(
+        GpuOptions::default().with("adapter=2").unwrap().adapter,
+        Some(2)
+    );
+    assert!(matches!(
+        GpuOptions::default().with("adapter=gpu"),
+        Err(gpu::GpuOptionError::Value { .. })
+    ));
     assert_eq!(
         GpuOptions::default().with("f32").unwrap_err(),
         gpu::GpuOptionError::Unknown("f32".into())

@@ -98,6 +98,19 @@ pub fn configure_gpu(list: &str) -> Result<GpuOptions, Error> {
     Ok(have)
 }
 
+/// The GPU adapters the environment offers, a line each (`N: name (backend, type);
+/// f64 …`): N is what `adapter=N` of [`configure_gpu`] names.
+#[cfg(feature = "gpu")]
+pub fn gpu_adapters() -> Result<Vec<String>, Error> {
+    Ok(gpu::adapters().iter().map(ToString::to_string).collect())
+}
+
+/// There are no adapters to list in a build without the `gpu` feature.
+#[cfg(not(feature = "gpu"))]
+pub fn gpu_adapters() -> Result<Vec<String>, Error> {
+    Err(Error::Gpu(GpuError::NotBuilt))
+}
+
 /// Without the GPU back end there is nothing to configure.
 #[cfg(not(feature = "gpu"))]
 pub fn configure_gpu(list: &str) -> Result<(), Error> {
