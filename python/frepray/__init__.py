@@ -27,6 +27,7 @@ from ._native import (
     SceneError,
     bench,
     configure_gpu,
+    gpu_adapters,
     gpu_available,
     load,
     merge,
@@ -42,7 +43,8 @@ __all__ = [
     "Error", "SceneError", "RenderError", "ModelError", "Cancelled", "Cancel", "Scene",
     "RenderState", "Model",
     "load", "load_dict", "render", "merge", "read_exr", "write_exr", "model", "mis",
-    "experiment", "measure", "summarize", "gpu_available", "configure_gpu", "bench",
+    "experiment", "measure", "summarize", "gpu_available", "gpu_adapters", "configure_gpu",
+    "bench",
 ]
 
 

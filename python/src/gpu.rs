@@ -32,11 +32,13 @@ impl GpuAvailable {
 /// Sets the features the process's GPU opens with, before it opens (over the
 /// `FREPRAY_GPU_*` variables): each keyword True or False, None leaves it. `f64`,
 /// `int64`, `subgroups` and `sums` are on where the adapter has them; `checked` turns
-/// the kernels' runtime bounds checks on (a diagnostic; off). Raises ValueError once the
-/// GPU has opened with other options (it opens once per process). Returns the options
-/// in force as a dict.
+/// the kernels' runtime bounds checks on (a diagnostic; off); `adapter` opens the N-th
+/// adapter of [`gpu_adapters`] (None: the first high-performance one). Raises ValueError
+/// once the GPU has opened with other options (it opens once per process). Returns the
+/// options in force as a dict.
 #[pyfunction]
-#[pyo3(signature = (*, f64 = None, int64 = None, subgroups = None, sums = None, checked = None))]
+#[pyo3(signature = (*, f64 = None, int64 = None, subgroups = None, sums = None, checked = None, adapter = None))]
+#[allow(clippy::too_many_arguments)]
 pub fn configure_gpu<'py>(
     py: Python<'py>,
     f64: Option<bool>,
@@ -44,8 +46,9 @@ pub fn configure_gpu<'py>(
     subgroups: Option<bool>,
     sums: Option<bool>,
     checked: Option<bool>,
+    adapter: Option<usize>,
 ) -> PyResult<Bound<'py, pyo3::types::PyDict>> {
-    let list: Vec<String> = [
+    let mut list: Vec<String> = [
         ("f64", f64),
         ("int64", int64),
         ("subgroups", subgroups),
@@ -55,6 +58,7 @@ pub fn configure_gpu<'py>(
     .iter()
     .filter_map(|(k, v)| v.map(|on| format!("{k}={}", if on { "on" } else { "off" })))
     .collect();
+    list.extend(adapter.map(|n| format!("adapter={n}")));
     let o = frepray::backend::configure_gpu(&list.join(","))
         .map_err(|e| pyo3::exceptions::PyValueError::new_err(e.to_string()))?;
     let d = pyo3::types::PyDict::new(py);
@@ -63,5 +67,15 @@ pub fn configure_gpu<'py>(
     d.set_item("subgroups", o.subgroups)?;
     d.set_item("sums", o.sums)?;
     d.set_item("checked", o.checked)?;
+    d.set_item("adapter", o.adapter)?;
     Ok(d)
+}
+
+/// The GPU adapters the environment offers, a line each (`N: name (backend, type); f64
+/// yes, …`), as `frepray gpu list` prints them: N is what `configure_gpu(adapter=N)`
+/// takes. Raises RuntimeError in a build without the GPU back end.
+#[pyfunction]
+pub fn gpu_adapters(py: Python<'_>) -> PyResult<Vec<String>> {
+    py.detach(frepray::backend::gpu_adapters)
+        .map_err(|e| pyo3::exceptions::PyRuntimeError::new_err(e.to_string()))
 }

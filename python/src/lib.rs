@@ -49,6 +49,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(experiment::summarize, m)?)?;
     m.add("gpu_available", gpu::GpuAvailable)?;
     m.add_function(wrap_pyfunction!(gpu::configure_gpu, m)?)?;
+    m.add_function(wrap_pyfunction!(gpu::gpu_adapters, m)?)?;
     m.add_function(wrap_pyfunction!(bench::bench, m)?)?;
     let at_exit = wrap_pyfunction!(interrupt::_at_exit, m)?;
     py.import("atexit")?.call_method1("register", (&at_exit,))?;

@@ -199,3 +199,13 @@ def test_bench_rows_are_the_clis(many_lights):
         frepray.bench(many_lights, spp=1, backends=["auto"], **SMALL)
     with pytest.raises(ValueError, match="backend"):
         frepray.bench(many_lights, spp=1, backends=["tpu"], **SMALL)
+
+
+def test_gpu_adapters_are_listed_as_the_cli_lists_them():
+    # Each line as `frepray gpu list` prints it: index, name, backend, type, features;
+    # configure_gpu reports the adapter chosen (None: the first high-performance one).
+    lines = frepray.gpu_adapters()
+    for i, line in enumerate(lines):
+        assert line.startswith(f"{i}: ") and "f64 " in line and "timestamps " in line, line
+    # No keyword: the options in force, unchanged (they are set once per process).
+    assert frepray.configure_gpu()["adapter"] is None
