@@ -186,7 +186,6 @@ pub struct GpuInfo {
 
 impl fmt::Display for GpuInfo {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let yes = |b: bool| if b { "yes" } else { "no" };
         write!(
             f,
             "{} ({}, {}); f64 {}, int64 {}, subgroups {}, timestamps {}, sums on the GPU {}; \
@@ -205,6 +204,16 @@ impl fmt::Display for GpuInfo {
             write!(f, "; bounds checks on")?;
         }
         Ok(())
+    }
+}
+
+/// How the feature lists of [`GpuInfo`] and [`AdapterSummary`] say whether a feature
+/// is there.
+fn yes(b: bool) -> &'static str {
+    if b {
+        "yes"
+    } else {
+        "no"
     }
 }
 
@@ -240,7 +249,6 @@ pub struct AdapterSummary {
 
 impl fmt::Display for AdapterSummary {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let yes = |b: bool| if b { "yes" } else { "no" };
         write!(
             f,
             "{}: {} ({}, {}); f64 {}, int64 {}, subgroups {}, timestamps {}",
@@ -334,10 +342,9 @@ impl Gpu {
             Some(i) => {
                 let mut all = pollster::block_on(instance.enumerate_adapters(backends));
                 if i >= all.len() {
-                    let names: Vec<String> = all
+                    let names: Vec<String> = adapters()
                         .iter()
-                        .enumerate()
-                        .map(|(k, a)| format!("{k}: {}", a.get_info().name))
+                        .map(|a| format!("{}: {}", a.index, a.name))
                         .collect();
                     return Err(GpuError::NoSuchAdapter {
                         asked: i,

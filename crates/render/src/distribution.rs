@@ -5,6 +5,9 @@
 
 use glam::DVec2;
 
+/// The largest f64 below 1: a remapped uniform number stays in [0, 1).
+pub(crate) const ONE_MINUS_EPSILON: f64 = 1.0 - f64::EPSILON / 2.0;
+
 /// A piecewise-constant density on [0, 1) from n non-negative values, also usable as
 /// a discrete distribution over n items.
 #[derive(Clone, Debug)]
@@ -45,7 +48,7 @@ impl Distribution1D {
         if width > 0.0 {
             du /= width;
         }
-        let x = ((i as f64 + du) / self.len() as f64).min(1.0 - f64::EPSILON / 2.0);
+        let x = ((i as f64 + du) / self.len() as f64).min(ONE_MINUS_EPSILON);
         (x, self.func[i] / self.integral, i)
     }
     /// An index i with probability f_i / Σf; returns (i, probability, u remapped to
@@ -54,7 +57,7 @@ impl Distribution1D {
         let i = self.find(u);
         let width = self.cdf[i + 1] - self.cdf[i];
         let rest = if width > 0.0 {
-            ((u - self.cdf[i]) / width).min(1.0 - f64::EPSILON / 2.0)
+            ((u - self.cdf[i]) / width).min(ONE_MINUS_EPSILON)
         } else {
             0.0
         };

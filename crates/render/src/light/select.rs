@@ -258,7 +258,7 @@ impl Lights {
                 if uc < pe {
                     return Some(self.area.len());
                 }
-                let u = ((uc - pe) / (1.0 - pe)).min(1.0 - f64::EPSILON / 2.0);
+                let u = ((uc - pe) / (1.0 - pe)).min(crate::distribution::ONE_MINUS_EPSILON);
                 self.tree.as_ref()?.sample(p, n, u).map(|(k, _)| k)
             }
             Selection::Spatial => {

@@ -14,6 +14,7 @@
 //! the depth at ⌈log₂ n⌉, which bounds the trail to 64 levels for any count).
 
 use super::select::{importance_of, ImportanceBounds};
+use crate::distribution::ONE_MINUS_EPSILON;
 use glam::DVec3;
 
 /// One node: its bounds and power, and its children or its light.
@@ -38,9 +39,6 @@ pub struct LightTree {
     /// child at depth d, and the path's length.
     trails: Vec<(u64, u8)>,
 }
-
-/// The largest u below 1: a remapped uniform number stays in [0, 1).
-const ONE_MINUS_EPSILON: f64 = 1.0 - f64::EPSILON / 2.0;
 
 impl LightTree {
     /// The tree over lights given by their importance bounds and the luminance of their
