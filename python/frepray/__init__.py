@@ -27,6 +27,7 @@ from ._native import (
     SceneError,
     bench,
     configure_gpu,
+    exr_attributes,
     gpu_adapters,
     gpu_available,
     load,
@@ -42,8 +43,8 @@ from ._native import measure, summarize
 __all__ = [
     "Error", "SceneError", "RenderError", "ModelError", "Cancelled", "Cancel", "Scene",
     "RenderState", "Model",
-    "load", "load_dict", "render", "merge", "read_exr", "write_exr", "model", "mis",
-    "experiment", "measure", "summarize", "gpu_available", "gpu_adapters", "configure_gpu",
+    "load", "load_dict", "render", "merge", "read_exr", "exr_attributes", "write_exr", "model",
+    "mis", "experiment", "measure", "summarize", "gpu_available", "gpu_adapters", "configure_gpu",
     "bench",
 ]
 

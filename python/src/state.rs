@@ -208,6 +208,18 @@ pub fn merge(py: Python<'_>, states: Vec<PyRef<'_, RenderState>>) -> PyResult<Re
     Ok(all.into())
 }
 
+/// The header attributes of an EXR as a dict of strings: what `render` and
+/// `RenderState.write_exr` record there (`frepray.settings`, `frepray.scene_hash`, …).
+#[pyfunction]
+pub fn exr_attributes<'py>(py: Python<'py>, path: PathBuf) -> PyResult<Bound<'py, PyDict>> {
+    let img = frepray::Image::read_exr(&path).map_err(render_err)?;
+    let out = PyDict::new(py);
+    for (name, value) in img.attributes() {
+        out.set_item(name, value)?;
+    }
+    Ok(out)
+}
+
 /// Reads an EXR: `(rgb float32 (h, w, 3), {aov: float32 (h, w)})`.
 #[pyfunction]
 pub fn read_exr<'py>(

@@ -5,6 +5,7 @@ sample counts of one render of [0, 2N) bit for bit and its sums to ~1e-12 relati
 (the additions happen in another order); a merge through bytes equals the merge in
 memory bit for bit."""
 
+import json
 import os
 import signal
 import threading
@@ -68,6 +69,13 @@ def test_numpy_equals_the_cli_exr(many_lights, cli, tmp_path):
     # And the EXR Python writes is the same file content.
     st.write_exr(tmp_path / "py.exr")
     assert np.array_equal(frepray.read_exr(tmp_path / "py.exr")[0], img)
+    # Both record the same settings; the CLI's adds the render's statistics.
+    cli_attrs, py_attrs = frepray.exr_attributes(exr), frepray.exr_attributes(tmp_path / "py.exr")
+    settings = json.loads(py_attrs["frepray.settings"])
+    assert (settings["seed"], settings["estimator"], settings["aovs"]) == (7, "optimal-direct", ["depth"])
+    assert cli_attrs["frepray.settings"] == py_attrs["frepray.settings"]
+    assert cli_attrs["frepray.samples_rendered"] == str(24 * 16 * 2)
+    assert "frepray.statistics" not in py_attrs
 
 
 @pytest.mark.parametrize("flags", [["--per-light"], ["--pixel-center"],

@@ -15,11 +15,55 @@ pub fn run(file: &Path) -> Result<(), String> {
     match ext.as_deref() {
         Some("toml" | "json") => scene(file),
         Some("frep" | "hf" | "vm") => model(file),
+        Some("exr") => image(file),
+        Some("state") => state(file),
         _ => Err(format!(
-            "{}: unknown kind of file; expected {KINDS}",
+            "{}: unknown kind of file; expected {KINDS}, an image (.exr) or a state (.state)",
             file.display()
         )),
     }
+}
+
+/// Reads an EXR image and prints its size, channels, mean colour and header attributes
+/// (what `render` records there: settings, scene hash, version, statistics).
+fn image(file: &Path) -> Result<(), String> {
+    let img = frepray::Image::read_exr(file).map_err(|e| e.to_string())?;
+    out!("file:          {}", file.display());
+    out!("size:          {}×{}", img.width(), img.height());
+    let mut channels = vec!["R".to_string(), "G".into(), "B".into()];
+    channels.extend(img.aov_names().iter().cloned());
+    out!("channels:      {}", channels.join(", "));
+    let n = (img.width() as f64 * img.height() as f64).max(1.0);
+    let mut mean = [0.0; 3];
+    for p in img.data().chunks_exact(img.channels()) {
+        for c in 0..3 {
+            mean[c] += p[c] / n;
+        }
+    }
+    out!(
+        "mean:          {:.6} {:.6} {:.6}",
+        mean[0],
+        mean[1],
+        mean[2]
+    );
+    if img.attributes().is_empty() {
+        out!("attributes:    none (not written by frepray)");
+    }
+    for (name, value) in img.attributes() {
+        out!("{name}: {value}");
+    }
+    Ok(())
+}
+
+/// Reads a render state and prints its summary and settings.
+fn state(file: &Path) -> Result<(), String> {
+    let s = frepray::RenderState::read(file).map_err(|e| e.to_string())?;
+    out!("file:          {}", file.display());
+    out!("state:         {}", s.summary());
+    for (name, value) in s.image().attributes() {
+        out!("{name}: {value}");
+    }
+    Ok(())
 }
 
 /// Resolves a scene file and summarises it.

@@ -73,9 +73,11 @@ enum Command {
     /// image (.png, .exr) or state.
     Merge(merge_cmd::MergeArgs),
     /// Validate a scene or model file and print a summary (scenes: resolution,
-    /// objects, lights, settings; models: bounds, node count, perturbations).
+    /// objects, lights, settings; models: bounds, node count, perturbations), or print
+    /// what made an image (.exr: its header's record of the render) or a state (.state).
     Check {
-        /// The scene (.toml, .json) or model (.frep, .hf, .vm) file.
+        /// The scene (.toml, .json), model (.frep, .hf, .vm), image (.exr) or state
+        /// (.state) file.
         file: PathBuf,
     },
     /// The GPU back end's adapters.
@@ -560,13 +562,9 @@ fn render(args: RenderArgs) -> Result<(), String> {
     } else {
         args.output.clone()
     };
-    output::write_all(
-        &outs,
-        &formats,
-        &state.image(),
-        &film,
-        output::model_values(look),
-    )?;
+    let mut image = state.image();
+    output::describe_render(&mut image, &args.input, &stats, r.gpu.is_some());
+    output::write_all(&outs, &formats, &image, &film, output::model_values(look))?;
     note!(
         "{}{} written",
         if stats.stopped {

@@ -34,7 +34,13 @@ pub fn run(args: MergeArgs) -> Result<(), String> {
         }
     }
     let merged = merged.expect("clap requires one state");
-    output::write_state(&args.output, &formats, &merged, &film)?;
+    let from = output::list(&args.states);
+    output::write_state(&args.output, &formats, &merged, &film, &|img| {
+        img.set_attribute(
+            &format!("{}merged_from", frepray::ATTRIBUTE_PREFIX),
+            from.as_str(),
+        )
+    })?;
     note!(
         "merged {} state(s): {}; written {}",
         args.states.len(),

@@ -4,7 +4,7 @@
 
 use frepray::preview::Look;
 use frepray::value_png::Values;
-use frepray::{Film, Image, RenderState, Tonemap};
+use frepray::{Film, Image, RenderState, RenderStats, Tonemap};
 use std::path::{Path, PathBuf};
 
 /// How PNG outputs show the image: `--exposure` and `--tonemap` (EXR and state files
@@ -242,6 +242,7 @@ pub fn write_state(
     formats: &[Format],
     state: &RenderState,
     film: &Film,
+    describe: &dyn Fn(&mut Image),
 ) -> Result<(), String> {
     let mut image = None;
     let mut failed = Vec::new();
@@ -252,7 +253,11 @@ pub fn write_state(
         } else {
             write(
                 p,
-                image.get_or_insert_with(|| state.image()),
+                image.get_or_insert_with(|| {
+                    let mut img = state.image();
+                    describe(&mut img);
+                    img
+                }),
                 f,
                 film,
                 values,
@@ -266,6 +271,24 @@ pub fn write_state(
         clip_note(outs, formats, img, film);
     }
     written_or(outs.len(), failed)
+}
+
+/// Records in an image's EXR attributes how it was rendered, beyond what its state
+/// records ([`RenderState::image`]): the input file, the back end (with the GPU's
+/// adapter) and the render's statistics.
+pub fn describe_render(img: &mut Image, input: &Path, stats: &RenderStats, on_gpu: bool) {
+    let p = frepray::ATTRIBUTE_PREFIX;
+    img.set_attribute(&format!("{p}input"), input.display().to_string());
+    let backend = if on_gpu {
+        match frepray::backend::shared_gpu() {
+            Ok(g) => format!("gpu ({})", g.info()),
+            Err(_) => "gpu".to_string(),
+        }
+    } else {
+        "cpu".to_string()
+    };
+    img.set_attribute(&format!("{p}backend"), backend);
+    stats.describe(img);
 }
 
 /// Writes an image to every output; every one is attempted, the error names each that
@@ -320,7 +343,7 @@ mod tests {
             dir.join("c.png"),
         ];
         let formats: Vec<Format> = outs.iter().map(|p| format_for_scene(p).unwrap()).collect();
-        let e = write_state(&outs, &formats, &state, &Film::default()).unwrap_err();
+        let e = write_state(&outs, &formats, &state, &Film::default(), &|_| {}).unwrap_err();
         assert!(e.contains("1 of 3") && e.contains("b.state"), "{e}");
         assert!(outs[0].is_file() && outs[2].is_file());
         assert!(check_writable(&outs[1])

@@ -187,7 +187,10 @@ pub fn run(
             .map(|p| output::partial_path(p, args.overwrite_partial))
             .collect();
     }
-    output::write_state(&outs, &formats, &state, &film)?;
+    let on_gpu = r.gpu.is_some();
+    output::write_state(&outs, &formats, &state, &film, &|img| {
+        output::describe_render(img, input, &stats, on_gpu)
+    })?;
     if stats.stopped {
         let at = formats
             .iter()

@@ -338,6 +338,56 @@ fn split_render_merges_through_state_files() {
     assert!(!twice.status.success());
     assert!(String::from_utf8_lossy(&twice.stderr).contains("overlap"));
     assert!(!dir.join("never.exr").exists());
+
+    // Each EXR records in its header how it was made, and `check` prints it.
+    let read = |name: &str| frepray::Image::read_exr(dir.join(name)).unwrap();
+    let (w, m) = (read("whole.exr"), read("merged.exr"));
+    let at = |img: &frepray::Image, name: &str| {
+        img.attribute(&format!("frepray.{name}"))
+            .unwrap_or_else(|| panic!("no attribute frepray.{name}"))
+            .to_string()
+    };
+    let settings: serde_json::Value = serde_json::from_str(&at(&w, "settings")).unwrap();
+    assert_eq!(settings["estimator"], "optimal-direct");
+    assert_eq!(
+        (settings["width"].as_u64(), settings["seed"].as_u64()),
+        (Some(20), Some(whole.header().seed))
+    );
+    assert_eq!(at(&w, "settings"), at(&m, "settings"));
+    assert_eq!(
+        at(&w, "scene_hash"),
+        format!("{:016x}", whole.header().scene_hash)
+    );
+    assert_ne!(whole.header().scene_hash, 0);
+    assert_eq!(
+        (at(&w, "samples"), at(&m, "samples")),
+        ("0..6".into(), "0..6".into())
+    );
+    assert_eq!(at(&w, "backend"), "cpu");
+    assert!(at(&w, "input").ends_with("many-lights.toml"));
+    assert_eq!(at(&w, "samples_rendered"), (20 * 14 * 6).to_string());
+    assert!(at(&w, "statistics").contains("1680 samples"));
+    assert_eq!(
+        w.attribute("software"),
+        Some(concat!("frepray ", env!("CARGO_PKG_VERSION")))
+    );
+    let from = at(&m, "merged_from");
+    assert!(
+        from.contains("a.state") && from.contains("b.state"),
+        "{from}"
+    );
+    assert_eq!(m.attribute("frepray.statistics"), None);
+    let o = frepray()
+        .arg("check")
+        .arg(dir.join("whole.exr"))
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(
+        text.contains("size:          20×14") && text.contains("frepray.estimator: optimal-direct"),
+        "{text}"
+    );
 }
 
 /// `--dump-scene` writes the resolved scene (overrides applied) as JSON and, without

@@ -53,7 +53,7 @@ pub use model_info::{info as model_info, ModelInfo};
 pub use mis::Method;
 pub use render::integrator::{Aov, IntegratorKind, RenderOptions};
 pub use render::{Film, Image, RenderState, RenderStats, StateHeader, Tonemap};
-pub use scene::{Overrides, RenderSettings, SceneData, SceneError, SceneFormat};
+pub use scene::{Overrides, RenderSettings, SceneData, SceneError, SceneFormat, ATTRIBUTE_PREFIX};
 pub use settings::{Settings, Unused};
 
 /// The limits a render is checked against before it starts: threads, memory (with an

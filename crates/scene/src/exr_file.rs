@@ -60,6 +60,33 @@ pub struct ExrChannels {
     pub names: Vec<String>,
     /// One row-major `width × height` array per channel.
     pub values: Vec<Vec<f32>>,
+    /// The header's text attributes (name, value), sorted by name: the standard
+    /// `software` and any custom ones (frepray's render record, [`ATTRIBUTE_PREFIX`]).
+    pub attributes: Vec<(String, String)>,
+}
+
+/// The prefix of the header attributes frepray writes about a render.
+pub const ATTRIBUTE_PREFIX: &str = "frepray.";
+
+/// The header's text attributes of a layer, sorted by name (values as UTF-8, which
+/// OpenEXR's tools print as they are).
+fn text_attributes(a: &exr::meta::header::LayerAttributes) -> Vec<(String, String)> {
+    let text = |t: &exr::meta::attribute::Text| String::from_utf8_lossy(t.bytes()).into_owned();
+    let mut out: Vec<(String, String)> = a
+        .other
+        .iter()
+        .filter_map(|(name, v)| match v {
+            exr::meta::attribute::AttributeValue::Text(t) => Some((text(name), text(t))),
+            _ => None,
+        })
+        .collect();
+    out.extend(
+        a.software_name
+            .iter()
+            .map(|s| ("software".to_string(), text(s))),
+    );
+    out.sort();
+    out
 }
 
 impl ExrChannels {
@@ -94,6 +121,7 @@ pub fn read_exr(path: &Path) -> Result<ExrChannels, ExrError> {
         height,
         names: Vec::new(),
         values: Vec::new(),
+        attributes: text_attributes(&layer.attributes),
     };
     for c in &layer.channel_data.list {
         let v: Vec<f32> = c.sample_data.values_as_f32().collect();

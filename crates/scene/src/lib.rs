@@ -70,7 +70,7 @@ pub use desc::{
 pub use distribution::{Distribution1D, Distribution2D};
 pub use environment::{read_exr_rgb, MapError};
 pub use error::SceneError;
-pub use exr_file::{read_exr, ExrChannels, ExrError};
+pub use exr_file::{read_exr, ExrChannels, ExrError, ATTRIBUTE_PREFIX};
 pub use load::{
     description_from_value, load, load_value, load_with, parse, parse_description, parse_with,
     resolve, SceneFormat,

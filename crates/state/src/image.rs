@@ -8,6 +8,7 @@
 
 use crate::color::{srgb_u8, Rgb};
 use crate::output::write_atomically;
+use exr::meta::attribute::{AttributeValue, Text};
 use exr::prelude::{
     AnyChannel, AnyChannels, Encoding, FlatSamples, Layer, LayerAttributes, SmallVec, WritableImage,
 };
@@ -33,6 +34,8 @@ pub struct Image {
     aov_names: Vec<String>,
     /// `[R, G, B, AOVs…]` per pixel, row by row.
     data: Vec<f64>,
+    /// Header attributes written to EXR files (name, value), sorted by name.
+    attributes: Vec<(String, String)>,
 }
 
 /// How a PNG shows linear radiance: scaled by 2^`exposure` (stops), then mapped by
@@ -67,6 +70,32 @@ impl Image {
             height,
             aov_names: aov_names.iter().map(|s| s.to_string()).collect(),
             data: vec![0.0; n * (3 + aov_names.len())],
+            attributes: Vec::new(),
+        }
+    }
+    /// The text attributes an EXR file of this image carries in its header (name,
+    /// value), sorted by name: what made it ([`crate::RenderState::image`] records the
+    /// render's settings) and what was read back from a file.
+    pub fn attributes(&self) -> &[(String, String)] {
+        &self.attributes
+    }
+    /// The value of attribute `name`.
+    pub fn attribute(&self, name: &str) -> Option<&str> {
+        self.attributes
+            .iter()
+            .find(|(n, _)| n == name)
+            .map(|(_, v)| v.as_str())
+    }
+    /// Sets attribute `name` (replacing a value it had). `software` is OpenEXR's
+    /// standard attribute of that name; any other is written as a custom text attribute.
+    pub fn set_attribute(&mut self, name: &str, value: impl Into<String>) {
+        let value = value.into();
+        match self
+            .attributes
+            .binary_search_by(|(n, _)| n.as_str().cmp(name))
+        {
+            Ok(i) => self.attributes[i].1 = value,
+            Err(i) => self.attributes.insert(i, (name.to_string(), value)),
         }
     }
     /// Width in pixels.
@@ -156,9 +185,21 @@ impl Image {
             let data = self.channel(3 + k);
             list.push(AnyChannel::new(name.as_str(), FlatSamples::F32(data)));
         }
+        // Text as UTF-8 bytes: OpenEXR stores strings as bytes and its tools print them.
+        let text = |s: &str| Text::from_bytes_unchecked(SmallVec::from_slice(s.as_bytes()));
+        let mut attributes = LayerAttributes::default();
+        for (name, value) in &self.attributes {
+            if name == "software" {
+                attributes.software_name = Some(text(value));
+            } else {
+                attributes
+                    .other
+                    .insert(text(name), AttributeValue::Text(text(value)));
+            }
+        }
         let layer = Layer::new(
             (self.width as usize, self.height as usize),
-            LayerAttributes::default(),
+            attributes,
             Encoding::FAST_LOSSLESS,
             AnyChannels::sort(list),
         );
@@ -208,7 +249,8 @@ impl Image {
         clipped as f64 / n as f64
     }
     /// Reads the first layer of an EXR file: channels R, G, B (required) and every other
-    /// channel as an AOV, in the file's (alphabetical) order. Errors name the file and
+    /// channel as an AOV, in the file's (alphabetical) order, and the header's text
+    /// attributes. Errors name the file and
     /// what is wrong; a decoder panic on a malformed file is caught and reported.
     pub fn read_exr(path: impl AsRef<Path>) -> Result<Image, ReadExrError> {
         let path = path.as_ref();
@@ -235,6 +277,7 @@ impl Image {
                 p[k] = f64::from(v);
             }
         }
+        out.attributes = exr.attributes;
         Ok(out)
     }
 }
@@ -301,6 +344,44 @@ mod tests {
             e.to_string().starts_with(&format!("{}: ", bad.display())),
             "{e}"
         );
+        fs::remove_dir_all(&d).unwrap();
+    }
+
+    /// Header attributes survive the file as they were set (UTF-8 text, the standard
+    /// `software` attribute among them); a later value replaces an earlier one.
+    #[test]
+    fn exr_attributes_round_trip() {
+        let d = scratch("exr-attributes");
+        let path = d.join("img.exr");
+        let mut f = test_film();
+        f.set_attribute("frepray.size", "5×3");
+        f.set_attribute("software", "frepray test");
+        f.set_attribute("frepray.b", "first");
+        f.set_attribute("frepray.b", "second");
+        assert_eq!(f.attribute("frepray.b"), Some("second"));
+        f.write_exr(&path).unwrap();
+        let g = Image::read_exr(&path).unwrap();
+        assert_eq!(g.attributes(), f.attributes());
+        assert_eq!(
+            g.attributes()
+                .iter()
+                .map(|(n, _)| n.as_str())
+                .collect::<Vec<_>>(),
+            ["frepray.b", "frepray.size", "software"]
+        );
+        let raw = exr::prelude::read_first_flat_layer_from_file(&path).unwrap();
+        assert_eq!(
+            raw.layer_data
+                .attributes
+                .software_name
+                .as_ref()
+                .map(|t| t.to_string()),
+            Some("frepray test".to_string())
+        );
+        // A name OpenEXR reserves for a standard attribute of another type is an error.
+        f.set_attribute("dataWindow", "x");
+        assert!(f.write_exr(d.join("reserved.exr")).is_err());
+        assert!(!d.join("reserved.exr").exists());
         fs::remove_dir_all(&d).unwrap();
     }
 

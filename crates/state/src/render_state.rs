@@ -539,7 +539,40 @@ impl RenderState {
                 }
             }
         }
+        self.describe(&mut img);
         img
+    }
+
+    /// Records in `img`'s EXR attributes what made it: frepray's version, the scene's
+    /// hash, the resolved settings (the header as the state file stores it, one JSON
+    /// object), the sample ranges and whether the render is partial; the settings also
+    /// one by one, for people reading them with `frepray check` or `exrheader`.
+    fn describe(&self, img: &mut Image) {
+        let h = &self.header;
+        let p = scene::ATTRIBUTE_PREFIX;
+        let techniques: Vec<String> = h
+            .techniques
+            .iter()
+            .map(|(t, n)| format!("{}:{n}", t.name()))
+            .collect();
+        let samples: Vec<String> = self
+            .samples
+            .iter()
+            .map(|r| format!("{}..{}", r.start, r.end))
+            .collect();
+        img.set_attribute("software", format!("frepray {}", env!("CARGO_PKG_VERSION")));
+        img.set_attribute(&format!("{p}version"), env!("CARGO_PKG_VERSION"));
+        img.set_attribute(&format!("{p}scene_hash"), format!("{:016x}", h.scene_hash));
+        img.set_attribute(&format!("{p}settings"), h.to_json().to_string());
+        img.set_attribute(&format!("{p}integrator"), h.integrator.name());
+        img.set_attribute(&format!("{p}estimator"), h.method.name());
+        img.set_attribute(&format!("{p}techniques"), techniques.join(","));
+        img.set_attribute(&format!("{p}seed"), h.seed.to_string());
+        img.set_attribute(&format!("{p}samples"), samples.join(","));
+        img.set_attribute(
+            &format!("{p}partial"),
+            if self.partial { "yes" } else { "no" },
+        );
     }
 
     /// Adds the sums of `other`, a state of the same header over disjoint samples.
@@ -759,5 +792,33 @@ impl RenderState {
             s.push_str(" (partial)");
         }
         s
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// An image's `frepray.settings` attribute is its state's header: it reads back as
+    /// the same header; the samples, partial flag and scene hash are recorded beside it.
+    #[test]
+    fn an_image_records_its_header() {
+        let o = RenderOptions {
+            seed: 9,
+            scene_hash: 0xabc,
+            ..RenderOptions::default()
+        };
+        let mut s = RenderState::new(StateHeader::new(4, 3, &o), 2..5).unwrap();
+        s.set_partial();
+        let img = s.image();
+        let v: Value = serde_json::from_str(img.attribute("frepray.settings").unwrap()).unwrap();
+        assert_eq!(StateHeader::from_json(&v).unwrap(), *s.header());
+        assert_eq!(img.attribute("frepray.samples"), Some("2..5"));
+        assert_eq!(img.attribute("frepray.partial"), Some("yes"));
+        assert_eq!(img.attribute("frepray.seed"), Some("9"));
+        assert_eq!(
+            img.attribute("frepray.scene_hash"),
+            Some("0000000000000abc")
+        );
     }
 }

@@ -52,6 +52,22 @@ impl RenderStats {
     }
 }
 
+impl RenderStats {
+    /// Records the statistics in `img`'s EXR attributes: the line this type displays,
+    /// and the wall time, samples and rays as numbers.
+    pub fn describe(&self, img: &mut crate::Image) {
+        let p = scene::ATTRIBUTE_PREFIX;
+        img.set_attribute(&format!("{p}statistics"), self.to_string());
+        img.set_attribute(
+            &format!("{p}time_s"),
+            format!("{:.6}", self.wall.as_secs_f64()),
+        );
+        img.set_attribute(&format!("{p}samples_rendered"), self.samples.to_string());
+        img.set_attribute(&format!("{p}rays"), self.rays.total().to_string());
+        img.set_attribute(&format!("{p}threads"), self.threads.to_string());
+    }
+}
+
 impl fmt::Display for RenderStats {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let (c, s, sh) = self.mrays_per_s_by_kind();
