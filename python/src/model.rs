@@ -63,6 +63,27 @@ impl Model {
         let g = Array2::from_shape_vec((g.len(), 3), g.concat()).expect("N x 3");
         Ok((Array1::from(v).into_pyarray(py), g.into_pyarray(py)))
     }
+    /// A closed triangle mesh of the surface with `resolution` cubes along the longest
+    /// side of the bounds (`frepray mesh`): `(vertices float64 (V, 3), triangles uint32
+    /// (T, 3))`, triangles counter-clockwise seen from outside, vertices on F = 0.
+    #[pyo3(signature = (resolution = 256))]
+    #[allow(clippy::type_complexity)]
+    fn mesh<'py>(
+        &self,
+        py: Python<'py>,
+        resolution: i64,
+    ) -> PyResult<(Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<u32>>)> {
+        let resolution = u32::try_from(resolution).unwrap_or(0);
+        let bounds = self.solid.bounds();
+        let m = py
+            .detach(|| frepray::mesh_solid(&self.expr, &bounds, resolution))
+            .map_err(|e| PyValueError::new_err(e.to_string()))?
+            .mesh;
+        let v = Array2::from_shape_vec((m.vertices.len(), 3), m.vertices.concat()).expect("V x 3");
+        let t =
+            Array2::from_shape_vec((m.triangles.len(), 3), m.triangles.concat()).expect("T x 3");
+        Ok((v.into_pyarray(py), t.into_pyarray(py)))
+    }
     /// The solid's bounding box `((x0, y0, z0), (x1, y1, z1))`.
     #[getter]
     fn bounds(&self) -> ([f64; 3], [f64; 3]) {

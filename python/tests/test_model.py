@@ -62,3 +62,21 @@ def test_preview():
     assert img.shape == (16, 24, 3) and img.max() > 0
     depth = m.preview(width=24, height=16, spp=1, look="depth").aovs()["depth"]
     assert depth.max() > 0 and depth.min() == 0  # the sphere, and misses around it
+
+
+def test_mesh_is_closed_on_the_surface_with_the_torus_volume():
+    m = frepray.model(TORUS)
+    v, t = m.mesh(resolution=48)
+    assert v.dtype == np.float64 and t.dtype == np.uint32 and v.shape[1] == t.shape[1] == 3
+    np.testing.assert_allclose(m.eval(v), 0.0, atol=1e-9)
+    # Closed and consistently oriented: each directed edge once, its reverse once.
+    edges = np.concatenate([t[:, [0, 1]], t[:, [1, 2]], t[:, [2, 0]]])
+    directed = set(map(tuple, edges.tolist()))
+    assert len(directed) == len(edges)
+    assert all((b, a) in directed for a, b in directed)
+    a, b, c = (v[t[:, k]] for k in range(3))
+    volume = np.einsum("ij,ij->i", a, np.cross(b, c)).sum() / 6.0
+    exact = 2 * np.pi**2 * 1.0 * 0.35**2
+    assert abs(volume / exact - 1) < 0.03, volume
+    with pytest.raises(ValueError, match="resolution"):
+        m.mesh(resolution=0)

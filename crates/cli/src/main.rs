@@ -29,6 +29,7 @@ mod check;
 mod experiment_cmd;
 mod interrupt;
 mod merge_cmd;
+mod mesh_cmd;
 mod output;
 mod scene_flags;
 mod scene_render;
@@ -80,6 +81,9 @@ enum Command {
         /// (.state) file.
         file: PathBuf,
     },
+    /// Write a watertight triangle mesh of a model's surface (.obj or .stl), for 3-D
+    /// printing and other tools: vertices on F = 0, about bounds / resolution apart.
+    Mesh(mesh_cmd::MeshArgs),
     /// The GPU back end's adapters.
     Gpu {
         #[command(subcommand)]
@@ -271,6 +275,7 @@ fn main() -> ExitCode {
         Command::Bench(args) => bench(args),
         Command::Experiment(args) => experiment_cmd::run(args),
         Command::Merge(args) => merge_cmd::run(args),
+        Command::Mesh(args) => mesh_cmd::run(args),
         Command::Check { file } => check::run(&file),
     };
     let code = match result {

@@ -906,3 +906,78 @@ fn gpu_adapters_are_listed_and_chosen_by_index() {
     );
     assert!(!d.join("x.exr").exists());
 }
+
+/// `frepray mesh` writes a closed mesh of a model as OBJ and STL (the same triangles),
+/// its vertices on the model's surface; bad outputs and resolutions are clear errors
+/// that write nothing.
+#[test]
+fn meshes_a_model_to_obj_and_stl() {
+    let dir = out_dir("mesh");
+    let model = root().join("models/examples/bumpy_ball.frep");
+    let (obj, stl) = (dir.join("ball.obj"), dir.join("ball.stl"));
+    let o = frepray()
+        .args(["mesh", "--resolution", "24", "-o"])
+        .arg(&obj)
+        .arg("-o")
+        .arg(&stl)
+        .arg(&model)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = std::fs::read_to_string(&obj).unwrap();
+    let vertices: Vec<[f64; 3]> = text
+        .lines()
+        .filter_map(|l| l.strip_prefix("v "))
+        .map(|l| {
+            let v: Vec<f64> = l.split(' ').map(|x| x.parse().unwrap()).collect();
+            [v[0], v[1], v[2]]
+        })
+        .collect();
+    let faces = text.lines().filter(|l| l.starts_with("f ")).count();
+    assert!(faces > 1000, "{faces} triangles");
+    assert_eq!(
+        std::fs::metadata(&stl).unwrap().len(),
+        84 + 50 * faces as u64
+    );
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        stderr.contains(&format!("{} vertices, {faces} triangles", vertices.len())),
+        "{stderr}"
+    );
+    let f = frepray::model::read_file(&model)
+        .unwrap()
+        .shape
+        .to_tree()
+        .unwrap();
+    let f = frepray::model::Expr::new(&f);
+    for v in &vertices {
+        let (value, g) = f.gradient(*v);
+        let g = (g[0] * g[0] + g[1] * g[1] + g[2] * g[2]).sqrt();
+        assert!(value.abs() / g < 1e-9, "{v:?}: F = {value}");
+    }
+    for (args, want) in [
+        (vec!["--resolution", "0"], "resolution 0"),
+        (vec!["--resolution", "24"], "unknown mesh format"),
+    ] {
+        let bad = if want.contains("format") {
+            dir.join("x.ply")
+        } else {
+            dir.join("x.obj")
+        };
+        let o = frepray()
+            .arg("mesh")
+            .args(&args)
+            .arg("-o")
+            .arg(&bad)
+            .arg(&model)
+            .output()
+            .unwrap();
+        assert!(!o.status.success());
+        assert!(
+            String::from_utf8_lossy(&o.stderr).contains(want),
+            "{}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        assert!(!bad.exists());
+    }
+}

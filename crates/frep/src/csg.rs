@@ -17,6 +17,15 @@ pub fn intersection(a: &Tree, b: &Tree) -> Tree {
     a.min(b)
 }
 
+/// The box `b` as a solid: the least of the six distances to its faces' planes,
+/// min over the axes of min(x − lo, hi − x) (≥ 0 inside). Intersecting a solid with it
+/// cuts the solid at the box and closes it there ([`crate::mesh`]).
+pub fn box_tree(b: &crate::ray::Aabb) -> Tree {
+    let axes = [Tree::x(), Tree::y(), Tree::z()];
+    let slab = |k: usize| (&axes[k] - b.lo[k]).min(&(b.hi[k] - &axes[k]));
+    intersection(&intersection(&slab(0), &slab(1)), &slab(2))
+}
+
 /// Difference a \ b: min(a, −b).
 pub fn difference(a: &Tree, b: &Tree) -> Tree {
     a.min(&-b)

@@ -31,6 +31,7 @@ pub mod fixed;
 pub mod flat;
 pub mod interval;
 pub mod interval_trace;
+pub mod mesh;
 pub mod occupancy;
 pub mod perturbed;
 pub mod poly;

@@ -7,6 +7,7 @@ mod common;
 mod csg_differential;
 mod csg_unbounded;
 mod inside;
+mod mesh;
 mod occludes;
 mod occupancy;
 mod perturbed_march;

@@ -42,11 +42,13 @@ pub struct LibraryGuide;
 pub mod backend;
 pub mod bench;
 pub mod experiment;
+pub mod mesh_model;
 pub mod model_info;
 pub mod preview;
 pub mod settings;
 
 pub use backend::{render_range_on, Backend, Rendered};
+pub use mesh_model::{mesh_model, mesh_solid, ModelMesh};
 pub use model_info::{info as model_info, ModelInfo};
 
 /// The MIS estimators by name (`balance`, `power`, …, `optimal-direct`, …).
