@@ -45,6 +45,7 @@ pub mod solid;
 pub mod surface;
 pub mod transform;
 pub mod tree;
+pub mod triangles;
 
 pub use build_error::BuildError;
 pub use bvh::{Bvh, BvhRef};

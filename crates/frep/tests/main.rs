@@ -15,3 +15,4 @@ mod poly_trace;
 mod read_frep;
 mod read_hf;
 mod read_vm;
+mod triangles;

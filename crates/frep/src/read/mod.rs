@@ -20,10 +20,12 @@
 mod frep;
 mod hf;
 mod lex;
+mod mesh_file;
 mod sym;
 mod vm;
 mod vm_write;
 
+pub use mesh_file::{is_mesh_extension, read_mesh, read_obj, read_ply, MAX_MESH_BYTES};
 pub use vm::{view_domain, VM_DOMAIN};
 pub use vm_write::write_vm;
 
