@@ -2,8 +2,8 @@
 # Sets up and runs every check and test: formatting, clippy, the docs (warnings are
 # errors: broken intra-doc links fail), the dependencies' licences, the crates'
 # dependency arrows (DESIGN.md §3), the whole Rust test suite, then the Python package's
-# tests (pytest, Ray on a local 2-CPU cluster). The long comparisons are in
-# scripts/long-test.sh.
+# tests (pytest, Ray on a local 2-CPU cluster) and its wheel, installed into a clean
+# environment. The long comparisons are in scripts/long-test.sh.
 #
 # One build serves every step: clippy's lints run inside the test build (clippy-driver
 # as the workspace's compiler, with `-D warnings`: what `cargo clippy --workspace
@@ -103,3 +103,6 @@ step "cargo test --doc" cargo test --workspace --doc
 step "the Python package (set up beside the build)" \
   await "$python_setup" "$logs/setup" "the Python package's setup"
 step "pytest" .venv/bin/python -m pytest -q --doctest-modules python/tests python/frepray
+# The wheel users install: packaged from the extension just built, installed into a
+# clean virtual environment and run there (the quick start).
+step "the wheel, in a clean environment" bash scripts/wheel.sh --dev --check --out "$logs/dist"

@@ -76,10 +76,19 @@ fn scene(file: &Path) -> Result<(), String> {
         data.camera.width,
         data.camera.height
     );
+    let meshes = data
+        .objects
+        .iter()
+        .filter(|o| o.geometry.solid().is_none())
+        .count();
     out!(
-        "objects:       {} ({} materials)",
+        "objects:       {} ({} materials{})",
         data.objects.len(),
-        data.materials.len()
+        data.materials.len(),
+        match meshes {
+            0 => String::new(),
+            n => format!("; {n} triangle meshes"),
+        }
     );
     out!(
         "lights:        {} area, {} point/spot, environment: {}",

@@ -20,7 +20,7 @@ use glam::DVec3;
 use render::integrator::{Aov, IntegratorKind, RenderOptions};
 use render::{RenderState, RenderStats, Technique};
 use scene::{
-    CameraData, CameraKind, EnvironmentData, Light, LightData, MaterialData, MaterialId,
+    CameraData, CameraKind, EnvironmentData, Geometry, Light, LightData, MaterialData, MaterialId,
     ObjectData, RenderSettings, SceneData, SolidPool, TextureData, TextureId,
 };
 use std::sync::atomic::AtomicBool;
@@ -259,9 +259,10 @@ pub fn scene_data(solid: Solid, cam: CameraData, b: &Aabb, up: DVec3) -> SceneDa
         }],
         material_names: vec!["preview".into()],
         solids,
+        meshes: Default::default(),
         objects: vec![ObjectData {
             name: "model".into(),
-            solid,
+            geometry: Geometry::Solid(solid),
             material: MaterialId(0),
         }],
         lights,

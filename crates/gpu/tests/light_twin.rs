@@ -93,6 +93,7 @@ fn lights() -> Vec<(AreaLight, GpuAreaLight)> {
                     rgb,
                     area,
                 ),
+                Shape::Triangle { .. } => unreachable!("the GPU refuses triangle lights"),
             };
             out.push((l, g));
         }
@@ -110,6 +111,7 @@ fn clearance(l: &AreaLight, p: DVec3) -> f64 {
             edge_v,
         } => (p - corner).dot(edge_u.cross(edge_v).normalize()).abs(),
         Shape::Disk { center, normal, .. } => (p - center).dot(normal).abs(),
+        Shape::Triangle { p0, e1, e2 } => (p - p0).dot(e1.cross(e2).normalize()).abs(),
     }
 }
 

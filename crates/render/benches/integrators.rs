@@ -35,12 +35,14 @@ fn scene(width: u32) -> Scene {
     let objects = vec![
         Object {
             name: "ball".into(),
-            solid: Solid::build(&Shape::Perturbed(bumpy)).expect("ball"),
+            geometry: Solid::build(&Shape::Perturbed(bumpy)).expect("ball").into(),
             material: 0,
         },
         Object {
             name: "floor".into(),
-            solid: Solid::build(&Shape::Perturbed(floor)).expect("floor"),
+            geometry: Solid::build(&Shape::Perturbed(floor))
+                .expect("floor")
+                .into(),
             material: 1,
         },
     ];

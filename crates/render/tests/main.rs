@@ -4,6 +4,7 @@
 #[path = "integrators/common.rs"]
 mod common;
 mod integrators;
+mod meshes;
 mod min_depth;
 mod per_light;
 mod scene_format;

@@ -1,7 +1,6 @@
 //! Scene files: every scene in scenes/ loads and is seen by its camera, TOML and JSON
 //! forms agree, and malformed files are reported at the right line, column and key.
 
-use frep::Surface;
 use glam::{DVec2, DVec3};
 use render::color::luminance;
 use render::light::Shape;
@@ -81,9 +80,14 @@ fn every_scene_loads_and_its_camera_sees_it() {
         );
         // Every object is bounded, and no object holds the eye or a light.
         for o in &scene.objects {
-            assert!(o.solid.bounds().is_finite(), "{}: {}", f.display(), o.name);
             assert!(
-                !o.solid.inside(cam.eye),
+                o.geometry.bounds().is_finite(),
+                "{}: {}",
+                f.display(),
+                o.name
+            );
+            assert!(
+                !o.solid().expect("a solid").inside(cam.eye),
                 "{}: eye in {}",
                 f.display(),
                 o.name
@@ -96,8 +100,14 @@ fn every_scene_loads_and_its_camera_sees_it() {
                         edge_u,
                         edge_v,
                     } => corner + (edge_u + edge_v) / 2.0,
+                    Shape::Triangle { p0, e1, e2 } => p0 + (e1 + e2) / 3.0,
                 };
-                assert!(!o.solid.inside(c), "{}: light in {}", f.display(), o.name);
+                assert!(
+                    !o.solid().expect("a solid").inside(c),
+                    "{}: light in {}",
+                    f.display(),
+                    o.name
+                );
             }
         }
         assert!(settings.spp <= 16, "{}: keep spp small", f.display());
@@ -139,7 +149,7 @@ fn assert_same(a: &(Scene, RenderSettings), b: &(Scene, RenderSettings)) {
     assert_eq!(a.0.objects.len(), b.0.objects.len());
     for (x, y) in a.0.objects.iter().zip(&b.0.objects) {
         assert_eq!((&x.name, x.material), (&y.name, y.material));
-        assert_eq!(x.solid.bounds(), y.solid.bounds());
+        assert_eq!(x.geometry.bounds(), y.geometry.bounds());
     }
     assert_eq!(a.0.lights.area(), b.0.lights.area());
     assert_eq!(a.0.lights.delta(), b.0.lights.delta());
@@ -259,7 +269,7 @@ fn transforms_apply_in_order() {
             &format!("material = \"white\"\ntransform = {t}"),
         );
         let (s, _) = toml(&text).unwrap();
-        s.objects[0].solid.bounds()
+        s.objects[0].geometry.bounds()
     };
     // Scale 2 then move up 1: the ball (centre z = 1) ends at z = 3; the other way, z = 4.
     let a = with("[{ scale = 2 }, { translate = [0, 0, 1] }]");

@@ -7,6 +7,7 @@
 //! samples from the same numbers. Vectors are `[f64; 3]` (x, y, z or r, g, b).
 
 use crate::distribution::{Distribution1D, Distribution2D};
+use crate::meshes::MeshPool;
 use crate::solids::SolidPool;
 use serde::Serialize;
 
@@ -39,6 +40,10 @@ id!(
     SolidId
 );
 id!(
+    /// A triangle mesh: an index into [`SceneData::meshes`].
+    MeshId
+);
+id!(
     /// An environment map: an index into [`SceneData::maps`].
     MapId
 );
@@ -54,8 +59,11 @@ pub struct SceneData {
     pub materials: Vec<MaterialData>,
     /// The name of each material, for messages.
     pub material_names: Vec<String>,
-    /// Solid pool (one per object).
+    /// Solid pool (one per solid object).
     pub solids: SolidPool,
+    /// Triangle-mesh pool (one per mesh object; left out of the JSON when empty).
+    #[serde(skip_serializing_if = "MeshPool::is_empty")]
+    pub meshes: MeshPool,
     /// The objects: a solid with a material.
     pub objects: Vec<ObjectData>,
     /// Area, point and spot lights, with their selection distributions.
@@ -198,15 +206,46 @@ pub enum MaterialData {
     },
 }
 
-/// One object: a solid of the pool with a material.
+/// One object: a solid or a mesh of the pools with a material.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct ObjectData {
     /// Name, for messages (default `objects[i]`).
     pub name: String,
-    /// Its solid (transforms folded in).
-    pub solid: SolidId,
+    /// Its geometry (transforms folded in): `"solid": id` or `"mesh": id` in JSON.
+    #[serde(flatten)]
+    pub geometry: Geometry,
     /// Its material.
     pub material: MaterialId,
+}
+
+/// What an object is made of.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Geometry {
+    /// A solid of [`SceneData::solids`].
+    Solid(SolidId),
+    /// A triangle mesh of [`SceneData::meshes`].
+    Mesh(MeshId),
+}
+
+impl Geometry {
+    /// The solid, where the object is one.
+    pub fn solid(self) -> Option<SolidId> {
+        match self {
+            Geometry::Solid(s) => Some(s),
+            Geometry::Mesh(_) => None,
+        }
+    }
+}
+
+impl SceneData {
+    /// The bounds of object `i`'s geometry (possibly infinite for an unbounded solid).
+    pub fn object_bounds(&self, i: usize) -> frep::Aabb {
+        match self.objects[i].geometry {
+            Geometry::Solid(s) => self.solids.bounds(s),
+            Geometry::Mesh(m) => self.meshes.mesh(m).bounds(),
+        }
+    }
 }
 
 /// What a light is; says which fields of [`Light`] apply.
@@ -219,6 +258,9 @@ pub enum LightKind {
     Rect,
     /// A disk of centre `p0`, unit normal `e1` (the emitting side) and `radius`.
     Disk,
+    /// The triangle `p0`, `p0 + e1`, `p0 + e2`, emitting along e1 × e2 (one of a mesh
+    /// light's triangles).
+    Triangle,
     /// An isotropic point light at `p0`.
     Point,
     /// A spot light at `p0` with unit axis `e1`.
@@ -228,7 +270,10 @@ pub enum LightKind {
 impl LightKind {
     /// Whether the light has an area (and so takes part in MIS).
     pub fn has_area(self) -> bool {
-        matches!(self, LightKind::Sphere | LightKind::Rect | LightKind::Disk)
+        matches!(
+            self,
+            LightKind::Sphere | LightKind::Rect | LightKind::Disk | LightKind::Triangle
+        )
     }
 }
 

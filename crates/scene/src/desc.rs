@@ -205,6 +205,11 @@ pub struct LightDesc {
     pub falloff_start: Option<f64>,
     /// Copies of the light on a grid, for scenes of many lights.
     pub array: Option<ArrayDesc>,
+    /// A mesh light's file (.obj, .ply), relative to the scene file: every triangle
+    /// emits.
+    pub file: Option<String>,
+    /// Transforms of a mesh light, applied in order.
+    pub transform: Option<TransformDesc>,
 }
 
 /// `array = { count = [nx, ny, nz], step = [dx, dy, dz], power_range = [a, b], seed }`:

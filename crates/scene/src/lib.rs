@@ -52,6 +52,7 @@ mod exr_file;
 mod lights;
 mod load;
 mod locate;
+mod meshes;
 mod overrides;
 mod resolve;
 mod settings;
@@ -59,8 +60,9 @@ mod solids;
 mod training;
 
 pub use data::{
-    CameraData, CameraKind, EnvMapTable, EnvironmentData, Lens, Light, LightData, LightKind, MapId,
-    MaterialData, MaterialId, ObjectData, SceneData, SolidId, TextureData, TextureId, TextureSpace,
+    CameraData, CameraKind, EnvMapTable, EnvironmentData, Geometry, Lens, Light, LightData,
+    LightKind, MapId, MaterialData, MaterialId, MeshId, ObjectData, SceneData, SolidId,
+    TextureData, TextureId, TextureSpace,
 };
 pub use desc::{
     CameraDesc, CheckerDesc, ColorDesc, EnvironmentDesc, FilmDesc, LightDesc, MaterialDesc,
@@ -75,6 +77,7 @@ pub use load::{
     description_from_value, load, load_value, load_with, parse, parse_description, parse_with,
     resolve, SceneFormat,
 };
+pub use meshes::MeshPool;
 pub use overrides::{parse_technique_list, Overrides};
 pub use resolve::METALS;
 pub use settings::{

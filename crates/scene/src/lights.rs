@@ -27,6 +27,14 @@ pub(crate) fn bounding_sphere(l: &Light) -> (DVec3, f64) {
             p0 + (e1 + e2) / 2.0,
             (e1 + e2).length().max((e1 - e2).length()) / 2.0,
         ),
+        LightKind::Triangle => {
+            let c = p0 + (e1 + e2) / 3.0;
+            let r = [p0, p0 + e1, p0 + e2]
+                .iter()
+                .map(|v| v.distance(c))
+                .fold(0.0, f64::max);
+            (c, r)
+        }
         _ => (p0, l.radius),
     }
 }
@@ -100,10 +108,9 @@ fn require<T: Copy>(
     v.ok_or_else(|| src.at_key(at, format!("a {kind} light needs {key}")))
 }
 
-fn light(src: &Source, i: usize, l: &LightDesc) -> Result<Light, SceneError> {
-    let at = kp!["lights", i];
-    let key = |k: &str| [at.clone(), kp![k]].concat();
-    let present = [
+/// Which of a light's optional keys are given.
+fn present(l: &LightDesc) -> [(&'static str, bool); 19] {
+    [
         ("center", l.center.is_some()),
         ("radius", l.radius.is_some()),
         ("normal", l.normal.is_some()),
@@ -121,7 +128,15 @@ fn light(src: &Source, i: usize, l: &LightDesc) -> Result<Light, SceneError> {
         ("target", l.target.is_some()),
         ("cone", l.cone.is_some()),
         ("falloff_start", l.falloff_start.is_some()),
-    ];
+        ("file", l.file.is_some()),
+        ("transform", l.transform.is_some()),
+    ]
+}
+
+fn light(src: &Source, i: usize, l: &LightDesc) -> Result<Light, SceneError> {
+    let at = kp!["lights", i];
+    let key = |k: &str| [at.clone(), kp![k]].concat();
+    let present = present(l);
     let kind = l.kind.as_str();
     let emit = ["type", "radiance", "power", "color"];
     let allowed: Vec<&str> = match kind {
@@ -156,8 +171,8 @@ fn light(src: &Source, i: usize, l: &LightDesc) -> Result<Light, SceneError> {
             return Err(src.at_value(
                 &key("type"),
                 format!(
-                    "unknown light type {kind:?}; valid types: sphere, rect, disk, point, spot"
-                ),
+                "unknown light type {kind:?}; valid types: sphere, rect, disk, mesh, point, spot"
+            ),
             ))
         }
     };
@@ -399,15 +414,96 @@ impl LightData {
     }
 }
 
-/// The area lights and the point / spot lights, in file order.
+/// A mesh light's triangles (entry `i`), each an area light of the mesh's radiance
+/// (with `power`, the whole mesh's power shared by area), appended to `out`; at most
+/// `room` of them. Triangles without area are left out.
+fn mesh_lights(
+    src: &Source,
+    base: &std::path::Path,
+    i: usize,
+    l: &LightDesc,
+    room: usize,
+    out: &mut Vec<Light>,
+) -> Result<(), SceneError> {
+    let at = kp!["lights", i];
+    let key = |k: &str| [at.clone(), kp![k]].concat();
+    let allowed = [
+        "type",
+        "file",
+        "transform",
+        "two_sided",
+        "radiance",
+        "power",
+        "color",
+    ];
+    check_keys(src, &at, "a mesh light", &present(l), &allowed)?;
+    if l.array.is_some() {
+        return Err(src.at_key(&key("array"), "a mesh light takes no array"));
+    }
+    let file = require(src, &at, "mesh", "file", l.file.as_deref())?;
+    let m = crate::meshes::read(
+        src,
+        base,
+        &key("file"),
+        file,
+        &key("transform"),
+        l.transform.as_ref(),
+    )?;
+    let triangles: Vec<(DVec3, DVec3, DVec3, f64)> = (0..m.len())
+        .map(|k| {
+            let [a, b, c] = m.triangle(k);
+            (a, b - a, c - a, 0.5 * (b - a).cross(c - a).length())
+        })
+        .filter(|t| t.3 > 0.0)
+        .collect();
+    if triangles.is_empty() {
+        return Err(src.at_value(&key("file"), "the mesh has no triangle with an area"));
+    }
+    if triangles.len() > room {
+        return Err(src.at_value(
+            &key("file"),
+            format!(
+                "{} triangles: a scene holds at most {MAX_LIGHTS} lights",
+                triangles.len()
+            ),
+        ));
+    }
+    let two_sided = l.two_sided.unwrap_or(false);
+    let sides = if two_sided { 2.0 } else { 1.0 };
+    let total: f64 = triangles.iter().map(|t| t.3).sum();
+    let radiance = emission(src, &at, "radiance", &l.radiance, l, PI * total * sides)?;
+    out.extend(triangles.into_iter().map(|(p0, e1, e2, area)| Light {
+        kind: LightKind::Triangle,
+        p0: p0.to_array(),
+        e1: e1.to_array(),
+        e2: e2.to_array(),
+        radius: 0.0,
+        emission: radiance.to_array(),
+        two_sided,
+        cos_falloff_start: 0.0,
+        cos_falloff_end: 0.0,
+        area,
+        power: (radiance * (PI * area * sides)).to_array(),
+        selection_pmf: 0.0,
+    }));
+    Ok(())
+}
+
+/// The area lights and the point / spot lights, in file order; mesh files are read
+/// relative to `base`.
 pub(crate) fn lights(
     src: &Source,
+    base: &std::path::Path,
     list: &[LightDesc],
 ) -> Result<(Vec<Light>, Vec<Light>), SceneError> {
     let (mut area, mut delta) = (Vec::new(), Vec::new());
     for (i, desc) in list.iter().enumerate() {
-        let l = light(src, i, desc)?;
         let room = MAX_LIGHTS.saturating_sub(area.len() + delta.len());
+        if desc.kind == "mesh" {
+            mesh_lights(src, base, i, desc, room, &mut area)?;
+            continue;
+        }
+        let l = light(src, i, desc)?;
         let out = if l.kind.has_area() {
             &mut area
         } else {

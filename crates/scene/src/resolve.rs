@@ -4,14 +4,15 @@
 
 use crate::check::{check_keys, number, transform, vec3};
 use crate::data::{
-    CameraData, CameraKind, Lens, MaterialData, MaterialId, ObjectData, SceneData, TextureData,
-    TextureId, TextureSpace,
+    CameraData, CameraKind, Geometry, Lens, MaterialData, MaterialId, ObjectData, SceneData,
+    TextureData, TextureId, TextureSpace,
 };
 use crate::desc::{CameraDesc, ColorDesc, MaterialDesc, ObjectDesc, SceneDescription};
 use crate::environment::environment;
 use crate::error::{kp, path_string, KeyPath, SceneError, Seg};
 use crate::lights::{bounding_sphere, lights};
 use crate::locate::{position_in_literal, Source};
+use crate::meshes::MeshPool;
 use crate::settings::{settings, RenderSettings};
 use crate::solids::SolidPool;
 use frep::read::{read_file, read_str, Format};
@@ -387,15 +388,56 @@ fn shape(src: &Source, base: &Path, i: usize, o: &ObjectDesc) -> Result<Shape, S
     }
 }
 
+/// An object's geometry as resolved: a solid, or a triangle mesh.
+// One per object, moved once into its pool: the variants' sizes do not matter.
+#[allow(clippy::large_enum_variant)]
+enum Built {
+    Solid(Solid),
+    Mesh(frep::triangles::Triangles),
+}
+
+/// Whether object `o` names a mesh file (.obj, .ply) as its model.
+fn is_mesh(o: &ObjectDesc) -> bool {
+    o.model.as_deref().is_some_and(|m| {
+        Path::new(m)
+            .extension()
+            .and_then(|e| e.to_str())
+            .is_some_and(frep::read::is_mesh_extension)
+    })
+}
+
+/// Reads object `i`'s mesh file and moves it by the object's transform.
+fn mesh(
+    src: &Source,
+    base: &Path,
+    i: usize,
+    o: &ObjectDesc,
+) -> Result<frep::triangles::Triangles, SceneError> {
+    if o.solid.is_some() {
+        return Err(src.at_key(
+            &kp!["objects", i, "model"],
+            "give either solid or model, not both",
+        ));
+    }
+    crate::meshes::read(
+        src,
+        base,
+        &kp!["objects", i, "model"],
+        o.model.as_deref().unwrap_or_default(),
+        &kp!["objects", i, "transform"],
+        o.transform.as_ref(),
+    )
+}
+
 /// The material index of object `i`, its shape (transform folded in) and its solid's
-/// bounds (the solid is built once here to check it).
+/// bounds (the solid is built once here to check it), or its mesh.
 fn object(
     src: &Source,
     base: &Path,
     i: usize,
     o: &ObjectDesc,
     names: &[&String],
-) -> Result<(MaterialId, Solid), SceneError> {
+) -> Result<(MaterialId, Built), SceneError> {
     let material = names
         .iter()
         .position(|n| **n == o.material)
@@ -411,13 +453,17 @@ fn object(
                 format!("unknown material {:?}; defined: {list}", o.material),
             )
         })?;
+    let material = MaterialId(material as u32);
+    if is_mesh(o) {
+        return Ok((material, Built::Mesh(mesh(src, base, i, o)?)));
+    }
     let mut shape = shape(src, base, i, o)?;
     let tp: KeyPath = kp!["objects", i, "transform"];
     if let Some(t) = &o.transform {
         shape = Shape::Transformed(transform(src, &tp, t)?, Box::new(shape));
     }
     let solid = Solid::build(&shape).map_err(|e| src.at_value(&tp, e.to_string()))?;
-    Ok((MaterialId(material as u32), solid))
+    Ok((material, Built::Solid(solid)))
 }
 
 /// Resolves a description; relative files are looked up in `base`.
@@ -435,16 +481,20 @@ pub(crate) fn resolve_source(
         .map(|(n, m)| material(src, n, m, &mut textures))
         .collect::<Result<Vec<_>, _>>()?;
     let mut solids = SolidPool::default();
+    let mut meshes = MeshPool::default();
     let mut objects = Vec::with_capacity(d.objects.len());
     for (i, o) in d.objects.iter().enumerate() {
-        let (material, solid) = object(src, base, i, o, &names)?;
+        let (material, built) = object(src, base, i, o, &names)?;
         objects.push(ObjectData {
             name: o.name.clone().unwrap_or_else(|| format!("objects[{i}]")),
-            solid: solids.push(solid),
+            geometry: match built {
+                Built::Solid(s) => Geometry::Solid(solids.push(s)),
+                Built::Mesh(m) => Geometry::Mesh(meshes.push(m)),
+            },
             material,
         });
     }
-    let (area, delta) = lights(src, &d.lights)?;
+    let (area, delta) = lights(src, base, &d.lights)?;
     let mut maps = Vec::new();
     let env = match &d.environment {
         Some(e) => Some(environment(src, base, e, &mut maps)?),
@@ -453,7 +503,10 @@ pub(crate) fn resolve_source(
     // The scene's extent sets the environment's share of light selection.
     let mut b = objects
         .iter()
-        .map(|o| solids.bounds(o.solid))
+        .map(|o| match o.geometry {
+            Geometry::Solid(s) => solids.bounds(s),
+            Geometry::Mesh(m) => meshes.mesh(m).bounds(),
+        })
         .filter(Aabb::is_finite)
         .fold(Aabb::EMPTY, |a, b| a.union(&b));
     for l in &area {
@@ -475,6 +528,7 @@ pub(crate) fn resolve_source(
         materials,
         material_names: names.into_iter().cloned().collect(),
         solids,
+        meshes,
         objects,
         lights,
         environment: env,
@@ -484,6 +538,7 @@ pub(crate) fn resolve_source(
             .objects
             .iter()
             .filter_map(|o| o.model.as_ref())
+            .chain(d.lights.iter().filter_map(|l| l.file.as_ref()))
             .chain(d.environment.as_ref().and_then(|e| e.map.as_ref()))
             .map(|f| base.join(f))
             .collect(),

@@ -219,7 +219,13 @@ impl DirectScene {
     }
 
     fn pack_object(&mut self, data: &SceneData, obj: &scene::ObjectData) -> Result<(), GpuError> {
-        let flat = data.solids.solid(obj.solid).flat();
+        let Some(solid) = obj.geometry.solid() else {
+            return Err(unsupported(format!(
+                "object '{}' is a triangle mesh; meshes render on the CPU",
+                obj.name
+            )));
+        };
+        let flat = data.solids.solid(solid).flat();
         let root = flat.nodes.len() - 1;
         let node = &flat.nodes[root];
         let material = obj.material.0;
@@ -396,6 +402,9 @@ impl DirectScene {
                 }
                 LightKind::Disk => {
                     GpuAreaLight::disk(f3(l.p0), f3(l.e1), l.radius as f32, l.two_sided, rad, area)
+                }
+                LightKind::Triangle => {
+                    return Err(unsupported("mesh lights (triangles) render on the CPU"))
                 }
                 LightKind::Point | LightKind::Spot => unreachable!("area lights only"),
             });

@@ -337,7 +337,9 @@ mod tests {
         use std::sync::atomic::AtomicBool;
         let object = |q: Quadric| Object {
             name: "test".into(),
-            solid: Solid::build(&Shape::Perturbed(PerturbedQuadric::new(q))).unwrap(),
+            geometry: Solid::build(&Shape::Perturbed(PerturbedQuadric::new(q)))
+                .unwrap()
+                .into(),
             material: 0,
         };
         let sphere = LightShape::Sphere {

@@ -39,6 +39,15 @@ pub enum Shape {
         /// Radius.
         radius: f64,
     },
+    /// The triangle `p0`, `p0 + e1`, `p0 + e2` (a mesh light's); normal along e1 × e2.
+    Triangle {
+        /// One corner.
+        p0: DVec3,
+        /// First edge.
+        e1: DVec3,
+        /// Second edge.
+        e2: DVec3,
+    },
 }
 
 /// A surface crossing of a ray with a light.
@@ -76,6 +85,7 @@ impl AreaLight {
             Shape::Sphere { radius, .. } => 4.0 * PI * radius * radius,
             Shape::Rect { edge_u, edge_v, .. } => edge_u.cross(edge_v).length(),
             Shape::Disk { radius, .. } => PI * radius * radius,
+            Shape::Triangle { e1, e2, .. } => 0.5 * e1.cross(e2).length(),
         }
     }
     /// A box holding the surface, grown by a hair (1e-9 of its size, and of its distance
@@ -103,6 +113,10 @@ impl AreaLight {
                 let half = (DVec3::ONE - normal * normal).max(DVec3::ZERO);
                 let half = DVec3::new(half.x.sqrt(), half.y.sqrt(), half.z.sqrt()) * radius;
                 (center - half, center + half)
+            }
+            Shape::Triangle { p0, e1, e2 } => {
+                let (a, b) = (p0 + e1, p0 + e2);
+                (p0.min(a).min(b), p0.max(a).max(b))
             }
         };
         let pad = 1e-9 * (1.0 + (hi - lo).max_element() + lo.abs().max(hi.abs()).max_element());
@@ -196,6 +210,26 @@ impl AreaLight {
                     }
                 }
             }
+            Shape::Triangle { p0, e1, e2 } => {
+                // Möller–Trumbore, edges widened by 1e-12 as the rect's are.
+                let pv = d.cross(e2);
+                let det = e1.dot(pv);
+                if det != 0.0 {
+                    let inv = 1.0 / det;
+                    let s = o - p0;
+                    let (u, q) = (s.dot(pv) * inv, s.cross(e1));
+                    let v = d.dot(q) * inv;
+                    let t = e2.dot(q) * inv;
+                    let slack = 1e-12;
+                    if t > 0.0 && u >= -slack && v >= -slack && u + v <= 1.0 + slack {
+                        out[0] = Some(Crossing {
+                            t,
+                            n: e1.cross(e2).normalize(),
+                        });
+                        k = 1;
+                    }
+                }
+            }
         }
         (out, k)
     }
@@ -231,6 +265,10 @@ impl AreaLight {
                 let f = Frame::from_z(normal);
                 let d = uniform_disk_concentric(u) * radius;
                 (center + d.x * f.s + d.y * f.t, normal)
+            }
+            Shape::Triangle { p0, e1, e2 } => {
+                let [_, b1, b2] = uniform_triangle(u);
+                (p0 + b1 * e1 + b2 * e2, e1.cross(e2).normalize())
             }
         }
     }
@@ -270,7 +308,7 @@ impl AreaLight {
         let (q, n) = self.sample_point(u);
         match self.shape {
             Shape::Sphere { .. } => self.toward(p, q, n, |wi| self.pdf_area(p, wi)),
-            Shape::Rect { .. } | Shape::Disk { .. } => {
+            Shape::Rect { .. } | Shape::Disk { .. } | Shape::Triangle { .. } => {
                 let dist2 = p.distance_squared(q);
                 self.toward(p, q, n, |wi| {
                     let cos = n.dot(wi).abs();
@@ -310,6 +348,15 @@ impl AreaLight {
     /// seen from outside (uniform in solid angle, pbrt-v4 §6.2.4); uniform area
     /// otherwise.
     pub fn sample_li(&self, p: DVec3, u: DVec2) -> Option<LightSample> {
+        if let Shape::Triangle { p0, e1, e2 } = self.shape {
+            let corners = [p0, p0 + e1, p0 + e2];
+            let Some(omega) = spherical_triangle_area(corners, p) else {
+                return self.sample_area(p, u);
+            };
+            let [b0, b1, b2] = sample_spherical_triangle(corners, p, u)?;
+            let q = corners[0] * b0 + corners[1] * b1 + corners[2] * b2;
+            return self.toward(p, q, e1.cross(e2).normalize(), |_| 1.0 / omega);
+        }
         let Shape::Sphere { center, radius } = self.shape else {
             return self.sample_area(p, u);
         };
@@ -344,6 +391,16 @@ impl AreaLight {
     /// [`Self::pdf_li`], taking [`Self::pdf_area`] from `area` where it is needed.
     #[inline]
     fn pdf_li_with(&self, p: DVec3, wi: DVec3, area: impl FnOnce() -> f64) -> f64 {
+        if let Shape::Triangle { p0, e1, e2 } = self.shape {
+            return match spherical_triangle_area([p0, p0 + e1, p0 + e2], p) {
+                // Uniform over the triangle's solid angle: wherever the line meets it.
+                Some(omega) => match self.crossings(p, wi).1 {
+                    0 => 0.0,
+                    _ => 1.0 / omega,
+                },
+                None => area(),
+            };
+        }
         let Shape::Sphere { center, radius } = self.shape else {
             return area();
         };
@@ -362,4 +419,88 @@ impl AreaLight {
             0.0
         }
     }
+}
+
+/// Barycentrics (b0, b1, b2) uniform over a triangle's area, by pbrt-v4's
+/// low-distortion mapping (`SampleUniformTriangle`, Heitz 2019).
+pub fn uniform_triangle(u: DVec2) -> [f64; 3] {
+    let (b0, b1) = if u.x < u.y {
+        let b0 = u.x / 2.0;
+        (b0, u.y - b0)
+    } else {
+        let b1 = u.y / 2.0;
+        (u.x - b1, b1)
+    };
+    [b0, b1, 1.0 - b0 - b1]
+}
+
+/// The solid angle a triangle subtends at `p` (Van Oosterom & Strackee 1983), where
+/// sampling it is worth while: None outside pbrt-v4's range [3·10⁻⁴, 6.22] sr, where
+/// the triangle is small or far (area sampling is as good and cheaper) or covers
+/// nearly a hemisphere (the spherical sampling loses precision).
+pub fn spherical_triangle_area(corners: [DVec3; 3], p: DVec3) -> Option<f64> {
+    let [a, b, c] = corners.map(|v| (v - p).normalize_or_zero());
+    let omega = (2.0
+        * a.dot(b.cross(c))
+            .atan2(1.0 + a.dot(b) + a.dot(c) + b.dot(c)))
+    .abs();
+    (3e-4..=6.22).contains(&omega).then_some(omega)
+}
+
+/// The angle between unit vectors, accurate near 0 and π (pbrt-v4 `AngleBetween`).
+fn angle_between(v1: DVec3, v2: DVec3) -> f64 {
+    if v1.dot(v2) < 0.0 {
+        PI - 2.0 * ((v1 + v2).length() / 2.0).clamp(-1.0, 1.0).asin()
+    } else {
+        2.0 * ((v2 - v1).length() / 2.0).clamp(-1.0, 1.0).asin()
+    }
+}
+
+/// Barycentrics of a direction from `p` uniform over the solid angle of the triangle
+/// `corners` (Arvo 1995, "Stratified sampling of spherical triangles", as pbrt-v4's
+/// `SampleSphericalTriangle`); None for a degenerate spherical triangle.
+pub fn sample_spherical_triangle(corners: [DVec3; 3], p: DVec3, u: DVec2) -> Option<[f64; 3]> {
+    let [a, b, c] = corners.map(|v| (v - p).normalize_or_zero());
+    let (n_ab, n_bc, n_ca) = (
+        a.cross(b).try_normalize()?,
+        b.cross(c).try_normalize()?,
+        c.cross(a).try_normalize()?,
+    );
+    let alpha = angle_between(n_ab, -n_ca);
+    let beta = angle_between(n_bc, -n_ab);
+    let gamma = angle_between(n_ca, -n_bc);
+    // The sub-triangle's area A' (plus π), uniform in [0, A].
+    let ap_pi = PI + u.x * (alpha + beta + gamma - PI);
+    let (cos_alpha, sin_alpha) = (alpha.cos(), alpha.sin());
+    let (sin_ap, cos_ap) = ap_pi.sin_cos();
+    let sin_phi = sin_ap * cos_alpha - cos_ap * sin_alpha;
+    let cos_phi = cos_ap * cos_alpha + sin_ap * sin_alpha;
+    let k1 = cos_phi + cos_alpha;
+    let k2 = sin_phi - sin_alpha * a.dot(b);
+    let cos_bp = ((k2 + (k2 * cos_phi - k1 * sin_phi) * cos_alpha)
+        / ((k2 * sin_phi + k1 * cos_phi) * sin_alpha))
+        .clamp(-1.0, 1.0);
+    if cos_bp.is_nan() {
+        return None;
+    }
+    let sin_bp = safe_sqrt(1.0 - cos_bp * cos_bp);
+    let cp = cos_bp * a + sin_bp * (c - c.dot(a) * a).try_normalize()?;
+    let cos_t = 1.0 - u.y * (1.0 - cp.dot(b));
+    let sin_t = safe_sqrt(1.0 - cos_t * cos_t);
+    let w = cos_t * b + sin_t * (cp - cp.dot(b) * b).try_normalize()?;
+    // Where w meets the triangle's plane, as barycentrics.
+    let (e1, e2) = (corners[1] - corners[0], corners[2] - corners[0]);
+    let s1 = w.cross(e2);
+    let divisor = s1.dot(e1);
+    if divisor == 0.0 {
+        return Some([1.0 / 3.0; 3]);
+    }
+    let s = p - corners[0];
+    let mut b1 = (s.dot(s1) / divisor).clamp(0.0, 1.0);
+    let mut b2 = (w.dot(s.cross(e1)) / divisor).clamp(0.0, 1.0);
+    if b1 + b2 > 1.0 {
+        let sum = b1 + b2;
+        (b1, b2) = (b1 / sum, b2 / sum);
+    }
+    Some([1.0 - b1 - b2, b1, b2])
 }

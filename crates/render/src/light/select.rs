@@ -147,6 +147,14 @@ impl AreaLight {
                 normal,
                 radius,
             } => (center, radius, normal, 1.0, self.two_sided),
+            Shape::Triangle { p0, e1, e2 } => {
+                let c = p0 + (e1 + e2) / 3.0;
+                let r = [p0, p0 + e1, p0 + e2]
+                    .iter()
+                    .map(|v| v.distance(c))
+                    .fold(0.0, f64::max);
+                (c, r, e1.cross(e2).normalize(), 1.0, self.two_sided)
+            }
         };
         ImportanceBounds {
             center,

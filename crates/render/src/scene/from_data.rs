@@ -2,7 +2,7 @@
 //! in the pool, plastic coats tabulated), lights with the distributions computed at
 //! resolution, and one [`Solid`] built per object.
 
-use super::{Object, Scene};
+use super::{Geometry, Object, Scene};
 use crate::camera::Camera;
 use crate::color::Rgb;
 use crate::distribution::Distribution1D;
@@ -73,6 +73,11 @@ impl AreaLight {
                 normal: v3(l.e1),
                 radius: l.radius,
             },
+            LightKind::Triangle => Shape::Triangle {
+                p0: v3(l.p0),
+                e1: v3(l.e1),
+                e2: v3(l.e2),
+            },
             LightKind::Point | LightKind::Spot => return None,
         };
         Some(AreaLight {
@@ -135,7 +140,10 @@ pub(super) fn build(data: &SceneData) -> Scene {
         .iter()
         .map(|o| Object {
             name: o.name.clone(),
-            solid: data.solids.solid(o.solid).clone(),
+            geometry: match o.geometry {
+                ::scene::Geometry::Solid(s) => Geometry::Solid(data.solids.solid(s).clone()),
+                ::scene::Geometry::Mesh(m) => Geometry::Mesh(data.meshes.mesh(m).clone()),
+            },
             material: o.material.index(),
         })
         .collect();

@@ -46,9 +46,11 @@ use crate::camera::Camera;
 use crate::light::Lights;
 use crate::material::Material;
 use crate::texture::TexCoord;
+use frep::triangles::Triangles;
 use frep::{Aabb, Bvh, Ray, Solid, Surface};
-use glam::DVec3;
+use glam::{DVec2, DVec3};
 use std::path::Path;
+use std::sync::Arc;
 
 /// Parses scene text and builds the scene; `path` names the file in errors and anchors
 /// relative model and map paths (it is not read).
@@ -67,14 +69,76 @@ pub fn load_scene(path: &Path) -> Result<(Scene, RenderSettings), SceneError> {
     Ok((Scene::from_data(&data), settings))
 }
 
-/// One solid with its material.
+/// One solid or mesh with its material.
 pub struct Object {
     /// Name, for messages.
     pub name: String,
-    /// The solid (transforms already folded in).
-    pub solid: Solid,
+    /// What it is made of (transforms already folded in).
+    pub geometry: Geometry,
     /// Index into [`Scene::materials`].
     pub material: usize,
+}
+
+impl Object {
+    /// The solid, where the object is one.
+    pub fn solid(&self) -> Option<&Solid> {
+        match &self.geometry {
+            Geometry::Solid(s) => Some(s),
+            Geometry::Mesh(_) => None,
+        }
+    }
+}
+
+/// An object's geometry: a solid, or a triangle mesh (shared with the resolved scene).
+/// A solid stays inline: ray queries read it on every hit test, without a pointer to
+/// follow, and a scene holds few objects.
+#[allow(clippy::large_enum_variant)]
+pub enum Geometry {
+    /// A solid (F ≥ 0 inside).
+    Solid(Solid),
+    /// A triangle mesh.
+    Mesh(Arc<Triangles>),
+}
+
+impl From<Solid> for Geometry {
+    fn from(s: Solid) -> Self {
+        Geometry::Solid(s)
+    }
+}
+
+impl Geometry {
+    /// A box holding it.
+    pub fn bounds(&self) -> Aabb {
+        match self {
+            Geometry::Solid(s) => s.bounds(),
+            Geometry::Mesh(m) => m.bounds(),
+        }
+    }
+    /// Whether it is known to be convex (never, for a mesh).
+    pub fn is_convex(&self) -> bool {
+        matches!(self, Geometry::Solid(s) if s.is_convex())
+    }
+    /// The nearest crossing in (t_min, t_max): t, the outward (front) normal and the
+    /// surface parameters.
+    #[inline]
+    pub fn intersect(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<(f64, DVec3, DVec2)> {
+        match self {
+            Geometry::Solid(s) => s
+                .intersect(ray, t_min, t_max)
+                .map(|h| (h.t, h.normal, DVec2::ZERO)),
+            Geometry::Mesh(m) => m
+                .intersect(ray, t_min, t_max)
+                .map(|h| (h.t, h.normal, h.uv)),
+        }
+    }
+    /// Whether its surface lies in (t_min, t_max) along the ray.
+    #[inline]
+    pub fn occludes(&self, ray: &Ray, t_min: f64, t_max: f64) -> bool {
+        match self {
+            Geometry::Solid(s) => s.occludes(ray, t_min, t_max),
+            Geometry::Mesh(m) => m.occludes(ray, t_min, t_max),
+        }
+    }
 }
 
 impl From<&Scene> for Emitters {
@@ -100,6 +164,8 @@ pub struct SurfaceHit {
     pub object: usize,
     /// Index into [`Scene::materials`].
     pub material: usize,
+    /// Surface parameters (a mesh's interpolated texture coordinates; 0 on solids).
+    pub uv: DVec2,
 }
 
 impl SurfaceHit {
@@ -108,7 +174,7 @@ impl SurfaceHit {
         TexCoord {
             p: self.p,
             n: self.n,
-            ..Default::default()
+            uv: self.uv,
         }
     }
 }
@@ -137,13 +203,13 @@ impl Scene {
         objects: Vec<Object>,
         lights: Lights,
     ) -> Self {
-        let boxes: Vec<Aabb> = objects.iter().map(|o| o.solid.bounds()).collect();
+        let boxes: Vec<Aabb> = objects.iter().map(|o| o.geometry.bounds()).collect();
         let bvh = Bvh::new(&boxes);
         let bounds = boxes
             .iter()
             .filter(|b| b.is_finite())
             .fold(Aabb::EMPTY, |a, b| a.union(b));
-        let convex = objects.iter().map(|o| o.solid.is_convex()).collect();
+        let convex = objects.iter().map(|o| o.geometry.is_convex()).collect();
         Self {
             camera,
             materials,
@@ -189,14 +255,14 @@ impl Scene {
         t_max: f64,
         skip: Option<usize>,
     ) -> Option<SurfaceHit> {
-        let mut normal = DVec3::ZERO;
+        let (mut normal, mut uv) = (DVec3::ZERO, DVec2::ZERO);
         let (k, t) = self.bvh.nearest(ray, t_min, t_max, |i, t_max| {
             if Some(i) == skip {
                 return None;
             }
-            let h = self.objects[i].solid.intersect(ray, t_min, t_max)?;
-            normal = h.normal;
-            Some(h.t)
+            let (t, n, st) = self.objects[i].geometry.intersect(ray, t_min, t_max)?;
+            (normal, uv) = (n, st);
+            Some(t)
         })?;
         // `normal` belongs to the last accepted hit, which is the nearest: `nearest`
         // only accepts hits below the shrinking t_max.
@@ -206,6 +272,7 @@ impl Scene {
             n: normal,
             object: k,
             material: self.objects[k].material,
+            uv,
         })
     }
 
@@ -223,7 +290,7 @@ impl Scene {
         skip: Option<usize>,
     ) -> bool {
         self.bvh.any_hit(ray, t_min, t_max, |i| {
-            Some(i) != skip && self.objects[i].solid.occludes(ray, t_min, t_max)
+            Some(i) != skip && self.objects[i].geometry.occludes(ray, t_min, t_max)
         })
     }
 }

@@ -24,7 +24,7 @@ pub fn diffuse(r: Rgb) -> Material {
 pub fn object(shape: &Shape, material: usize) -> Object {
     Object {
         name: "test".into(),
-        solid: Solid::build(shape).unwrap(),
+        geometry: Solid::build(shape).unwrap().into(),
         material,
     }
 }
