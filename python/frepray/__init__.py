@@ -15,6 +15,7 @@ import os
 from typing import Any, Iterable, Mapping, Optional, Sequence, Tuple, Union
 
 from . import mis
+from .denoise import denoise
 from ._native import (
     Cancel,
     Cancelled,
@@ -44,7 +45,7 @@ __all__ = [
     "Error", "SceneError", "RenderError", "ModelError", "Cancelled", "Cancel", "Scene",
     "RenderState", "Model",
     "load", "load_dict", "render", "merge", "read_exr", "exr_attributes", "write_exr", "model",
-    "mis", "experiment", "measure", "summarize", "gpu_available", "gpu_adapters", "configure_gpu",
+    "mis", "experiment", "denoise", "measure", "summarize", "gpu_available", "gpu_adapters", "configure_gpu",
     "bench",
 ]
 

@@ -42,6 +42,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(state::merge, m)?)?;
     m.add_function(wrap_pyfunction!(state::read_exr, m)?)?;
     m.add_function(wrap_pyfunction!(state::exr_attributes, m)?)?;
+    m.add_function(wrap_pyfunction!(state::_write_rgb_exr, m)?)?;
     m.add_function(wrap_pyfunction!(model::model, m)?)?;
     m.add_function(wrap_pyfunction!(mis_py::mis_estimate, m)?)?;
     m.add_function(wrap_pyfunction!(mis_py::mis_methods, m)?)?;

@@ -67,6 +67,16 @@ impl RenderState {
         let img = py.detach(|| self.inner.image());
         Ok(image_arrays(py, &img)?.1)
     }
+    /// What an EXR of this state records in its header (`frepray.settings`,
+    /// `frepray.scene_hash`, …), as a dict of strings.
+    fn attributes<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let img = py.detach(|| self.inner.image());
+        let out = PyDict::new(py);
+        for (name, value) in img.attributes() {
+            out.set_item(name, value)?;
+        }
+        Ok(out)
+    }
     /// The AOV channel names, in order.
     fn aov_names(&self) -> Vec<String> {
         self.inner.image().aov_names().to_vec()
@@ -218,6 +228,42 @@ pub fn exr_attributes<'py>(py: Python<'py>, path: PathBuf) -> PyResult<Bound<'py
         out.set_item(name, value)?;
     }
     Ok(out)
+}
+
+/// Writes linear RGB `rgb` (float32 `(h, w, 3)`) as an EXR whose header carries
+/// `attributes` (a dict of strings), whole or not at all: what `frepray.denoise` writes.
+#[pyfunction]
+pub fn _write_rgb_exr(
+    py: Python<'_>,
+    path: PathBuf,
+    rgb: numpy::PyReadonlyArray3<'_, f32>,
+    attributes: std::collections::BTreeMap<String, String>,
+) -> PyResult<()> {
+    let a = rgb.as_array();
+    let (h, w, c) = (a.shape()[0], a.shape()[1], a.shape()[2]);
+    if c != 3 || h == 0 || w == 0 {
+        return Err(pyo3::exceptions::PyValueError::new_err(format!(
+            "rgb: expected shape (height, width, 3), got {:?}",
+            a.shape()
+        )));
+    }
+    let too_big = || pyo3::exceptions::PyValueError::new_err("rgb: the image is too large");
+    let (w32, h32) = (
+        u32::try_from(w).map_err(|_| too_big())?,
+        u32::try_from(h).map_err(|_| too_big())?,
+    );
+    let mut img = frepray::Image::new(w32, h32, &[]);
+    for y in 0..h {
+        for x in 0..w {
+            let v = [0, 1, 2].map(|k| f64::from(a[[y, x, k]]));
+            img.pixel_mut(x as u32, y as u32)[..3].copy_from_slice(&v);
+        }
+    }
+    for (name, value) in &attributes {
+        img.set_attribute(name, value.as_str());
+    }
+    py.detach(|| img.write_exr(&path))
+        .map_err(|e| pyo3::exceptions::PyOSError::new_err(format!("{}: {e}", path.display())))
 }
 
 /// Reads an EXR: `(rgb float32 (h, w, 3), {aov: float32 (h, w)})`.

@@ -26,6 +26,7 @@ macro_rules! note {
 }
 
 mod check;
+mod denoised;
 mod experiment_cmd;
 mod interrupt;
 mod merge_cmd;
@@ -175,6 +176,12 @@ struct RenderArgs {
     /// `NAME.partial.EXT` (which never replaces a finished file).
     #[arg(long)]
     overwrite_partial: bool,
+    /// Also write a denoised copy here (.exr or .png; never one of the -o outputs):
+    /// Intel Open Image Denoise, guided by the albedo and normal AOVs where the render
+    /// has them (`--aovs albedo,normal`). For looking at, not measuring; the library
+    /// comes from `pip install pyoidn` or $FREPRAY_OIDN (docs/denoise.md).
+    #[arg(long, value_name = "FILE")]
+    denoised: Option<PathBuf>,
     /// Hide the progress bar.
     #[arg(long)]
     quiet: bool,
@@ -461,6 +468,10 @@ fn render(args: RenderArgs) -> Result<(), String> {
             Ok(f)
         })
         .collect::<Result<Vec<_>, String>>()?;
+    if args.denoised.is_some() && output::model_values(look).is_some() {
+        return Err("--denoised applies to shaded renders, not depth or normals".into());
+    }
+    let denoised = denoised::Denoised::prepare(args.denoised.as_deref(), &args.output)?;
     if width == 0 || height == 0 {
         return Err("--width and --height must be at least 1".into());
     }
@@ -579,7 +590,14 @@ fn render(args: RenderArgs) -> Result<(), String> {
         },
         output::list(&outs)
     );
-    Ok(())
+    match (&denoised, stats.stopped) {
+        (Some(d), false) => d.write(&image, &film),
+        (Some(_), true) => {
+            note!("note: interrupted: no denoised copy");
+            Ok(())
+        }
+        (None, _) => Ok(()),
+    }
 }
 
 fn bench(args: BenchArgs) -> Result<(), String> {

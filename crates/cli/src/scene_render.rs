@@ -94,6 +94,13 @@ pub fn run(
     }
     let (scene, opts) = load_options(input, settings, &[])?;
     output::check_not_inputs(outs, input, &scene.data().inputs)?;
+    if args.denoised.is_some() && frepray::value_png::Values::of(opts.integrator).is_some() {
+        return Err(format!(
+            "--denoised applies to light transport (direct, path), not {}",
+            opts.integrator
+        ));
+    }
+    let denoised = crate::denoised::Denoised::prepare(args.denoised.as_deref(), outs)?;
     let film = args.film.over(frepray::Film {
         exposure: scene.settings().exposure,
         tonemap: scene.settings().tonemap,
@@ -205,6 +212,11 @@ pub fn run(
         );
     } else {
         note!("{} written", output::list(&outs));
+        if let Some(d) = &denoised {
+            let mut image = state.image();
+            output::describe_render(&mut image, input, &stats, on_gpu);
+            d.write(&image, &film)?;
+        }
     }
     Ok(())
 }

@@ -41,6 +41,7 @@ pub struct LibraryGuide;
 
 pub mod backend;
 pub mod bench;
+pub mod denoise;
 pub mod experiment;
 pub mod mesh_model;
 pub mod model_info;
