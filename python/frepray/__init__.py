@@ -14,9 +14,37 @@ import math
 import os
 from typing import Any, Iterable, Mapping, Optional, Sequence, Tuple, Union
 
-from . import mis
-from .denoise import denoise
-from ._native import (
+
+
+def _runtime_dir() -> None:
+    """Gives Mesa's Vulkan drivers a runtime directory where the session has none (a
+    container, a CI job): without one they print "XDG_RUNTIME_DIR is invalid or not set"
+    whenever the GPU is touched. A private directory (mode 0700) under the temporary
+    directory, as the `frepray` command makes; nothing changes when it cannot be made.
+    Runs at import, before the extension opens any device."""
+    if os.path.isdir(os.environ.get("XDG_RUNTIME_DIR", "")):
+        return
+    import tempfile
+
+    try:
+        uid = os.getuid()
+        path = os.path.join(tempfile.gettempdir(), f"frepray-runtime-{uid}")
+        try:
+            os.mkdir(path, 0o700)
+        except FileExistsError:
+            pass
+        st = os.stat(path)
+        if os.path.isdir(path) and st.st_uid == uid and st.st_mode & 0o077 == 0:
+            os.environ["XDG_RUNTIME_DIR"] = path
+    except (AttributeError, OSError):
+        pass
+
+
+_runtime_dir()
+
+from . import mis  # noqa: E402
+from .denoise import denoise  # noqa: E402
+from ._native import (  # noqa: E402
     Cancel,
     Cancelled,
     Error,
@@ -37,16 +65,16 @@ from ._native import (
     read_exr,
     render,
 )
-from ._native import experiment as _experiment
-from ._native import load_json as _load_json
-from ._native import measure, summarize
+from ._native import experiment as _experiment  # noqa: E402
+from ._native import load_json as _load_json  # noqa: E402
+from ._native import measure, summarize  # noqa: E402
 
 __all__ = [
     "Error", "SceneError", "RenderError", "ModelError", "Cancelled", "Cancel", "Scene",
     "RenderState", "Model",
     "load", "load_dict", "render", "merge", "read_exr", "exr_attributes", "write_exr", "model",
-    "mis", "experiment", "denoise", "measure", "summarize", "gpu_available", "gpu_adapters", "configure_gpu",
-    "bench",
+    "mis", "experiment", "denoise", "measure", "summarize", "gpu_available", "gpu_adapters",
+    "configure_gpu", "bench",
 ]
 
 

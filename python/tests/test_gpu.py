@@ -73,3 +73,20 @@ def test_gpu_available_says_whether_the_gpu_renders():
     assert bool(frepray.gpu_available) is adapter
     if os.environ.get("FREPRAY_REQUIRE_GPU") == "1":
         assert frepray.gpu_available()
+
+
+def test_import_gives_mesa_a_private_runtime_directory(tmp_path):
+    # Without XDG_RUNTIME_DIR, importing frepray makes $TMPDIR/frepray-runtime-UID (0700)
+    # and points the variable there, so Mesa prints no warning when a device opens.
+    import subprocess
+    import sys
+
+    env = {k: v for k, v in os.environ.items() if k != "XDG_RUNTIME_DIR"}
+    env["TMPDIR"] = str(tmp_path)
+    code = ("import os, frepray; d = os.environ['XDG_RUNTIME_DIR']; "
+            "print(d, oct(os.stat(d).st_mode & 0o777)); frepray.gpu_adapters()")
+    r = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    d, mode = r.stdout.split()
+    assert (d, mode) == (str(tmp_path / f"frepray-runtime-{os.getuid()}"), "0o700")
+    assert "XDG_RUNTIME_DIR" not in r.stderr, r.stderr
