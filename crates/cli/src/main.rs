@@ -35,6 +35,7 @@ mod output;
 mod scene_flags;
 mod scene_render;
 mod stage_plot;
+mod view_cmd;
 
 use clap::{Parser, Subcommand, ValueEnum};
 use frepray::preview;
@@ -85,6 +86,10 @@ enum Command {
     /// Write a watertight triangle mesh of a model's surface (.obj or .stl), for 3-D
     /// printing and other tools: vertices on F = 0, about bounds / resolution apart.
     Mesh(mesh_cmd::MeshArgs),
+    /// A live preview in the browser: a local page (127.0.0.1, a token in its URL) that
+    /// renders progressively, re-renders when the scene or a file it names is saved,
+    /// and inspects pixels (samples, standard error, the optimal estimators' α).
+    View(view_cmd::ViewArgs),
     /// The GPU back end's adapters.
     Gpu {
         #[command(subcommand)]
@@ -283,6 +288,7 @@ fn main() -> ExitCode {
         Command::Experiment(args) => experiment_cmd::run(args),
         Command::Merge(args) => merge_cmd::run(args),
         Command::Mesh(args) => mesh_cmd::run(args),
+        Command::View(args) => view_cmd::run(args),
         Command::Check { file } => check::run(&file),
     };
     let code = match result {

@@ -47,6 +47,7 @@ pub mod mesh_model;
 pub mod model_info;
 pub mod preview;
 pub mod settings;
+pub mod view;
 
 pub use backend::{render_range_on, Backend, Rendered};
 pub use mesh_model::{mesh_model, mesh_solid, ModelMesh};
@@ -55,7 +56,9 @@ pub use model_info::{info as model_info, ModelInfo};
 /// The MIS estimators by name (`balance`, `power`, …, `optimal-direct`, …).
 pub use mis::Method;
 pub use render::integrator::{Aov, IntegratorKind, RenderOptions};
-pub use render::{Film, Image, RenderState, RenderStats, StateHeader, Tonemap};
+pub use render::{
+    BlockDetail, Film, Image, PixelDetail, RenderState, RenderStats, StateHeader, Tonemap,
+};
 pub use scene::{Overrides, RenderSettings, SceneData, SceneError, SceneFormat, ATTRIBUTE_PREFIX};
 pub use settings::{Settings, Unused};
 

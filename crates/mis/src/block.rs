@@ -245,6 +245,23 @@ impl Kernel {
         }
     }
 
+    /// The α̂ an optimal estimator applies to a block (one length-T column per channel,
+    /// channel-major): the direct estimator's solve from the block's moments, the
+    /// progressive ones' current α. None for the heuristics (their weights are per
+    /// draw) and the uncorrelated estimator (each of its two sets has its own).
+    pub fn alpha(&self, block: &[f64]) -> Option<Vec<f64>> {
+        let l = &*self.layout;
+        match self.code {
+            Code::Direct => {
+                let mut a = vec![0.0; l.techniques() * l.channels()];
+                direct::alpha(l, self.ridge(), block, &mut a);
+                Some(a)
+            }
+            Code::Progressive(_) => Some(progressive::alpha(l, block).to_vec()),
+            Code::Weighted(_) | Code::Uncorrelated => None,
+        }
+    }
+
     /// Adds block `b` into block `a` (module docs).
     pub fn merge(&self, a: &mut [f64], b: &[f64]) {
         match self.code {

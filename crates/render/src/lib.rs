@@ -51,6 +51,6 @@ pub use image::{Film, Image, Tonemap};
 pub use material::Material;
 pub use render_loop::{render, render_range, resume};
 pub use sampler::{SampleStream, Sampler};
-pub use state::{fnv1a, RenderState, RenderStats, StateHeader};
+pub use state::{fnv1a, BlockDetail, PixelDetail, RenderState, RenderStats, StateHeader};
 pub use technique::{Sampling, ShadingPoint, Technique, TechniqueSample};
 pub use texture::{TexCoord, Texture};

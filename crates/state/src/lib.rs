@@ -37,7 +37,7 @@ pub use image::{Film, Image, Tonemap};
 pub use options::{uses_mis, RenderOptions, MAX_TECHNIQUES};
 pub use options_error::OptionsError;
 pub use record::{Pixel, Record};
-pub use render_state::{fnv1a, RenderState, StateHeader};
+pub use render_state::{fnv1a, BlockDetail, PixelDetail, RenderState, StateHeader};
 pub use sampler::{SampleStream, Sampler};
 pub use scene::IntegratorKind;
 pub use shaded::{LinearMis, LinearRecord, ShadedDraw, ShadedVertex};

@@ -46,6 +46,35 @@ use std::io::Write as _;
 use std::ops::Range;
 use std::path::Path;
 
+/// One pixel of a state, for an inspector ([`RenderState::pixel_detail`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct PixelDetail {
+    /// Samples summed.
+    pub samples: u64,
+    /// The pixel's estimate.
+    pub estimate: Rgb,
+    /// The part added outside MIS (emitters seen directly, deltas), per sample.
+    pub outside: Rgb,
+    /// The MIS blocks, by depth (and light in per-light mode).
+    pub blocks: Vec<BlockDetail>,
+}
+
+/// One MIS block of a pixel.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BlockDetail {
+    /// Vertex depth (0: the first vertex the camera ray meets).
+    pub depth: usize,
+    /// The light, in per-light mode (else 0).
+    pub light: usize,
+    /// The estimator's completed iterations.
+    pub iterations: u64,
+    /// Its estimate (per iteration of the block).
+    pub estimate: Rgb,
+    /// The optimal estimators' α, channel-major (R's T values, then G's, then B's);
+    /// None for the heuristics and the uncorrelated estimator.
+    pub alpha: Option<Vec<f64>>,
+}
+
 /// Everything that gives a state's sums their meaning; states merge only when equal.
 #[derive(Clone, Debug, PartialEq)]
 pub struct StateHeader {
@@ -507,6 +536,44 @@ impl RenderState {
             }
         }
         v
+    }
+
+    /// What pixel (x, y) holds, for an inspector: its samples, its estimate, and per
+    /// MIS block (vertex depth, and light in per-light mode) its iterations, estimate
+    /// and the optimal estimators' α ([`mis::Kernel::alpha`]).
+    pub fn pixel_detail(&self, x: u32, y: u32) -> PixelDetail {
+        let rec = self.pixel(x, y);
+        let n = rec[0];
+        let o = Record::OUTSIDE;
+        let outside = if n > 0.0 {
+            Rgb::new(rec[o], rec[o + 1], rec[o + 2]) / n
+        } else {
+            Rgb::ZERO
+        };
+        let mut blocks = Vec::new();
+        if let Some(k) = &self.kernel {
+            for i in 0..self.record.blocks() {
+                let block = &rec[self.record.block_range(i)];
+                let iterations = k.iterations(block);
+                let mut est = [0.0; 3];
+                if iterations > 0 {
+                    k.estimate(block, &mut est);
+                }
+                blocks.push(BlockDetail {
+                    depth: i / self.record.lights,
+                    light: i % self.record.lights,
+                    iterations,
+                    estimate: Rgb::from_array(est),
+                    alpha: (iterations > 0).then(|| k.alpha(block)).flatten(),
+                });
+            }
+        }
+        PixelDetail {
+            samples: n as u64,
+            estimate: self.value(rec),
+            outside,
+            blocks,
+        }
     }
 
     /// The estimate of pixel (x, y).
