@@ -11,7 +11,7 @@ cd "$(dirname "$0")/.."
 t0=$SECONDS
 step() { echo "main: [$((SECONDS - t0)) s] $*" >&2; }
 step "setting up (Rust's components)"
-bash scripts/setup.sh --no-python --no-gpu
+bash scripts/setup.sh --no-python --no-gpu --no-browser
 [ -x "$HOME/.cargo/bin/cargo" ] && export PATH="$HOME/.cargo/bin:$PATH"
 mkdir -p out
 step "building frepray (optimised, CPU back end; about 3 minutes on 2 cores the first time)"

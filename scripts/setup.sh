@@ -8,6 +8,8 @@
 # into it by maturin (editable: python/frepray). Options:
 #   --no-python   skip the Python package (the CLI alone renders the main job);
 #   --no-gpu      skip Mesa's lavapipe (a CPU-only build needs no Vulkan driver);
+#   --no-browser  skip Debian's Chromium and ChromeDriver (only `frepray view`'s browser
+#                 tests use them);
 #   --dev         build the extension in the dev profile (optimised, not across crates:
 #                 the build `cargo test` shares, as scripts/test.sh wants) instead of
 #                 release;
@@ -15,14 +17,15 @@
 #                 build).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-python=1 gpu=1 profile=--release venv_only=
+python=1 gpu=1 browser=1 profile=--release venv_only=
 for a in "$@"; do
   case $a in
     --no-python) python= ;;
     --no-gpu) gpu= ;;
+    --no-browser) browser= ;;
     --dev) profile= ;;
     --venv-only) venv_only=1 ;;
-    *) echo "setup: unknown option $a (expected --no-python, --no-gpu, --dev, --venv-only)" >&2; exit 2 ;;
+    *) echo "setup: unknown option $a (expected --no-python, --no-gpu, --no-browser, --dev, --venv-only)" >&2; exit 2 ;;
   esac
 done
 if ! command -v cargo >/dev/null 2>&1; then
@@ -47,6 +50,18 @@ if [ -n "$gpu" ] && ! dpkg -s mesa-vulkan-drivers libvulkan1 >/dev/null 2>&1; th
   else
     echo "setup: mesa-vulkan-drivers and libvulkan1 are missing; install them as root" \
       "(apt-get install mesa-vulkan-drivers libvulkan1) for the GPU tests" >&2
+  fi
+fi
+
+# Headless Chromium and its WebDriver, for the browser tests of `frepray view`.
+if [ -n "$browser" ] && ! { command -v chromium && command -v chromedriver; } >/dev/null 2>&1; then
+  if [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then
+    echo "setup: installing Chromium and ChromeDriver for the browser tests" >&2
+    apt-get update -qq >/dev/null
+    DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium chromium-driver >/dev/null
+  else
+    echo "setup: chromium and chromium-driver are missing; install them as root" \
+      "(apt-get install chromium chromium-driver) for the browser tests" >&2
   fi
 fi
 

@@ -39,7 +39,7 @@ await() {
   cat "$log" >&2
 }
 
-step "setup (Rust components, lavapipe, .venv)" bash scripts/setup.sh --venv-only
+step "setup (Rust components, lavapipe, Chromium, .venv)" bash scripts/setup.sh --venv-only
 [ -x "$HOME/.cargo/bin/cargo" ] && export PATH="$HOME/.cargo/bin:$PATH"
 # What `maturin develop` sets for Cargo (maturin 1.16), so that pyo3's build script
 # gives the tests' build and the extension's the same configuration.
@@ -69,7 +69,7 @@ if [ -x "$driver" ]; then
 fi
 # The Python package: pip (no compiler needed), then maturin, which waits for Cargo's
 # lock and builds the extension on the dependencies the test build made.
-bash scripts/setup.sh --dev --no-gpu > "$logs/setup" 2>&1 &
+bash scripts/setup.sh --dev --no-gpu --no-browser > "$logs/setup" 2>&1 &
 python_setup=$!
 step "cargo fmt --check" cargo fmt --all -- --check
 if [ -n "${RUSTC_WORKSPACE_WRAPPER:-}" ]; then

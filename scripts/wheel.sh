@@ -22,7 +22,7 @@ while [ $# -gt 0 ]; do
 done
 [ -x "$HOME/.cargo/bin/cargo" ] && export PATH="$HOME/.cargo/bin:$PATH"
 # maturin from .venv, at the version python/requirements-dev.txt pins.
-bash scripts/setup.sh --no-gpu --venv-only
+bash scripts/setup.sh --no-gpu --no-browser --venv-only
 pin=$(grep '^maturin==' python/requirements-dev.txt)
 .venv/bin/python -m pip install -q --disable-pip-version-check "$pin"
 mkdir -p "$out"
