@@ -12,6 +12,11 @@ pub struct ViewArgs {
     /// The port on 127.0.0.1 (0: a free one).
     #[arg(long, default_value_t = 0)]
     port: u16,
+    /// Also render every pass with rays through pixel centres, so that the inspector
+    /// splits each pixel's variance into the footprint's and the directions' (the part
+    /// MIS weights act on); twice the work.
+    #[arg(long)]
+    decompose: bool,
     /// Samples per pixel to render to [the scene's; 64 for models].
     #[arg(long)]
     spp: Option<u32>,
@@ -47,8 +52,8 @@ pub fn run(args: ViewArgs) -> Result<(), String> {
             .map(String::from)
             .collect()
     });
-    let viewer =
-        frepray::view::Viewer::bind(&args.input, settings, args.port).map_err(|e| e.to_string())?;
+    let viewer = frepray::view::Viewer::bind(&args.input, settings, args.port, args.decompose)
+        .map_err(|e| e.to_string())?;
     let stop = crate::stop_on_ctrl_c();
     note!("frepray view: open {}", viewer.url());
     out!("{}", viewer.url());

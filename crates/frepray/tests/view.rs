@@ -31,12 +31,13 @@ struct Running {
 }
 
 impl Running {
-    fn start(name: &str) -> Running {
+    fn start(name: &str, decompose: bool) -> Running {
         let dir = std::env::temp_dir().join(format!("frepray-view-{}-{name}", std::process::id()));
         let _ = std::fs::remove_dir_all(&dir);
         std::fs::create_dir_all(&dir).unwrap();
         std::fs::write(dir.join("scene.toml"), SCENE.replace("POWER", "100")).unwrap();
-        let viewer = Viewer::bind(&dir.join("scene.toml"), Settings::default(), 0).unwrap();
+        let viewer =
+            Viewer::bind(&dir.join("scene.toml"), Settings::default(), 0, decompose).unwrap();
         let url = viewer.url();
         let port = url
             .split(':')
@@ -132,7 +133,7 @@ fn png_size(png: &[u8]) -> (u32, u32) {
 /// estimator switches and restarts; the viewer stops cleanly.
 #[test]
 fn token_folder_inspector_and_estimator() {
-    let v = Running::start("basics");
+    let v = Running::start("basics", false);
     for path in ["/", "/status", "/image.png", "/?token=wrong"] {
         assert_eq!(v.request("GET", path).0, 403, "{path}");
     }
@@ -236,7 +237,7 @@ fn events(v: &Running) -> BufReader<TcpStream> {
 /// fix clears the error.
 #[test]
 fn pages_follow_passes_and_edits() {
-    let v = Running::start("edits");
+    let v = Running::start("edits", false);
     let (mut a, b) = (events(&v), events(&v));
     next_event(&mut a, |s| s["passes"].as_u64() >= Some(1));
     drop(b); // a page that goes away
@@ -268,5 +269,36 @@ fn pages_follow_passes_and_edits() {
     std::thread::sleep(Duration::from_millis(300));
     std::fs::write(v.dir.join("scene.toml"), SCENE.replace("POWER", "100")).unwrap();
     next_event(&mut a, |s| s["error"].is_null() && s["spp"] == 8);
+    v.finish();
+}
+
+/// With the decomposition, the inspector splits a pixel's variance: the directions'
+/// part from rays through pixel centres, the footprint's the rest (never negative);
+/// over a grid of pixels both parts are present (the scene has edges and soft
+/// shadows).
+#[test]
+fn the_inspector_splits_the_variance() {
+    let v = Running::start("decompose", true);
+    let s = v.wait("the last pass", |s| s["spp"] == 8);
+    assert_eq!(s["decompose"], true);
+    let (mut footprint, mut directions) = (0.0, 0.0);
+    for y in (1..18).step_by(3) {
+        for x in (1..24).step_by(3) {
+            let p = v.json(&format!("/pixel?x={x}&y={y}"));
+            let var = &p["variance"];
+            let (t, d, f) = (
+                var["total"].as_f64().unwrap(),
+                var["directions"].as_f64().unwrap(),
+                var["footprint"].as_f64().unwrap(),
+            );
+            assert!(d >= 0.0 && f >= 0.0 && f == (t - d).max(0.0), "{var}");
+            footprint += f;
+            directions += d;
+        }
+    }
+    assert!(
+        footprint > 0.0 && directions > 0.0,
+        "{footprint} {directions}"
+    );
     v.finish();
 }

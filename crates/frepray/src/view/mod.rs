@@ -53,8 +53,14 @@ fn token() -> Result<String, Error> {
 
 impl Viewer {
     /// Binds 127.0.0.1:`port` (0: a free port) for `input` (a scene or model file)
-    /// rendered with `settings`.
-    pub fn bind(input: &Path, settings: Settings, port: u16) -> Result<Viewer, Error> {
+    /// rendered with `settings`; `decompose` also renders every pass with rays through
+    /// pixel centres, for the inspector's variance split (twice the work).
+    pub fn bind(
+        input: &Path,
+        settings: Settings,
+        port: u16,
+        decompose: bool,
+    ) -> Result<Viewer, Error> {
         if !input.is_file() {
             return Err(Error::Invalid(format!(
                 "{}: not a file; expected a scene (.toml, .json) or a model (.frep, .hf, .vm)",
@@ -72,7 +78,7 @@ impl Viewer {
             listener,
             token: token()?,
             folder,
-            session: Arc::new(Session::new(input.to_path_buf(), settings)),
+            session: Arc::new(Session::new(input.to_path_buf(), settings, decompose)),
         })
     }
 
@@ -182,6 +188,7 @@ pub fn status(s: &Snapshot) -> Value {
         "techniques": s.techniques,
         "aovs": s.image.as_ref().map(|i| i.aov_names().to_vec()).unwrap_or_default(),
         "has_stderr": !s.stderr.is_empty(),
+        "decompose": !s.stderr_centered.is_empty(),
         "estimators": estimator_names(),
         "error": s.error.as_ref().map(|e| json!({
             "message": e.message, "file": e.file, "line": e.line, "column": e.column,
@@ -343,6 +350,20 @@ fn pixel(stream: &TcpStream, session: &Session, req: &Request) -> std::io::Resul
         .stderr
         .get((y * h.width + x) as usize)
         .map(|&e| f64::from(e));
+    // The variance of the pixel's mean (luminance), and its split into the directions'
+    // part (rays through the pixel's centre) and the footprint's (the rest).
+    let centered = s
+        .stderr_centered
+        .get((y * h.width + x) as usize)
+        .map(|&e| f64::from(e));
+    let variance = match (stderr, centered) {
+        (Some(t), Some(c)) => json!({
+            "total": t * t,
+            "directions": c * c,
+            "footprint": (t * t - c * c).max(0.0),
+        }),
+        _ => Value::Null,
+    };
     let t = h.techniques.len();
     let blocks: Vec<Value> = d
         .blocks
@@ -367,6 +388,7 @@ fn pixel(stream: &TcpStream, session: &Session, req: &Request) -> std::io::Resul
         "samples": d.samples,
         "mean": d.estimate.to_array(),
         "stderr": stderr,
+        "variance": variance,
         "outside": d.outside.to_array(),
         "estimator": h.method.name(),
         "techniques": h.techniques.iter().map(|(t, n)| format!("{}:{n}", t.name())).collect::<Vec<_>>(),

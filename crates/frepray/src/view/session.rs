@@ -44,6 +44,10 @@ pub struct Snapshot {
     /// Per pixel, the standard error of the luminance (module docs); empty before two
     /// passes.
     pub stderr: Vec<f32>,
+    /// With the decomposition on, the same from a render with every camera ray through
+    /// its pixel's centre: the directions' share of the error, without the pixel
+    /// footprint's (as `experiment --decompose` splits it); else empty.
+    pub stderr_centered: Vec<f32>,
     /// Samples per pixel rendered and aimed at.
     pub spp: (u32, u32),
     /// Passes finished in this generation.
@@ -81,12 +85,16 @@ pub struct Session {
     pub restart: AtomicBool,
     /// Set to stop the viewer.
     pub stop: AtomicBool,
+    /// Also render every pass with rays through pixel centres, to split each pixel's
+    /// variance into the footprint's and the directions' parts (twice the work).
+    pub decompose: bool,
 }
 
 impl Session {
-    /// A session over `input` with `settings`.
-    pub fn new(input: PathBuf, settings: Settings) -> Session {
+    /// A session over `input` with `settings`; `decompose`: see [`Session::decompose`].
+    pub fn new(input: PathBuf, settings: Settings, decompose: bool) -> Session {
         Session {
+            decompose,
             input,
             settings: Mutex::new(settings),
             snap: Mutex::new(Snapshot::default()),
@@ -223,8 +231,14 @@ impl Session {
             s.estimator = options.method.name().to_string();
             s.techniques = techniques;
             s.stderr.clear();
+            s.stderr_centered.clear();
         });
+        let centered = RenderOptions {
+            pixel_center: true,
+            ..options.clone()
+        };
         let (mut a, mut b): (Option<RenderState>, Option<RenderState>) = (None, None);
+        let (mut c, mut d): (Option<RenderState>, Option<RenderState>) = (None, None);
         let (mut done, mut pass) = (0u32, 0u32);
         while done < target {
             let n = match pass {
@@ -240,11 +254,19 @@ impl Session {
             };
             let started = Instant::now();
             let mut stats: Vec<RenderStats> = Vec::new();
-            for (range, half) in [(done..done + na, &mut a), (done + na..done + n, &mut b)] {
+            let mut halves = vec![
+                (options, done..done + na, &mut a),
+                (options, done + na..done + n, &mut b),
+            ];
+            if self.decompose {
+                halves.push((&centered, done..done + na, &mut c));
+                halves.push((&centered, done + na..done + n, &mut d));
+            }
+            for (o, range, half) in halves {
                 if range.is_empty() {
                     continue;
                 }
-                let (part, st) = scene.render_with(options, range, &self.interrupt, &|_, _| {})?;
+                let (part, st) = scene.render_with(o, range, &self.interrupt, &|_, _| {})?;
                 if st.stopped {
                     return Ok(());
                 }
@@ -265,6 +287,10 @@ impl Session {
                 (Some(a), Some(b)) => standard_errors(a, b),
                 _ => Vec::new(),
             };
+            let stderr_centered = match (&c, &d) {
+                (Some(c), Some(d)) => standard_errors(c, d),
+                _ => Vec::new(),
+            };
             let seconds = started.elapsed().as_secs_f64();
             self.publish(|s| {
                 s.passes = pass;
@@ -274,6 +300,7 @@ impl Session {
                 s.rays += stats.iter().map(|t| t.rays.total()).sum::<u64>();
                 s.image = Some(image);
                 s.stderr = stderr;
+                s.stderr_centered = stderr_centered;
                 s.state = Some(merged);
             });
             if self.interrupt.load(Ordering::SeqCst) {
