@@ -170,6 +170,7 @@ def experiment(
     threads: int = 0,
     pandas: Optional[bool] = None,
     cancel: Optional[Cancel] = None,
+    budget: Optional[float] = None,
 ):
     """The estimator comparison of ``frepray experiment``: a reference (rendered with
     ``reference_spp`` samples, or the EXR ``reference``), then every estimator at every
@@ -187,7 +188,9 @@ def experiment(
     (``threads=0``: every core).  ``out`` receives results.json/csv, summary.md, plots and
     images (a temporary folder when not given); a rerun into the same ``out`` resumes.
     Ctrl-C (KeyboardInterrupt) or ``cancel`` (a :class:`Cancel`; :class:`Cancelled`)
-    stops it with what finished written to ``out``."""
+    stops it with what finished written to ``out``.  ``budget`` (processor seconds, the
+    CLI's ``--budget``): every estimator renders the spp that fill it and the comparison
+    is at equal time (``spp`` is then not used)."""
     import tempfile
 
     def run(folder: str):
@@ -201,7 +204,7 @@ def experiment(
             decompose=decompose, max_depth=max_depth, min_depth=min_depth,
             hide_emitters=hide_emitters, beta=beta, cutoff=cutoff, ridge=ridge,
             trained_grid=trained_grid, trained_floor=trained_floor,
-            trained_spp=trained_spp, threads=threads, cancel=cancel)
+            trained_spp=trained_spp, threads=threads, cancel=cancel, budget=budget)
 
     if out is None:
         with tempfile.TemporaryDirectory(prefix="frepray-experiment-") as folder:

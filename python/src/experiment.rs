@@ -100,7 +100,9 @@ pub fn summarize<'py>(
 /// estimator, spp, time_s, mse, rmse, relmse, mse_ci, rmse_ci, trimmed_mse, net_mse,
 /// cpu_s, improvement, improvement_ci, improvement_trimmed, median_pixel_ratio,
 /// speed_up, speed_up_ci, overhead (intervals as [lo, hi] or None with one seed), and
-/// with `decompose` variance_jittered, variance_centered, direction_share. The other
+/// with `decompose` variance_jittered, variance_centered, direction_share. With
+/// `budget` (processor seconds) each estimator renders the spp that fill it and is
+/// compared at equal time (`spp` is not used). The other
 /// arguments are the CLI's flags of the same names (`per_light` is `--per-light`, and so
 /// on); `threads` 0 uses every core. Ctrl-C and `cancel` stop it (KeyboardInterrupt,
 /// `frepray.Cancelled`) with what finished written to `out`, as the CLI does.
@@ -110,7 +112,7 @@ pub fn summarize<'py>(
     techniques = None, integrator = None, width = None, height = None, per_light = false,
     pixel_center = false, decompose = false, max_depth = None, min_depth = None,
     hide_emitters = false, beta = None, cutoff = None, ridge = None, trained_grid = None,
-    trained_floor = None, trained_spp = None, threads = 0, cancel = None))]
+    trained_floor = None, trained_spp = None, threads = 0, cancel = None, budget = None))]
 #[allow(clippy::too_many_arguments)]
 pub fn experiment<'py>(
     py: Python<'py>,
@@ -142,6 +144,7 @@ pub fn experiment<'py>(
     trained_spp: Option<i128>,
     threads: i128,
     cancel: Option<PyRef<'_, Cancel>>,
+    budget: Option<f64>,
 ) -> PyResult<Bound<'py, PyList>> {
     let spp: Vec<u32> = spp
         .into_iter()
@@ -212,6 +215,7 @@ pub fn experiment<'py>(
     cfg.seed = seed;
     cfg.repeats = repeats;
     cfg.decompose = decompose;
+    cfg.budget = budget;
     let (result, interrupted) = interrupt::run(py, cancel.as_deref(), |stop| {
         let mut r = SceneRenderer::new(&s, base.clone(), stop, &|_| {});
         exp::run(&cfg, &mut r, &|_| {})

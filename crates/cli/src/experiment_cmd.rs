@@ -51,6 +51,11 @@ pub struct ExperimentArgs {
     /// variance into its pixel-footprint and direction parts (needs --repeats ≥ 2).
     #[arg(long)]
     decompose: bool,
+    /// Compare at equal time instead of equal samples: every estimator renders the
+    /// samples per pixel that fill this many processor seconds (calibrated from short
+    /// renders of each), and --spp is not used.
+    #[arg(long, value_name = "SECONDS", conflicts_with = "spp")]
+    budget: Option<f64>,
     #[command(flatten)]
     flags: SceneFlags,
     /// Hide progress lines.
@@ -82,6 +87,7 @@ pub fn run(a: ExperimentArgs) -> Result<(), String> {
     cfg.seed = a.seed;
     cfg.repeats = a.repeats;
     cfg.decompose = a.decompose;
+    cfg.budget = a.budget;
     let quiet = a.quiet;
     let note = |line: &str| {
         if !quiet {

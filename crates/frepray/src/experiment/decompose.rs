@@ -51,18 +51,26 @@ pub fn summed_variance(images: &[Image]) -> f64 {
     total
 }
 
-/// Renders the pixel-centred images that the manifest lacks; returns whether stopped.
+/// Renders the pixel-centred images of `points` (estimator, spp) that the manifest
+/// lacks; returns whether stopped.
 pub(super) fn render_missing(
     renderer: &mut dyn Renderer,
     out: &Path,
     manifest: &mut Manifest,
     plan: &Plan,
+    points: &[(String, u32)],
     progress: &dyn Fn(&str),
 ) -> Result<bool, ExperimentError> {
     let mut todo = Vec::new();
-    for &spp in &plan.spp {
+    let mut spps: Vec<u32> = points.iter().map(|p| p.1).collect();
+    spps.sort_unstable();
+    spps.dedup();
+    for spp in spps {
         for &seed in &plan.seeds {
             for e in &plan.estimators {
+                if !points.contains(&(e.clone(), spp)) {
+                    continue;
+                }
                 let file = centered_file(e, spp, seed);
                 let have = manifest
                     .centered

@@ -49,6 +49,9 @@ pub enum ExperimentError {
     /// No sample count, or one of 0.
     #[error("give at least one sample count, each at least 1")]
     NoSampleCounts,
+    /// A budget that is not a positive number of seconds.
+    #[error("--budget {0}: expected a positive number of seconds")]
+    Budget(f64),
     /// No repeats.
     #[error("repeats must be at least 1")]
     NoRepeats,

@@ -192,6 +192,9 @@ pub struct Manifest {
     /// (`time_s` and the errors against the reference mean little for them).
     #[serde(default)]
     pub centered: Vec<RenderRecord>,
+    /// At equal time: the budget and what it bought each estimator.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub budget: Option<super::budget::Budget>,
 }
 
 impl Manifest {

@@ -13,6 +13,7 @@
 //! The renderer is abstract ([`Renderer`]), so that the driver is tested with a
 //! synthetic one of known noise.
 
+pub mod budget;
 mod cpu_time;
 pub mod decompose;
 mod error;
@@ -145,6 +146,10 @@ pub struct ExperimentConfig {
     /// pixel's variance into the pixel footprint's part and the directions' part
     /// ([`decompose`]); needs two or more repeats.
     pub decompose: bool,
+    /// Compare at equal time instead of equal samples: each estimator renders the
+    /// samples per pixel that fill this many processor seconds ([`budget`]), and `spp`
+    /// is not used.
+    pub budget: Option<f64>,
 }
 
 /// XORed into the seed for a rendered reference, so that its noise is independent of
@@ -175,6 +180,7 @@ impl ExperimentConfig {
             baseline: "balance".into(),
             size: None,
             decompose: false,
+            budget: None,
         }
     }
 }
@@ -235,7 +241,8 @@ impl Plan {
         let mut spp = cfg.spp.clone();
         spp.sort_unstable();
         spp.dedup();
-        if spp.is_empty() || spp[0] == 0 {
+        // At equal time the budget chooses the sample counts.
+        if cfg.budget.is_none() && (spp.is_empty() || spp[0] == 0) {
             return Err(ExperimentError::NoSampleCounts);
         }
         if cfg.repeats == 0 {
@@ -488,6 +495,56 @@ pub fn run(
             }
         }
     };
+    // At equal time: the samples each estimator's budget buys (kept from an earlier run
+    // of the same budget and estimators, so that its renders are reused).
+    let budget = match cfg.budget {
+        None => None,
+        Some(seconds) => {
+            let same = |b: &&budget::Budget| {
+                b.seconds == seconds
+                    && plan.estimators.iter().all(|e| b.spp(e).is_some())
+                    && b.estimators.len() == plan.estimators.len()
+            };
+            match old.as_ref().and_then(|m| m.budget.as_ref()).filter(same) {
+                Some(b) => Some(b.clone()),
+                None => {
+                    progress(&format!(
+                        "budget: calibrating {} estimator(s) for {seconds} s a render",
+                        plan.estimators.len()
+                    ));
+                    let seed = cfg.seed;
+                    match budget::calibrate(renderer, &plan.estimators, seconds, seed, progress)? {
+                        Some(b) => Some(b),
+                        None => {
+                            summary.interrupted = true;
+                            progress("interrupted while calibrating the budget: rerun to continue");
+                            return Ok(summary);
+                        }
+                    }
+                }
+            }
+        }
+    };
+    // The points to render: every sample count of every estimator, or at equal time
+    // each estimator's own.
+    let sweep: Vec<(String, u32)> = match &budget {
+        Some(b) => plan
+            .estimators
+            .iter()
+            .map(|e| (e.clone(), b.spp(e).expect("calibrated")))
+            .collect(),
+        None => plan
+            .spp
+            .iter()
+            .flat_map(|&n| plan.estimators.iter().map(move |e| (e.clone(), n)))
+            .collect(),
+    };
+    let spp_list: Vec<u32> = {
+        let mut v: Vec<u32> = sweep.iter().map(|p| p.1).collect();
+        v.sort_unstable();
+        v.dedup();
+        v
+    };
     // Renders measured against another reference are stale.
     let (renders, centered) = match old {
         Some(m)
@@ -514,11 +571,17 @@ pub fn run(
         results: vec![],
         comparisons: vec![],
         centered,
+        budget: budget.clone(),
     };
     let refresh = |m: &mut Manifest| {
         let noise = m.reference.noise_mse;
-        m.results = report::rows(m, &plan.estimators, &plan.spp, &plan.seeds, noise);
-        m.comparisons = report::compare(m, &m.results, &cfg.baseline, noise);
+        let mut rows = report::rows(m, &plan.estimators, &spp_list, &plan.seeds, noise);
+        rows.retain(|r| sweep.contains(&(r.estimator.clone(), r.spp)));
+        m.comparisons = match &budget {
+            Some(_) => report::compare_at_budget(m, &rows, &cfg.baseline, noise),
+            None => report::compare(m, &rows, &cfg.baseline, noise),
+        };
+        m.results = rows;
     };
     refresh(&mut manifest);
     manifest.save(&manifest_path)?;
@@ -526,9 +589,12 @@ pub fn run(
     // Seeds outside, estimators inside: the renders of one point interleave with the
     // other estimators', so that a change of load hits all of them alike.
     let mut todo = Vec::new();
-    for &spp in &plan.spp {
+    for &spp in &spp_list {
         for &seed in &plan.seeds {
             for e in &plan.estimators {
+                if !sweep.contains(&(e.clone(), spp)) {
+                    continue;
+                }
                 let file = image_file(e, spp, seed);
                 if manifest.find(e, spp, seed).is_some() && out.join(&file).is_file() {
                     summary.reused += 1;
@@ -596,7 +662,8 @@ pub fn run(
     }
 
     if cfg.decompose && !summary.interrupted {
-        let stopped = decompose::render_missing(renderer, out, &mut manifest, &plan, progress)?;
+        let stopped =
+            decompose::render_missing(renderer, out, &mut manifest, &plan, &sweep, progress)?;
         summary.interrupted |= stopped;
         manifest.save(&manifest_path)?;
     }
@@ -619,7 +686,7 @@ pub fn run(
         format!(
             "Interrupted: {} of {} points complete; rerun the command to resume.",
             manifest.results.len(),
-            plan.spp.len() * plan.estimators.len()
+            sweep.len()
         )
     } else {
         "Complete.".to_string()

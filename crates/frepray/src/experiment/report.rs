@@ -68,11 +68,22 @@ fn cost(r: &Row, other: &Row) -> (f64, f64) {
 /// out); the per-seed renders of `m` pair the seeds for the intervals. With the
 /// reference's `noise` known, the MSEs compared are net of it.
 pub fn compare(m: &Manifest, rows: &[Row], baseline: &str, noise: Option<f64>) -> Vec<Comparison> {
+    compare_by(m, rows, noise, |r| {
+        rows.iter()
+            .find(|b| b.estimator == baseline && b.spp == r.spp)
+    })
+}
+
+/// Each row against the row `base` pairs it with (rows without one are left out).
+fn compare_by<'a>(
+    m: &Manifest,
+    rows: &'a [Row],
+    noise: Option<f64>,
+    base: impl Fn(&Row) -> Option<&'a Row>,
+) -> Vec<Comparison> {
     rows.iter()
         .filter_map(|r| {
-            let b = rows
-                .iter()
-                .find(|b| b.estimator == baseline && b.spp == r.spp)?;
+            let b = base(r)?;
             let per_seed = |row: &Row| -> Vec<f64> {
                 row.seeds
                     .iter()
@@ -101,6 +112,22 @@ pub fn compare(m: &Manifest, rows: &[Row], baseline: &str, noise: Option<f64>) -
             })
         })
         .collect()
+}
+
+/// Each row against the baseline's at equal time (`experiment --budget`: every
+/// estimator at the samples that fill the budget, [`super::budget`]): Improvement is
+/// the RMSE ratio at equal time (its square the MSE ratio), with intervals from the
+/// seeds paired; Overhead says how far the measured times came out from equal, and
+/// Speed Up corrects the MSE ratio by it.
+pub fn compare_at_budget(
+    m: &Manifest,
+    rows: &[Row],
+    baseline: &str,
+    noise: Option<f64>,
+) -> Vec<Comparison> {
+    compare_by(m, rows, noise, |_| {
+        rows.iter().find(|b| b.estimator == baseline)
+    })
 }
 
 /// Writes `results.csv`: one line per point; floats in shortest round-trip form.
@@ -255,6 +282,47 @@ pub fn summary_markdown(m: &Manifest, rows: &[Row], cmp: &[Comparison], done: &s
             overhead_cell(c.and_then(|c| c.overhead)),
         );
     };
+    if let Some(b) = &m.budget {
+        let _ = write!(
+            s,
+            "## At equal time\n\nEvery estimator rendered the samples per pixel that fill \
+             {} s of processor time: its cost was calibrated as t₀ + n·c from renders at 1 \
+             and {} spp, then at about an eighth of the budget (each the least of {} \
+             interleaved rounds), and n = ⌊(budget − t₀)/c⌋. \
+             MSE ratio = MSE_baseline / MSE_method at equal time, RMSE ratio its square root \
+             (the Improvement of the tables below, here at equal time); Overhead: how far the \
+             measured time came from the baseline's.\n\n\
+             | Estimator | spp | t₀ (s) | c (s/spp) | CPU (s) | RMSE | MSE ratio [95 % CI] | \
+             RMSE ratio [95 % CI] | Overhead |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|\n",
+            b.seconds,
+            super::budget::CALIBRATION_SPP,
+            super::budget::CALIBRATION_ROUNDS
+        );
+        for e in &b.estimators {
+            let Some(r) = rows.iter().find(|r| r.estimator == e.estimator) else {
+                continue;
+            };
+            let c = cmp.iter().find(|c| c.estimator == r.estimator);
+            let improvement = c.and_then(|c| c.improvement);
+            let ci = c.and_then(|c| c.improvement_ci);
+            let _ = writeln!(
+                s,
+                "| {} | {} | {:.4} | {:.3e} | {} | {:.4e} | {}{} | {}{} | {} |",
+                r.estimator,
+                r.spp,
+                e.fixed_s,
+                e.per_sample_s,
+                opt(r.cpu_s, |v| format!("{v:.3}")),
+                r.rmse,
+                ratio_cell(improvement.map(|v| v * v)),
+                ci_cell(ci.map(|c| c.map(|v| v * v)), |v| format!("{v:.3}")),
+                ratio_cell(improvement),
+                ci_cell(ci, |v| format!("{v:.3}")),
+                overhead_cell(c.and_then(|c| c.overhead)),
+            );
+        }
+        s.push('\n');
+    }
     let _ = write!(s, "## Every sample count\n\n{head}");
     for r in rows {
         line(&mut s, r);

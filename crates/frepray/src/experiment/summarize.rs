@@ -74,6 +74,7 @@ pub fn summarize(renders: &[Measured], baseline: &str, reference_noise: Option<f
         results: Vec::new(),
         comparisons: Vec::new(),
         centered: Vec::new(),
+        budget: None,
     };
     let rows = report::rows(&m, &estimators, &spp, &seeds, reference_noise);
     let comparisons = report::compare(&m, &rows, baseline, reference_noise);

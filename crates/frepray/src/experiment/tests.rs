@@ -718,3 +718,55 @@ fn variance_decomposition() {
     ));
     fs::remove_dir_all(&d).unwrap();
 }
+
+/// At equal time: each estimator renders the samples that fill the budget, from its
+/// calibrated cost (1 s buys balance 100 spp at 0.010 s each, optimal 90 at 0.011,
+/// power 95 at 0.0105), and Improvement is the RMSE ratio at equal time: within its
+/// 95 % interval of the model's √((σ_b²/n_b) / (σ_e²/n_e)), with the time overhead
+/// near 0. A rerun of the same budget reuses the calibration and every render.
+#[test]
+fn budget_compares_at_equal_time() {
+    let d = scratch("budget");
+    let mut cfg = config(&d);
+    cfg.budget = Some(1.0);
+    cfg.repeats = 4;
+    let mut r = Synth::default();
+    let s = run_quiet(&cfg, &mut r).unwrap();
+    // Per estimator and round: 1 and 4 spp, then about an eighth of the budget.
+    let calibrations = 3 * budget::CALIBRATION_ROUNDS as usize * 3;
+    assert_eq!(r.calls.len(), 2 + calibrations + 3 * 4, "{:?}", r.calls);
+    let spp = |e: &str| s.rows.iter().find(|row| row.estimator == e).unwrap().spp;
+    assert_eq!(
+        (spp("balance"), spp("optimal"), spp("power")),
+        (100, 90, 95)
+    );
+    let model = |e: &str| {
+        let ((sb, _), (se, _)) = (params("balance"), params(e));
+        ((sb * sb / 100.0) / (se * se / f64::from(spp(e)))).sqrt()
+    };
+    for c in &s.comparisons {
+        let [lo, hi] = c.improvement_ci.unwrap();
+        let want = model(&c.estimator);
+        assert!(
+            lo <= want && want <= hi,
+            "{}: [{lo}, {hi}] vs {want}",
+            c.estimator
+        );
+        assert!(c.overhead.unwrap().abs() < 0.02, "{c:?}");
+    }
+    let md = read(&cfg.out_dir.join("summary.md"));
+    assert!(
+        md.contains("equal time") && md.contains("MSE ratio"),
+        "{md}"
+    );
+    let mut again = Synth::default();
+    let s2 = run_quiet(&cfg, &mut again).unwrap();
+    assert!(again.calls.is_empty(), "{:?}", again.calls);
+    assert_eq!(s2.rows, s.rows);
+    cfg.budget = Some(0.0);
+    assert!(matches!(
+        run_quiet(&cfg, &mut Synth::default()),
+        Err(ExperimentError::Budget(_))
+    ));
+    fs::remove_dir_all(&d).unwrap();
+}
