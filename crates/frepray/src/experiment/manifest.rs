@@ -160,7 +160,8 @@ pub struct Comparison {
     /// efficiency_method / efficiency_baseline, efficiency = 1 / (MSE × time), time as
     /// in the overhead.
     pub speed_up: Option<f64>,
-    /// 95 % interval of the speed-up from the MSEs' spread (the time taken as exact).
+    /// 95 % interval of the speed-up from the seeds' MSE × time (paired), so that it
+    /// widens with the timing noise as with the MSEs'.
     pub speed_up_ci: Option<[f64; 2]>,
 }
 

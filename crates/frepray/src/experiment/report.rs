@@ -74,7 +74,8 @@ pub fn compare(m: &Manifest, rows: &[Row], baseline: &str, noise: Option<f64>) -
     })
 }
 
-/// Each row against the row `base` pairs it with (rows without one are left out).
+/// Each row against the row `base` pairs it with (rows without one are left out); the
+/// per-seed renders of `m` pair the seeds for the intervals.
 fn compare_by<'a>(
     m: &Manifest,
     rows: &'a [Row],
@@ -98,6 +99,33 @@ fn compare_by<'a>(
             );
             let (tr, tb) = cost(r, b);
             let time_ratio = ratio(tr, tb);
+            let speed_up = ratio(mb * tb, mr * tr);
+            // Speed Up's interval from the seeds' own costs, MSE × time paired by seed,
+            // so that it widens with the timing noise as with the MSEs'; placed around
+            // the point (whose time is the least over the seeds) by its relative width.
+            let both_cpu = r.cpu_s.is_some() && b.cpu_s.is_some();
+            let per_seed_cost = |row: &Row| -> Vec<f64> {
+                row.seeds
+                    .iter()
+                    .filter_map(|&s| m.find(&row.estimator, row.spp, s))
+                    .map(|x| match (both_cpu, x.cpu_s) {
+                        (true, Some(c)) => c,
+                        _ => x.time_s,
+                    })
+                    .collect()
+            };
+            let effort = |mse: &[f64], t: &[f64]| -> Vec<f64> {
+                mse.iter().zip(t).map(|(a, b)| a * b).collect()
+            };
+            let (eb, er) = (
+                effort(&sb, &per_seed_cost(b)),
+                effort(&sr, &per_seed_cost(r)),
+            );
+            let centre = ratio(stats::mean(&eb), stats::mean(&er));
+            let speed_up_ci = match (speed_up, centre, stats::ratio_ci(&eb, &er)) {
+                (Some(p), Some(c), Some([lo, hi])) => Some([p * lo / c, p * hi / c]),
+                _ => None,
+            };
             Some(Comparison {
                 estimator: r.estimator.clone(),
                 spp: r.spp,
@@ -106,9 +134,8 @@ fn compare_by<'a>(
                 improvement_trimmed: ratio(b.trimmed_mse, r.trimmed_mse).map(f64::sqrt),
                 median_pixel_ratio: None,
                 overhead: time_ratio.map(|q| q - 1.0),
-                speed_up: ratio(mb * tb, mr * tr),
-                speed_up_ci: time_ratio
-                    .and_then(|q| stats::ratio_ci(&sb, &sr).map(|c| c.map(|v| v / q))),
+                speed_up,
+                speed_up_ci,
             })
         })
         .collect()
@@ -251,7 +278,8 @@ pub fn summary_markdown(m: &Manifest, rows: &[Row], cmp: &[Comparison], done: &s
          {cost}. RMSE and relMSE = mean (x − ref)² / (ref² + {REL_EPSILON}) over all \
          pixels and channels, unclamped; MSE and wall time are means over {repeats} seed(s) \
          per point; [a, b] are 95 % intervals over the seeds (Student's t; ratios by the \
-         delta method on paired seeds; none with one seed). Trimmed: without the worst \
+         delta method on paired seeds, Speed Up's on each seed's MSE × time, so that timing \
+         noise widens it; none with one seed). Trimmed: without the worst \
          {trim} % of pixels. Pixel ratio: the median over pixels of the squared-error ratio \
          baseline / method (maps in `maps/`).\n",
         trim = 100.0 * TRIM_FRACTION

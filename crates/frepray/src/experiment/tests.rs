@@ -71,6 +71,8 @@ struct Synth {
     stop_at: Option<usize>,
     clock: f64,
     after: std::cell::Cell<bool>,
+    /// Relative spread of the render times (load on a shared machine), from the seed.
+    time_jitter: f64,
 }
 
 impl Renderer for Synth {
@@ -85,6 +87,10 @@ impl Renderer for Synth {
         }
         self.calls.push((est.to_string(), spp, seed));
         let (img, t) = synthetic(est, spp, seed);
+        let tag = est
+            .bytes()
+            .fold(seed ^ spp as u64, |h, b| splitmix(h ^ b as u64));
+        let t = t * (1.0 + self.time_jitter * gauss(tag).clamp(-2.0, 2.0));
         self.clock = t;
         Ok(Some((img, t)))
     }
@@ -769,4 +775,33 @@ fn budget_compares_at_equal_time() {
         Err(ExperimentError::Budget(_))
     ));
     fs::remove_dir_all(&d).unwrap();
+}
+
+/// Speed Up's interval carries the timing noise: the same renders with render times
+/// spread by load (20 %) give a wider interval than with exact times.
+#[test]
+fn speed_up_intervals_widen_with_timing_noise() {
+    let width = |jitter: f64, name: &str| {
+        let d = scratch(name);
+        let mut cfg = config(&d);
+        cfg.repeats = 4;
+        let s = run_quiet(
+            &cfg,
+            &mut Synth {
+                time_jitter: jitter,
+                ..Synth::default()
+            },
+        )
+        .unwrap();
+        let c = s
+            .comparisons
+            .iter()
+            .find(|c| c.estimator == "optimal" && c.spp == 16)
+            .unwrap();
+        let [lo, hi] = c.speed_up_ci.unwrap();
+        fs::remove_dir_all(&d).unwrap();
+        (hi / lo).ln()
+    };
+    let (exact, noisy) = (width(0.0, "exact-times"), width(0.2, "noisy-times"));
+    assert!(noisy > 1.2 * exact, "{exact} vs {noisy}");
 }
