@@ -171,6 +171,7 @@ def experiment(
     pandas: Optional[bool] = None,
     cancel: Optional[Cancel] = None,
     budget: Optional[float] = None,
+    practice: bool = False,
 ):
     """The estimator comparison of ``frepray experiment``: a reference (rendered with
     ``reference_spp`` samples, or the EXR ``reference``), then every estimator at every
@@ -190,7 +191,9 @@ def experiment(
     Ctrl-C (KeyboardInterrupt) or ``cancel`` (a :class:`Cancel`; :class:`Cancelled`)
     stops it with what finished written to ``out``.  ``budget`` (processor seconds, the
     CLI's ``--budget``): every estimator renders the spp that fill it and the comparison
-    is at equal time (``spp`` is then not used)."""
+    is at equal time (``spp`` is then not used).  An estimator may bring its own
+    techniques (``"power@light-bvh+bsdf"``); ``practice=True`` adds the best heuristic
+    practice as baselines (the CLI's ``--practice``)."""
     import tempfile
 
     def run(folder: str):
@@ -204,7 +207,8 @@ def experiment(
             decompose=decompose, max_depth=max_depth, min_depth=min_depth,
             hide_emitters=hide_emitters, beta=beta, cutoff=cutoff, ridge=ridge,
             trained_grid=trained_grid, trained_floor=trained_floor,
-            trained_spp=trained_spp, threads=threads, cancel=cancel, budget=budget)
+            trained_spp=trained_spp, threads=threads, cancel=cancel, budget=budget,
+            practice=practice)
 
     if out is None:
         with tempfile.TemporaryDirectory(prefix="frepray-experiment-") as folder:

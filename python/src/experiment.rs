@@ -102,7 +102,9 @@ pub fn summarize<'py>(
 /// speed_up, speed_up_ci, overhead (intervals as [lo, hi] or None with one seed), and
 /// with `decompose` variance_jittered, variance_centered, direction_share. With
 /// `budget` (processor seconds) each estimator renders the spp that fill it and is
-/// compared at equal time (`spp` is not used). The other
+/// compared at equal time (`spp` is not used). An estimator may bring its own
+/// techniques (`power@light-bvh+bsdf`); `practice` adds the best heuristic practice as
+/// baselines (the CLI's `--practice`). The other
 /// arguments are the CLI's flags of the same names (`per_light` is `--per-light`, and so
 /// on); `threads` 0 uses every core. Ctrl-C and `cancel` stop it (KeyboardInterrupt,
 /// `frepray.Cancelled`) with what finished written to `out`, as the CLI does.
@@ -112,7 +114,8 @@ pub fn summarize<'py>(
     techniques = None, integrator = None, width = None, height = None, per_light = false,
     pixel_center = false, decompose = false, max_depth = None, min_depth = None,
     hide_emitters = false, beta = None, cutoff = None, ridge = None, trained_grid = None,
-    trained_floor = None, trained_spp = None, threads = 0, cancel = None, budget = None))]
+    trained_floor = None, trained_spp = None, threads = 0, cancel = None, budget = None,
+    practice = false))]
 #[allow(clippy::too_many_arguments)]
 pub fn experiment<'py>(
     py: Python<'py>,
@@ -145,6 +148,7 @@ pub fn experiment<'py>(
     threads: i128,
     cancel: Option<PyRef<'_, Cancel>>,
     budget: Option<f64>,
+    practice: bool,
 ) -> PyResult<Bound<'py, PyList>> {
     let spp: Vec<u32> = spp
         .into_iter()
@@ -185,8 +189,10 @@ pub fn experiment<'py>(
         ..Default::default()
     };
     let (base, _) = s.options_with(&settings).map_err(|e| to_py(py, e))?;
+    // An estimator, or a variant with its own techniques (`power@light-bvh+bsdf`).
     let parse = |e: &str| {
-        e.parse::<frepray::Method>()
+        exp::variant::parse(e)
+            .map(|v| v.method)
             .map_err(|e| PyValueError::new_err(e.to_string()))
     };
     let methods = estimators
@@ -197,6 +203,17 @@ pub fn experiment<'py>(
     reference_estimator.as_deref().map(parse).transpose()?;
     for u in frepray::settings::unused_in_sweep(&settings.overrides, &base, &methods) {
         warn(py, &u.message(keyword))?;
+    }
+    let mut estimators = estimators;
+    if practice {
+        for v in exp::variant::practice(&s) {
+            let known = estimators
+                .iter()
+                .any(|e| exp::variant::canonical(e).is_ok_and(|c| c == v));
+            if !known {
+                estimators.push(v);
+            }
+        }
     }
     let mut cfg = ExperimentConfig::for_scene(
         &s,

@@ -24,9 +24,11 @@ def test_experiment_table(many_lights, tmp_path):
 def test_experiment_at_equal_time(many_lights, tmp_path):
     # Each estimator gets the spp its calibrated cost fits in the budget; one point each.
     rows = frepray.experiment(
-        many_lights, ["balance", "optimal-direct"], [], out=tmp_path / "exp", budget=0.2,
-        reference_spp=16, width=24, height=16, repeats=2, pandas=False)
-    assert sorted(r["estimator"] for r in rows) == ["balance", "optimal-direct"]
+        many_lights, ["balance", "optimal-direct", "power@light-bvh+bsdf"], [],
+        out=tmp_path / "exp", budget=0.2, reference_spp=16, width=24, height=16, repeats=2,
+        pandas=False)
+    assert sorted(r["estimator"] for r in rows) == [
+        "balance", "optimal-direct", "power@light-bvh:1+bsdf:1"]
     assert all(r["spp"] >= 1 and r["cpu_s"] > 0 for r in rows)
     assert "At equal time" in (tmp_path / "exp" / "summary.md").read_text()
 

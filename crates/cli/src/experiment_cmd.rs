@@ -12,7 +12,8 @@ use std::path::PathBuf;
 pub struct ExperimentArgs {
     /// The scene file (.toml or .json).
     scene: PathBuf,
-    /// Estimators to compare (MIS names), comma-separated.
+    /// Estimators to compare (MIS names), comma-separated; each may bring its own
+    /// techniques, `NAME@TECHNIQUE+TECHNIQUE`, e.g. `power@light-bvh+bsdf`.
     #[arg(
         long,
         value_delimiter = ',',
@@ -51,6 +52,11 @@ pub struct ExperimentArgs {
     /// variance into its pixel-footprint and direction parts (needs --repeats ≥ 2).
     #[arg(long)]
     decompose: bool,
+    /// Add the best heuristic practice as baselines: balance and power over the
+    /// experiment's techniques, over one technique per light (`light#*+bsdf`, scenes of
+    /// at most 16 lights) and pbrt-v4's `light-bvh+bsdf` with the power heuristic.
+    #[arg(long)]
+    practice: bool,
     /// Compare at equal time instead of equal samples: every estimator renders the
     /// samples per pixel that fill this many processor seconds (calibrated from short
     /// renders of each), and --spp is not used.
@@ -68,14 +74,32 @@ pub fn run(a: ExperimentArgs) -> Result<(), String> {
     crate::set_threads(a.flags.threads)?;
     let mut settings = a.flags.settings()?;
     settings.overrides.integrator = a.integrator.clone();
-    let (scene, base) = load_options(&a.scene, &settings, &a.estimators)?;
+    // The estimators of the variants, for the warnings about flags they ignore.
+    let methods = a
+        .estimators
+        .iter()
+        .map(|e| experiment::variant::parse(e).map(|v| v.method.name().to_string()))
+        .collect::<Result<Vec<_>, _>>()
+        .map_err(|e| format!("--estimators: {e}"))?;
+    let (scene, base) = load_options(&a.scene, &settings, &methods)?;
     let err = |e: frepray::Error| e.to_string();
+    let mut estimators = a.estimators.clone();
+    if a.practice {
+        for v in experiment::variant::practice(&scene) {
+            let known = estimators
+                .iter()
+                .any(|e| experiment::variant::canonical(e).is_ok_and(|c| c == v));
+            if !known {
+                estimators.push(v);
+            }
+        }
+    }
     let mut cfg = ExperimentConfig::for_scene(
         &scene,
         &base,
         &a.scene,
         &a.out,
-        &a.estimators,
+        &estimators,
         &a.baseline,
         a.reference_estimator.as_deref(),
     )

@@ -7,9 +7,9 @@
 //! interleaved across estimators and repeated [`CALIBRATION_ROUNDS`] times (the least
 //! time of each kept: load only adds): first at 1 and [`CALIBRATION_SPP`] samples, then
 //! at the samples of about an eighth of the budget (small renders cost more per sample:
-//! their passes are small), and the line through the 1-sample and the long render's
-//! times is the model. The estimator then renders `n = ⌊(budget − t₀) / c⌋` samples (at
-//! least 1). The measured times of the renders are reported beside, so that a reader
+//! their passes are small), then once at the samples that line says fill the budget;
+//! the line through the 1-sample and that render's times is the model. The estimator
+//! then renders `n = ⌊(budget − t₀) / c⌋` samples (at least 1). The measured times of the renders are reported beside, so that a reader
 //! sees how equal they came out.
 
 use super::{ExperimentError, Renderer};
@@ -90,23 +90,35 @@ pub fn calibrate(
     let Some(second) = measure(renderer, estimators, &spps, seed)? else {
         return Ok(None);
     };
-    let least: Vec<[f64; 2]> = first
-        .iter()
-        .zip(&second)
-        .map(|(a, b)| [a[0], b[0]])
+    // The samples a budget buys on the line through (1, t₁) and (n, tₙ).
+    let buy = |t1: f64, n: u32, tn: f64| {
+        let (per_sample, fixed) = fit(1, t1, n, tn);
+        // A hair of slack, so that a budget of exactly n samples buys n.
+        let k = ((seconds - fixed) / per_sample + 1e-9).floor();
+        (
+            k.clamp(1.0, f64::from(MAX_BUDGET_SPP)) as u32,
+            per_sample,
+            fixed,
+        )
+    };
+    let guess: Vec<u32> = (0..estimators.len())
+        .map(|i| buy(first[i][0], long[i], second[i][0]).0)
         .collect();
+    // Stage 3: one render at the guessed samples (a whole budget), interleaved, and the
+    // line refitted through it: the cost measured at the budget's own size.
+    let spps: Vec<Vec<u32>> = guess.iter().map(|&n| vec![n]).collect();
+    let Some(third) = measure_rounds(renderer, estimators, &spps, seed, 1)? else {
+        return Ok(None);
+    };
     let shares = estimators
         .iter()
-        .zip(&least)
-        .zip(&long)
-        .map(|((e, &[t1, tn]), &n_long)| {
-            let (per_sample, fixed) = fit(1, t1, n_long, tn);
-            // A hair of slack, so that a budget of exactly n samples buys n.
-            let n = ((seconds - fixed) / per_sample + 1e-9).floor();
-            let spp = n.clamp(1.0, f64::from(MAX_BUDGET_SPP)) as u32;
+        .enumerate()
+        .map(|(i, e)| {
+            let (spp, per_sample, fixed) = buy(first[i][0], guess[i], third[i][0]);
             progress(&format!(
-                "budget: {e}: {fixed:.4} s + {per_sample:.3e} s per sample (calibrated at 1 \
-                 and {n_long} spp): {spp} spp in {seconds} s"
+                "budget: {e}: {fixed:.4} s + {per_sample:.3e} s per sample (measured at 1 \
+                 and {} spp): {spp} spp in {seconds} s",
+                guess[i]
             ));
             BudgetShare {
                 estimator: e.clone(),
@@ -131,8 +143,19 @@ fn measure(
     spps: &[Vec<u32>],
     seed: u64,
 ) -> Result<Option<Vec<[f64; 2]>>, ExperimentError> {
+    measure_rounds(renderer, estimators, spps, seed, CALIBRATION_ROUNDS)
+}
+
+/// [`measure`] over `rounds` rounds.
+fn measure_rounds(
+    renderer: &mut dyn Renderer,
+    estimators: &[String],
+    spps: &[Vec<u32>],
+    seed: u64,
+    rounds: u32,
+) -> Result<Option<Vec<[f64; 2]>>, ExperimentError> {
     let mut least = vec![[f64::INFINITY; 2]; estimators.len()];
-    for round in 0..CALIBRATION_ROUNDS as usize {
+    for round in 0..rounds as usize {
         for k in 0..estimators.len() {
             let i = (k + round) % estimators.len();
             for (j, &spp) in spps[i].iter().enumerate() {

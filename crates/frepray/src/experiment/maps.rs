@@ -78,7 +78,11 @@ pub fn write(
         if !defined.is_empty() {
             medians.insert((est.clone(), *spp), stats::median(&mut defined));
         }
-        let stem = dir.join(format!("{est}-{spp:05}spp-vs-{baseline}"));
+        let stem = dir.join(format!(
+            "{}-{spp:05}spp-vs-{}",
+            super::variant::label(est),
+            super::variant::label(baseline)
+        ));
         let map = Image {
             width: reference.width,
             height: reference.height,

@@ -29,6 +29,7 @@ pub mod stats;
 mod summarize;
 #[cfg(test)]
 mod tests;
+pub mod variant;
 
 pub use cpu_time::process_cpu_seconds;
 pub use error::{ExperimentError, ImageError};
@@ -200,11 +201,13 @@ pub struct Summary {
     pub interrupted: bool,
 }
 
-/// An estimator name: it becomes part of file names.
+/// An estimator name, or a variant (`NAME@TECHNIQUES`, [`variant`]): its label
+/// becomes part of file names.
 fn check_name(what: &'static str, name: &str) -> Result<(), ExperimentError> {
+    let label = variant::label(name);
     let ok = !name.is_empty()
-        && name.len() <= 64
-        && name
+        && label.len() <= 128
+        && label
             .chars()
             .all(|c| c.is_ascii_alphanumeric() || "-_.".contains(c))
         && !name.starts_with('.');
@@ -400,7 +403,10 @@ fn render_reference(
 
 /// The image file of a render, relative to the output folder.
 fn image_file(estimator: &str, spp: u32, seed: u64) -> String {
-    format!("images/{estimator}-{spp:05}spp-seed{seed}.exr")
+    format!(
+        "images/{}-{spp:05}spp-seed{seed}.exr",
+        variant::label(estimator)
+    )
 }
 
 /// Runs the experiment of `cfg` with `renderer`, reporting a line per render to

@@ -5,7 +5,7 @@
 //! Python and Ray all run experiments through it.
 
 use super::{ExperimentConfig, ExperimentError, Image, Renderer};
-use crate::{Error, Method, RenderOptions, RenderState, Scene, StateHeader};
+use crate::{Error, RenderOptions, RenderState, Scene, StateHeader};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
 
@@ -21,17 +21,11 @@ pub struct SceneRenderer<'a> {
     note: &'a dyn Fn(&str),
 }
 
-/// The canonical spelling of an estimator (`optimal_direct` → `optimal-direct`), so that
-/// two spellings are one point of the sweep.
+/// The canonical spelling of an estimator or variant (`optimal_direct` →
+/// `optimal-direct`, `power@light-bvh+bsdf` → `power@light-bvh:1+bsdf:1`), so that two
+/// spellings are one point of the sweep.
 pub fn canonical(estimator: &str) -> Result<String, Error> {
-    method(estimator).map(|m| m.name().to_string())
-}
-
-/// The estimator named `estimator` (an unknown name lists the known ones).
-fn method(estimator: &str) -> Result<Method, Error> {
-    estimator
-        .parse::<Method>()
-        .map_err(|e| Error::Invalid(e.to_string()))
+    super::variant::canonical(estimator)
 }
 
 impl ExperimentConfig {
@@ -50,23 +44,22 @@ impl ExperimentConfig {
         baseline: &str,
         reference_estimator: Option<&str>,
     ) -> Result<Self, Error> {
-        let methods = estimators
+        let variants = estimators
             .iter()
-            .map(|e| method(e))
+            .map(|e| canonical(e))
             .collect::<Result<Vec<_>, _>>()?;
-        let reference = reference_estimator.map(method).transpose()?;
+        let reference = reference_estimator.map(canonical).transpose()?;
         let mut cfg = ExperimentConfig::new(path, out_dir);
-        cfg.estimators = methods.iter().map(|m| m.name().to_string()).collect();
         cfg.baseline = canonical(baseline)?;
-        cfg.reference_estimator = reference.map(|m| m.name().to_string());
         let (width, height) = scene.resolution();
-        for &method in methods.iter().chain(&reference) {
-            let o = RenderOptions {
-                method,
-                ..base.clone()
-            };
+        // Every variant is checked against the scene (its techniques) and the memory
+        // limit before anything runs.
+        for v in variants.iter().chain(&reference).chain([&cfg.baseline]) {
+            let o = super::variant::options(scene, base, v)?;
             render::limits::check_memory(width, height, &o)?;
         }
+        cfg.estimators = variants;
+        cfg.reference_estimator = reference;
         // The hash of the resolved scene (in `base`) covers every file it reads (models,
         // environment maps), not only the scene text: editing a model invalidates
         // earlier renders.
@@ -100,12 +93,9 @@ impl<'a> SceneRenderer<'a> {
 
     fn options(&self, estimator: &str, spp: u32, seed: u64) -> Result<RenderOptions, Error> {
         Ok(RenderOptions {
-            method: estimator
-                .parse()
-                .map_err(|e: mis::UnknownMethod| Error::Invalid(e.to_string()))?,
             spp,
             seed,
-            ..self.base.clone()
+            ..super::variant::options(self.scene, &self.base, estimator)?
         })
     }
 

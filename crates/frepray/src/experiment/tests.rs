@@ -738,8 +738,9 @@ fn budget_compares_at_equal_time() {
     cfg.repeats = 4;
     let mut r = Synth::default();
     let s = run_quiet(&cfg, &mut r).unwrap();
-    // Per estimator and round: 1 and 4 spp, then about an eighth of the budget.
-    let calibrations = 3 * budget::CALIBRATION_ROUNDS as usize * 3;
+    // Per estimator and round: 1 and 4 spp, then about an eighth of the budget; then
+    // one render of the whole budget.
+    let calibrations = 3 * budget::CALIBRATION_ROUNDS as usize * 3 + 3;
     assert_eq!(r.calls.len(), 2 + calibrations + 3 * 4, "{:?}", r.calls);
     let spp = |e: &str| s.rows.iter().find(|row| row.estimator == e).unwrap().spp;
     assert_eq!(
