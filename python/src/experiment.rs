@@ -204,17 +204,10 @@ pub fn experiment<'py>(
     for u in frepray::settings::unused_in_sweep(&settings.overrides, &base, &methods) {
         warn(py, &u.message(keyword))?;
     }
-    let mut estimators = estimators;
-    if practice {
-        for v in exp::variant::practice(&s) {
-            let known = estimators
-                .iter()
-                .any(|e| exp::variant::canonical(e).is_ok_and(|c| c == v));
-            if !known {
-                estimators.push(v);
-            }
-        }
-    }
+    let estimators = match practice {
+        true => exp::variant::with_practice(&s, &estimators),
+        false => estimators,
+    };
     let mut cfg = ExperimentConfig::for_scene(
         &s,
         &base,

@@ -83,17 +83,10 @@ pub fn run(a: ExperimentArgs) -> Result<(), String> {
         .map_err(|e| format!("--estimators: {e}"))?;
     let (scene, base) = load_options(&a.scene, &settings, &methods)?;
     let err = |e: frepray::Error| e.to_string();
-    let mut estimators = a.estimators.clone();
-    if a.practice {
-        for v in experiment::variant::practice(&scene) {
-            let known = estimators
-                .iter()
-                .any(|e| experiment::variant::canonical(e).is_ok_and(|c| c == v));
-            if !known {
-                estimators.push(v);
-            }
-        }
-    }
+    let estimators = match a.practice {
+        true => experiment::variant::with_practice(&scene, &a.estimators),
+        false => a.estimators.clone(),
+    };
     let mut cfg = ExperimentConfig::for_scene(
         &scene,
         &base,

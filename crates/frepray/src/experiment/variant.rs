@@ -150,6 +150,18 @@ pub fn practice(scene: &Scene) -> Vec<String> {
         .collect()
 }
 
+/// `estimators` with the `--practice` variants for `scene` added after them (those not
+/// already there, in any spelling).
+pub fn with_practice(scene: &Scene, estimators: &[String]) -> Vec<String> {
+    let mut out = estimators.to_vec();
+    for v in practice(scene) {
+        if !out.iter().any(|e| canonical(e).is_ok_and(|c| c == v)) {
+            out.push(v);
+        }
+    }
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
