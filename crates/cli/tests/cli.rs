@@ -689,6 +689,14 @@ fn gpu_backend_refuses_by_name_and_auto_falls_back() {
             ),
             "mesh lights",
         ),
+        (
+            format!(
+                "{head}[materials.marble]\ntype = \"diffuse\"\n\
+                 reflectance = {{ pattern = {{ kind = \"marble\", a = 0.9, b = 0.2 }} }}\n\n\
+                 [[objects]]\nsolid = \"sphere([0, 0, 0], 1)\"\nmaterial = \"marble\"\n\n{lamp}"
+            ),
+            "marble pattern texture",
+        ),
     ];
     let small = ["--width", "16", "--height", "12", "--spp", "1", "--quiet"];
     for (k, (text, refused)) in cases.iter().enumerate() {

@@ -41,6 +41,20 @@ pub enum Texture {
         /// Point or uv domain.
         space: TextureSpace,
     },
+    /// Colours `a` and `b` blended by a solid pattern of the hit point
+    /// ([`crate::noise`]): `a` where it is 0, `b` where it is 1.
+    Pattern {
+        /// The pattern.
+        pattern: crate::noise::Pattern,
+        /// Colour at 0.
+        a: Rgb,
+        /// Colour at 1.
+        b: Rgb,
+        /// Pattern cells per unit length.
+        scale: f64,
+        /// Octaves of the fractal patterns.
+        octaves: u32,
+    },
 }
 
 impl From<Rgb> for Texture {
@@ -69,6 +83,16 @@ impl Texture {
                 } else {
                     *b
                 }
+            }
+            Texture::Pattern {
+                pattern,
+                a,
+                b,
+                scale,
+                octaves,
+            } => {
+                let t = pattern.value(tc.p * *scale, *octaves);
+                *a * (1.0 - t) + *b * t
             }
         }
     }
@@ -139,5 +163,30 @@ mod tests {
         }
         // Without a normal the rounding picks the cell: the flip this avoids.
         assert_ne!(at(-1e-16, DVec3::ZERO), at(1e-16, DVec3::ZERO));
+    }
+}
+
+#[cfg(test)]
+mod pattern_tests {
+    use super::*;
+    use crate::noise::Pattern;
+
+    /// A pattern texture blends its colours by the pattern's value at the scaled point.
+    #[test]
+    fn patterns_blend_their_colours() {
+        let t = Texture::Pattern {
+            pattern: Pattern::Marble,
+            a: Rgb::ZERO,
+            b: Rgb::new(1.0, 0.5, 0.25),
+            scale: 3.0,
+            octaves: 4,
+        };
+        let p = DVec3::new(0.3, -1.2, 0.7);
+        let v = Pattern::Marble.value(p * 3.0, 4);
+        let c = t.eval(&TexCoord {
+            p,
+            ..TexCoord::default()
+        });
+        assert!((c - Rgb::new(1.0, 0.5, 0.25) * v).abs().max_element() < 1e-15);
     }
 }

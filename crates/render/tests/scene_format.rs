@@ -17,7 +17,7 @@ fn scenes_dir() -> PathBuf {
 
 /// The scenes shipped in scenes/, named (not globbed: a user's own scene saved there
 /// must not change what the tests check).
-const SCENES: [&str; 8] = [
+const SCENES: [&str; 9] = [
     "city.toml",
     "cornell.json",
     "cornell.toml",
@@ -26,6 +26,7 @@ const SCENES: [&str; 8] = [
     "point-lights.toml",
     "table.json",
     "table.toml",
+    "textures.toml",
 ];
 
 fn scene_files() -> Vec<PathBuf> {

@@ -168,6 +168,56 @@ pub enum TextureData {
         /// Point or uv cells.
         space: TextureSpace,
     },
+    /// Colours `a` and `b` blended by a solid pattern of the (world-space) hit point.
+    Pattern {
+        /// The pattern.
+        kind: PatternKind,
+        /// Colour where the pattern is 0.
+        a: [f64; 3],
+        /// Colour where it is 1.
+        b: [f64; 3],
+        /// Pattern cells per unit length (> 0).
+        scale: f64,
+        /// Octaves of the fractal patterns.
+        octaves: u32,
+    },
+}
+
+/// A solid pattern (noise and what is built on it: `render::noise`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum PatternKind {
+    /// Perlin's gradient noise.
+    Noise,
+    /// Fractal Brownian motion.
+    Fbm,
+    /// Turbulence (a sum of |noise|).
+    Turbulence,
+    /// Marble veins.
+    Marble,
+    /// Wood rings.
+    Wood,
+}
+
+impl PatternKind {
+    /// Every pattern.
+    pub const ALL: [PatternKind; 5] = [
+        PatternKind::Noise,
+        PatternKind::Fbm,
+        PatternKind::Turbulence,
+        PatternKind::Marble,
+        PatternKind::Wood,
+    ];
+    /// Its name in scene files.
+    pub const fn name(self) -> &'static str {
+        match self {
+            PatternKind::Noise => "noise",
+            PatternKind::Fbm => "fbm",
+            PatternKind::Turbulence => "turbulence",
+            PatternKind::Marble => "marble",
+            PatternKind::Wood => "wood",
+        }
+    }
 }
 
 /// A material: plain parameters and texture ids. Roughness is the GGX α.

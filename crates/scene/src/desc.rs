@@ -249,6 +249,24 @@ pub enum ColorDesc {
     Rgb([f64; 3]),
     /// `{ checker = { a, b, scale, space } }`.
     Checker(CheckerDesc),
+    /// `{ pattern = { kind, a, b, scale, octaves } }`: solid noise, marble, wood.
+    Pattern(PatternDesc),
+}
+
+/// A procedural solid texture: colours `a` and `b` blended by a pattern of the hit point.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct PatternDesc {
+    /// "noise", "fbm", "turbulence", "marble" or "wood".
+    pub kind: String,
+    /// Colour where the pattern is 0.
+    pub a: RgbDesc,
+    /// Colour where the pattern is 1.
+    pub b: RgbDesc,
+    /// Pattern cells per unit length (default 1).
+    pub scale: Option<f64>,
+    /// Octaves of the fractal patterns (default 5, at most 12).
+    pub octaves: Option<u32>,
 }
 
 /// A constant colour: [r, g, b], or a number for grey.
@@ -298,8 +316,9 @@ pub struct CheckerDesc {
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
-struct CheckerWrap {
-    checker: CheckerDesc,
+struct TextureWrap {
+    checker: Option<CheckerDesc>,
+    pattern: Option<PatternDesc>,
 }
 
 struct ColorVisitor;
@@ -307,7 +326,10 @@ struct ColorVisitor;
 impl<'de> Visitor<'de> for ColorVisitor {
     type Value = ColorDesc;
     fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
-        f.write_str("a colour: a number, [r, g, b] or { checker = { a, b, scale } }")
+        f.write_str(
+            "a colour: a number, [r, g, b], { checker = { a, b, scale } } or \
+             { pattern = { kind, a, b, scale } }",
+        )
     }
     fn visit_f64<E: de::Error>(self, v: f64) -> Result<ColorDesc, E> {
         Ok(ColorDesc::Rgb([v; 3]))
@@ -322,8 +344,14 @@ impl<'de> Visitor<'de> for ColorVisitor {
         Ok(ColorDesc::Rgb(triple(seq, &self)?))
     }
     fn visit_map<A: MapAccess<'de>>(self, map: A) -> Result<ColorDesc, A::Error> {
-        let w = CheckerWrap::deserialize(de::value::MapAccessDeserializer::new(map))?;
-        Ok(ColorDesc::Checker(w.checker))
+        let w = TextureWrap::deserialize(de::value::MapAccessDeserializer::new(map))?;
+        match (w.checker, w.pattern) {
+            (Some(c), None) => Ok(ColorDesc::Checker(c)),
+            (None, Some(p)) => Ok(ColorDesc::Pattern(p)),
+            _ => Err(de::Error::custom(
+                "a texture is { checker = {…} } or { pattern = {…} }, exactly one",
+            )),
+        }
     }
 }
 

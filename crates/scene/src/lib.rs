@@ -61,13 +61,13 @@ mod training;
 
 pub use data::{
     CameraData, CameraKind, EnvMapTable, EnvironmentData, Geometry, Lens, Light, LightData,
-    LightKind, MapId, MaterialData, MaterialId, MeshId, ObjectData, SceneData, SolidId,
-    TextureData, TextureId, TextureSpace,
+    LightKind, MapId, MaterialData, MaterialId, MeshId, ObjectData, PatternKind, SceneData,
+    SolidId, TextureData, TextureId, TextureSpace,
 };
 pub use desc::{
     CameraDesc, CheckerDesc, ColorDesc, EnvironmentDesc, FilmDesc, LightDesc, MaterialDesc,
-    ObjectDesc, RenderDesc, RgbDesc, RotateDesc, ScaleDesc, SceneDescription, TechniqueDesc,
-    TransformDesc, TransformStep,
+    ObjectDesc, PatternDesc, RenderDesc, RgbDesc, RotateDesc, ScaleDesc, SceneDescription,
+    TechniqueDesc, TransformDesc, TransformStep,
 };
 pub use distribution::{Distribution1D, Distribution2D};
 pub use environment::{read_exr_rgb, MapError};

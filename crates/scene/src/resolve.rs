@@ -4,8 +4,8 @@
 
 use crate::check::{check_keys, number, transform, vec3};
 use crate::data::{
-    CameraData, CameraKind, Geometry, Lens, MaterialData, MaterialId, ObjectData, SceneData,
-    TextureData, TextureId, TextureSpace,
+    CameraData, CameraKind, Geometry, Lens, MaterialData, MaterialId, ObjectData, PatternKind,
+    SceneData, TextureData, TextureId, TextureSpace,
 };
 use crate::desc::{CameraDesc, ColorDesc, MaterialDesc, ObjectDesc, SceneDescription};
 use crate::environment::environment;
@@ -195,6 +195,42 @@ fn texture_data(
                 b: rgb(&sub("b"), &k.b.0)?,
                 scale,
                 space,
+            })
+        }
+        ColorDesc::Pattern(k) => {
+            let mut p = at.to_vec();
+            p.push("pattern".into());
+            let sub = |key: &str| [p.clone(), kp![key]].concat();
+            let kind = PatternKind::ALL
+                .into_iter()
+                .find(|x| x.name() == k.kind)
+                .ok_or_else(|| {
+                    let names: Vec<&str> = PatternKind::ALL.iter().map(|x| x.name()).collect();
+                    src.at_value(
+                        &sub("kind"),
+                        format!("unknown pattern {:?}; valid: {}", k.kind, names.join(", ")),
+                    )
+                })?;
+            let scale = number(
+                src,
+                &sub("scale"),
+                k.scale.unwrap_or(1.0),
+                0.0,
+                f64::INFINITY,
+            )?;
+            if scale == 0.0 {
+                return Err(src.at_value(&sub("scale"), "a pattern's scale must be positive"));
+            }
+            let octaves = k.octaves.unwrap_or(5);
+            if !(1..=12).contains(&octaves) {
+                return Err(src.at_value(&sub("octaves"), "octaves must be 1 to 12"));
+            }
+            Ok(TextureData::Pattern {
+                kind,
+                a: rgb(&sub("a"), &k.a.0)?,
+                b: rgb(&sub("b"), &k.b.0)?,
+                scale,
+                octaves,
             })
         }
     }

@@ -15,7 +15,7 @@ fn scenes_dir() -> PathBuf {
 
 /// The scenes shipped in scenes/, named (not globbed: a user's own scene saved there
 /// must not change what the tests check).
-const SCENES: [&str; 9] = [
+const SCENES: [&str; 10] = [
     "city.toml",
     "cornell.json",
     "cornell.toml",
@@ -25,6 +25,7 @@ const SCENES: [&str; 9] = [
     "rooms.toml",
     "table.json",
     "table.toml",
+    "textures.toml",
 ];
 
 fn scene_files() -> Vec<PathBuf> {

@@ -354,12 +354,18 @@ impl DirectScene {
                             "material '{name}' has a uv-space checker"
                         )))
                     }
+                    TextureData::Pattern { kind, .. } => {
+                        return Err(unsupported(format!(
+                            "material '{name}' has a {} pattern texture",
+                            kind.name()
+                        )))
+                    }
                 }
             }
             let rgb = |id: scene::TextureId| match &data.textures[id.index()] {
                 TextureData::Constant { rgb } => *rgb,
                 // The checker's colours are written per hit; any value serves here.
-                TextureData::Checker { a, .. } => *a,
+                TextureData::Checker { a, .. } | TextureData::Pattern { a, .. } => *a,
             };
             let bsdf = match *m {
                 MaterialData::Diffuse { reflectance } => GpuBsdf::diffuse(rgb(reflectance)),

@@ -28,6 +28,25 @@ fn texture(data: &SceneData, id: TextureId) -> Texture {
                 ::scene::TextureSpace::Uv => TextureSpace::Uv,
             },
         },
+        TextureData::Pattern {
+            kind,
+            a,
+            b,
+            scale,
+            octaves,
+        } => Texture::Pattern {
+            pattern: match kind {
+                ::scene::PatternKind::Noise => crate::noise::Pattern::Noise,
+                ::scene::PatternKind::Fbm => crate::noise::Pattern::Fbm,
+                ::scene::PatternKind::Turbulence => crate::noise::Pattern::Turbulence,
+                ::scene::PatternKind::Marble => crate::noise::Pattern::Marble,
+                ::scene::PatternKind::Wood => crate::noise::Pattern::Wood,
+            },
+            a: v3(a),
+            b: v3(b),
+            scale,
+            octaves,
+        },
     }
 }
 
