@@ -54,6 +54,7 @@ from ._native import (  # noqa: E402
     RenderState,
     Scene,
     SceneError,
+    Viewer,
     bench,
     configure_gpu,
     exr_attributes,
@@ -71,7 +72,7 @@ from ._native import measure, summarize  # noqa: E402
 
 __all__ = [
     "Error", "SceneError", "RenderError", "ModelError", "Cancelled", "Cancel", "Scene",
-    "RenderState", "Model",
+    "RenderState", "Model", "Viewer",
     "load", "load_dict", "render", "merge", "read_exr", "exr_attributes", "write_exr", "model",
     "mis", "experiment", "denoise", "measure", "summarize", "gpu_available", "gpu_adapters",
     "configure_gpu", "bench",

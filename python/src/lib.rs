@@ -19,6 +19,7 @@ mod model;
 mod scene;
 mod sigint;
 mod state;
+mod view;
 
 use pyo3::prelude::*;
 
@@ -35,6 +36,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<scene::Scene>()?;
     m.add_class::<state::RenderState>()?;
     m.add_class::<model::Model>()?;
+    m.add_class::<view::Viewer>()?;
     m.add_function(wrap_pyfunction!(scene::load, m)?)?;
     m.add_function(wrap_pyfunction!(scene::load_json, m)?)?;
     m.add_function(wrap_pyfunction!(scene::render, m)?)?;

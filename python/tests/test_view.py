@@ -225,3 +225,27 @@ def test_the_page_shows_the_render_inspects_and_follows_edits(viewer, tmp_path):
         assert kept == brighter
     finally:
         browser.close()
+
+
+def test_the_viewer_from_python(tmp_path):
+    # The same server from Python: a page at 127.0.0.1 with a token, the render's status
+    # as JSON, refused without the token, and closed on leaving the block.
+    scene = tmp_path / "scene.toml"
+    scene.write_text(SCENE.replace("POWER", "100"))
+    import frepray
+
+    with frepray.Viewer(scene) as v:
+        assert v.url.startswith("http://127.0.0.1:") and "token=" in v.url
+        base, token = v.url.split("/?token=")
+        for _ in range(600):
+            with urllib.request.urlopen(f"{base}/status?token={token}", timeout=10) as r:
+                status = json.loads(r.read())
+            if status["spp"] == 8:
+                break
+            time.sleep(0.05)
+        assert status["spp"] == 8 and status["width"] == 48, status
+        with pytest.raises(urllib.error.HTTPError) as e:
+            urllib.request.urlopen(f"{base}/status", timeout=10)
+        assert e.value.code == 403
+    with pytest.raises(urllib.error.URLError):
+        urllib.request.urlopen(f"{base}/status?token={token}", timeout=5)
