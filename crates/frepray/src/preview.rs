@@ -254,6 +254,7 @@ pub fn scene_data(solid: Solid, cam: CameraData, b: &Aabb, up: DVec3) -> SceneDa
     SceneData {
         camera: cam,
         textures: vec![TextureData::Constant { rgb: BASE }],
+        images: Default::default(),
         materials: vec![MaterialData::Diffuse {
             reflectance: TextureId(0),
         }],

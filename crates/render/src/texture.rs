@@ -41,6 +41,17 @@ pub enum Texture {
         /// Point or uv domain.
         space: TextureSpace,
     },
+    /// An image projected along the three axes and blended by the normal (triplanar
+    /// mapping): the projection along axis i (onto the other two coordinates, `scale`
+    /// repeats per unit, bilinear, repeating) weighs |n_i|^k / Σ_j |n_j|^k.
+    Image {
+        /// The image (linear RGB).
+        image: std::sync::Arc<::scene::ImageTexture>,
+        /// Repeats per unit length.
+        scale: f64,
+        /// The blend's sharpness k.
+        sharpness: f64,
+    },
     /// Colours `a` and `b` blended by a solid pattern of the hit point
     /// ([`crate::noise`]): `a` where it is 0, `b` where it is 1.
     Pattern {
@@ -94,8 +105,54 @@ impl Texture {
                 let t = pattern.value(tc.p * *scale, *octaves);
                 *a * (1.0 - t) + *b * t
             }
+            Texture::Image {
+                image,
+                scale,
+                sharpness,
+            } => triplanar(image, tc.p * *scale, tc.n, *sharpness),
         }
     }
+}
+
+/// The image at (u, v) (one repeat per unit, v down the image's rows), bilinear between
+/// pixel centres, repeating.
+pub fn bilinear(img: &::scene::ImageTexture, u: f64, v: f64) -> Rgb {
+    let (w, h) = (img.width as f64, img.height as f64);
+    let (x, y) = (u.rem_euclid(1.0) * w - 0.5, v.rem_euclid(1.0) * h - 0.5);
+    let (x0, y0) = (x.floor(), y.floor());
+    let (fx, fy) = (x - x0, y - y0);
+    let at = |i: f64, j: f64| {
+        let (i, j) = (i.rem_euclid(w) as usize, j.rem_euclid(h) as usize);
+        let p = img.pixels[j * img.width + i];
+        Rgb::new(f64::from(p[0]), f64::from(p[1]), f64::from(p[2]))
+    };
+    let top = at(x0, y0) * (1.0 - fx) + at(x0 + 1.0, y0) * fx;
+    let bottom = at(x0, y0 + 1.0) * (1.0 - fx) + at(x0 + 1.0, y0 + 1.0) * fx;
+    top * (1.0 - fy) + bottom * fy
+}
+
+/// Triplanar mapping at `p` (already scaled) with normal `n` (module docs of
+/// [`Texture::Image`]); where the normal is unknown (0), the z projection.
+pub fn triplanar(img: &::scene::ImageTexture, p: DVec3, n: DVec3, k: f64) -> Rgb {
+    let w = DVec3::new(n.x.abs().powf(k), n.y.abs().powf(k), n.z.abs().powf(k));
+    let sum = w.x + w.y + w.z;
+    if sum.is_nan() || sum <= 0.0 {
+        return bilinear(img, p.x, -p.y);
+    }
+    let w = w / sum;
+    // Each projection reads the image with its v axis down the rows: the up axis of
+    // the plane it is seen in runs up the image.
+    let mut c = Rgb::ZERO;
+    if w.x > 0.0 {
+        c += bilinear(img, p.y, -p.z) * w.x;
+    }
+    if w.y > 0.0 {
+        c += bilinear(img, p.x, -p.z) * w.y;
+    }
+    if w.z > 0.0 {
+        c += bilinear(img, p.x, -p.y) * w.z;
+    }
+    c
 }
 
 #[cfg(test)]
@@ -188,5 +245,70 @@ mod pattern_tests {
             ..TexCoord::default()
         });
         assert!((c - Rgb::new(1.0, 0.5, 0.25) * v).abs().max_element() < 1e-15);
+    }
+}
+
+#[cfg(test)]
+mod image_tests {
+    use super::*;
+    use ::scene::ImageTexture;
+
+    /// A 4 × 2 image of distinct colours.
+    fn image() -> ImageTexture {
+        ImageTexture {
+            width: 4,
+            height: 2,
+            pixels: (0..8).map(|i| [i as f32, (i * i) as f32, 1.0]).collect(),
+        }
+    }
+
+    /// Bilinear lookups return pixel values at pixel centres and repeat with period 1.
+    #[test]
+    fn bilinear_hits_pixel_centres_and_repeats() {
+        let img = image();
+        for j in 0..2 {
+            for i in 0..4 {
+                let (u, v) = ((i as f64 + 0.5) / 4.0, (j as f64 + 0.5) / 2.0);
+                let want = img.pixels[j * 4 + i];
+                for shift in [0.0, 1.0, -3.0] {
+                    let c = bilinear(&img, u + shift, v - shift);
+                    assert!(
+                        (c - Rgb::new(want[0] as f64, want[1] as f64, 1.0))
+                            .abs()
+                            .max_element()
+                            < 1e-9
+                    );
+                }
+            }
+        }
+    }
+
+    /// On a plane facing an axis, triplanar mapping is that axis's planar projection;
+    /// on any normal its weights sum to 1 (a uniform image stays uniform).
+    #[test]
+    fn triplanar_is_planar_on_planes_and_a_partition_of_unity() {
+        let img = image();
+        let p = DVec3::new(0.3, 1.7, -0.6);
+        assert_eq!(triplanar(&img, p, DVec3::Z, 4.0), bilinear(&img, p.x, -p.y));
+        assert_eq!(
+            triplanar(&img, p, -DVec3::X, 4.0),
+            bilinear(&img, p.y, -p.z)
+        );
+        let flat = ImageTexture {
+            width: 3,
+            height: 3,
+            pixels: vec![[0.25, 0.5, 0.75]; 9],
+        };
+        for n in [
+            DVec3::new(1.0, 2.0, 3.0),
+            DVec3::new(-0.3, 0.1, 0.9),
+            DVec3::ONE,
+        ] {
+            let c = triplanar(&flat, p, n.normalize(), 4.0);
+            assert!(
+                (c - Rgb::new(0.25, 0.5, 0.75)).abs().max_element() < 1e-6,
+                "{c}"
+            );
+        }
     }
 }

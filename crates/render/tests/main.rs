@@ -3,6 +3,7 @@
 
 #[path = "integrators/common.rs"]
 mod common;
+mod image_textures;
 mod integrators;
 mod meshes;
 mod min_depth;

@@ -7,6 +7,7 @@
 //! samples from the same numbers. Vectors are `[f64; 3]` (x, y, z or r, g, b).
 
 use crate::distribution::{Distribution1D, Distribution2D};
+use crate::images::ImagePool;
 use crate::meshes::MeshPool;
 use crate::solids::SolidPool;
 use serde::Serialize;
@@ -44,6 +45,10 @@ id!(
     MeshId
 );
 id!(
+    /// An image texture's image: an index into [`SceneData::images`].
+    ImageId
+);
+id!(
     /// An environment map: an index into [`SceneData::maps`].
     MapId
 );
@@ -55,6 +60,9 @@ pub struct SceneData {
     pub camera: CameraData,
     /// Texture pool.
     pub textures: Vec<TextureData>,
+    /// The images of image textures (left out of the JSON when there are none).
+    #[serde(skip_serializing_if = "ImagePool::is_empty")]
+    pub images: ImagePool,
     /// Material pool, in the order of their names.
     pub materials: Vec<MaterialData>,
     /// The name of each material, for messages.
@@ -167,6 +175,16 @@ pub enum TextureData {
         scale: f64,
         /// Point or uv cells.
         space: TextureSpace,
+    },
+    /// An image projected onto the surface from the three axes, blended by the normal
+    /// (triplanar mapping; `render::texture`).
+    Image {
+        /// The image.
+        image: ImageId,
+        /// Image repeats per unit length.
+        scale: f64,
+        /// The blend's sharpness k: weights ∝ |n_axis|^k.
+        sharpness: f64,
     },
     /// Colours `a` and `b` blended by a solid pattern of the (world-space) hit point.
     Pattern {

@@ -251,6 +251,20 @@ pub enum ColorDesc {
     Checker(CheckerDesc),
     /// `{ pattern = { kind, a, b, scale, octaves } }`: solid noise, marble, wood.
     Pattern(PatternDesc),
+    /// `{ image = { file, scale, sharpness } }`: a PNG or EXR projected triplanarly.
+    Image(ImageDesc),
+}
+
+/// An image texture: a PNG or EXR file projected onto the surface along the three axes.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct ImageDesc {
+    /// The image (.png: sRGB; .exr: linear), relative to the scene file.
+    pub file: String,
+    /// Image repeats per unit length (default 1).
+    pub scale: Option<f64>,
+    /// Blend sharpness k ≥ 1: each axis's weight ∝ |n_axis|^k (default 4).
+    pub sharpness: Option<f64>,
 }
 
 /// A procedural solid texture: colours `a` and `b` blended by a pattern of the hit point.
@@ -319,6 +333,7 @@ pub struct CheckerDesc {
 struct TextureWrap {
     checker: Option<CheckerDesc>,
     pattern: Option<PatternDesc>,
+    image: Option<ImageDesc>,
 }
 
 struct ColorVisitor;
@@ -327,8 +342,8 @@ impl<'de> Visitor<'de> for ColorVisitor {
     type Value = ColorDesc;
     fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
         f.write_str(
-            "a colour: a number, [r, g, b], { checker = { a, b, scale } } or \
-             { pattern = { kind, a, b, scale } }",
+            "a colour: a number, [r, g, b], { checker = { a, b, scale } }, \
+             { pattern = { kind, a, b, scale } } or { image = { file, scale } }",
         )
     }
     fn visit_f64<E: de::Error>(self, v: f64) -> Result<ColorDesc, E> {
@@ -345,11 +360,12 @@ impl<'de> Visitor<'de> for ColorVisitor {
     }
     fn visit_map<A: MapAccess<'de>>(self, map: A) -> Result<ColorDesc, A::Error> {
         let w = TextureWrap::deserialize(de::value::MapAccessDeserializer::new(map))?;
-        match (w.checker, w.pattern) {
-            (Some(c), None) => Ok(ColorDesc::Checker(c)),
-            (None, Some(p)) => Ok(ColorDesc::Pattern(p)),
+        match (w.checker, w.pattern, w.image) {
+            (Some(c), None, None) => Ok(ColorDesc::Checker(c)),
+            (None, Some(p), None) => Ok(ColorDesc::Pattern(p)),
+            (None, None, Some(i)) => Ok(ColorDesc::Image(i)),
             _ => Err(de::Error::custom(
-                "a texture is { checker = {…} } or { pattern = {…} }, exactly one",
+                "a texture is { checker = {…} }, { pattern = {…} } or { image = {…} }, exactly one",
             )),
         }
     }

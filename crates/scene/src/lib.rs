@@ -49,6 +49,7 @@ mod distribution;
 mod environment;
 mod error;
 mod exr_file;
+mod images;
 mod lights;
 mod load;
 mod locate;
@@ -60,9 +61,9 @@ mod solids;
 mod training;
 
 pub use data::{
-    CameraData, CameraKind, EnvMapTable, EnvironmentData, Geometry, Lens, Light, LightData,
-    LightKind, MapId, MaterialData, MaterialId, MeshId, ObjectData, PatternKind, SceneData,
-    SolidId, TextureData, TextureId, TextureSpace,
+    CameraData, CameraKind, EnvMapTable, EnvironmentData, Geometry, ImageId, Lens, Light,
+    LightData, LightKind, MapId, MaterialData, MaterialId, MeshId, ObjectData, PatternKind,
+    SceneData, SolidId, TextureData, TextureId, TextureSpace,
 };
 pub use desc::{
     CameraDesc, CheckerDesc, ColorDesc, EnvironmentDesc, FilmDesc, LightDesc, MaterialDesc,
@@ -73,6 +74,7 @@ pub use distribution::{Distribution1D, Distribution2D};
 pub use environment::{read_exr_rgb, MapError};
 pub use error::SceneError;
 pub use exr_file::{read_exr, ExrChannels, ExrError, ATTRIBUTE_PREFIX};
+pub use images::{read_image, ImagePool, ImageTexture, MAX_IMAGE_PIXELS};
 pub use load::{
     description_from_value, load, load_value, load_with, parse, parse_description, parse_with,
     resolve, SceneFormat,

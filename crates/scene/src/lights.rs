@@ -48,7 +48,7 @@ pub(crate) fn rgb(src: &Source, at: &[Seg], c: &ColorDesc) -> Result<DVec3, Scen
             }
             Ok(DVec3::from_array(*a))
         }
-        ColorDesc::Checker(_) | ColorDesc::Pattern(_) => {
+        ColorDesc::Checker(_) | ColorDesc::Pattern(_) | ColorDesc::Image(_) => {
             Err(src.at_value(at, "a light's colour must be constant"))
         }
     }

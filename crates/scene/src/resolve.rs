@@ -10,6 +10,7 @@ use crate::data::{
 use crate::desc::{CameraDesc, ColorDesc, MaterialDesc, ObjectDesc, SceneDescription};
 use crate::environment::environment;
 use crate::error::{kp, path_string, KeyPath, SceneError, Seg};
+use crate::images::{read_image, ImagePool};
 use crate::lights::{bounding_sphere, lights};
 use crate::locate::{position_in_literal, Source};
 use crate::meshes::MeshPool;
@@ -139,17 +140,40 @@ fn camera(src: &Source, c: &CameraDesc) -> Result<CameraData, SceneError> {
     })
 }
 
+/// Textures as they are resolved: the pool, the images they read (with their files),
+/// and the folder relative image files are found in.
+struct Textures<'a> {
+    list: Vec<TextureData>,
+    images: ImagePool,
+    files: Vec<std::path::PathBuf>,
+    base: &'a Path,
+}
+
 /// Adds a texture to the pool; `max` bounds every channel (1 for reflectances).
 fn texture(
     src: &Source,
     at: &[Seg],
     c: &ColorDesc,
     max: f64,
-    pool: &mut Vec<TextureData>,
+    pool: &mut Textures,
 ) -> Result<TextureId, SceneError> {
-    let t = texture_data(src, at, c, max)?;
-    pool.push(t);
-    Ok(TextureId(pool.len() as u32 - 1))
+    let t = texture_data(src, at, c, max, pool)?;
+    pool.list.push(t);
+    Ok(TextureId(pool.list.len() as u32 - 1))
+}
+
+/// A texture's `scale` (default 1): a positive number.
+fn texture_scale(
+    src: &Source,
+    at: &[Seg],
+    scale: Option<f64>,
+    what: &str,
+) -> Result<f64, SceneError> {
+    let s = number(src, at, scale.unwrap_or(1.0), 0.0, f64::INFINITY)?;
+    if s == 0.0 {
+        return Err(src.at_value(at, format!("{what}'s scale must be positive")));
+    }
+    Ok(s)
 }
 
 fn texture_data(
@@ -157,6 +181,7 @@ fn texture_data(
     at: &[Seg],
     c: &ColorDesc,
     max: f64,
+    pool: &mut Textures,
 ) -> Result<TextureData, SceneError> {
     let rgb = |at: &[Seg], a: &[f64; 3]| -> Result<[f64; 3], SceneError> {
         for &x in a {
@@ -170,16 +195,7 @@ fn texture_data(
             let mut p = at.to_vec();
             p.push("checker".into());
             let sub = |key: &str| [p.clone(), kp![key]].concat();
-            let scale = number(
-                src,
-                &sub("scale"),
-                k.scale.unwrap_or(1.0),
-                0.0,
-                f64::INFINITY,
-            )?;
-            if scale == 0.0 {
-                return Err(src.at_value(&sub("scale"), "a checker's scale must be positive"));
-            }
+            let scale = texture_scale(src, &sub("scale"), k.scale, "a checker")?;
             let space = match k.space.as_deref() {
                 None | Some("point") => TextureSpace::Point,
                 Some("uv") => TextureSpace::Uv,
@@ -197,6 +213,28 @@ fn texture_data(
                 space,
             })
         }
+        ColorDesc::Image(k) => {
+            let mut p = at.to_vec();
+            p.push("image".into());
+            let sub = |key: &str| [p.clone(), kp![key]].concat();
+            let scale = texture_scale(src, &sub("scale"), k.scale, "an image")?;
+            let sharpness = number(
+                src,
+                &sub("sharpness"),
+                k.sharpness.unwrap_or(4.0),
+                1.0,
+                64.0,
+            )?;
+            let full = pool.base.join(&k.file);
+            let img = read_image(&full)
+                .map_err(|m| src.at_value(&sub("file"), format!("{}: {m}", full.display())))?;
+            pool.files.push(full);
+            Ok(TextureData::Image {
+                image: pool.images.push(img),
+                scale,
+                sharpness,
+            })
+        }
         ColorDesc::Pattern(k) => {
             let mut p = at.to_vec();
             p.push("pattern".into());
@@ -211,16 +249,7 @@ fn texture_data(
                         format!("unknown pattern {:?}; valid: {}", k.kind, names.join(", ")),
                     )
                 })?;
-            let scale = number(
-                src,
-                &sub("scale"),
-                k.scale.unwrap_or(1.0),
-                0.0,
-                f64::INFINITY,
-            )?;
-            if scale == 0.0 {
-                return Err(src.at_value(&sub("scale"), "a pattern's scale must be positive"));
-            }
+            let scale = texture_scale(src, &sub("scale"), k.scale, "a pattern")?;
             let octaves = k.octaves.unwrap_or(5);
             if !(1..=12).contains(&octaves) {
                 return Err(src.at_value(&sub("octaves"), "octaves must be 1 to 12"));
@@ -248,7 +277,7 @@ fn material(
     src: &Source,
     name: &String,
     m: &MaterialDesc,
-    pool: &mut Vec<TextureData>,
+    pool: &mut Textures,
 ) -> Result<MaterialData, SceneError> {
     let at = kp!["materials", name];
     let key = |k: &str| [at.clone(), kp![k]].concat();
@@ -510,12 +539,23 @@ pub(crate) fn resolve_source(
 ) -> Result<(SceneData, RenderSettings), SceneError> {
     let camera = camera(src, &d.camera)?;
     let names: Vec<&String> = d.materials.keys().collect();
-    let mut textures = Vec::new();
+    let mut pool = Textures {
+        list: Vec::new(),
+        images: ImagePool::default(),
+        files: Vec::new(),
+        base,
+    };
     let materials = d
         .materials
         .iter()
-        .map(|(n, m)| material(src, n, m, &mut textures))
+        .map(|(n, m)| material(src, n, m, &mut pool))
         .collect::<Result<Vec<_>, _>>()?;
+    let Textures {
+        list: textures,
+        images,
+        files: image_files,
+        ..
+    } = pool;
     let mut solids = SolidPool::default();
     let mut meshes = MeshPool::default();
     let mut objects = Vec::with_capacity(d.objects.len());
@@ -561,6 +601,7 @@ pub(crate) fn resolve_source(
     let data = SceneData {
         camera,
         textures,
+        images,
         materials,
         material_names: names.into_iter().cloned().collect(),
         solids,
@@ -577,6 +618,7 @@ pub(crate) fn resolve_source(
             .chain(d.lights.iter().filter_map(|l| l.file.as_ref()))
             .chain(d.environment.as_ref().and_then(|e| e.map.as_ref()))
             .map(|f| base.join(f))
+            .chain(image_files)
             .collect(),
     };
     let mut settings = settings(src, &d.render, &data)?;

@@ -354,6 +354,11 @@ impl DirectScene {
                             "material '{name}' has a uv-space checker"
                         )))
                     }
+                    TextureData::Image { .. } => {
+                        return Err(unsupported(format!(
+                            "material '{name}' has an image texture"
+                        )))
+                    }
                     TextureData::Pattern { kind, .. } => {
                         return Err(unsupported(format!(
                             "material '{name}' has a {} pattern texture",
@@ -366,6 +371,7 @@ impl DirectScene {
                 TextureData::Constant { rgb } => *rgb,
                 // The checker's colours are written per hit; any value serves here.
                 TextureData::Checker { a, .. } | TextureData::Pattern { a, .. } => *a,
+                TextureData::Image { .. } => [0.5; 3],
             };
             let bsdf = match *m {
                 MaterialData::Diffuse { reflectance } => GpuBsdf::diffuse(rgb(reflectance)),

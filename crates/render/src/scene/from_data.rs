@@ -28,6 +28,15 @@ fn texture(data: &SceneData, id: TextureId) -> Texture {
                 ::scene::TextureSpace::Uv => TextureSpace::Uv,
             },
         },
+        TextureData::Image {
+            image,
+            scale,
+            sharpness,
+        } => Texture::Image {
+            image: data.images.image(image).clone(),
+            scale,
+            sharpness,
+        },
         TextureData::Pattern {
             kind,
             a,
