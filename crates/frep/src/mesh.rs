@@ -22,14 +22,16 @@ use crate::ray::Aabb;
 use glam::DVec3;
 use std::collections::HashMap;
 use std::io::{self, Write};
+use std::sync::atomic::{AtomicUsize, Ordering};
 
 pub mod write;
 
 /// The finest grid: cubes along the box's longest side.
 pub const MAX_RESOLUTION: u32 = 4096;
 
-/// Triangles a mesh may have (about 2.4 GB of vertices and indices).
-pub const MAX_TRIANGLES: usize = 100_000_000;
+/// Triangles a mesh may have: meshing holds about 120 bytes a triangle at its peak
+/// (named crossings, their positions, the numbered mesh), so 20 million take ~2.4 GB.
+pub const MAX_TRIANGLES: usize = 20_000_000;
 
 /// A triangle mesh: vertices and counter-clockwise triangles seen from outside (normals
 /// point out of the solid, towards F < 0).
@@ -155,14 +157,20 @@ pub fn mesh_limited(
         frontier = next;
     }
     use rayon::prelude::*;
+    // Triangles made so far over every part: past the limit, every part stops.
+    let made = AtomicUsize::new(0);
+    let budget = Budget { made: &made, limit };
     let parts: Vec<Part> = frontier
         .par_iter()
         .map(|(c, s, tape)| {
             let mut part = Part::default();
-            walk(&grid, *c, *s, tape, &mut part, limit);
+            walk(&grid, *c, *s, tape, &mut part, &budget);
             part
         })
         .collect();
+    if made.load(Ordering::Relaxed) > limit {
+        return Err(MeshError::TooLarge { limit });
+    }
     assemble(parts, limit)
 }
 
@@ -199,17 +207,28 @@ fn split(
     }
 }
 
-/// Meshes the cubes of box (`c`, `s`) into `part`, depth first.
-fn walk(grid: &Grid, c: [u32; 3], s: u32, tape: &Expr, part: &mut Part, limit: usize) {
-    if part.triangles.len() > limit {
+/// The triangles made by every part, against the limit.
+struct Budget<'a> {
+    made: &'a AtomicUsize,
+    limit: usize,
+}
+
+/// Meshes the cubes of box (`c`, `s`) into `part`, depth first; stops once every
+/// part's triangles together pass the limit.
+fn walk(grid: &Grid, c: [u32; 3], s: u32, tape: &Expr, part: &mut Part, budget: &Budget) {
+    if budget.made.load(Ordering::Relaxed) > budget.limit {
         return;
     }
     if s == 1 {
+        let before = part.triangles.len();
         cube(grid, c, tape, part);
+        budget
+            .made
+            .fetch_add(part.triangles.len() - before, Ordering::Relaxed);
         return;
     }
     split(grid, c, s, tape, &mut |cc, hs, t| {
-        walk(grid, cc, hs, &t, part, limit)
+        walk(grid, cc, hs, &t, part, budget)
     });
 }
 
