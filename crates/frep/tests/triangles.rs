@@ -187,3 +187,26 @@ property double y\nproperty double z\nelement face 1\nproperty list uchar uint v
     assert_eq!(m.triangle(0)[1], DVec3::X);
     let _: &Triangles = &m;
 }
+
+/// Garbage never panics either reader: 3 000 random texts built from OBJ's and PLY's
+/// own words and bytes (a fixed seed) each read to a value or an error.
+#[test]
+fn garbage_is_an_error_never_a_panic() {
+    let mut rng = rand_pcg::Pcg64::seed_from_u64(42);
+    let words = [
+        "v", "vt", "vn", "f", "1", "-1", "0", "2/3", "1//2", "-7/-1/2", "1e308", "nan", "\n",
+        " ", "ply\n", "format ascii 1.0\n", "format binary_little_endian 1.0\n",
+        "element vertex 3\n", "element face 1\n", "property float x\n",
+        "property list uchar int vertex_indices\n", "end_header\n", "\u{ff}", "#",
+    ];
+    for _ in 0..3000 {
+        let n = rng.gen_range(0..40);
+        let text: String = (0..n).map(|_| words[rng.gen_range(0..words.len())]).collect();
+        let _ = read_obj(&text, "g.obj");
+        let mut bytes = text.into_bytes();
+        for _ in 0..rng.gen_range(0..8) {
+            bytes.push(rng.gen());
+        }
+        let _ = read_ply(&bytes, "g.ply");
+    }
+}
