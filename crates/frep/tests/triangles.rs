@@ -159,7 +159,7 @@ fn malformed_mesh_files_are_located_errors() {
     let e = read_ply(b"ply\nformat ascii 1.0\nelement vertex 1\n", "cut.ply").unwrap_err();
     assert!(
         e.to_string()
-            .starts_with("cut.ply: not a readable PLY file"),
+            .starts_with("cut.ply:4:1: not a readable PLY file"),
         "{e}"
     );
     let bad = cube_ply_ascii().replace("4 0 3 2 1", "4 0 3 2 9");
@@ -194,14 +194,36 @@ property double y\nproperty double z\nelement face 1\nproperty list uchar uint v
 fn garbage_is_an_error_never_a_panic() {
     let mut rng = rand_pcg::Pcg64::seed_from_u64(42);
     let words = [
-        "v", "vt", "vn", "f", "1", "-1", "0", "2/3", "1//2", "-7/-1/2", "1e308", "nan", "\n",
-        " ", "ply\n", "format ascii 1.0\n", "format binary_little_endian 1.0\n",
-        "element vertex 3\n", "element face 1\n", "property float x\n",
-        "property list uchar int vertex_indices\n", "end_header\n", "\u{ff}", "#",
+        "v",
+        "vt",
+        "vn",
+        "f",
+        "1",
+        "-1",
+        "0",
+        "2/3",
+        "1//2",
+        "-7/-1/2",
+        "1e308",
+        "nan",
+        "\n",
+        " ",
+        "ply\n",
+        "format ascii 1.0\n",
+        "format binary_little_endian 1.0\n",
+        "element vertex 3\n",
+        "element face 1\n",
+        "property float x\n",
+        "property list uchar int vertex_indices\n",
+        "end_header\n",
+        "\u{ff}",
+        "#",
     ];
     for _ in 0..3000 {
         let n = rng.gen_range(0..40);
-        let text: String = (0..n).map(|_| words[rng.gen_range(0..words.len())]).collect();
+        let text: String = (0..n)
+            .map(|_| words[rng.gen_range(0..words.len())])
+            .collect();
         let _ = read_obj(&text, "g.obj");
         let mut bytes = text.into_bytes();
         for _ in 0..rng.gen_range(0..8) {
@@ -209,4 +231,19 @@ fn garbage_is_an_error_never_a_panic() {
         }
         let _ = read_ply(&bytes, "g.ply");
     }
+}
+
+/// An ASCII PLY's errors name the line: a malformed body line as the parser reports it,
+/// a face naming a vertex that is not there at the face's own line.
+#[test]
+fn ascii_ply_errors_name_the_line() {
+    let text = cube_ply_ascii();
+    let header = text.lines().position(|l| l == "end_header").unwrap() + 1;
+    let bad = text.replace("4 0 3 2 1", "4 0 3 2 9");
+    let e = read_ply(bad.as_bytes(), "bad.ply").unwrap_err();
+    // Face 1 follows the header and the 8 vertices.
+    assert_eq!((e.line, e.column), (header + 8 + 1, 1), "{e}");
+    let broken = text.replacen("-1 -1 -1", "-1 oops -1", 1);
+    let e = read_ply(broken.as_bytes(), "broken.ply").unwrap_err();
+    assert_eq!(e.line, header + 1, "{e}");
 }

@@ -194,7 +194,25 @@ pub fn read_ply(bytes: &[u8], file: &str) -> Result<Triangles, ReadError> {
     let parser = Parser::<DefaultElement>::new();
     let ply = std::panic::catch_unwind(|| parser.read_ply(&mut &bytes[..]))
         .map_err(|_| whole("the PLY reader failed on this file".into()))?
-        .map_err(|e| whole(format!("not a readable PLY file ({e})")))?;
+        .map_err(|e| match e.line() {
+            // An ASCII file's line (the column is not known: its first).
+            Some(line) => ReadError::at(file, line, 1, format!("not a readable PLY file ({e})")),
+            None => whole(format!("not a readable PLY file ({e})")),
+        })?;
+    // In an ASCII file, element k of the body is on line `header + k + 1`: where the
+    // checks below find a bad face, they can say where.
+    let header_lines = match ply.header.encoding {
+        ply_rs_bw::ply::Encoding::Ascii => bytes
+            .split(|&b| b == b'\n')
+            .position(|l| l.starts_with(b"end_header"))
+            .map(|i| i + 1),
+        _ => None,
+    };
+    let vertex_count = ply.payload.get("vertex").map_or(0, Vec::len);
+    let face_at = |k: usize, m: String| match header_lines {
+        Some(h) => ReadError::at(file, h + vertex_count + k + 1, 1, m),
+        None => whole(m),
+    };
     let scalar = |p: &Property| -> Option<f64> {
         Some(match *p {
             Property::Char(x) => x.into(),
@@ -245,25 +263,27 @@ pub fn read_ply(bytes: &[u8], file: &str) -> Result<Triangles, ReadError> {
             Some(Property::ListInt(v)) => v.iter().map(|&x| x.into()).collect(),
             Some(Property::ListUInt(v)) => v.iter().map(|&x| x.into()).collect(),
             _ => {
-                return Err(whole(format!(
-                    "face {} has no integer list vertex_indices",
-                    k + 1
-                )))
+                return Err(face_at(
+                    k,
+                    format!("face {} has no integer list vertex_indices", k + 1),
+                ))
             }
         };
         if list.len() < 3 {
-            return Err(whole(format!(
-                "face {} has {} corners; a face needs 3 or more",
-                k + 1,
-                list.len()
-            )));
+            return Err(face_at(
+                k,
+                format!(
+                    "face {} has {} corners; a face needs 3 or more",
+                    k + 1,
+                    list.len()
+                ),
+            ));
         }
         if let Some(i) = list.iter().find(|&&i| i < 0 || i >= positions.len() as i64) {
-            return Err(whole(format!(
-                "face {} names vertex {i} of {}",
-                k + 1,
-                positions.len()
-            )));
+            return Err(face_at(
+                k,
+                format!("face {} names vertex {i} of {}", k + 1, positions.len()),
+            ));
         }
         for j in 1..list.len() - 1 {
             indices.push([list[0], list[j], list[j + 1]].map(|i| i as u32));
