@@ -265,6 +265,7 @@ pub fn scene_data(solid: Solid, cam: CameraData, b: &Aabb, up: DVec3) -> SceneDa
             name: "model".into(),
             geometry: Geometry::Solid(solid),
             material: MaterialId(0),
+            placement: None,
         }],
         lights,
         environment: Some(sky),

@@ -37,6 +37,7 @@ fn scene(width: u32) -> Scene {
             name: "ball".into(),
             geometry: Solid::build(&Shape::Perturbed(bumpy)).expect("ball").into(),
             material: 0,
+            to_local: None,
         },
         Object {
             name: "floor".into(),
@@ -44,6 +45,7 @@ fn scene(width: u32) -> Scene {
                 .expect("floor")
                 .into(),
             material: 1,
+            to_local: None,
         },
     ];
     let materials = vec![

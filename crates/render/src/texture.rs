@@ -14,6 +14,16 @@ pub struct TexCoord {
     /// the surface, so that a surface lying on a cell boundary (a floor at z = 0) takes
     /// the cell behind it instead of flipping between two with the rounding of each hit.
     pub n: DVec3,
+    /// The hit point in the object's own space (its transform undone; `p` where it has
+    /// none), where pattern and image textures are read, so that they move with it.
+    pub local: Option<(DVec3, DVec3)>,
+}
+
+impl TexCoord {
+    /// The point and unit normal in the object's own space (module docs of `local`).
+    pub fn local(&self) -> (DVec3, DVec3) {
+        self.local.unwrap_or((self.p, self.n))
+    }
 }
 
 /// The domain of a checker.
@@ -102,14 +112,17 @@ impl Texture {
                 scale,
                 octaves,
             } => {
-                let t = pattern.value(tc.p * *scale, *octaves);
+                let t = pattern.value(tc.local().0 * *scale, *octaves);
                 *a * (1.0 - t) + *b * t
             }
             Texture::Image {
                 image,
                 scale,
                 sharpness,
-            } => triplanar(image, tc.p * *scale, tc.n, *sharpness),
+            } => {
+                let (p, n) = tc.local();
+                triplanar(image, p * *scale, n, *sharpness)
+            }
         }
     }
 }
@@ -190,6 +203,7 @@ mod tests {
             p: DVec3::splat(0.1),
             uv: DVec2::new(x, y),
             n: DVec3::Z,
+            local: None,
         };
         assert_eq!(u.eval(&tc(0.1, 0.1)), a);
         assert_eq!(u.eval(&tc(0.3, 0.1)), b);

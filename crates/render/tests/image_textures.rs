@@ -68,3 +68,65 @@ fn a_png_texture_decodes_srgb_and_projects_onto_the_floor() {
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// Pattern textures are read in the object's own space: a ball moved by a rotation and
+/// a translation shows, at each moved point, the colour the unmoved ball shows at the
+/// point it came from (checkers stay in world space, as before).
+#[test]
+fn patterns_move_with_their_object() {
+    let scene = |transform: &str| {
+        let text = format!(
+            r#"
+camera = {{ eye = [0, -6, 2], target = [0, 0, 0], resolution = [16, 12] }}
+materials.marble = {{ type = "diffuse", reflectance = {{ pattern = {{ kind = "marble", a = 0.9, b = 0.1, scale = 2 }} }} }}
+objects = [{{ solid = "sphere([0, 0, 0], 1)", material = "marble"{transform} }}]
+lights = [{{ type = "sphere", center = [0, 0, 4], radius = 0.3, power = 50 }}]
+"#
+        );
+        parse_scene(&text, SceneFormat::Toml, std::path::Path::new("t.toml"))
+            .unwrap()
+            .0
+    };
+    let (still, moved) = (
+        scene(""),
+        scene(
+            r#", transform = [{ rotate = { axis = [0, 0, 1], degrees = 90 } }, { translate = [5, 1, 0] }]"#,
+        ),
+    );
+    let forward = |p: DVec3| DVec3::new(-p.y, p.x, p.z) + DVec3::new(5.0, 1.0, 0.0);
+    let colour = |s: &render::scene::Scene, p: DVec3, n: DVec3| {
+        let Material::Diffuse { reflectance } = &s.materials[0] else {
+            panic!("diffuse")
+        };
+        let hit = render::scene::SurfaceHit {
+            t: 1.0,
+            p,
+            n,
+            object: 0,
+            material: 0,
+            uv: glam::DVec2::ZERO,
+        };
+        reflectance.eval(&s.tex_coord(&hit))
+    };
+    let mut differ = 0;
+    for k in 0..200 {
+        let (a, b) = (k as f64 * 0.37, k as f64 * 0.11);
+        let n = DVec3::new(a.cos() * b.sin(), a.sin() * b.sin(), b.cos());
+        let at_origin = colour(&still, n, n);
+        let moved_n = DVec3::new(-n.y, n.x, n.z);
+        assert!(
+            (colour(&moved, forward(n), moved_n) - at_origin)
+                .abs()
+                .max_element()
+                < 1e-9
+        );
+        // In world space the moved ball would show other colours.
+        differ += usize::from(
+            (colour(&still, forward(n), moved_n) - at_origin)
+                .abs()
+                .max_element()
+                > 1e-3,
+        );
+    }
+    assert!(differ > 100, "{differ}");
+}

@@ -186,7 +186,8 @@ pub enum TextureData {
         /// The blend's sharpness k: weights ∝ |n_axis|^k.
         sharpness: f64,
     },
-    /// Colours `a` and `b` blended by a solid pattern of the (world-space) hit point.
+    /// Colours `a` and `b` blended by a solid pattern of the hit point (in the object's
+    /// own space).
     Pattern {
         /// The pattern.
         kind: PatternKind,
@@ -284,6 +285,19 @@ pub struct ObjectData {
     pub geometry: Geometry,
     /// Its material.
     pub material: MaterialId,
+    /// The object's transform, where it has one: pattern and image textures are read in
+    /// the object's own space (the transform undone), so that they move with it.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub placement: Option<Placement>,
+}
+
+/// An object's transform x ↦ M·x + t (M row-major).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct Placement {
+    /// The linear part, row by row.
+    pub m: [f64; 9],
+    /// The translation.
+    pub t: [f64; 3],
 }
 
 /// What an object is made of.

@@ -5,7 +5,7 @@
 use crate::check::{check_keys, number, transform, vec3};
 use crate::data::{
     CameraData, CameraKind, Geometry, Lens, MaterialData, MaterialId, ObjectData, PatternKind,
-    SceneData, TextureData, TextureId, TextureSpace,
+    Placement, SceneData, TextureData, TextureId, TextureSpace,
 };
 use crate::desc::{CameraDesc, ColorDesc, MaterialDesc, ObjectDesc, SceneDescription};
 use crate::environment::environment;
@@ -561,6 +561,20 @@ pub(crate) fn resolve_source(
     let mut objects = Vec::with_capacity(d.objects.len());
     for (i, o) in d.objects.iter().enumerate() {
         let (material, built) = object(src, base, i, o, &names)?;
+        let placement = match &o.transform {
+            Some(t) => {
+                let a = transform(src, &kp!["objects", i, "transform"], t)?;
+                let r = |k: usize| a.m.row(k).to_array();
+                let (r0, r1, r2) = (r(0), r(1), r(2));
+                Some(Placement {
+                    m: [
+                        r0[0], r0[1], r0[2], r1[0], r1[1], r1[2], r2[0], r2[1], r2[2],
+                    ],
+                    t: a.t.to_array(),
+                })
+            }
+            None => None,
+        };
         objects.push(ObjectData {
             name: o.name.clone().unwrap_or_else(|| format!("objects[{i}]")),
             geometry: match built {
@@ -568,6 +582,7 @@ pub(crate) fn resolve_source(
                 Built::Mesh(m) => Geometry::Mesh(meshes.push(m)),
             },
             material,
+            placement,
         });
     }
     let (area, delta) = lights(src, base, &d.lights)?;

@@ -341,6 +341,7 @@ mod tests {
                 .unwrap()
                 .into(),
             material: 0,
+            to_local: None,
         };
         let sphere = LightShape::Sphere {
             center: DVec3::new(0.8, 0.1, 1.5),

@@ -136,7 +136,7 @@ pub(crate) struct Vertex<'s> {
 
 impl<'s> Vertex<'s> {
     pub fn new(scene: &'s Scene, hit: &SurfaceHit, wo: DVec3) -> Self {
-        let bsdf = scene.materials[hit.material].bsdf(&hit.tex_coord(), hit.n);
+        let bsdf = scene.materials[hit.material].bsdf(&scene.tex_coord(hit), hit.n);
         Self {
             p: hit.p,
             n: hit.n,

@@ -77,6 +77,41 @@ pub struct Object {
     pub geometry: Geometry,
     /// Index into [`Scene::materials`].
     pub material: usize,
+    /// From world space to the object's own (its transform undone), where it has a
+    /// transform: where pattern and image textures are read.
+    pub to_local: Option<LocalFrame>,
+}
+
+/// The inverse of an object's transform: points by `m·x + t`, normals by `normals·n`
+/// (the inverse transpose of `m`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LocalFrame {
+    /// Linear part.
+    pub m: glam::DMat3,
+    /// Translation.
+    pub t: DVec3,
+    /// The normals' matrix.
+    pub normals: glam::DMat3,
+}
+
+impl LocalFrame {
+    /// The frame undoing x ↦ `forward`·x + `t` (None where it is singular).
+    pub fn undoing(forward: glam::DMat3, t: DVec3) -> Option<LocalFrame> {
+        let det = forward.determinant();
+        if det == 0.0 || !det.is_finite() {
+            return None;
+        }
+        let m = forward.inverse();
+        Some(LocalFrame {
+            m,
+            t: -(m * t),
+            normals: forward.transpose(),
+        })
+    }
+    /// A world point and unit normal in the object's space.
+    pub fn apply(&self, p: DVec3, n: DVec3) -> (DVec3, DVec3) {
+        (self.m * p + self.t, (self.normals * n).normalize_or_zero())
+    }
 }
 
 impl Object {
@@ -169,12 +204,14 @@ pub struct SurfaceHit {
 }
 
 impl SurfaceHit {
-    /// Where textures are evaluated.
+    /// Where textures are evaluated (in world space; [`Scene::tex_coord`] adds the
+    /// object's own space).
     pub fn tex_coord(&self) -> TexCoord {
         TexCoord {
             p: self.p,
             n: self.n,
             uv: self.uv,
+            local: None,
         }
     }
 }
@@ -225,6 +262,17 @@ impl Scene {
     /// tabulated, one solid built per object, the resolved light distributions reused.
     pub fn from_data(data: &SceneData) -> Self {
         from_data::build(data)
+    }
+
+    /// Where textures are evaluated at `hit`, with the point and normal in its
+    /// object's own space where the object has a transform.
+    pub fn tex_coord(&self, hit: &SurfaceHit) -> TexCoord {
+        TexCoord {
+            local: self.objects[hit.object]
+                .to_local
+                .map(|f| f.apply(hit.p, hit.n)),
+            ..hit.tex_coord()
+        }
     }
 
     /// The union of the finite object bounds (empty if there is none).

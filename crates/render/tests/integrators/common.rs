@@ -26,6 +26,7 @@ pub fn object(shape: &Shape, material: usize) -> Object {
         name: "test".into(),
         geometry: Solid::build(shape).unwrap().into(),
         material,
+        to_local: None,
     }
 }
 
