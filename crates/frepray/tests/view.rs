@@ -302,3 +302,27 @@ fn the_inspector_splits_the_variance() {
     );
     v.finish();
 }
+
+/// Connections are capped: with MAX_CONNECTIONS of them open and silent, the next is
+/// answered 503 at once; when they close, pages are served again.
+#[test]
+fn connections_are_capped() {
+    let v = Running::start("cap", false);
+    v.wait("the first pass", |s| s["passes"].as_u64() >= Some(1));
+    let idle: Vec<TcpStream> = (0..frepray::view::MAX_CONNECTIONS)
+        .map(|_| TcpStream::connect(("127.0.0.1", v.port)).unwrap())
+        .collect();
+    // Let the server take them all.
+    std::thread::sleep(Duration::from_millis(300));
+    assert_eq!(v.get("/status").0, 503);
+    drop(idle);
+    let start = Instant::now();
+    while v.get("/status").0 != 200 {
+        assert!(
+            start.elapsed() < Duration::from_secs(20),
+            "never served again"
+        );
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    v.finish();
+}

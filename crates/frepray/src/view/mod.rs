@@ -26,12 +26,16 @@ use serde_json::{json, Value};
 use session::{Session, Snapshot};
 use std::net::{TcpListener, TcpStream};
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::Arc;
 use std::time::Duration;
 
 /// The page, built in.
 const PAGE: &str = include_str!("page.html");
+
+/// Connections served at once (each holds a thread; an event stream holds it for as
+/// long as its page is open).
+pub const MAX_CONNECTIONS: usize = 64;
 
 /// A viewer, bound and ready to run.
 pub struct Viewer {
@@ -104,13 +108,22 @@ impl Viewer {
             .set_nonblocking(true)
             .map_err(|e| Error::Invalid(e.to_string()))?;
         let shared = Arc::new((self.token.clone(), self.folder.clone()));
+        let open = Arc::new(AtomicUsize::new(0));
         while !stop.load(Ordering::SeqCst) {
             match self.listener.accept() {
                 Ok((stream, _)) => {
-                    let (session, shared) = (session.clone(), shared.clone());
+                    let _ = stream.set_nonblocking(false);
+                    // A thread per connection, at most MAX_CONNECTIONS at once: past
+                    // that, an answer and no thread.
+                    if open.fetch_add(1, Ordering::SeqCst) >= MAX_CONNECTIONS {
+                        open.fetch_sub(1, Ordering::SeqCst);
+                        refuse(&stream);
+                        continue;
+                    }
+                    let (session, shared, open) = (session.clone(), shared.clone(), open.clone());
                     std::thread::spawn(move || {
-                        let _ = stream.set_nonblocking(false);
                         serve(&stream, &session, &shared.0, &shared.1);
+                        open.fetch_sub(1, Ordering::SeqCst);
                     });
                 }
                 Err(e) if e.kind() == std::io::ErrorKind::WouldBlock => {
@@ -124,6 +137,16 @@ impl Viewer {
         let _ = watch.join();
         Ok(())
     }
+}
+
+/// Answers a connection past [`MAX_CONNECTIONS`] with 503, having read what of its
+/// request has arrived (within 50 ms: closing over unread bytes would reset it).
+fn refuse(stream: &TcpStream) {
+    use std::io::Read;
+    let _ = stream.set_read_timeout(Some(Duration::from_millis(50)));
+    let _ = (&*stream).read(&mut [0u8; 4096]);
+    let _ = http::error(stream, "503 Service Unavailable", "too many connections");
+    let _ = stream.shutdown(std::net::Shutdown::Write);
 }
 
 /// Answers one connection.
