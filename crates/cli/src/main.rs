@@ -404,13 +404,7 @@ fn render(args: RenderArgs) -> Result<(), String> {
         o.estimator = args.estimator.clone();
         o.seed = args.seed;
         o.integrator = args.integrator.clone();
-        o.aovs = args.aovs.as_deref().map(|s| {
-            s.split(',')
-                .map(str::trim)
-                .filter(|x| !x.is_empty())
-                .map(String::from)
-                .collect()
-        });
+        o.aovs = scene_flags::aov_list(args.aovs.as_deref());
         settings.stage_times = args.stage_times;
         let samples = args
             .samples

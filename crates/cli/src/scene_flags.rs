@@ -193,3 +193,14 @@ pub fn load_options(
     }
     Ok((scene, options))
 }
+
+/// `--aovs a,b,c` as a list (blanks and empty entries dropped).
+pub fn aov_list(aovs: Option<&str>) -> Option<Vec<String>> {
+    aovs.map(|s| {
+        s.split(',')
+            .map(str::trim)
+            .filter(|x| !x.is_empty())
+            .map(String::from)
+            .collect()
+    })
+}

@@ -45,13 +45,7 @@ pub fn run(args: ViewArgs) -> Result<(), String> {
     o.estimator = args.estimator.clone();
     o.seed = args.seed;
     o.integrator = args.integrator.clone();
-    o.aovs = args.aovs.as_deref().map(|s| {
-        s.split(',')
-            .map(str::trim)
-            .filter(|x| !x.is_empty())
-            .map(String::from)
-            .collect()
-    });
+    o.aovs = scene_flags::aov_list(args.aovs.as_deref());
     let viewer = frepray::view::Viewer::bind(&args.input, settings, args.port, args.decompose)
         .map_err(|e| e.to_string())?;
     let stop = crate::stop_on_ctrl_c();

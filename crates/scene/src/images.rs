@@ -51,14 +51,13 @@ impl Serialize for ImagePool {
         struct One<'a>(&'a ImageTexture);
         impl Serialize for One<'_> {
             fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-                let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+                let mut fnv = crate::meshes::Fnv::default();
                 for p in &self.0.pixels {
                     for x in p {
-                        for b in x.to_le_bytes() {
-                            h = (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3);
-                        }
+                        fnv.eat(&x.to_le_bytes());
                     }
                 }
+                let h = fnv.0;
                 let mut m = s.serialize_map(Some(3))?;
                 m.serialize_entry("width", &self.0.width)?;
                 m.serialize_entry("height", &self.0.height)?;

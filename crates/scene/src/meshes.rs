@@ -52,23 +52,18 @@ impl PartialEq for MeshPool {
 /// stands for it in a resolved scene's JSON: a dump stays small, and the scene's hash
 /// still changes with every vertex.
 fn content_hash(m: &Triangles) -> u64 {
-    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
-    let mut eat = |bytes: &[u8]| {
-        for &b in bytes {
-            h = (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3);
-        }
-    };
+    let mut h = Fnv::default();
     for p in m.positions() {
         for x in p.to_array() {
-            eat(&x.to_le_bytes());
+            h.eat(&x.to_le_bytes());
         }
     }
     for t in m.indices() {
         for i in t {
-            eat(&i.to_le_bytes());
+            h.eat(&i.to_le_bytes());
         }
     }
-    h
+    h.0
 }
 
 impl Serialize for MeshPool {
@@ -126,5 +121,24 @@ pub(crate) fn read(
                 .ok_or_else(|| src.at_value(tp, "the transform is singular (a zero scale)"))
         }
         None => Ok(m),
+    }
+}
+
+/// FNV-1a 64, fed a piece at a time: the content hashes that stand for meshes and
+/// images in a resolved scene's JSON.
+pub(crate) struct Fnv(pub u64);
+
+impl Default for Fnv {
+    fn default() -> Self {
+        Fnv(0xcbf2_9ce4_8422_2325)
+    }
+}
+
+impl Fnv {
+    /// Adds `bytes`.
+    pub fn eat(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.0 = (self.0 ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3);
+        }
     }
 }

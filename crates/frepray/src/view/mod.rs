@@ -260,9 +260,10 @@ fn events(mut stream: &TcpStream, session: &Session) -> std::io::Result<()> {
     }
 }
 
-/// The image as the page asked for it, as PNG.
-fn image_png(stream: &TcpStream, session: &Session, req: &Request) -> std::io::Result<()> {
-    let film = Film {
+/// The page's exposure (stops) and tone map from a request (defaults where missing
+/// or malformed).
+fn film(req: &Request) -> Film {
+    Film {
         exposure: req
             .param("exposure")
             .and_then(|e| e.parse().ok())
@@ -272,16 +273,26 @@ fn image_png(stream: &TcpStream, session: &Session, req: &Request) -> std::io::R
             .param("tonemap")
             .and_then(|t| t.parse::<Tonemap>().ok())
             .unwrap_or_default(),
-    };
+    }
+}
+
+/// The answer before the first pass has finished.
+fn not_ready(stream: &TcpStream) -> std::io::Result<()> {
+    http::error(
+        stream,
+        "503 Service Unavailable",
+        "no pass has finished yet",
+    )
+}
+
+/// The image as the page asked for it, as PNG.
+fn image_png(stream: &TcpStream, session: &Session, req: &Request) -> std::io::Result<()> {
+    let film = film(req);
     let view = req.param("view").unwrap_or("color");
     let png = {
         let s = lock(session);
         let Some(img) = &s.image else {
-            return http::error(
-                stream,
-                "503 Service Unavailable",
-                "no pass has finished yet",
-            );
+            return not_ready(stream);
         };
         match rgb8(img, &s.stderr, view, &film) {
             Ok(bytes) => encode_png(&bytes, img.width(), img.height()),
@@ -358,11 +369,7 @@ fn pixel(stream: &TcpStream, session: &Session, req: &Request) -> std::io::Resul
     };
     let s = lock(session);
     let Some(state) = &s.state else {
-        return http::error(
-            stream,
-            "503 Service Unavailable",
-            "no pass has finished yet",
-        );
+        return not_ready(stream);
     };
     let h = state.header();
     if x >= h.width || y >= h.height {
@@ -449,21 +456,9 @@ fn save(
     let (img, film) = {
         let s = lock(session);
         let Some(state) = &s.state else {
-            return http::error(
-                stream,
-                "503 Service Unavailable",
-                "no pass has finished yet",
-            );
+            return not_ready(stream);
         };
-        let exposure = req
-            .param("exposure")
-            .and_then(|e| e.parse().ok())
-            .unwrap_or(0.0);
-        let tonemap = req
-            .param("tonemap")
-            .and_then(|t| t.parse::<Tonemap>().ok())
-            .unwrap_or_default();
-        (state.image(), Film { exposure, tonemap })
+        (state.image(), film(req))
     };
     let path = folder.join(name);
     let written = match ext.as_deref() {
