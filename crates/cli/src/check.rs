@@ -82,12 +82,16 @@ fn scene(file: &Path) -> Result<(), String> {
         .filter(|o| o.geometry.solid().is_none())
         .count();
     out!(
-        "objects:       {} ({} materials{})",
+        "objects:       {} ({} materials{}{})",
         data.objects.len(),
         data.materials.len(),
         match meshes {
             0 => String::new(),
             n => format!("; {n} triangle meshes"),
+        },
+        match data.media.len() {
+            0 => String::new(),
+            n => format!("; {n} media: {}", data.medium_names.join(", ")),
         }
     );
     out!(

@@ -697,6 +697,21 @@ fn gpu_backend_refuses_by_name_and_auto_falls_back() {
             ),
             "marble pattern texture",
         ),
+        (
+            format!(
+                "{head}[media.smoke]\nsigma_a = 0.1\nsigma_s = 1\n\n\
+                 [[objects]]\nsolid = \"sphere([0, 0, 0], 1)\"\nmaterial = \"clay\"\n\
+                 medium = \"smoke\"\n\n{lamp}"
+            ),
+            "bounds a participating medium",
+        ),
+        (
+            format!(
+                "{head}[materials.none]\ntype = \"interface\"\n\n\
+                 [[objects]]\nsolid = \"sphere([0, 0, 0], 1)\"\nmaterial = \"none\"\n\n{lamp}"
+            ),
+            "index-matched interface",
+        ),
     ];
     let small = ["--width", "16", "--height", "12", "--spp", "1", "--quiet"];
     for (k, (text, refused)) in cases.iter().enumerate() {

@@ -151,6 +151,8 @@ impl GpuBsdf {
                 eta,
                 roughness,
             } => Self::plastic(rgb(diffuse), eta, roughness, coat.0, coat.1),
+            // Refused by the packer; as shaded, smooth glass of η = 1 (the CPU's).
+            MaterialData::Interface => Self::dielectric(1.0, 0.0),
         }
     }
 }

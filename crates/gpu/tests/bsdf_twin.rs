@@ -449,6 +449,8 @@ fn f32_params<'a>(b: &Bxdf<'a>) -> Bxdf<'a> {
             rho: rv(p.rho),
             coat: p.coat,
         }),
+        // No GPU twin: media render on the CPU.
+        Bxdf::Phase(h) => Bxdf::Phase(h),
     }
 }
 

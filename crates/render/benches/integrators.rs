@@ -38,6 +38,8 @@ fn scene(width: u32) -> Scene {
             geometry: Solid::build(&Shape::Perturbed(bumpy)).expect("ball").into(),
             material: 0,
             to_local: None,
+            interior: None,
+            exterior: None,
         },
         Object {
             name: "floor".into(),
@@ -46,6 +48,8 @@ fn scene(width: u32) -> Scene {
                 .into(),
             material: 1,
             to_local: None,
+            interior: None,
+            exterior: None,
         },
     ];
     let materials = vec![

@@ -34,6 +34,7 @@ pub mod frame;
 pub mod integrator;
 pub mod light;
 pub mod material;
+pub mod medium;
 pub mod noise;
 pub mod render_loop;
 #[cfg(test)]

@@ -37,6 +37,10 @@ pub enum Material {
         /// The coat (index and roughness, with its precomputed albedo).
         coat: CoatTable,
     },
+    /// No surface: an index-matched boundary between media. Integrators pass through
+    /// it; where it is shaded anyway (the AOVs' first hit) it is smooth glass of η = 1,
+    /// which lets light through unchanged.
+    Interface,
 }
 
 impl Material {
@@ -65,6 +69,10 @@ impl Material {
             Material::Plastic { diffuse, coat } => {
                 Bxdf::Plastic(PlasticBxdf::new(diffuse.eval(tc), coat))
             }
+            Material::Interface => Bxdf::Dielectric(DielectricBxdf {
+                distrib: TrowbridgeReitz::isotropic(0.0),
+                eta: 1.0,
+            }),
         };
         Bsdf::new(n, bxdf)
     }

@@ -5,6 +5,7 @@
 mod common;
 mod image_textures;
 mod integrators;
+mod media;
 mod meshes;
 mod min_depth;
 mod per_light;

@@ -638,7 +638,15 @@ fn doc_blocks(lang: &str) -> Vec<String> {
 fn the_documented_examples_parse() {
     let here = scenes_dir().join("doc-example.toml");
     let toml_blocks = doc_blocks("toml");
-    assert_eq!(toml_blocks.len(), 1);
+    assert_eq!(toml_blocks.len(), 2);
+    // The media example: a glass of milk and a box of smoke.
+    let (m, _) =
+        parse_scene(&toml_blocks[1], SceneFormat::Toml, &here).unwrap_or_else(|e| panic!("{e}"));
+    assert!(m.participating && m.media.len() == 2);
+    assert_eq!(
+        m.objects.iter().map(|o| o.interior).collect::<Vec<_>>(),
+        vec![Some(0), Some(1)]
+    );
     let (s, st) =
         parse_scene(&toml_blocks[0], SceneFormat::Toml, &here).unwrap_or_else(|e| panic!("{e}"));
     assert_eq!((s.materials.len(), s.objects.len()), (6, 6));

@@ -52,6 +52,10 @@ id!(
     /// An environment map: an index into [`SceneData::maps`].
     MapId
 );
+id!(
+    /// A participating medium: an index into [`SceneData::media`].
+    MediumId
+);
 
 /// A whole resolved scene (see the module docs).
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -74,6 +78,13 @@ pub struct SceneData {
     pub meshes: MeshPool,
     /// The objects: a solid with a material.
     pub objects: Vec<ObjectData>,
+    /// Participating media, in the order of their names (left out of the JSON when
+    /// there are none).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub media: Vec<MediumData>,
+    /// The name of each medium, for messages.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub medium_names: Vec<String>,
     /// Area, point and spot lights, with their selection distributions.
     pub lights: LightData,
     /// Light from infinitely far away.
@@ -273,6 +284,20 @@ pub enum MaterialData {
         /// Coat GGX α in [0, 1].
         roughness: f64,
     },
+    /// No surface: an index-matched boundary between media, which light crosses
+    /// unchanged (pbrt-v4's `interface`, Mitsuba 3's `null`).
+    Interface,
+}
+
+/// A homogeneous participating medium (coefficients per unit length, per RGB channel).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct MediumData {
+    /// Absorption coefficient σ_a ≥ 0.
+    pub sigma_a: [f64; 3],
+    /// Scattering coefficient σ_s ≥ 0.
+    pub sigma_s: [f64; 3],
+    /// Henyey–Greenstein asymmetry g in [−0.99, 0.99].
+    pub g: f64,
 }
 
 /// One object: a solid or a mesh of the pools with a material.
@@ -289,6 +314,12 @@ pub struct ObjectData {
     /// the object's own space (the transform undone), so that they move with it.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub placement: Option<Placement>,
+    /// The medium inside (None: vacuum).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub interior: Option<MediumId>,
+    /// The medium around it (None: vacuum).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub exterior: Option<MediumId>,
 }
 
 /// An object's transform x ↦ M·x + t (M row-major).

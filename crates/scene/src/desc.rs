@@ -19,6 +19,9 @@ pub struct SceneDescription {
     /// Materials by name.
     #[serde(default)]
     pub materials: BTreeMap<String, MaterialDesc>,
+    /// Participating media by name, which objects fill (`medium`) or sit in (`exterior`).
+    #[serde(default)]
+    pub media: BTreeMap<String, MediumDesc>,
     /// The solids.
     #[serde(default)]
     pub objects: Vec<ObjectDesc>,
@@ -129,7 +132,7 @@ pub struct TechniqueDesc {
 #[derive(Clone, Debug, Default, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct MaterialDesc {
-    /// "diffuse", "conductor", "dielectric" or "plastic".
+    /// "diffuse", "conductor", "dielectric", "plastic" or "interface".
     #[serde(rename = "type")]
     pub kind: String,
     /// Diffuse reflectance.
@@ -160,6 +163,30 @@ pub struct ObjectDesc {
     pub transform: Option<TransformDesc>,
     /// A key of `materials`.
     pub material: String,
+    /// A key of `media`: what fills the object (its inside, F ≥ 0).
+    pub medium: Option<String>,
+    /// A key of `media`: what surrounds the object (default: vacuum).
+    pub exterior: Option<String>,
+}
+
+/// A homogeneous participating medium: `sigma_a` and `sigma_s`, or `albedo` and
+/// `mean_free_path`, per RGB channel (a number means grey), with a Henyey–Greenstein
+/// phase function of asymmetry `g`.
+#[derive(Clone, Debug, Default, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct MediumDesc {
+    /// Absorption coefficient σ_a (per unit length).
+    pub sigma_a: Option<RgbDesc>,
+    /// Scattering coefficient σ_s (per unit length).
+    pub sigma_s: Option<RgbDesc>,
+    /// Single-scattering albedo σ_s/σ_t in [0, 1].
+    pub albedo: Option<RgbDesc>,
+    /// Mean free path 1/σ_t (a length, > 0).
+    pub mean_free_path: Option<RgbDesc>,
+    /// Henyey–Greenstein asymmetry g in [−0.99, 0.99] (default 0: isotropic).
+    pub g: Option<f64>,
+    /// Multiplies σ_a and σ_s (divides the mean free path; default 1).
+    pub scale: Option<f64>,
 }
 
 /// A light; `type` says which other keys apply.

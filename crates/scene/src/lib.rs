@@ -53,6 +53,7 @@ mod images;
 mod lights;
 mod load;
 mod locate;
+mod media;
 mod meshes;
 mod overrides;
 mod resolve;
@@ -62,13 +63,13 @@ mod training;
 
 pub use data::{
     CameraData, CameraKind, EnvMapTable, EnvironmentData, Geometry, ImageId, Lens, Light,
-    LightData, LightKind, MapId, MaterialData, MaterialId, MeshId, ObjectData, PatternKind,
-    SceneData, SolidId, TextureData, TextureId, TextureSpace,
+    LightData, LightKind, MapId, MaterialData, MaterialId, MediumData, MediumId, MeshId,
+    ObjectData, PatternKind, SceneData, SolidId, TextureData, TextureId, TextureSpace,
 };
 pub use desc::{
     CameraDesc, CheckerDesc, ColorDesc, EnvironmentDesc, FilmDesc, LightDesc, MaterialDesc,
-    ObjectDesc, PatternDesc, RenderDesc, RgbDesc, RotateDesc, ScaleDesc, SceneDescription,
-    TechniqueDesc, TransformDesc, TransformStep,
+    MediumDesc, ObjectDesc, PatternDesc, RenderDesc, RgbDesc, RotateDesc, ScaleDesc,
+    SceneDescription, TechniqueDesc, TransformDesc, TransformStep,
 };
 pub use distribution::{Distribution1D, Distribution2D};
 pub use environment::{read_exr_rgb, MapError};

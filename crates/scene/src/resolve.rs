@@ -13,6 +13,7 @@ use crate::error::{kp, path_string, KeyPath, SceneError, Seg};
 use crate::images::{read_image, ImagePool};
 use crate::lights::{bounding_sphere, lights};
 use crate::locate::{position_in_literal, Source};
+use crate::media::medium_ref;
 use crate::meshes::MeshPool;
 use crate::settings::{settings, RenderSettings};
 use crate::solids::SolidPool;
@@ -294,8 +295,9 @@ fn material(
         "conductor" => &["type", "metal", "eta", "k", "roughness"],
         "dielectric" => &["type", "eta", "roughness"],
         "plastic" => &["type", "diffuse", "eta", "roughness"],
+        "interface" => &["type"],
         other => {
-            return Err(src.at_value(&key("type"), format!("unknown material type {other:?}; valid types: diffuse, conductor, dielectric, plastic")))
+            return Err(src.at_value(&key("type"), format!("unknown material type {other:?}; valid types: diffuse, conductor, dielectric, plastic, interface")))
         }
     };
     check_keys(
@@ -312,6 +314,7 @@ fn material(
         None => Ok(default),
     };
     Ok(match m.kind.as_str() {
+        "interface" => MaterialData::Interface,
         "diffuse" => MaterialData::Diffuse {
             reflectance: texture(
                 src,
@@ -556,6 +559,7 @@ pub(crate) fn resolve_source(
         files: image_files,
         ..
     } = pool;
+    let (media, medium_names) = crate::media::media(src, d)?;
     let mut solids = SolidPool::default();
     let mut meshes = MeshPool::default();
     let mut objects = Vec::with_capacity(d.objects.len());
@@ -583,6 +587,18 @@ pub(crate) fn resolve_source(
             },
             material,
             placement,
+            interior: medium_ref(
+                src,
+                &kp!["objects", i, "medium"],
+                o.medium.as_ref(),
+                &medium_names,
+            )?,
+            exterior: medium_ref(
+                src,
+                &kp!["objects", i, "exterior"],
+                o.exterior.as_ref(),
+                &medium_names,
+            )?,
         });
     }
     let (area, delta) = lights(src, base, &d.lights)?;
@@ -622,6 +638,8 @@ pub(crate) fn resolve_source(
         solids,
         meshes,
         objects,
+        media,
+        medium_names,
         lights,
         environment: env,
         maps,

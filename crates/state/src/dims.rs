@@ -13,9 +13,12 @@
 //! | 5, 6 | the point on a thin lens |
 //! | 8 + d·S + 3j … +2 | draw slot j of vertex d: `(uc, u.x, u.y)`; slots 0…D−1 are the techniques' draws in list order, slot D the extra BSDF draw (delta lobes and the continuation when no BSDF technique is listed) |
 //! | 8 + d·S + 3(D + 1) | Russian roulette after vertex d |
+//! | 8 + M·S + 2d, +1 | free flight of the ray that reaches vertex d through media: the channel, the distance |
 //!
 //! with the stride `S = 3(D + 1) + 1` rounded up to a multiple of 4, so that each vertex
-//! starts a new Philox block ([`crate::sampler`]).
+//! starts a new Philox block ([`crate::sampler`]), and M the maximum depth (at least 1).
+//! The free-flight numbers come after every vertex's, so that scenes without media use
+//! the same dimensions as before they existed.
 
 use crate::options_error::OptionsError;
 use crate::sampler::SampleStream;
@@ -39,6 +42,8 @@ pub struct Dims {
     draws: u32,
     /// Dimensions per vertex S.
     stride: u32,
+    /// First free-flight dimension.
+    flight: u32,
 }
 
 /// The three numbers of one draw.
@@ -56,7 +61,8 @@ impl Dims {
     pub fn new(counts: &[u32], max_depth: u32) -> Result<Dims, OptionsError> {
         let draws: u64 = counts.iter().map(|&n| u64::from(n)).sum();
         let stride = (3 * (draws + 1) + 1).div_ceil(4) * 4;
-        let last = u64::from(FIRST_VERTEX) + u64::from(max_depth.max(1)) * stride;
+        let flight = u64::from(FIRST_VERTEX) + u64::from(max_depth.max(1)) * stride;
+        let last = flight + 2 * u64::from(max_depth.max(1));
         if last > u64::from(u32::MAX) {
             return Err(OptionsError::TooManyDimensions {
                 draws,
@@ -74,6 +80,7 @@ impl Dims {
             first_slot,
             draws: draws as u32,
             stride: stride as u32,
+            flight: flight as u32,
         })
     }
 
@@ -97,6 +104,13 @@ impl Dims {
     /// The extra BSDF draw at vertex `depth`.
     pub fn extra(&self, rng: &SampleStream, depth: usize) -> Draw {
         self.slot(rng, depth, self.draws)
+    }
+
+    /// The free-flight numbers (channel, distance) of the ray that reaches vertex
+    /// `depth` (0: the camera ray).
+    pub fn flight(&self, rng: &SampleStream, depth: usize) -> (f64, f64) {
+        let d = self.flight + 2 * depth as u32;
+        (rng.get(d), rng.get(d + 1))
     }
 
     /// The roulette number after vertex `depth`.
@@ -126,6 +140,10 @@ mod tests {
                 }
             }
             assert!(used.insert(d.base(depth) + 3 * (d.draws + 1)));
+        }
+        for depth in 0..4 {
+            assert!(used.insert(d.flight + 2 * depth));
+            assert!(used.insert(d.flight + 2 * depth + 1));
         }
         assert_eq!(d.first_slot, vec![0, 2, 3]);
         assert!(Dims::new(&[u32::MAX / 2], 1000).is_err());

@@ -225,6 +225,12 @@ impl DirectScene {
                 obj.name
             )));
         };
+        if obj.interior.is_some() || obj.exterior.is_some() {
+            return Err(unsupported(format!(
+                "object '{}' bounds a participating medium; media render on the CPU",
+                obj.name
+            )));
+        }
         let flat = data.solids.solid(solid).flat();
         let root = flat.nodes.len() - 1;
         let node = &flat.nodes[root];
@@ -316,6 +322,11 @@ impl DirectScene {
 
     fn pack_materials(&mut self, data: &SceneData, host: &dyn Host) -> Result<(), GpuError> {
         for (m, name) in data.materials.iter().zip(&data.material_names) {
+            if matches!(m, MaterialData::Interface) {
+                return Err(unsupported(format!(
+                    "material '{name}' is an index-matched interface; media render on the CPU"
+                )));
+            }
             let constant = |id: scene::TextureId| -> Result<[f64; 3], GpuError> {
                 match &data.textures[id.index()] {
                     TextureData::Constant { rgb } => Ok(*rgb),
@@ -379,6 +390,7 @@ impl DirectScene {
                     GpuBsdf::conductor(constant(eta)?, constant(k)?, roughness)
                 }
                 MaterialData::Dielectric { eta, roughness } => GpuBsdf::dielectric(eta, roughness),
+                MaterialData::Interface => unreachable!("refused above"),
                 MaterialData::Plastic {
                     diffuse,
                     eta,

@@ -11,11 +11,13 @@ mod dielectric;
 mod diffuse;
 pub mod fresnel;
 pub mod microfacet;
+mod phase;
 mod plastic;
 
 pub use conductor::ConductorBxdf;
 pub use dielectric::DielectricBxdf;
 pub use diffuse::DiffuseBxdf;
+pub use phase::HenyeyGreenstein;
 pub use plastic::{CoatTable, PlasticBxdf};
 
 use crate::color::Rgb;
@@ -104,6 +106,8 @@ pub enum Bxdf<'a> {
     Dielectric(DielectricBxdf),
     /// Diffuse base under a dielectric coat.
     Plastic(PlasticBxdf<'a>),
+    /// A medium's phase function (no cosine factor: see [`Bsdf::cos`]).
+    Phase(HenyeyGreenstein),
 }
 
 impl Bxdf<'_> {
@@ -114,6 +118,7 @@ impl Bxdf<'_> {
             Bxdf::Conductor(b) => b.f(wo, wi),
             Bxdf::Dielectric(b) => b.f(wo, wi),
             Bxdf::Plastic(b) => b.f(wo, wi),
+            Bxdf::Phase(b) => b.f(wo, wi),
         }
     }
     /// Draws wi given wo from `uc` (lobe choice) and `u`; None when no direction results.
@@ -123,6 +128,7 @@ impl Bxdf<'_> {
             Bxdf::Conductor(b) => b.sample_f(wo, u),
             Bxdf::Dielectric(b) => b.sample_f(wo, uc, u),
             Bxdf::Plastic(b) => b.sample_f(wo, uc, u),
+            Bxdf::Phase(b) => b.sample_f(wo, u),
         }
     }
     /// Density in solid angle of `sample_f` producing the non-specular direction wi.
@@ -132,6 +138,7 @@ impl Bxdf<'_> {
             Bxdf::Conductor(b) => b.pdf(wo, wi),
             Bxdf::Dielectric(b) => b.pdf(wo, wi),
             Bxdf::Plastic(b) => b.pdf(wo, wi),
+            Bxdf::Phase(b) => b.pdf(wo, wi),
         }
     }
     /// `(f(wo, wi), pdf(wo, wi))` bit for bit, sharing what the two have in common.
@@ -141,12 +148,16 @@ impl Bxdf<'_> {
             Bxdf::Conductor(b) => b.f_pdf(wo, wi),
             Bxdf::Dielectric(b) => (b.f(wo, wi), b.pdf(wo, wi)),
             Bxdf::Plastic(b) => (b.f(wo, wi), b.pdf(wo, wi)),
+            Bxdf::Phase(b) => {
+                let p = b.pdf(wo, wi);
+                (Rgb::splat(p), p)
+            }
         }
     }
     /// Whether the BSDF has a delta lobe (samples flagged `specular`).
     pub fn has_specular(&self) -> bool {
         match self {
-            Bxdf::Diffuse(_) => false,
+            Bxdf::Diffuse(_) | Bxdf::Phase(_) => false,
             Bxdf::Conductor(b) => b.distrib.effectively_smooth(),
             Bxdf::Dielectric(b) => b.distrib.effectively_smooth() || b.eta == 1.0,
             Bxdf::Plastic(b) => b.coat.distrib.effectively_smooth(),
@@ -155,7 +166,7 @@ impl Bxdf<'_> {
     /// Whether the BSDF is nothing but delta lobes (f and pdf are 0 everywhere).
     pub fn is_pure_specular(&self) -> bool {
         match self {
-            Bxdf::Plastic(_) | Bxdf::Diffuse(_) => false,
+            Bxdf::Plastic(_) | Bxdf::Diffuse(_) | Bxdf::Phase(_) => false,
             _ => self.has_specular(),
         }
     }
@@ -176,6 +187,21 @@ impl<'a> Bsdf<'a> {
         Self {
             frame: Frame::from_z(n),
             bxdf,
+        }
+    }
+    /// The phase function at a medium point, its frame about `wo` (any frame serves).
+    pub fn phase(g: f64, wo: DVec3) -> Self {
+        Self::new(wo, Bxdf::Phase(HenyeyGreenstein { g }))
+    }
+    /// The projection factor of the integrand for wi at shading normal `n`: |cos θi|
+    /// at a surface, 1 at a medium point (a phase function integrates over the sphere
+    /// without one).
+    #[inline]
+    pub fn cos(&self, n: DVec3, wi: DVec3) -> f64 {
+        if matches!(self.bxdf, Bxdf::Phase(_)) {
+            1.0
+        } else {
+            wi.dot(n).abs()
         }
     }
     /// f(wo, wi) in world space.

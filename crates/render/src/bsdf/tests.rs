@@ -1,5 +1,6 @@
-//! Statistical tests of every BSDF: sampling against pdf (chi-square), pdf mass,
-//! agreement of sample / f / pdf, white furnace and reciprocity.
+//! Statistical tests of every BSDF and of the media's phase function: sampling against
+//! pdf (chi-square), pdf mass (∫ p = 1 for the phase function), agreement of sample /
+//! f / pdf, white furnace and reciprocity.
 
 use super::microfacet::TrowbridgeReitz;
 use super::*;
@@ -62,6 +63,12 @@ fn configs(t: &Tables, rho: Rgb) -> Vec<(String, Bxdf<'_>)> {
         v.push((
             format!("plastic α={}", c.distrib.alpha_x),
             Bxdf::Plastic(PlasticBxdf::new(rho, c)),
+        ));
+    }
+    for g in [0.0, 0.7, -0.5, 0.95] {
+        v.push((
+            format!("Henyey-Greenstein g={g}"),
+            Bxdf::Phase(HenyeyGreenstein { g }),
         ));
     }
     v
@@ -184,7 +191,13 @@ fn sample_agrees_with_eval() {
                     (x.f - f).abs().max_element() <= 1e-9 * f.max_element(),
                     "{name}"
                 );
-                let w = f * x.wi.z.abs() / pdf;
+                // A phase function has no cosine factor.
+                let cos = if matches!(b, Bxdf::Phase(_)) {
+                    1.0
+                } else {
+                    x.wi.z.abs()
+                };
+                let w = f * cos / pdf;
                 assert!((x.weight - w).abs().max_element() <= 1e-9 * w.max_element());
             }
         }
@@ -213,8 +226,8 @@ fn sqrt3(v: Rgb) -> Rgb {
     Rgb::new(v.x.sqrt(), v.y.sqrt(), v.z.sqrt())
 }
 
-/// White furnace: the energy albedo ∫ f |cos θi| dωi (transmission scaled by η′²) of
-/// every BSDF, from 200 000 samples, satisfies, per channel (σ the standard error):
+/// White furnace: the energy albedo ∫ f |cos θi| dωi (transmission scaled by η′²; ∫ p
+/// for a phase function) of every BSDF, from 200 000 samples, satisfies, per channel (σ the standard error):
 /// - always: albedo ≤ 1 + 4σ (+ 5e-4 for plastic: its coat albedo is tabulated);
 /// - white diffuse and smooth glass are lossless sample by sample: |albedo − 1| < 1e-12;
 /// - white plastic (ρ = 1) is lossless by construction: |albedo − 1| < 4σ + 5e-4;
@@ -253,6 +266,8 @@ fn white_furnace() {
                         assert!(m >= lower, "{name} wo {wo}: {m} < {lower}");
                     }
                     Bxdf::Conductor(_) => assert!(m > 0.0),
+                    // Sampled exactly: every weight is 1.
+                    Bxdf::Phase(_) => assert!((m - 1.0).abs() < 1e-12, "{name}: {m}"),
                 }
             }
         }

@@ -24,7 +24,8 @@ pub use state::Aov;
 /// Depth, normal and albedo of a camera ray's first hit.
 fn first_hit(scene: &Scene, t: &Trace, ray: &Ray, rng: &SampleStream) -> [f64; 7] {
     match t {
-        Trace::Escape => [0.0; 7],
+        // Walks end at a light, a surface or the escape, never in a medium.
+        Trace::Escape | Trace::Medium { .. } => [0.0; 7],
         Trace::Light(l) => [l.t, l.n.x, l.n.y, l.n.z, 0.0, 0.0, 0.0],
         Trace::Surface(h) => {
             let v = Vertex::new(scene, h, -ray.d);

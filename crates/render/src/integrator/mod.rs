@@ -53,6 +53,7 @@
 
 mod accumulate;
 mod aov;
+mod medium;
 mod path;
 mod ray_log;
 mod train;
@@ -342,6 +343,8 @@ mod tests {
                 .into(),
             material: 0,
             to_local: None,
+            interior: None,
+            exterior: None,
         };
         let sphere = LightShape::Sphere {
             center: DVec3::new(0.8, 0.1, 1.5),

@@ -40,8 +40,9 @@
 //! the α minimising the variance is the optimum for the paths that do, which is what the
 //! per-depth state estimates. Memory: one estimator per pixel for each depth reached.
 
+use super::medium::{Flight, Walk};
 use super::ray_log::RayLog;
-use super::vertex::{trace, Trace, Vertex};
+use super::vertex::{emitted, trace, Trace, Vertex};
 use super::{Integrator, IntegratorKind, Pixel, RayKind};
 use crate::color::Rgb;
 use crate::sampler::SampleStream;
@@ -64,37 +65,49 @@ impl Integrator {
         rays.begin(RayKind::Generate);
         let ray = self.camera_ray(scene, x, y, rng);
         rays.end(RayKind::Generate);
-        rays.begin(RayKind::Camera);
-        let first = trace(scene, &ray, None);
-        rays.end(RayKind::Camera);
-        if self.aovs {
-            self.add_aovs(scene, &first, &ray, rng, px);
-        }
         let camera_emitters = !self.hide_emitters && self.min_depth == 0;
-        let mut hit = match first {
-            Trace::Light(l) => {
-                if camera_emitters {
-                    px.add(l.radiance);
-                }
-                return;
+        rays.begin(RayKind::Camera);
+        // Through media: the camera (in vacuum) sees the walk's end through its
+        // transmittance, and the first vertex is the free flight's stop.
+        let (first, mut beta) = if scene.participating {
+            let walk = Walk::new(scene, &ray, None, None, None);
+            rays.end(RayKind::Camera);
+            if self.aovs {
+                self.add_aovs(scene, &walk.end, &ray, rng, px);
             }
-            Trace::Escape => {
-                if camera_emitters {
-                    px.add(scene.lights.environment_radiance(ray.d));
-                }
-                return;
+            if camera_emitters {
+                px.add(walk.tr * emitted(scene, &walk.end, ray.d));
             }
-            Trace::Surface(h) => h,
+            let (uc, u) = self.dims.flight(rng, 0);
+            match walk.fly(scene, Rgb::ONE, uc, u) {
+                Flight::Scatter { p, medium, weight } => (Trace::Medium { p, medium }, weight),
+                Flight::Through(weight) => (walk.end, weight),
+            }
+        } else {
+            let first = trace(scene, &ray, None);
+            rays.end(RayKind::Camera);
+            if self.aovs {
+                self.add_aovs(scene, &first, &ray, rng, px);
+            }
+            if camera_emitters && matches!(first, Trace::Light(_) | Trace::Escape) {
+                px.add(emitted(scene, &first, ray.d));
+            }
+            (first, Rgb::ONE)
         };
+        if matches!(first, Trace::Light(_) | Trace::Escape) || beta == Rgb::ZERO {
+            return;
+        }
+        let mut at = first;
         let max_depth = match self.kind {
             IntegratorKind::Direct => 1,
             _ => self.max_depth as usize,
         };
         let mut wo = -ray.d;
-        let mut beta = Rgb::ONE;
         let mut depth = 0usize;
         while depth < max_depth {
-            let v = Vertex::new(scene, &hit, wo);
+            let Some(v) = Vertex::at(scene, &at, wo) else {
+                break;
+            };
             let extend = depth + 1 < max_depth;
             px.mute = depth + 1 < self.min_depth as usize;
             let next = self.shade(scene, &v, beta, depth, extend, rng, px, rays);
@@ -103,7 +116,9 @@ impl Integrator {
                 break;
             };
             beta *= next.weight;
-            let Trace::Surface(h) = next.trace else { break };
+            if matches!(next.trace, Trace::Light(_) | Trace::Escape) {
+                break;
+            }
             if beta == Rgb::ZERO || !beta.is_finite() {
                 break;
             }
@@ -114,7 +129,7 @@ impl Integrator {
                 }
                 beta /= 1.0 - q;
             }
-            hit = h;
+            at = next.trace;
             wo = -next.wi;
             depth += 1;
         }

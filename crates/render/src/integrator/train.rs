@@ -72,7 +72,7 @@ impl Integrator {
                         .lights
                         .sample_selected(Selection::One(k), v.p, v.n, 0.0, u)
                         .map_or(0.0, |s| {
-                            let fc = v.bsdf.f(v.wo, s.wi) * s.wi.dot(v.n).abs();
+                            let fc = v.bsdf.f(v.wo, s.wi) * v.cos(s.wi);
                             if luminance(fc) <= 0.0 {
                                 return 0.0;
                             }
@@ -80,6 +80,7 @@ impl Integrator {
                                 scene,
                                 &spawn(v.p, v.n, s.wi),
                                 v.left_behind(scene, s.wi),
+                                v.medium_toward(s.wi),
                                 &mut rays,
                             );
                             lights as f64 * luminance(fc * li) / s.pdf

@@ -1,6 +1,7 @@
 //! One scattering vertex: delta lights, the MIS draws of every technique, delta lobes and
 //! the path's continuation (module docs of [`crate::integrator`]).
 
+use super::medium::{transmitted, Flight, Walk};
 use super::ray_log::RayLog;
 use super::{Integrator, Pixel, RayKind, MAX_TECHNIQUES};
 use crate::bsdf::{Bsdf, BsdfSample};
@@ -26,6 +27,13 @@ pub(crate) enum Trace {
     Light(LightHit),
     /// Nothing: the ray escapes to the environment.
     Escape,
+    /// A scattering point inside a medium (the free flight's stop, `integrator/medium.rs`).
+    Medium {
+        /// The point.
+        p: DVec3,
+        /// Index into [`Scene::media`].
+        medium: usize,
+    },
 }
 
 /// The nearest of objects and area lights along `ray` (a nearest-hit query), object
@@ -55,7 +63,7 @@ pub(crate) fn emitted(scene: &Scene, t: &Trace, d: DVec3) -> Rgb {
     match t {
         Trace::Light(l) => l.radiance,
         Trace::Escape => scene.lights.environment_radiance(d),
-        Trace::Surface(_) => Rgb::ZERO,
+        Trace::Surface(_) | Trace::Medium { .. } => Rgb::ZERO,
     }
 }
 
@@ -68,12 +76,14 @@ pub(crate) fn spawn(p: DVec3, n: DVec3, wi: DVec3) -> Ray {
 }
 
 /// `Li(ω)` by one shadow ray: the nearest area light along the ray (or the environment)
-/// if no object lies before it (object `skip` left out: [`Scene::left_behind`]). No ray
-/// is traced when there is nothing to see.
+/// if no object lies before it (object `skip` left out: [`Scene::left_behind`]), times
+/// the transmittance of the media on the way where the scene has them (the ray starts
+/// in `medium`). No ray is traced when there is nothing to see.
 pub(crate) fn incident(
     scene: &Scene,
     ray: &Ray,
     skip: Option<usize>,
+    medium: Option<usize>,
     rays: &mut impl RayLog,
 ) -> Rgb {
     incident_from(
@@ -81,6 +91,7 @@ pub(crate) fn incident(
         ray,
         scene.lights.intersect(ray, 0.0, f64::INFINITY),
         skip,
+        medium,
         rays,
     )
 }
@@ -91,6 +102,7 @@ fn incident_from(
     ray: &Ray,
     light: Option<LightHit>,
     skip: Option<usize>,
+    medium: Option<usize>,
     rays: &mut impl RayLog,
 ) -> Rgb {
     let (t_max, le) = match light {
@@ -99,6 +111,9 @@ fn incident_from(
     };
     if le == Rgb::ZERO {
         return Rgb::ZERO;
+    }
+    if scene.participating {
+        return transmitted(scene, ray, t_max, le, skip, medium, rays);
     }
     rays.begin(RayKind::Shadow);
     let occluded = scene.occluded_skipping(ray, 0.0, t_max, skip);
@@ -124,31 +139,73 @@ fn light_reached(scene: &Scene, nearest: Option<LightHit>) -> Option<usize> {
     }
 }
 
-/// A shading point: the hit, its BSDF and the direction toward the viewer.
+/// A shading point: a surface hit with its BSDF, or a point inside a medium with its
+/// phase function; and the direction toward the viewer.
 pub(crate) struct Vertex<'s> {
     pub p: DVec3,
+    /// The outward normal at a surface; zero inside a medium.
     pub n: DVec3,
     pub wo: DVec3,
     pub bsdf: Bsdf<'s>,
-    /// The object hit.
-    pub object: usize,
+    /// The object hit (None inside a medium).
+    pub object: Option<usize>,
+    /// The media on the two sides: against the normal (inside the object) and along it;
+    /// both the medium itself at a medium point.
+    inside: Option<usize>,
+    outside: Option<usize>,
 }
 
 impl<'s> Vertex<'s> {
     pub fn new(scene: &'s Scene, hit: &SurfaceHit, wo: DVec3) -> Self {
         let bsdf = scene.materials[hit.material].bsdf(&scene.tex_coord(hit), hit.n);
+        let o = &scene.objects[hit.object];
         Self {
             p: hit.p,
             n: hit.n,
             wo,
             bsdf,
-            object: hit.object,
+            object: Some(hit.object),
+            inside: o.interior,
+            outside: o.exterior,
+        }
+    }
+
+    /// The vertex at `t`, a surface or a medium point (None for a light or escape).
+    pub fn at(scene: &'s Scene, t: &Trace, wo: DVec3) -> Option<Self> {
+        match *t {
+            Trace::Surface(ref h) => Some(Self::new(scene, h, wo)),
+            Trace::Medium { p, medium } => Some(Self {
+                p,
+                n: DVec3::ZERO,
+                wo,
+                bsdf: Bsdf::phase(scene.media[medium].g, wo),
+                object: None,
+                inside: Some(medium),
+                outside: Some(medium),
+            }),
+            Trace::Light(_) | Trace::Escape => None,
         }
     }
 
     /// The object a ray leaving here along `wi` need not test ([`Scene::left_behind`]).
     pub fn left_behind(&self, scene: &Scene, wi: DVec3) -> Option<usize> {
-        scene.left_behind(self.object, self.n, wi)
+        self.object.and_then(|o| scene.left_behind(o, self.n, wi))
+    }
+
+    /// The medium a ray leaving here along `wi` starts in.
+    #[inline]
+    pub fn medium_toward(&self, wi: DVec3) -> Option<usize> {
+        if wi.dot(self.n) < 0.0 {
+            self.inside
+        } else {
+            self.outside
+        }
+    }
+
+    /// The integrand's projection factor for `wi`: |cos θi| at a surface, 1 in a medium.
+    #[inline]
+    pub fn cos(&self, wi: DVec3) -> f64 {
+        self.bsdf.cos(self.n, wi)
     }
 }
 
@@ -168,7 +225,7 @@ impl Integrator {
         let mut sum = Rgb::ZERO;
         for l in scene.lights.delta() {
             let Some(ls) = l.sample_li(v.p) else { continue };
-            let fc = v.bsdf.f(v.wo, ls.wi) * ls.wi.dot(v.n).abs();
+            let fc = v.bsdf.f(v.wo, ls.wi) * v.cos(ls.wi);
             if fc == Rgb::ZERO || ls.radiance == Rgb::ZERO {
                 continue;
             }
@@ -177,8 +234,14 @@ impl Integrator {
             if scene.lights.intersect(&ray, 0.0, dist).is_some() {
                 continue;
             }
+            let skip = v.left_behind(scene, ls.wi);
+            if scene.participating {
+                let medium = v.medium_toward(ls.wi);
+                sum += fc * transmitted(scene, &ray, dist, ls.radiance, skip, medium, rays);
+                continue;
+            }
             rays.begin(RayKind::Shadow);
-            let occluded = scene.occluded_skipping(&ray, 0.0, dist, v.left_behind(scene, ls.wi));
+            let occluded = scene.occluded_skipping(&ray, 0.0, dist, skip);
             rays.end(RayKind::Shadow);
             if !occluded {
                 sum += fc * ls.radiance;
@@ -189,22 +252,44 @@ impl Integrator {
 
     /// Traces a BSDF draw's ray (nearest hit) when it extends the path, else evaluates
     /// `Li` by a shadow ray; returns `Li` and records the continuation. `along`: the
-    /// lights along the draw's ray ([`spawn`]), where the caller found them.
+    /// lights along the draw's ray ([`spawn`]), where the caller found them. Through
+    /// media the continuation is the free flight's stop (`integrator/medium.rs`), drawn
+    /// with the numbers of vertex `depth + 1` and the path's throughput `beta` at `v`.
     #[allow(clippy::too_many_arguments)]
     fn li_of_bsdf_draw(
         &self,
         scene: &Scene,
         v: &Vertex,
+        beta: Rgb,
         s: &BsdfSample,
         extends: bool,
         needed: bool,
         along: Option<&Along>,
+        depth: usize,
+        rng: &SampleStream,
         next: &mut Option<Continuation>,
         rays: &mut impl RayLog,
     ) -> Rgb {
         let ray = spawn(v.p, v.n, s.wi);
         let skip = v.left_behind(scene, s.wi);
-        if extends {
+        let medium = v.medium_toward(s.wi);
+        if extends && scene.participating {
+            rays.begin(RayKind::Secondary);
+            let walk = Walk::new(scene, &ray, skip, medium, along.map(|a| a.nearest));
+            rays.end(RayKind::Secondary);
+            let li = walk.tr * emitted(scene, &walk.end, s.wi);
+            let (uc, u) = self.dims.flight(rng, depth + 1);
+            let (flight, trace) = match walk.fly(scene, beta * s.weight, uc, u) {
+                Flight::Scatter { p, medium, weight } => (weight, Trace::Medium { p, medium }),
+                Flight::Through(weight) => (weight, walk.end),
+            };
+            *next = Some(Continuation {
+                weight: s.weight * flight,
+                trace,
+                wi: s.wi,
+            });
+            li
+        } else if extends {
             rays.begin(RayKind::Secondary);
             let t = match along {
                 Some(a) => trace_along(scene, &ray, a, skip),
@@ -220,8 +305,8 @@ impl Integrator {
             li
         } else if needed {
             match along {
-                Some(a) => incident_from(scene, &ray, a.nearest, skip, rays),
-                None => incident(scene, &ray, skip, rays),
+                Some(a) => incident_from(scene, &ray, a.nearest, skip, medium, rays),
+                None => incident(scene, &ray, skip, medium, rays),
             }
         } else {
             Rgb::ZERO
@@ -258,10 +343,13 @@ impl Integrator {
                     let li = self.li_of_bsdf_draw(
                         scene,
                         v,
+                        beta,
                         &s,
                         extend && j == 0,
                         true,
                         None,
+                        depth,
+                        rng,
                         &mut next,
                         rays,
                     );
@@ -297,8 +385,9 @@ impl Integrator {
                     // A delta lobe: a failed draw for MIS, its own estimate outside.
                     px.add_failed(self, depth, k);
                     let bs = s.bsdf.as_ref().expect("specular draws come from the BSDF");
-                    let li =
-                        self.li_of_bsdf_draw(scene, v, bs, carries, true, None, &mut next, rays);
+                    let li = self.li_of_bsdf_draw(
+                        scene, v, beta, bs, carries, true, None, depth, rng, &mut next, rays,
+                    );
                     px.add(beta * bs.weight * li / f64::from(n_k));
                     continue;
                 }
@@ -313,23 +402,31 @@ impl Integrator {
                 } else {
                     (v.bsdf.f(v.wo, s.wi), None)
                 };
-                let fc = f * s.wi.dot(v.n).abs();
+                let fc = f * v.cos(s.wi);
                 // Li along the draw: the continuation's trace for the draw that carries
                 // the path, else a shadow ray toward the light it meets.
                 let mut li_of = |rays: &mut _| match &s.bsdf {
                     Some(bs) if carries => self.li_of_bsdf_draw(
                         scene,
                         v,
+                        beta,
                         bs,
                         true,
                         true,
                         Some(&along),
+                        depth,
+                        rng,
                         &mut next,
                         rays,
                     ),
-                    _ if fc != Rgb::ZERO => {
-                        incident_from(scene, &ray, along.nearest, v.left_behind(scene, s.wi), rays)
-                    }
+                    _ if fc != Rgb::ZERO => incident_from(
+                        scene,
+                        &ray,
+                        along.nearest,
+                        v.left_behind(scene, s.wi),
+                        v.medium_toward(s.wi),
+                        rays,
+                    ),
                     _ => Rgb::ZERO,
                 };
                 // Li before the pdfs, so that a draw whose value is 0 skips its pdfs and
@@ -378,8 +475,9 @@ impl Integrator {
             // its continuous outcomes are already covered by the techniques.
             let d = self.dims.extra(rng, depth);
             if let Some(s) = v.bsdf.sample_f(v.wo, d.uc, d.u) {
-                let li =
-                    self.li_of_bsdf_draw(scene, v, &s, extend, s.specular, None, &mut next, rays);
+                let li = self.li_of_bsdf_draw(
+                    scene, v, beta, &s, extend, s.specular, None, depth, rng, &mut next, rays,
+                );
                 if s.specular {
                     px.add(beta * s.weight * li);
                 }

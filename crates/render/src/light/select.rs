@@ -57,7 +57,7 @@ fn sin_sub_clamped(sin_a: f64, cos_a: f64, sin_b: f64, cos_b: f64) -> f64 {
 }
 
 /// A bound on the unoccluded contribution of area light `l` at point `p` with normal
-/// `n` (pbrt-v4 `LightBounds::Importance`, §12.6.3): `Φ · cos θ' · cos θi' / d²`, with
+/// `n` (zero inside a medium; pbrt-v4 `LightBounds::Importance`, §12.6.3): `Φ · cos θ' · cos θi' / d²`, with
 /// Φ the luminance of the light's power, d the distance to the centre of its bounding
 /// sphere (at least the sphere's radius), θ' the smallest angle between the light's
 /// normal cone and a direction from the light toward p, and θi' the smallest angle
@@ -103,9 +103,14 @@ pub fn importance_of(b: &ImportanceBounds, phi: f64, p: DVec3, n: DVec3) -> f64 
     if cos_p <= 0.0 {
         return 0.0;
     }
-    let cos_i = n.dot(w).abs();
-    let sin_i = safe_sqrt(1.0 - cos_i * cos_i);
-    let cos_ip = cos_sub_clamped(sin_i, cos_i, sin_b, cos_b);
+    // No normal (a point inside a medium): no cosine to bound (pbrt-v4 likewise).
+    let cos_ip = if n == DVec3::ZERO {
+        1.0
+    } else {
+        let cos_i = n.dot(w).abs();
+        let sin_i = safe_sqrt(1.0 - cos_i * cos_i);
+        cos_sub_clamped(sin_i, cos_i, sin_b, cos_b)
+    };
     (phi * cos_p * cos_ip / d2).max(0.0)
 }
 

@@ -8,6 +8,7 @@ use crate::color::Rgb;
 use crate::distribution::Distribution1D;
 use crate::light::{AreaLight, DeltaLight, EnvMap, Environment, Lights, Shape};
 use crate::material::Material;
+use crate::medium::Medium;
 use crate::texture::{Texture, TextureSpace};
 use ::scene::{EnvironmentData, Light, LightKind, MaterialData, SceneData, TextureData, TextureId};
 use glam::{DMat3, DVec3};
@@ -70,6 +71,7 @@ fn material(data: &SceneData, m: &MaterialData) -> Material {
             roughness,
         },
         MaterialData::Dielectric { eta, roughness } => Material::Dielectric { eta, roughness },
+        MaterialData::Interface => Material::Interface,
         MaterialData::Plastic {
             diffuse,
             eta,
@@ -177,6 +179,8 @@ pub(super) fn build(data: &SceneData) -> Scene {
                 let m = glam::DMat3::from_cols_array(&p.m).transpose();
                 LocalFrame::undoing(m, v3(p.t))
             }),
+            interior: o.interior.map(|m| m.index()),
+            exterior: o.exterior.map(|m| m.index()),
         })
         .collect();
     let l = &data.lights;
@@ -187,5 +191,10 @@ pub(super) fn build(data: &SceneData) -> Scene {
         l.by_power.as_ref().map(Distribution1D::from),
         l.by_area.as_ref().map(Distribution1D::from),
     );
-    Scene::new(camera, materials, objects, lights)
+    let media = data
+        .media
+        .iter()
+        .map(|m| Medium::new(v3(m.sigma_a), v3(m.sigma_s), m.g))
+        .collect();
+    Scene::new(camera, materials, objects, lights).with_media(media)
 }

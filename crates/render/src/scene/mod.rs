@@ -45,6 +45,7 @@ pub use ::scene::{
 use crate::camera::Camera;
 use crate::light::Lights;
 use crate::material::Material;
+use crate::medium::Medium;
 use crate::texture::TexCoord;
 use frep::triangles::Triangles;
 use frep::{Aabb, Bvh, Ray, Solid, Surface};
@@ -80,6 +81,10 @@ pub struct Object {
     /// From world space to the object's own (its transform undone), where it has a
     /// transform: where pattern and image textures are read.
     pub to_local: Option<LocalFrame>,
+    /// Index into [`Scene::media`] of what fills it (None: vacuum).
+    pub interior: Option<usize>,
+    /// Index into [`Scene::media`] of what surrounds it (None: vacuum).
+    pub exterior: Option<usize>,
 }
 
 /// The inverse of an object's transform: points by `m·x + t`, normals by `normals·n`
@@ -226,6 +231,11 @@ pub struct Scene {
     pub objects: Vec<Object>,
     /// Area, point/spot and environment lights.
     pub lights: Lights,
+    /// Participating media, referred to by index from the objects.
+    pub media: Vec<Medium>,
+    /// Whether rays must be walked through media and index-matched boundaries (some
+    /// object names a medium or has an `interface` material); else they never are.
+    pub participating: bool,
     bvh: Bvh,
     bounds: Aabb,
     /// Per object, whether its solid is convex ([`Solid::is_convex`]).
@@ -247,15 +257,28 @@ impl Scene {
             .filter(|b| b.is_finite())
             .fold(Aabb::EMPTY, |a, b| a.union(b));
         let convex = objects.iter().map(|o| o.geometry.is_convex()).collect();
+        let participating = objects.iter().any(|o| {
+            o.interior.is_some()
+                || o.exterior.is_some()
+                || matches!(materials[o.material], Material::Interface)
+        });
         Self {
             camera,
             materials,
             objects,
             lights,
+            media: Vec::new(),
+            participating,
             bvh,
             bounds,
             convex,
         }
+    }
+
+    /// The scene with `media`, which its objects' `interior` and `exterior` index.
+    pub fn with_media(mut self, media: Vec<Medium>) -> Self {
+        self.media = media;
+        self
     }
 
     /// Builds the CPU scene from resolved data: textures looked up, plastic coats

@@ -135,6 +135,8 @@ impl Sampling for Technique {
                 .lights
                 .sample_environment(u)
                 .map(TechniqueSample::from_light),
+            // No hemisphere inside a medium (n = 0): the technique draws nothing there.
+            Technique::CosineHemisphere if ctx.n == DVec3::ZERO => None,
             Technique::CosineHemisphere => {
                 let wi = Frame::from_z(facing_normal(ctx)).from_local(cosine_hemisphere(u));
                 let pdf = self.pdf(ctx, wi);

@@ -27,6 +27,8 @@ pub fn object(shape: &Shape, material: usize) -> Object {
         geometry: Solid::build(shape).unwrap().into(),
         material,
         to_local: None,
+        interior: None,
+        exterior: None,
     }
 }
 
