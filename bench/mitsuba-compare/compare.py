@@ -53,7 +53,11 @@ STATS = re.compile(r"(direct|path): ([\d.]+) s on (?:\d+ threads?|the GPU), (\d+
                    r"\(([\d.]+) MSamples/s\); rays: ([\d.]+) MRays/s")
 
 
-def mitsuba_integrator(kind, max_depth):
+def mitsuba_integrator(kind, max_depth, media=False):
+    if media:
+        # Mitsuba's volumetric path tracer (spectral MIS over the channels, as frepray's
+        # free flight); its `direct` has no media, so media scenes render `path` only.
+        return {"type": "volpathmis", "max_depth": max_depth + 1, "rr_depth": 1000}
     if kind == "direct":
         # One draw of each technique, power heuristic: frepray's `--estimator power` with
         # techniques bsdf:1, light-uniform:1 (Mitsuba picks an emitter uniformly).
@@ -164,11 +168,13 @@ def main():
         for v in VARIANTS:
             mi.set_variant(v)
             loaded[v] = mi.load_dict(scenes.SCENES[name](mi, w, h, args.spp))
-        for kind in args.integrators:
+        media = "media" in desc
+        kinds = [k for k in args.integrators if not (media and k == "direct")]
+        for kind in kinds:
             integ = {}
             for v in VARIANTS:
                 mi.set_variant(v)
-                integ[v] = mi.load_dict(mitsuba_integrator(kind, max_depth))
+                integ[v] = mi.load_dict(mitsuba_integrator(kind, max_depth, media))
                 # Untimed: LLVM compiles its kernels on the first render (cached after).
                 run_mitsuba(v, loaded[v], integ[v], args.spp, 10_000)
             imgs = {r: [] for r in RENDERERS}
@@ -235,6 +241,8 @@ def main():
     print("| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: |")
     for name in args.scenes:
         for kind in args.integrators:
+            if (name, kind, "frepray") not in perf:
+                continue  # `direct` of a media scene
             f = perf[(name, kind, "frepray")]
             fs, fr = statistics.median(x[0] for x in f), statistics.median(x[1] for x in f)
             s = statistics.median(x[0] for x in perf[(name, kind, "scalar_rgb")])

@@ -132,4 +132,40 @@ def room(mi, width, height, spp):
     }
 
 
-SCENES = {"diffuse": diffuse, "conductors": conductors, "room": room}
+def _medium(albedo, mean_free_path, g=0.0):
+    """frepray's `albedo` and `mean_free_path` as Mitsuba's `albedo` and σ_t = 1/mfp,
+    given as `scale` × an RGB in [0, 1] (Mitsuba reads an RGB σ_t as a reflectance and
+    refuses values above 1: mitsuba3 issue #1620)."""
+    mfp = [mean_free_path] * 3 if isinstance(mean_free_path, (int, float)) else mean_free_path
+    sigma_t = [1.0 / m for m in mfp]
+    scale = max(sigma_t)
+    return {"type": "homogeneous", "albedo": _rgb(albedo),
+            "sigma_t": _rgb([s / scale for s in sigma_t]), "scale": scale,
+            "phase": {"type": "hg", "g": g}}
+
+
+def _filled(center, radius, bsdf, medium):
+    s = _sphere(center, radius, bsdf)
+    s["interior"] = medium
+    return s
+
+
+def media(mi, width, height, spp):
+    glass = {"type": "dielectric", "int_ior": 1.5, "ext_ior": 1.0}
+    matched = {"type": "null"}
+    grey = _medium(0.9, 0.5)
+    return {
+        "type": "scene",
+        "camera": _camera(mi, [0, -6, 2], [0, 0, 0.55], 30, width, height, spp),
+        "floor": _box(mi, [0, 0, -0.05], [10, 10, 0.1], _diffuse(0.6)),
+        "glass": _filled([-1.65, 0, 0.5], 0.5, glass, grey),
+        "matched": _filled([-0.55, 0, 0.5], 0.5, matched, grey),
+        "forward": _filled([0.55, 0, 0.5], 0.5, matched, _medium(0.95, 0.33, 0.7)),
+        "chromatic": _filled([1.65, 0, 0.5], 0.5, matched,
+                             _medium([0.95, 0.8, 0.6], [1.0, 0.4, 0.2])),
+        "rect": _rect_light(mi, [-1.5, 1.5, 3], [3, 0, 0], [0, -2, 0], 3),
+        "bulb": _sphere_light([2, -2, 1.6], 0.2, [30, 24, 16]),
+    }
+
+
+SCENES = {"diffuse": diffuse, "conductors": conductors, "room": room, "media": media}
