@@ -712,6 +712,13 @@ fn gpu_backend_refuses_by_name_and_auto_falls_back() {
             ),
             "index-matched interface",
         ),
+        (
+            format!(
+                "{head}[materials.lamp]\ntype = \"diffuse\"\nemission = 5\n\n\
+                 [[objects]]\nsolid = \"sphere([0, 0, 2], 0.3)\"\nmaterial = \"lamp\"\n\n{ball}"
+            ),
+            "emitting objects",
+        ),
     ];
     let small = ["--width", "16", "--height", "12", "--spp", "1", "--quiet"];
     for (k, (text, refused)) in cases.iter().enumerate() {

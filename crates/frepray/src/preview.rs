@@ -259,6 +259,7 @@ pub fn scene_data(solid: Solid, cam: CameraData, b: &Aabb, up: DVec3) -> SceneDa
             reflectance: TextureId(0),
         }],
         material_names: vec!["preview".into()],
+        emission: vec![],
         solids,
         meshes: Default::default(),
         objects: vec![ObjectData {

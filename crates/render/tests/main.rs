@@ -3,6 +3,7 @@
 
 #[path = "integrators/common.rs"]
 mod common;
+mod emitting;
 mod image_textures;
 mod integrators;
 mod media;

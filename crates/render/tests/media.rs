@@ -4,7 +4,9 @@
 //! estimator converging to one reference on a lit medium, next-event estimation through
 //! the boundary included.
 
-use crate::common::{check_against, mean_se, options, run, Z_BOUND};
+use crate::common::{
+    check_against, estimators_agree_with_bsdf_sampling, mean_se, options, run, Z_BOUND,
+};
 use glam::{DVec2, DVec3};
 use mis::Method;
 use render::integrator::IntegratorKind;
@@ -156,33 +158,16 @@ objects = [
 lights = [{ type = "sphere", center = [1.2, -0.8, 2.2], radius = 0.6, power = 60 }]
 "#,
     );
-    let mut o = options(
-        IntegratorKind::Path,
-        Method::Balance,
-        &[(Technique::Bsdf, 1)],
-        4096,
-        5,
+    estimators_agree_with_bsdf_sampling(
+        &s,
+        4,
+        &[
+            Method::Balance,
+            Method::Power,
+            Method::OptimalDirect,
+            Method::OptimalProgressive,
+        ],
     );
-    o.max_depth = 4;
-    let (reference, _) = run(&s, &o);
-    let mix = [
-        (Technique::Bsdf, 1),
-        (Technique::LightPower, 1),
-        (Technique::LightArea, 1),
-    ];
-    for m in [
-        Method::Balance,
-        Method::Power,
-        Method::OptimalDirect,
-        Method::OptimalProgressive,
-    ] {
-        let mut o = options(IntegratorKind::Path, m, &mix, 256, 11);
-        o.max_depth = 4;
-        let (film, _) = run(&s, &o);
-        let (z, rel) = check_against(&film, &|x, y| reference.rgb(x, y), &format!("{m}"));
-        println!("{m}: |z| ≤ {z:.2}, relative se {rel:.1e}");
-        assert!(rel < 0.05, "{m}: no power ({rel})");
-    }
 }
 
 const MEDIA_SCENE: &str = r#"

@@ -71,6 +71,10 @@ pub struct SceneData {
     pub materials: Vec<MaterialData>,
     /// The name of each material, for messages.
     pub material_names: Vec<String>,
+    /// Emitted radiance per material, where any material emits (else empty, and left
+    /// out of the JSON).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub emission: Vec<[f64; 3]>,
     /// Solid pool (one per solid object).
     pub solids: SolidPool,
     /// Triangle-mesh pool (one per mesh object; left out of the JSON when empty).
@@ -378,6 +382,9 @@ pub enum LightKind {
     Point,
     /// A spot light at `p0` with unit axis `e1`.
     Spot,
+    /// The bounding sphere (centre `p0`, `radius`) of an emitting object: light
+    /// techniques sample directions toward it; the object's surface emits.
+    Solid,
 }
 
 impl LightKind {
@@ -385,7 +392,11 @@ impl LightKind {
     pub fn has_area(self) -> bool {
         matches!(
             self,
-            LightKind::Sphere | LightKind::Rect | LightKind::Disk | LightKind::Triangle
+            LightKind::Sphere
+                | LightKind::Rect
+                | LightKind::Disk
+                | LightKind::Triangle
+                | LightKind::Solid
         )
     }
 }

@@ -147,6 +147,8 @@ pub struct MaterialDesc {
     pub k: Option<ColorDesc>,
     /// GGX α.
     pub roughness: Option<f64>,
+    /// Emitted radiance of the surface (outward), making its objects lights.
+    pub emission: Option<ColorDesc>,
 }
 
 /// An object: a solid (inline or from a model file), a transform and a material.

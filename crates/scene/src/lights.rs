@@ -39,6 +39,56 @@ pub(crate) fn bounding_sphere(l: &Light) -> (DVec3, f64) {
     }
 }
 
+/// The light-selection proxies of the objects whose material emits (`emission` per
+/// material, empty when none does): each one's bounding sphere, which light techniques
+/// sample by solid angle, with the material's radiance and, for selection, the power
+/// π·A·L of the sphere's area A (an estimate: the surface's own area is not known in
+/// closed form). An unbounded emitting object is an error at its `material`.
+pub(crate) fn emitting_objects(
+    src: &Source,
+    objects: &[crate::data::ObjectData],
+    emission: &[[f64; 3]],
+    bounds: impl Fn(&crate::data::ObjectData) -> frep::Aabb,
+) -> Result<Vec<Light>, SceneError> {
+    let mut out = Vec::new();
+    if emission.is_empty() {
+        return Ok(out);
+    }
+    for (i, o) in objects.iter().enumerate() {
+        let le = emission[o.material.index()];
+        if le == [0.0; 3] {
+            continue;
+        }
+        let b = bounds(o);
+        if !b.is_finite() || b.is_empty() {
+            return Err(src.at_value(
+                &kp!["objects", i, "material"],
+                format!(
+                    "object '{}' emits but is unbounded: an emitting object must be bounded",
+                    o.name
+                ),
+            ));
+        }
+        let (c, r) = ((b.lo + b.hi) / 2.0, b.extent().length() / 2.0);
+        let area = 4.0 * PI * r * r;
+        out.push(Light {
+            kind: LightKind::Solid,
+            p0: c.to_array(),
+            e1: [0.0; 3],
+            e2: [0.0; 3],
+            radius: r,
+            emission: le,
+            two_sided: false,
+            cos_falloff_start: 0.0,
+            cos_falloff_end: 0.0,
+            area,
+            power: le.map(|x| PI * area * x),
+            selection_pmf: 0.0,
+        });
+    }
+    Ok(out)
+}
+
 /// A constant, non-negative colour.
 pub(crate) fn rgb(src: &Source, at: &[Seg], c: &ColorDesc) -> Result<DVec3, SceneError> {
     match c {

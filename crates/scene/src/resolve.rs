@@ -283,6 +283,7 @@ fn material(
     let at = kp!["materials", name];
     let key = |k: &str| [at.clone(), kp![k]].concat();
     let present = [
+        ("emission", m.emission.is_some()),
         ("reflectance", m.reflectance.is_some()),
         ("diffuse", m.diffuse.is_some()),
         ("metal", m.metal.is_some()),
@@ -291,10 +292,10 @@ fn material(
         ("roughness", m.roughness.is_some()),
     ];
     let allowed: &[&str] = match m.kind.as_str() {
-        "diffuse" => &["type", "reflectance"],
-        "conductor" => &["type", "metal", "eta", "k", "roughness"],
-        "dielectric" => &["type", "eta", "roughness"],
-        "plastic" => &["type", "diffuse", "eta", "roughness"],
+        "diffuse" => &["type", "reflectance", "emission"],
+        "conductor" => &["type", "metal", "eta", "k", "roughness", "emission"],
+        "dielectric" => &["type", "eta", "roughness", "emission"],
+        "plastic" => &["type", "diffuse", "eta", "roughness", "emission"],
         "interface" => &["type"],
         other => {
             return Err(src.at_value(&key("type"), format!("unknown material type {other:?}; valid types: diffuse, conductor, dielectric, plastic, interface")))
@@ -559,6 +560,16 @@ pub(crate) fn resolve_source(
         files: image_files,
         ..
     } = pool;
+    let mut emission = Vec::with_capacity(d.materials.len());
+    for (name, m) in &d.materials {
+        emission.push(match &m.emission {
+            Some(c) => crate::lights::rgb(src, &kp!["materials", name, "emission"], c)?.to_array(),
+            None => [0.0; 3],
+        });
+    }
+    if emission.iter().all(|e| *e == [0.0; 3]) {
+        emission.clear();
+    }
     let (media, medium_names) = crate::media::media(src, d)?;
     let mut solids = SolidPool::default();
     let mut meshes = MeshPool::default();
@@ -601,7 +612,16 @@ pub(crate) fn resolve_source(
             )?,
         });
     }
-    let (area, delta) = lights(src, base, &d.lights)?;
+    let (mut area, delta) = lights(src, base, &d.lights)?;
+    area.extend(crate::lights::emitting_objects(
+        src,
+        &objects,
+        &emission,
+        |o| match o.geometry {
+            Geometry::Solid(s) => solids.bounds(s),
+            Geometry::Mesh(m) => meshes.mesh(m).bounds(),
+        },
+    )?);
     let mut maps = Vec::new();
     let env = match &d.environment {
         Some(e) => Some(environment(src, base, e, &mut maps)?),
@@ -635,6 +655,7 @@ pub(crate) fn resolve_source(
         images,
         materials,
         material_names: names.into_iter().cloned().collect(),
+        emission,
         solids,
         meshes,
         objects,

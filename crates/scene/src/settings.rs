@@ -2,7 +2,7 @@
 //! besides the scene. Sampling techniques are named here by [`TechniqueKind`]; a
 //! renderer maps each to its own implementation.
 
-use crate::data::SceneData;
+use crate::data::{LightKind, SceneData};
 use crate::desc::RenderDesc;
 use crate::error::{kp, SceneError};
 use crate::locate::Source;
@@ -554,6 +554,12 @@ pub(crate) fn settings(
             return Err(src.at_value(
                 &kp!["render", "per_light"],
                 "per-light mode needs an area light or an environment",
+            ));
+        }
+        if scene.lights.area.iter().any(|l| l.kind == LightKind::Solid) {
+            return Err(src.at_value(
+                &kp!["render", "per_light"],
+                "per-light mode does not take emitting objects (materials with `emission`)",
             ));
         }
         s.per_light = n as u32;

@@ -90,6 +90,13 @@ pub enum OptionsError {
         /// The scene's MIS lights.
         lights: usize,
     },
+    /// Per-light mode in a scene with emitting objects, whose light is not a domain of
+    /// directions of its own (their proxies have no surface).
+    #[error(
+        "per-light mode does not take emitting objects (materials with `emission`); \
+         render without --per-light"
+    )]
+    PerLightEmittingObjects,
     /// `light#k` with k past the scene's MIS lights.
     #[error(
         "technique {technique}: the scene has {lights} MIS light{} (area lights, then the \

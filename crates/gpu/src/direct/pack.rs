@@ -430,6 +430,7 @@ impl DirectScene {
                 LightKind::Triangle => {
                     return Err(unsupported("mesh lights (triangles) render on the CPU"))
                 }
+                LightKind::Solid => return Err(unsupported("emitting objects render on the CPU")),
                 LightKind::Point | LightKind::Spot => unreachable!("area lights only"),
             });
         }

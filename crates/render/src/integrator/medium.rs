@@ -208,8 +208,10 @@ impl Walk {
 }
 
 /// Light `le` from `t_max` along `ray` (a light's point, or ∞ for the environment)
-/// times the transmittance to it, through index-matched boundaries and media; 0 when
-/// another surface is in the way. The ray starts in `medium`, object `skip` left out.
+/// times the transmittance to it, through index-matched boundaries and media; where
+/// another surface is in the way, its emission (0 unless it is an emitting object's
+/// outside) times the transmittance to it. The ray starts in `medium`, object `skip`
+/// left out.
 pub(crate) fn transmitted(
     scene: &Scene,
     ray: &Ray,
@@ -243,7 +245,7 @@ pub(crate) fn transmitted(
                     }
                 }
             }
-            Some(_) => return Rgb::ZERO,
+            Some(h) => return tr * scene.surface_emission(&h, ray.d),
         }
         if tr == Rgb::ZERO {
             return Rgb::ZERO;

@@ -173,6 +173,9 @@ impl Integrator {
     /// number.
     pub fn check_scene(&self, scene: &Scene) -> Result<(), OptionsError> {
         let count = scene.lights.count();
+        if self.per_light > 0 && scene.lights.area().iter().any(|l| l.proxy) {
+            return Err(OptionsError::PerLightEmittingObjects);
+        }
         if self.per_light > 0 && self.per_light != count {
             return Err(OptionsError::PerLightMismatch {
                 per_light: self.per_light,

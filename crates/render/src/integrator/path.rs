@@ -89,7 +89,7 @@ impl Integrator {
             if self.aovs {
                 self.add_aovs(scene, &first, &ray, rng, px);
             }
-            if camera_emitters && matches!(first, Trace::Light(_) | Trace::Escape) {
+            if camera_emitters {
                 px.add(emitted(scene, &first, ray.d));
             }
             (first, Rgb::ONE)

@@ -58,12 +58,14 @@ fn trace_along(scene: &Scene, ray: &Ray, along: &Along, skip: Option<usize>) -> 
 }
 
 /// Emitted radiance arriving along a traced ray of direction `d`: the light's, the
-/// environment's on escape, 0 at an object.
+/// environment's on escape, an emitting object's outside ([`Scene::surface_emission`]),
+/// else 0.
 pub(crate) fn emitted(scene: &Scene, t: &Trace, d: DVec3) -> Rgb {
     match t {
         Trace::Light(l) => l.radiance,
         Trace::Escape => scene.lights.environment_radiance(d),
-        Trace::Surface(_) | Trace::Medium { .. } => Rgb::ZERO,
+        Trace::Surface(h) => scene.surface_emission(h, d),
+        Trace::Medium { .. } => Rgb::ZERO,
     }
 }
 
@@ -109,11 +111,19 @@ fn incident_from(
         Some(h) => (h.t, h.radiance),
         None => (f64::INFINITY, scene.lights.environment_radiance(ray.d)),
     };
-    if le == Rgb::ZERO {
+    let emitting = scene.has_emitting_objects();
+    if le == Rgb::ZERO && !emitting {
         return Rgb::ZERO;
     }
     if scene.participating {
         return transmitted(scene, ray, t_max, le, skip, medium, rays);
+    }
+    if emitting {
+        // An object in the way may be the light: a nearest-hit ray.
+        rays.begin(RayKind::Shadow);
+        let hit = scene.intersect_skipping(ray, 0.0, t_max, skip);
+        rays.end(RayKind::Shadow);
+        return hit.map_or(le, |h| scene.surface_emission(&h, ray.d));
     }
     rays.begin(RayKind::Shadow);
     let occluded = scene.occluded_skipping(ray, 0.0, t_max, skip);

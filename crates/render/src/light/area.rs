@@ -68,6 +68,10 @@ pub struct AreaLight {
     pub radiance: Rgb,
     /// Whether planar shapes emit on both sides.
     pub two_sided: bool,
+    /// Whether the shape only stands in for an emitting object in light sampling (its
+    /// bounding sphere): light techniques sample directions toward it and count its
+    /// density, but rays never meet it (the object's surface emits, `Scene::emission`).
+    pub proxy: bool,
 }
 
 impl AreaLight {
@@ -77,6 +81,7 @@ impl AreaLight {
             shape,
             radiance,
             two_sided: false,
+            proxy: false,
         }
     }
     /// Surface area.

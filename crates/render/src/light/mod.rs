@@ -150,6 +150,9 @@ impl Lights {
     pub fn intersect(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<LightHit> {
         let mut n = DVec3::ZERO;
         let (i, t) = self.bvh.nearest(ray, t_min, t_max, |i, lim| {
+            if self.area[i].proxy {
+                return None;
+            }
             let c = self.area[i].intersect(ray, t_min, lim)?;
             n = c.n;
             Some(c.t)

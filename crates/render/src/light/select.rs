@@ -451,7 +451,9 @@ impl Lights {
                 let (cr, m) = l.crossings(p, wi);
                 // Crossings come nearest first, all at t > 0; the first light found wins
                 // a tie, as in the nearest-hit walk.
-                if let Some(first) = cr[0].filter(|_| nearest && m > 0) {
+                // A proxy (an emitting object's bounding sphere) has density but no
+                // surface: it is never the light a ray meets.
+                if let Some(first) = cr[0].filter(|_| nearest && m > 0 && !l.proxy) {
                     if best.is_none_or(|(_, b)| first.t < b.t) {
                         best = Some((k, first));
                     }

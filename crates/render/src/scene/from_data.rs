@@ -108,12 +108,17 @@ impl AreaLight {
                 e1: v3(l.e1),
                 e2: v3(l.e2),
             },
+            LightKind::Solid => Shape::Sphere {
+                center: v3(l.p0),
+                radius: l.radius,
+            },
             LightKind::Point | LightKind::Spot => return None,
         };
         Some(AreaLight {
             shape,
             radiance: Rgb::from_array(l.emission),
             two_sided: l.two_sided,
+            proxy: l.kind == LightKind::Solid,
         })
     }
 }
@@ -196,5 +201,8 @@ pub(super) fn build(data: &SceneData) -> Scene {
         .iter()
         .map(|m| Medium::new(v3(m.sigma_a), v3(m.sigma_s), m.g))
         .collect();
-    Scene::new(camera, materials, objects, lights).with_media(media)
+    let emission = data.emission.iter().map(|&e| v3(e)).collect();
+    Scene::new(camera, materials, objects, lights)
+        .with_media(media)
+        .with_emission(emission)
 }

@@ -43,6 +43,7 @@ pub use ::scene::{
 };
 
 use crate::camera::Camera;
+use crate::color::Rgb;
 use crate::light::Lights;
 use crate::material::Material;
 use crate::medium::Medium;
@@ -233,6 +234,9 @@ pub struct Scene {
     pub lights: Lights,
     /// Participating media, referred to by index from the objects.
     pub media: Vec<Medium>,
+    /// Emitted radiance per material (empty when no material emits): the surfaces of
+    /// objects of such a material emit on their outside.
+    pub emission: Vec<Rgb>,
     /// Whether rays must be walked through media and index-matched boundaries (some
     /// object names a medium or has an `interface` material); else they never are.
     pub participating: bool,
@@ -268,6 +272,7 @@ impl Scene {
             objects,
             lights,
             media: Vec::new(),
+            emission: Vec::new(),
             participating,
             bvh,
             bounds,
@@ -279,6 +284,35 @@ impl Scene {
     pub fn with_media(mut self, media: Vec<Medium>) -> Self {
         self.media = media;
         self
+    }
+
+    /// The scene with the materials' emitted radiance (one per material; empty: none
+    /// emits). The objects that emit need their proxies among the lights
+    /// ([`crate::light::AreaLight::proxy`]) for light techniques to reach them.
+    pub fn with_emission(mut self, emission: Vec<Rgb>) -> Self {
+        if emission.iter().all(|e| *e == Rgb::ZERO) {
+            self.emission = Vec::new();
+        } else {
+            self.emission = emission;
+        }
+        self
+    }
+
+    /// Whether some object's surface emits (then light reaching a point is found by
+    /// nearest-hit rays: an object in the way may be the light).
+    #[inline]
+    pub fn has_emitting_objects(&self) -> bool {
+        !self.emission.is_empty()
+    }
+
+    /// Radiance leaving `hit` toward the origin of a ray along `d`: its material's
+    /// emission on the outside (`d` against the outward normal), else 0.
+    #[inline]
+    pub fn surface_emission(&self, hit: &SurfaceHit, d: DVec3) -> Rgb {
+        match self.emission.get(hit.material) {
+            Some(&le) if d.dot(hit.n) < 0.0 => le,
+            _ => Rgb::ZERO,
+        }
     }
 
     /// Builds the CPU scene from resolved data: textures looked up, plastic coats

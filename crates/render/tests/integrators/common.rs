@@ -255,3 +255,27 @@ pub fn ball_on_floor(n: u32) -> Scene {
     );
     Scene::new(cam, materials, objects, lights)
 }
+
+/// `path` at `max_depth` with each of `methods` over [`MIX`] (256 spp) agrees with BSDF
+/// sampling alone (4096 spp, the balance heuristic over one technique), per channel
+/// within [`Z_BOUND`] standard errors of the difference, each image's relative
+/// standard error below 5 % (power).
+pub fn estimators_agree_with_bsdf_sampling(scene: &Scene, max_depth: u32, methods: &[Method]) {
+    let mut o = options(
+        IntegratorKind::Path,
+        Method::Balance,
+        &[(Technique::Bsdf, 1)],
+        4096,
+        5,
+    );
+    o.max_depth = max_depth;
+    let (reference, _) = run(scene, &o);
+    for &m in methods {
+        let mut o = options(IntegratorKind::Path, m, &MIX, 256, 11);
+        o.max_depth = max_depth;
+        let (film, _) = run(scene, &o);
+        let (z, rel) = check_against(&film, &|x, y| reference.rgb(x, y), &format!("{m}"));
+        println!("{m}: |z| ≤ {z:.2}, relative se {rel:.1e}");
+        assert!(rel < 0.05, "{m}: no power ({rel})");
+    }
+}
