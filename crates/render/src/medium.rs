@@ -1,28 +1,41 @@
-//! Homogeneous participating media: the coefficients a ray's transmittance and a
-//! scattering point's weight need (pbrt-v4 §11.1–11.2). What fills or surrounds an
-//! object is named on the object ([`crate::scene::Object::interior`], `exterior`); the
-//! integrator's walk through them is in `integrator/medium.rs`.
+//! Participating media of constant extinction: the coefficients a ray's transmittance
+//! and a scattering point's weight need (pbrt-v4 §11.1–11.2). What fills or surrounds
+//! an object is named on the object ([`crate::scene::Object::interior`], `exterior`);
+//! the integrator's walk through them is in `integrator/medium.rs`.
+//!
+//! σ_t is the same everywhere in a medium, so transmittance stays exp(−σ_t·d) and free
+//! flights are drawn exactly; the albedo may vary from point to point (a texture read
+//! in world space), which changes only how much of the extinction at a point scatters:
+//! σ_s(p) = albedo(p)·σ_t.
 
 use crate::color::Rgb;
+use crate::texture::{TexCoord, Texture};
+use glam::{DVec2, DVec3};
 
-/// A homogeneous medium: σ_s, σ_t = σ_a + σ_s per RGB channel, and the
-/// Henyey–Greenstein asymmetry g of its phase function.
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// A medium: σ_t per RGB channel, the single-scattering albedo (a texture of the
+/// point) and the Henyey–Greenstein asymmetry g of its phase function.
+#[derive(Clone, Debug, PartialEq)]
 pub struct Medium {
-    /// Scattering coefficient σ_s.
-    pub sigma_s: Rgb,
     /// Extinction coefficient σ_t = σ_a + σ_s.
     pub sigma_t: Rgb,
+    /// σ_s/σ_t, in [0, 1].
+    pub albedo: Texture,
     /// Phase-function asymmetry.
     pub g: f64,
 }
 
 impl Medium {
-    /// The medium of absorption `sigma_a` and scattering `sigma_s`.
+    /// The homogeneous medium of absorption `sigma_a` and scattering `sigma_s`.
     pub fn new(sigma_a: Rgb, sigma_s: Rgb, g: f64) -> Self {
+        let sigma_t = sigma_a + sigma_s;
+        let albedo = |s: f64, t: f64| if t > 0.0 { s / t } else { 0.0 };
         Self {
-            sigma_s,
-            sigma_t: sigma_a + sigma_s,
+            sigma_t,
+            albedo: Texture::Constant(Rgb::new(
+                albedo(sigma_s.x, sigma_t.x),
+                albedo(sigma_s.y, sigma_t.y),
+                albedo(sigma_s.z, sigma_t.z),
+            )),
             g,
         }
     }
@@ -30,6 +43,17 @@ impl Medium {
     #[inline]
     pub fn transmittance(&self, d: f64) -> Rgb {
         optical_transmittance(self.sigma_t, d)
+    }
+    /// σ_s at world point `p`: the albedo there times σ_t.
+    #[inline]
+    pub fn sigma_s(&self, p: DVec3) -> Rgb {
+        let tc = TexCoord {
+            p,
+            n: DVec3::ZERO,
+            uv: DVec2::ZERO,
+            local: None,
+        };
+        self.albedo.eval(&tc) * self.sigma_t
     }
 }
 
@@ -53,5 +77,6 @@ mod tests {
         assert!((t.z - (-2.0f64).exp()).abs() < 1e-15);
         let inf = m.transmittance(f64::INFINITY);
         assert_eq!(inf, Rgb::new(0.0, 1.0, 0.0));
+        assert_eq!(m.sigma_s(DVec3::ZERO), Rgb::new(0.0, 0.0, 0.5));
     }
 }

@@ -196,16 +196,21 @@ fn media_resolve_and_report_their_errors() {
     // Names sorted: ink, milk.
     let (ink, milk) = (&s.media[0], &s.media[1]);
     assert_eq!(ink.sigma_t, DVec3::new(0.6, 0.35, 1.1));
-    assert_eq!(ink.sigma_s, DVec3::splat(0.1));
+    assert!(
+        (ink.sigma_s(DVec3::ZERO) - DVec3::splat(0.1))
+            .abs()
+            .max_element()
+            < 1e-15
+    );
     // σ_t = scale / mfp = (4, 2, 1); σ_s = albedo · σ_t.
     assert_eq!(milk.sigma_t, DVec3::new(4.0, 2.0, 1.0));
-    assert_eq!(milk.sigma_s, DVec3::new(4.0, 1.0, 0.0));
+    assert_eq!(milk.sigma_s(DVec3::ZERO), DVec3::new(4.0, 1.0, 0.0));
     assert_eq!(milk.g, 0.3);
     assert_eq!(
         (s.objects[0].interior, s.objects[0].exterior),
         (Some(1), Some(0))
     );
-    let cases: [(&str, &str, &str, &str, &str); 5] = [
+    let cases: [(&str, &str, &str, &str, &str); 6] = [
         (
             r#"medium = "milk""#,
             r#"medium = "cream""#,
@@ -241,6 +246,13 @@ fn media_resolve_and_report_their_errors() {
             "media.ink",
             "needs sigma_s too",
         ),
+        (
+            "albedo = [1, 0.5, 0]",
+            "albedo = { image = { file = \"x.png\" } }",
+            "{ image",
+            "media.milk.albedo",
+            "an image needs a surface",
+        ),
     ];
     for (from, to, at, key, msg) in cases {
         let text = MEDIA_SCENE.replace(from, to);
@@ -254,4 +266,49 @@ fn media_resolve_and_report_their_errors() {
         );
         assert!(e.message.contains(msg), "{e}");
     }
+}
+
+/// A medium's albedo may vary from point to point (σ_t stays constant): a checker of
+/// two equal colours renders bit for bit as that constant albedo, and a checker of 0.2
+/// and 0.9 gives an image strictly between the two constant albedos' (each gap more
+/// than 10 standard errors of the per-pixel differences).
+#[test]
+fn a_textured_albedo_scatters_by_the_point() {
+    let ball = |albedo: &str| {
+        ball_in_dome(
+            &format!("{{ albedo = {albedo}, mean_free_path = 0.5, g = 0.3 }}"),
+            r#"{ type = "interface" }"#,
+            1.0,
+            12,
+        )
+    };
+    let render = |albedo: &str| {
+        let mut o = options(IntegratorKind::Path, Method::Power, &ENV, 64, 13);
+        o.max_depth = 64;
+        run(&ball(albedo), &o).0
+    };
+    let constant = render("0.7");
+    let same = render("{ checker = { a = 0.7, b = 0.7, scale = 4 } }");
+    assert!(
+        constant == same,
+        "a checker of equal colours is that colour"
+    );
+    // Per-pixel differences: their spread bounds the noise of the mean difference.
+    let diff = |a: &Image, b: &Image| {
+        let d: Vec<f64> = channel_values(a, 1)
+            .iter()
+            .zip(channel_values(b, 1))
+            .map(|(x, y)| x - y)
+            .collect();
+        mean_se(&d)
+    };
+    let (lo, hi) = (render("0.2"), render("0.9"));
+    let mid = render("{ checker = { a = 0.2, b = 0.9, scale = 4 } }");
+    let (above, above_se) = diff(&mid, &lo);
+    let (below, below_se) = diff(&hi, &mid);
+    println!(
+        "checker − 0.2: {above:.4} ± {above_se:.1e}; 0.9 − checker: {below:.4} ± {below_se:.1e}"
+    );
+    assert!(above > 10.0 * above_se, "{above} ± {above_se}");
+    assert!(below > 10.0 * below_se, "{below} ± {below_se}");
 }

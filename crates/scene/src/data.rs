@@ -293,13 +293,15 @@ pub enum MaterialData {
     Interface,
 }
 
-/// A homogeneous participating medium (coefficients per unit length, per RGB channel).
+/// A participating medium of constant extinction (coefficients per unit length, per RGB
+/// channel): σ_t everywhere, σ_s = albedo · σ_t with the albedo a texture of the point.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct MediumData {
-    /// Absorption coefficient σ_a ≥ 0.
-    pub sigma_a: [f64; 3],
-    /// Scattering coefficient σ_s ≥ 0.
-    pub sigma_s: [f64; 3],
+    /// Extinction coefficient σ_t = σ_a + σ_s ≥ 0.
+    pub sigma_t: [f64; 3],
+    /// Single-scattering albedo σ_s/σ_t in [0, 1]: a constant, a point-space checker
+    /// or a pattern, read in world space.
+    pub albedo: TextureId,
     /// Henyey–Greenstein asymmetry g in [−0.99, 0.99].
     pub g: f64,
 }

@@ -181,8 +181,9 @@ pub struct MediumDesc {
     pub sigma_a: Option<RgbDesc>,
     /// Scattering coefficient σ_s (per unit length).
     pub sigma_s: Option<RgbDesc>,
-    /// Single-scattering albedo σ_s/σ_t in [0, 1].
-    pub albedo: Option<RgbDesc>,
+    /// Single-scattering albedo σ_s/σ_t in [0, 1]: a colour, a point-space checker or a
+    /// pattern (read in world space at each scattering point).
+    pub albedo: Option<ColorDesc>,
     /// Mean free path 1/σ_t (a length, > 0).
     pub mean_free_path: Option<RgbDesc>,
     /// Henyey–Greenstein asymmetry g in [−0.99, 0.99] (default 0: isotropic).

@@ -554,6 +554,10 @@ pub(crate) fn resolve_source(
         .iter()
         .map(|(n, m)| material(src, n, m, &mut pool))
         .collect::<Result<Vec<_>, _>>()?;
+    let (media, medium_names) = crate::media::media(src, d, &mut |at, c| {
+        let id = texture(src, at, c, 1.0, &mut pool)?;
+        Ok((id, pool.list[id.index()].clone()))
+    })?;
     let Textures {
         list: textures,
         images,
@@ -570,7 +574,6 @@ pub(crate) fn resolve_source(
     if emission.iter().all(|e| *e == [0.0; 3]) {
         emission.clear();
     }
-    let (media, medium_names) = crate::media::media(src, d)?;
     let mut solids = SolidPool::default();
     let mut meshes = MeshPool::default();
     let mut objects = Vec::with_capacity(d.objects.len());

@@ -187,13 +187,14 @@ impl Walk {
                     let t = tau / sigma;
                     let tr_t = tr * m.transmittance(t);
                     let pdf = w.dot(m.sigma_t * tr_t);
+                    let p = s.o + s.d * t;
                     let weight = if pdf > 0.0 {
-                        m.sigma_s * tr_t / pdf
+                        m.sigma_s(p) * tr_t / pdf
                     } else {
                         Rgb::ZERO
                     };
                     return Flight::Scatter {
-                        p: s.o + s.d * t,
+                        p,
                         medium: s.medium,
                         weight,
                     };

@@ -199,7 +199,11 @@ pub(super) fn build(data: &SceneData) -> Scene {
     let media = data
         .media
         .iter()
-        .map(|m| Medium::new(v3(m.sigma_a), v3(m.sigma_s), m.g))
+        .map(|m| Medium {
+            sigma_t: v3(m.sigma_t),
+            albedo: texture(data, m.albedo),
+            g: m.g,
+        })
         .collect();
     let emission = data.emission.iter().map(|&e| v3(e)).collect();
     Scene::new(camera, materials, objects, lights)
