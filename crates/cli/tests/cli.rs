@@ -719,6 +719,14 @@ fn gpu_backend_refuses_by_name_and_auto_falls_back() {
             ),
             "emitting objects",
         ),
+        (
+            format!(
+                "{head}[materials.brushed]\ntype = \"conductor\"\nmetal = \"gold\"\n\
+                 roughness = {{ pattern = {{ kind = \"fbm\", a = 0.1, b = 0.4 }} }}\n\n\
+                 [[objects]]\nsolid = \"sphere([0, 0, 0], 1)\"\nmaterial = \"brushed\"\n\n{lamp}"
+            ),
+            "textured roughness",
+        ),
     ];
     let small = ["--width", "16", "--height", "12", "--spp", "1", "--quiet"];
     for (k, (text, refused)) in cases.iter().enumerate() {

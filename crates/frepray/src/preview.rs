@@ -260,6 +260,7 @@ pub fn scene_data(solid: Solid, cam: CameraData, b: &Aabb, up: DVec3) -> SceneDa
         }],
         material_names: vec!["preview".into()],
         emission: vec![],
+        roughness: vec![],
         solids,
         meshes: Default::default(),
         objects: vec![ObjectData {

@@ -10,6 +10,7 @@ mod media;
 mod meshes;
 mod min_depth;
 mod per_light;
+mod roughness;
 mod scene_format;
 mod state_merge;
 mod trained;

@@ -71,6 +71,11 @@ pub struct SceneData {
     pub materials: Vec<MaterialData>,
     /// The name of each material, for messages.
     pub material_names: Vec<String>,
+    /// Per material, a texture whose first channel is the GGX α at each point, where any
+    /// material's roughness is textured (else empty, and left out of the JSON); the
+    /// material's own `roughness` is then unused.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub roughness: Vec<Option<TextureId>>,
     /// Emitted radiance per material, where any material emits (else empty, and left
     /// out of the JSON).
     #[serde(skip_serializing_if = "Vec::is_empty")]

@@ -145,8 +145,8 @@ pub struct MaterialDesc {
     pub eta: Option<ColorDesc>,
     /// Conductor absorption.
     pub k: Option<ColorDesc>,
-    /// GGX α.
-    pub roughness: Option<f64>,
+    /// GGX α: a number, or a pattern or checker texture (its first channel).
+    pub roughness: Option<ColorDesc>,
     /// Emitted radiance of the surface (outward), making its objects lights.
     pub emission: Option<ColorDesc>,
 }

@@ -274,12 +274,14 @@ fn scalar(src: &Source, at: &[Seg], c: &ColorDesc, lo: f64) -> Result<f64, Scene
     }
 }
 
+/// A material and, where its roughness is a texture, that texture (α in its first
+/// channel; the material's `roughness` is then 0 and unused).
 fn material(
     src: &Source,
     name: &String,
     m: &MaterialDesc,
     pool: &mut Textures,
-) -> Result<MaterialData, SceneError> {
+) -> Result<(MaterialData, Option<TextureId>), SceneError> {
     let at = kp!["materials", name];
     let key = |k: &str| [at.clone(), kp![k]].concat();
     let present = [
@@ -308,13 +310,31 @@ fn material(
         &present,
         allowed,
     )?;
-    let roughness = number(src, &key("roughness"), m.roughness.unwrap_or(0.0), 0.0, 1.0)?;
+    let (roughness, roughness_map) = match &m.roughness {
+        None => (0.0, None),
+        Some(ColorDesc::Rgb([a, b, c])) if a == b && b == c => {
+            (number(src, &key("roughness"), *a, 0.0, 1.0)?, None)
+        }
+        Some(ColorDesc::Rgb(_)) => {
+            return Err(src.at_value(
+                &key("roughness"),
+                "roughness is one number (or a pattern or checker texture)",
+            ))
+        }
+        Some(ColorDesc::Image(_)) => {
+            return Err(src.at_value(
+                &key("roughness"),
+                "roughness may be a number, a pattern or a checker (not an image)",
+            ))
+        }
+        Some(c) => (0.0, Some(texture(src, &key("roughness"), c, 1.0, pool)?)),
+    };
     let grey = ColorDesc::Rgb([0.5; 3]);
     let eta = |default: f64| match &m.eta {
         Some(e) => scalar(src, &key("eta"), e, f64::MIN_POSITIVE),
         None => Ok(default),
     };
-    Ok(match m.kind.as_str() {
+    let data = match m.kind.as_str() {
         "interface" => MaterialData::Interface,
         "diffuse" => MaterialData::Diffuse {
             reflectance: texture(
@@ -371,7 +391,8 @@ fn material(
             };
             MaterialData::Conductor { eta, k, roughness }
         }
-    })
+    };
+    Ok((data, roughness_map))
 }
 
 /// Whether a `.frep` text has an `output` statement (else it is one expression).
@@ -549,11 +570,16 @@ pub(crate) fn resolve_source(
         files: Vec::new(),
         base,
     };
-    let materials = d
+    let (materials, mut roughness): (Vec<_>, Vec<_>) = d
         .materials
         .iter()
         .map(|(n, m)| material(src, n, m, &mut pool))
-        .collect::<Result<Vec<_>, _>>()?;
+        .collect::<Result<Vec<_>, _>>()?
+        .into_iter()
+        .unzip();
+    if roughness.iter().all(Option::is_none) {
+        roughness.clear();
+    }
     let (media, medium_names) = crate::media::media(src, d, &mut |at, c| {
         let id = texture(src, at, c, 1.0, &mut pool)?;
         Ok((id, pool.list[id.index()].clone()))
@@ -658,6 +684,7 @@ pub(crate) fn resolve_source(
         images,
         materials,
         material_names: names.into_iter().cloned().collect(),
+        roughness,
         emission,
         solids,
         meshes,

@@ -321,7 +321,12 @@ impl DirectScene {
     }
 
     fn pack_materials(&mut self, data: &SceneData, host: &dyn Host) -> Result<(), GpuError> {
-        for (m, name) in data.materials.iter().zip(&data.material_names) {
+        for (i, (m, name)) in data.materials.iter().zip(&data.material_names).enumerate() {
+            if data.roughness.get(i).is_some_and(Option::is_some) {
+                return Err(unsupported(format!(
+                    "material '{name}' has a textured roughness"
+                )));
+            }
             if matches!(m, MaterialData::Interface) {
                 return Err(unsupported(format!(
                     "material '{name}' is an index-matched interface; media render on the CPU"

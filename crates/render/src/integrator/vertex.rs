@@ -167,7 +167,7 @@ pub(crate) struct Vertex<'s> {
 
 impl<'s> Vertex<'s> {
     pub fn new(scene: &'s Scene, hit: &SurfaceHit, wo: DVec3) -> Self {
-        let bsdf = scene.materials[hit.material].bsdf(&scene.tex_coord(hit), hit.n);
+        let bsdf = scene.bsdf(hit);
         let o = &scene.objects[hit.object];
         Self {
             p: hit.p,

@@ -7,7 +7,7 @@ use crate::camera::Camera;
 use crate::color::Rgb;
 use crate::distribution::Distribution1D;
 use crate::light::{AreaLight, DeltaLight, EnvMap, Environment, Lights, Shape};
-use crate::material::Material;
+use crate::material::{Material, RoughnessMap};
 use crate::medium::Medium;
 use crate::texture::{Texture, TextureSpace};
 use ::scene::{EnvironmentData, Light, LightKind, MaterialData, SceneData, TextureData, TextureId};
@@ -169,7 +169,13 @@ impl Camera {
 
 pub(super) fn build(data: &SceneData) -> Scene {
     let camera = Camera::from_data(&data.camera);
-    let materials = data.materials.iter().map(|m| material(data, m)).collect();
+    let materials: Vec<Material> = data.materials.iter().map(|m| material(data, m)).collect();
+    let roughness = data
+        .roughness
+        .iter()
+        .zip(&materials)
+        .map(|(t, m)| t.map(|t| RoughnessMap::new(texture(data, t), m)))
+        .collect();
     let objects = data
         .objects
         .iter()
@@ -209,4 +215,5 @@ pub(super) fn build(data: &SceneData) -> Scene {
     Scene::new(camera, materials, objects, lights)
         .with_media(media)
         .with_emission(emission)
+        .with_roughness(roughness)
 }

@@ -45,7 +45,7 @@ pub use ::scene::{
 use crate::camera::Camera;
 use crate::color::Rgb;
 use crate::light::Lights;
-use crate::material::Material;
+use crate::material::{Material, RoughnessMap};
 use crate::medium::Medium;
 use crate::texture::TexCoord;
 use frep::triangles::Triangles;
@@ -237,6 +237,8 @@ pub struct Scene {
     /// Emitted radiance per material (empty when no material emits): the surfaces of
     /// objects of such a material emit on their outside.
     pub emission: Vec<Rgb>,
+    /// Per material, its roughness texture, if any (empty when none has one).
+    pub roughness: Vec<Option<RoughnessMap>>,
     /// Whether rays must be walked through media and index-matched boundaries (some
     /// object names a medium or has an `interface` material); else they never are.
     pub participating: bool,
@@ -273,6 +275,7 @@ impl Scene {
             lights,
             media: Vec::new(),
             emission: Vec::new(),
+            roughness: Vec::new(),
             participating,
             bvh,
             bounds,
@@ -296,6 +299,23 @@ impl Scene {
             self.emission = emission;
         }
         self
+    }
+
+    /// The scene with roughness textures (one entry per material, or empty).
+    pub fn with_roughness(mut self, roughness: Vec<Option<RoughnessMap>>) -> Self {
+        self.roughness = roughness;
+        self
+    }
+
+    /// The BSDF of `hit`'s material there, its roughness textured where it is.
+    #[inline]
+    pub fn bsdf(&self, hit: &SurfaceHit) -> crate::bsdf::Bsdf<'_> {
+        let m = &self.materials[hit.material];
+        let tc = self.tex_coord(hit);
+        match self.roughness.get(hit.material) {
+            Some(Some(map)) => m.bsdf_rough(&tc, hit.n, map),
+            _ => m.bsdf(&tc, hit.n),
+        }
     }
 
     /// Whether some object's surface emits (then light reaching a point is found by
