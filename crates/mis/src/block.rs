@@ -78,6 +78,10 @@ pub struct Kernel {
     params: Params,
     code: Code,
     len: usize,
+    /// Per technique, where a failed sample adds and what: the index of `Â_tt` in the
+    /// packed matrix and `1/n_t²` (`Moments::add_failed`, computed once: the optimal
+    /// estimators count many failed and unlit draws).
+    failed: Vec<(usize, f64)>,
 }
 
 impl Kernel {
@@ -104,12 +108,19 @@ impl Kernel {
             Code::Uncorrelated => uncorrelated::block_len(layout),
             Code::Progressive(_) => progressive::block_len(layout),
         };
+        let failed = layout
+            .counts()
+            .iter()
+            .enumerate()
+            .map(|(t, &n)| (crate::linalg::packed_index(t, t), 1.0 / (n * n)))
+            .collect();
         Ok(Kernel {
             method,
             layout: Arc::clone(layout),
             params: *params,
             code,
             len,
+            failed,
         })
     }
 
@@ -163,12 +174,27 @@ impl Kernel {
         match self.code {
             Code::Weighted(h) => weighted::add_sample(l, h, block, technique, f, pdfs),
             Code::Direct => {
-                Moments::view_mut(l, &mut block[1..]).add(l, technique, f, pdfs);
+                Moments::view_mut_sized(l, &mut block[1..]).add(l, technique, f, pdfs);
             }
             Code::Uncorrelated => {
                 uncorrelated::set_mut(l, block, (key & 1) as usize).add(l, technique, f, pdfs);
             }
             Code::Progressive(_) => progressive::add_sample(l, block, technique, f, pdfs),
+        }
+    }
+
+    /// Where in a block a failed sample of `technique` adds, and what, for the estimators
+    /// whose failed sample is one addition whatever the key (optimal-direct: `Â_tt` after
+    /// the count, `1/n_t²`); None for the others. A caller's short path for
+    /// [`Self::add_failed`], bit for bit.
+    #[inline]
+    pub fn failed_word(&self, technique: usize) -> Option<(usize, f64)> {
+        match self.code {
+            Code::Direct => {
+                let (at, add) = self.failed[technique];
+                Some((1 + at, add))
+            }
+            _ => None,
         }
     }
 
@@ -178,7 +204,11 @@ impl Kernel {
         let l = &*self.layout;
         match self.code {
             Code::Weighted(_) => {}
-            Code::Direct => Moments::view_mut(l, &mut block[1..]).add_failed(l, technique),
+            // `Moments::add_failed` on the block's sums (after its count), bit for bit.
+            Code::Direct => {
+                let (at, add) = self.failed[technique];
+                block[1 + at] += add;
+            }
             Code::Uncorrelated => {
                 uncorrelated::set_mut(l, block, (key & 1) as usize).add_failed(l, technique)
             }

@@ -64,6 +64,15 @@ impl<'a> Moments<&'a mut [f64]> {
     /// A mutable view over `data` (exactly [`Moments::len`] words).
     pub fn view_mut(layout: &Layout, data: &'a mut [f64]) -> Self {
         assert_eq!(data.len(), Moments::len(layout), "moments storage size");
+        Self::view_mut_sized(layout, data)
+    }
+
+    /// [`Self::view_mut`] for a caller that has checked the size (a kernel's block of
+    /// its own length): the per-sample path, where the check cost a few percent of
+    /// optimal-direct's overhead. Indexing stays bounds-checked.
+    #[inline(always)]
+    pub(crate) fn view_mut_sized(layout: &Layout, data: &'a mut [f64]) -> Self {
+        debug_assert_eq!(data.len(), Moments::len(layout), "moments storage size");
         Moments {
             t: layout.techniques(),
             data,

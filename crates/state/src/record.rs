@@ -165,6 +165,12 @@ impl Pixel<'_> {
             return;
         }
         if let Combine::Estimator(kernel) = &it.combine {
+            // One addition for optimal-direct without per-light blocks (most failed and
+            // unlit draws), with no block slicing.
+            if let (1, Some((at, add))) = (it.record.lights, kernel.failed_word(k)) {
+                self.rec[it.record.depth_light(depth, 0).start + at] += add;
+                return;
+            }
             for l in 0..it.record.lights {
                 let r = it.record.depth_light(depth, l);
                 kernel.add_failed(&mut self.rec[r], self.key, k);

@@ -102,6 +102,23 @@ fn forced_zero_draws() -> bool {
     COUNT_ZERO_DRAWS.with(std::cell::Cell::get)
 }
 
+#[cfg(test)]
+thread_local! {
+    /// Tests: integrators made on this thread take every unlit BSDF draw through its
+    /// pdfs (the reference for [`Integrator::unlit_bsdf_draws_fail`]).
+    static NO_UNLIT_SHORTCUT: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+}
+
+#[cfg(test)]
+fn unlit_shortcut_allowed() -> bool {
+    !NO_UNLIT_SHORTCUT.with(std::cell::Cell::get)
+}
+
+#[cfg(not(test))]
+fn unlit_shortcut_allowed() -> bool {
+    true
+}
+
 #[cfg(not(test))]
 fn forced_zero_draws() -> bool {
     false
@@ -120,6 +137,13 @@ pub(crate) struct Integrator {
     /// Whether a draw whose value is 0 still enters the MIS combination (the optimal
     /// estimators); else it is skipped before its pdfs are found ([`Kernel::counts_zero_samples`]).
     pub zero_draws_count: bool,
+    /// Whether a zero-valued BSDF draw that meets no light (in a scene without an
+    /// environment) may be counted as a failed draw without its pdfs: the other
+    /// techniques all sample lights, so their pdfs there are 0, and the draw's only term
+    /// is `p_k²/(n_k p_k)² = 1/n_k²` on `Â_kk`, a failed draw's (`mis` crate,
+    /// `Moments::add_failed`): the same sums and residuals to rounding, at a fraction of
+    /// the cost (the heuristics skip such draws altogether).
+    pub unlit_bsdf_draws_fail: bool,
     pub max_depth: u32,
     pub rr_depth: u32,
     /// Whether emitters seen by the camera are left out.
@@ -147,15 +171,42 @@ impl Integrator {
     /// Digests validated options.
     pub fn new(o: &RenderOptions) -> Result<Self, OptionsError> {
         let tally = Tally::new(o)?;
+        let zero_draws_count = forced_zero_draws()
+            || match &tally.combine {
+                Combine::Estimator(k) => k.counts_zero_samples(),
+                Combine::Heuristic(_) => false,
+            };
+        let lights_only = |t: &Technique| {
+            matches!(
+                t,
+                Technique::LightPower
+                    | Technique::LightUniform
+                    | Technique::LightSpatial
+                    | Technique::LightBvh
+                    | Technique::LightTrained
+                    | Technique::LightArea
+                    | Technique::Environment
+                    | Technique::Light(_)
+            )
+        };
+        let bsdf_count = tally
+            .techniques
+            .iter()
+            .filter(|&&t| t == Technique::Bsdf)
+            .count();
+        let unlit_bsdf_draws_fail = zero_draws_count
+            && unlit_shortcut_allowed()
+            && bsdf_count == 1
+            && tally
+                .techniques
+                .iter()
+                .all(|t| *t == Technique::Bsdf || lights_only(t));
         Ok(Self {
+            unlit_bsdf_draws_fail,
             sampler: Sampler::new(o.seed),
             bsdf_index: tally.techniques.iter().position(|&t| t == Technique::Bsdf),
             area_pdfs: tally.techniques.contains(&Technique::LightArea),
-            zero_draws_count: forced_zero_draws()
-                || match &tally.combine {
-                    Combine::Estimator(k) => k.counts_zero_samples(),
-                    Combine::Heuristic(_) => false,
-                },
+            zero_draws_count,
             tally,
             max_depth: o.max_depth,
             rr_depth: o.rr_depth,
@@ -423,6 +474,46 @@ mod tests {
             ..RenderOptions::default()
         };
         assert!(Integrator::new(&optimal).unwrap().zero_draws_count);
+        // The optimal estimators count an unlit BSDF draw as a failed draw without its
+        // pdfs: the same image as through its pdfs, bit for bit where the sums are the
+        // same numbers (n_bsdf = 1: p²/(1·p)² = 1), the progressive residual −α·p/p
+        // against −α to rounding.
+        let shortcut = |o: &RenderOptions, on: bool| {
+            NO_UNLIT_SHORTCUT.with(|c| c.set(!on));
+            assert_eq!(Integrator::new(o).unwrap().unlit_bsdf_draws_fail, on);
+            let r = crate::render_loop::render(&scene, o, &AtomicBool::new(false), &|_, _| {});
+            NO_UNLIT_SHORTCUT.with(|c| c.set(false));
+            r.unwrap().0.image()
+        };
+        for integrator in [IntegratorKind::Direct, IntegratorKind::Path] {
+            for method in [
+                Method::OptimalDirect,
+                Method::OptimalUncorrelated,
+                Method::OptimalProgressive,
+            ] {
+                let o = RenderOptions {
+                    integrator,
+                    method,
+                    techniques: vec![
+                        (Technique::Bsdf, 1),
+                        (Technique::LightPower, 1),
+                        (Technique::LightArea, 1),
+                    ],
+                    spp: 8,
+                    seed: 6,
+                    max_depth: 3,
+                    ..RenderOptions::default()
+                };
+                let (fast, slow) = (shortcut(&o, true), shortcut(&o, false));
+                assert!(fast.data().iter().any(|&v| v > 0.0));
+                for (a, b) in fast.data().iter().zip(slow.data()) {
+                    assert!(
+                        (a - b).abs() <= 1e-12 * b.abs().max(1e-3),
+                        "{integrator:?} {method}: {a} {b}"
+                    );
+                }
+            }
+        }
     }
 
     /// Up to [`MAX_TECHNIQUES`] techniques; the per-pixel state of optimal-direct is

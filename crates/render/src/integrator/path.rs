@@ -105,8 +105,11 @@ impl Integrator {
         let mut wo = -ray.d;
         let mut depth = 0usize;
         while depth < max_depth {
-            let Some(v) = Vertex::at(scene, &at, wo) else {
-                break;
+            // Built in place (an Option<Vertex> returned was copied, ~250 bytes a vertex).
+            let v = match at {
+                Trace::Surface(ref h) => Vertex::new(scene, h, wo),
+                Trace::Medium { p, medium } => Vertex::in_medium(scene, p, medium, wo),
+                Trace::Light(_) | Trace::Escape => break,
             };
             let extend = depth + 1 < max_depth;
             px.mute = depth + 1 < self.min_depth as usize;

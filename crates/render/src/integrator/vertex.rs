@@ -99,6 +99,7 @@ pub(crate) fn incident(
 }
 
 /// [`incident`] with the nearest area light along the ray already found.
+#[inline(always)]
 fn incident_from(
     scene: &Scene,
     ray: &Ray,
@@ -111,19 +112,11 @@ fn incident_from(
         Some(h) => (h.t, h.radiance),
         None => (f64::INFINITY, scene.lights.environment_radiance(ray.d)),
     };
-    let emitting = scene.has_emitting_objects();
-    if le == Rgb::ZERO && !emitting {
+    if scene.participating || scene.has_emitting_objects() {
+        return incident_beyond(scene, ray, t_max, le, skip, medium, rays);
+    }
+    if le == Rgb::ZERO {
         return Rgb::ZERO;
-    }
-    if scene.participating {
-        return transmitted(scene, ray, t_max, le, skip, medium, rays);
-    }
-    if emitting {
-        // An object in the way may be the light: a nearest-hit ray.
-        rays.begin(RayKind::Shadow);
-        let hit = scene.intersect_skipping(ray, 0.0, t_max, skip);
-        rays.end(RayKind::Shadow);
-        return hit.map_or(le, |h| scene.surface_emission(&h, ray.d));
     }
     rays.begin(RayKind::Shadow);
     let occluded = scene.occluded_skipping(ray, 0.0, t_max, skip);
@@ -133,6 +126,29 @@ fn incident_from(
     } else {
         le
     }
+}
+
+/// [`incident_from`] in scenes with media or emitting objects: through media and
+/// index-matched boundaries, or by a nearest-hit ray (an object in the way may be the
+/// light). Out of line and cold, so that other scenes keep the any-hit path inlined.
+#[cold]
+#[inline(never)]
+fn incident_beyond(
+    scene: &Scene,
+    ray: &Ray,
+    t_max: f64,
+    le: Rgb,
+    skip: Option<usize>,
+    medium: Option<usize>,
+    rays: &mut impl RayLog,
+) -> Rgb {
+    if scene.participating {
+        return transmitted(scene, ray, t_max, le, skip, medium, rays);
+    }
+    rays.begin(RayKind::Shadow);
+    let hit = scene.intersect_skipping(ray, 0.0, t_max, skip);
+    rays.end(RayKind::Shadow);
+    hit.map_or(le, |h| scene.surface_emission(&h, ray.d))
 }
 
 /// The MIS light a ray reaches if nothing but lights were in the scene: the nearest
@@ -166,6 +182,7 @@ pub(crate) struct Vertex<'s> {
 }
 
 impl<'s> Vertex<'s> {
+    #[inline]
     pub fn new(scene: &'s Scene, hit: &SurfaceHit, wo: DVec3) -> Self {
         let bsdf = scene.bsdf(hit);
         let o = &scene.objects[hit.object];
@@ -180,20 +197,16 @@ impl<'s> Vertex<'s> {
         }
     }
 
-    /// The vertex at `t`, a surface or a medium point (None for a light or escape).
-    pub fn at(scene: &'s Scene, t: &Trace, wo: DVec3) -> Option<Self> {
-        match *t {
-            Trace::Surface(ref h) => Some(Self::new(scene, h, wo)),
-            Trace::Medium { p, medium } => Some(Self {
-                p,
-                n: DVec3::ZERO,
-                wo,
-                bsdf: Bsdf::phase(scene.media[medium].g, wo),
-                object: None,
-                inside: Some(medium),
-                outside: Some(medium),
-            }),
-            Trace::Light(_) | Trace::Escape => None,
+    /// The vertex at point `p` inside medium `medium`.
+    pub fn in_medium(scene: &'s Scene, p: DVec3, medium: usize, wo: DVec3) -> Self {
+        Self {
+            p,
+            n: DVec3::ZERO,
+            wo,
+            bsdf: Bsdf::phase(scene.media[medium].g, wo),
+            object: None,
+            inside: Some(medium),
+            outside: Some(medium),
         }
     }
 
@@ -230,6 +243,42 @@ pub(crate) struct Continuation {
 }
 
 impl Integrator {
+    /// The continuation of a BSDF draw along `ray` in a scene with media: the walk's
+    /// `Li` (with its transmittance) and the free flight's stop (`integrator/medium.rs`).
+    /// Out of line and cold, so that scenes without media keep the short path inlined.
+    #[cold]
+    #[inline(never)]
+    #[allow(clippy::too_many_arguments)]
+    fn continue_through_media(
+        &self,
+        scene: &Scene,
+        ray: &Ray,
+        skip: Option<usize>,
+        medium: Option<usize>,
+        nearest: Option<Option<LightHit>>,
+        beta: Rgb,
+        s: &BsdfSample,
+        depth: usize,
+        rng: &SampleStream,
+        rays: &mut impl RayLog,
+    ) -> (Rgb, Continuation) {
+        rays.begin(RayKind::Secondary);
+        let walk = Walk::new(scene, ray, skip, medium, nearest);
+        rays.end(RayKind::Secondary);
+        let li = walk.tr * emitted(scene, &walk.end, s.wi);
+        let (uc, u) = self.dims.flight(rng, depth + 1);
+        let (flight, trace) = match walk.fly(scene, beta * s.weight, uc, u) {
+            Flight::Scatter { p, medium, weight } => (weight, Trace::Medium { p, medium }),
+            Flight::Through(weight) => (weight, walk.end),
+        };
+        let c = Continuation {
+            weight: s.weight * flight,
+            trace,
+            wi: s.wi,
+        };
+        (li, c)
+    }
+
     /// Point and spot lights at `v`: Σ f·|cos|·I/d² over the visible ones (outside MIS).
     fn delta_lights(&self, scene: &Scene, v: &Vertex, rays: &mut impl RayLog) -> Rgb {
         let mut sum = Rgb::ZERO;
@@ -284,20 +333,19 @@ impl Integrator {
         let skip = v.left_behind(scene, s.wi);
         let medium = v.medium_toward(s.wi);
         if extends && scene.participating {
-            rays.begin(RayKind::Secondary);
-            let walk = Walk::new(scene, &ray, skip, medium, along.map(|a| a.nearest));
-            rays.end(RayKind::Secondary);
-            let li = walk.tr * emitted(scene, &walk.end, s.wi);
-            let (uc, u) = self.dims.flight(rng, depth + 1);
-            let (flight, trace) = match walk.fly(scene, beta * s.weight, uc, u) {
-                Flight::Scatter { p, medium, weight } => (weight, Trace::Medium { p, medium }),
-                Flight::Through(weight) => (weight, walk.end),
-            };
-            *next = Some(Continuation {
-                weight: s.weight * flight,
-                trace,
-                wi: s.wi,
-            });
+            let (li, c) = self.continue_through_media(
+                scene,
+                &ray,
+                skip,
+                medium,
+                along.map(|a| a.nearest),
+                beta,
+                s,
+                depth,
+                rng,
+                rays,
+            );
+            *next = Some(c);
             li
         } else if extends {
             rays.begin(RayKind::Secondary);
@@ -414,8 +462,15 @@ impl Integrator {
                 };
                 let fc = f * v.cos(s.wi);
                 // Li along the draw: the continuation's trace for the draw that carries
-                // the path, else a shadow ray toward the light it meets.
-                let mut li_of = |rays: &mut _| match &s.bsdf {
+                // the path, else a shadow ray toward the light it meets. Before the pdfs,
+                // so that a draw whose value is 0 skips its pdfs and MIS term where such
+                // draws add nothing (heuristic weights; most BSDF draws of `direct` meet
+                // no light). A draw that carries the path is a BSDF draw, whose own pdf
+                // is its sample's: never refused below, where a draw whose own pdf comes
+                // from `pdfs` can be (a refused light draw has traced one shadow ray for
+                // nothing).
+                debug_assert!(!(carries && s.pdf.is_nan()));
+                let li = match &s.bsdf {
                     Some(bs) if carries => self.li_of_bsdf_draw(
                         scene,
                         v,
@@ -439,21 +494,21 @@ impl Integrator {
                     ),
                     _ => Rgb::ZERO,
                 };
-                // Li before the pdfs, so that a draw whose value is 0 skips its pdfs and
-                // MIS term where such draws add nothing (heuristic weights; most BSDF
-                // draws of `direct` meet no light). Not for a draw that carries the path
-                // and may yet be refused below (only a draw whose own pdf comes from
-                // `pdfs` can be): a refused draw must not carry it. A refused draw that
-                // does not carry it has traced one shadow ray for nothing.
-                let li_first = if !carries || !s.pdf.is_nan() {
-                    let li = li_of(rays);
-                    if !self.zero_draws_count && beta * fc * li == Rgb::ZERO {
+                if beta * fc * li == Rgb::ZERO {
+                    if !self.zero_draws_count {
                         continue;
                     }
-                    Some(li)
-                } else {
-                    None
-                };
+                    // A BSDF draw that meets no light: every other pdf is 0 there, and
+                    // its one term is a failed draw's (`Integrator::unlit_bsdf_draws_fail`).
+                    if self.unlit_bsdf_draws_fail
+                        && tech == Technique::Bsdf
+                        && along.crossed().is_some_and(|c| c.lights().is_empty())
+                        && scene.lights.environment().is_none()
+                    {
+                        px.add_failed(self, depth, k);
+                        continue;
+                    }
+                }
                 crate::technique::pdfs(
                     &self.techniques,
                     &ctx,
@@ -467,10 +522,6 @@ impl Integrator {
                     px.add_failed(self, depth, k);
                     continue;
                 }
-                let li = match li_first {
-                    Some(li) => li,
-                    None => li_of(rays),
-                };
                 let light = if self.record.lights > 1 {
                     light_reached(scene, along.nearest)
                 } else {

@@ -308,14 +308,14 @@ impl Scene {
     }
 
     /// The BSDF of `hit`'s material there, its roughness textured where it is.
-    #[inline]
+    #[inline(always)]
     pub fn bsdf(&self, hit: &SurfaceHit) -> crate::bsdf::Bsdf<'_> {
         let m = &self.materials[hit.material];
         let tc = self.tex_coord(hit);
-        match self.roughness.get(hit.material) {
-            Some(Some(map)) => m.bsdf_rough(&tc, hit.n, map),
-            _ => m.bsdf(&tc, hit.n),
+        if let Some(Some(map)) = self.roughness.get(hit.material) {
+            return m.bsdf_rough(&tc, hit.n, map);
         }
+        m.bsdf(&tc, hit.n)
     }
 
     /// Whether some object's surface emits (then light reaching a point is found by
