@@ -727,6 +727,14 @@ fn gpu_backend_refuses_by_name_and_auto_falls_back() {
             ),
             "textured roughness",
         ),
+        (
+            format!(
+                "[camera]\neye = [0, -4, 1]\ntarget = [0, 0, 0]\nmedium = \"fog\"\n\n\
+                 [materials.clay]\ntype = \"diffuse\"\n\n\
+                 [media.fog]\nalbedo = 0.9\nmean_free_path = 20\n\n{ball}{lamp}"
+            ),
+            "the camera sits in a participating medium",
+        ),
     ];
     let small = ["--width", "16", "--height", "12", "--spp", "1", "--quiet"];
     for (k, (text, refused)) in cases.iter().enumerate() {

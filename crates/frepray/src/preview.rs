@@ -273,6 +273,7 @@ pub fn scene_data(solid: Solid, cam: CameraData, b: &Aabb, up: DVec3) -> SceneDa
         }],
         media: vec![],
         medium_names: vec![],
+        camera_medium: None,
         lights,
         environment: Some(sky),
         maps: vec![],

@@ -312,3 +312,29 @@ fn a_textured_albedo_scatters_by_the_point() {
     assert!(above > 10.0 * above_se, "{above} ± {above_se}");
     assert!(below > 10.0 * below_se, "{below} ± {below_se}");
 }
+
+/// A camera inside a medium: at the centre of an index-matched ball of radius 2 filled
+/// with an absorber, in a dome of radiance 1, every pixel is exp(−2σ_a) exactly (each
+/// ray crosses 2 of absorber whatever its direction); `camera.medium` names the medium.
+#[test]
+fn a_camera_inside_a_medium_sees_through_it() {
+    let s = scene(
+        r#"
+camera = { eye = [0, 0, 0], target = [0, 1, 0], fov = 60, resolution = [6, 4], medium = "ink" }
+materials.none = { type = "interface" }
+media.ink = { sigma_a = [0.5, 0.25, 1.0], sigma_s = 0 }
+objects = [{ solid = "sphere([0, 0, 0], 2)", material = "none", medium = "ink" }]
+environment = { radiance = 1 }
+"#,
+    );
+    assert_eq!(s.camera_medium, Some(0));
+    let o = options(IntegratorKind::Path, Method::Balance, &ENV, 4, 2);
+    let film = run(&s, &o).0;
+    let want = DVec3::new((-1.0f64).exp(), (-0.5f64).exp(), (-2.0f64).exp());
+    for y in 0..4 {
+        for x in 0..6 {
+            let d = (film.rgb(x, y) - want).abs().max_element();
+            assert!(d < 1e-6, "({x}, {y}): {} against {want}", film.rgb(x, y));
+        }
+    }
+}

@@ -94,6 +94,9 @@ pub struct SceneData {
     /// The name of each medium, for messages.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub medium_names: Vec<String>,
+    /// The medium the camera sits in (None: vacuum; left out of the JSON then).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub camera_medium: Option<MediumId>,
     /// Area, point and spot lights, with their selection distributions.
     pub lights: LightData,
     /// Light from infinitely far away.

@@ -70,6 +70,8 @@ pub struct CameraDesc {
     /// Thin lens: the distance along the view direction that is in focus (default the
     /// target's distance).
     pub focus_distance: Option<f64>,
+    /// A key of `media`: what the camera sits in (default: vacuum).
+    pub medium: Option<String>,
 }
 
 /// Render settings; every key is optional.

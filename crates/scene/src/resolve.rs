@@ -689,6 +689,12 @@ pub(crate) fn resolve_source(
         solids,
         meshes,
         objects,
+        camera_medium: medium_ref(
+            src,
+            &kp!["camera", "medium"],
+            d.camera.medium.as_ref(),
+            &medium_names,
+        )?,
         media,
         medium_names,
         lights,

@@ -147,6 +147,11 @@ impl DirectScene {
     /// selection), or says what the GPU cannot do.
     pub fn new(data: &SceneData, o: &RenderOptions, host: &dyn Host) -> Result<Self, GpuError> {
         let mut s = DirectScene::default();
+        if data.camera_medium.is_some() {
+            return Err(unsupported(
+                "the camera sits in a participating medium; media render on the CPU",
+            ));
+        }
         s.pack_lights(data)?;
         s.pack_materials(data, host)?;
         for obj in &data.objects {

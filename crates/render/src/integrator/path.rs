@@ -67,10 +67,10 @@ impl Integrator {
         rays.end(RayKind::Generate);
         let camera_emitters = !self.hide_emitters && self.min_depth == 0;
         rays.begin(RayKind::Camera);
-        // Through media: the camera (in vacuum) sees the walk's end through its
-        // transmittance, and the first vertex is the free flight's stop.
+        // Through media: the camera sees the walk's end through its transmittance, and
+        // the first vertex is the free flight's stop.
         let (first, mut beta) = if scene.participating {
-            let walk = Walk::new(scene, &ray, None, None, None);
+            let walk = Walk::new(scene, &ray, None, scene.camera_medium, None);
             rays.end(RayKind::Camera);
             if self.aovs {
                 self.add_aovs(scene, &walk.end, &ray, rng, px);

@@ -213,7 +213,7 @@ pub(super) fn build(data: &SceneData) -> Scene {
         .collect();
     let emission = data.emission.iter().map(|&e| v3(e)).collect();
     Scene::new(camera, materials, objects, lights)
-        .with_media(media)
+        .with_media(media, data.camera_medium.map(|m| m.index()))
         .with_emission(emission)
         .with_roughness(roughness)
 }

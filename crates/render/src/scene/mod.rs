@@ -240,8 +240,11 @@ pub struct Scene {
     /// Per material, its roughness texture, if any (empty when none has one).
     pub roughness: Vec<Option<RoughnessMap>>,
     /// Whether rays must be walked through media and index-matched boundaries (some
-    /// object names a medium or has an `interface` material); else they never are.
+    /// object names a medium or has an `interface` material, or the camera sits in a
+    /// medium); else they never are.
     pub participating: bool,
+    /// Index into [`Self::media`] of what the camera sits in (None: vacuum).
+    pub camera_medium: Option<usize>,
     bvh: Bvh,
     bounds: Aabb,
     /// Per object, whether its solid is convex ([`Solid::is_convex`]).
@@ -277,15 +280,19 @@ impl Scene {
             emission: Vec::new(),
             roughness: Vec::new(),
             participating,
+            camera_medium: None,
             bvh,
             bounds,
             convex,
         }
     }
 
-    /// The scene with `media`, which its objects' `interior` and `exterior` index.
-    pub fn with_media(mut self, media: Vec<Medium>) -> Self {
+    /// The scene with `media`, which its objects' `interior` and `exterior` index, and
+    /// the camera in `camera_medium`.
+    pub fn with_media(mut self, media: Vec<Medium>, camera_medium: Option<usize>) -> Self {
         self.media = media;
+        self.camera_medium = camera_medium;
+        self.participating |= camera_medium.is_some();
         self
     }
 
