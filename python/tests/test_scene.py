@@ -124,3 +124,33 @@ def test_negative_integers_elsewhere(tmp_path):
         m.preview(width=-1)
     with pytest.raises(ValueError, match="^spp: 4294967296 is too large"):
         frepray.render(s, spp=2**32)
+
+
+def test_a_dict_scene_with_a_medium_and_an_emitting_object():
+    # Beer's law from Python: an absorbing ball (interface boundary) in a dome of
+    # radiance 1; the centre pixel sees exp(-2 sigma_a) through the ball's diameter.
+    d = {
+        "camera": {"eye": [0, -4, 0], "target": [0, 0, 0], "fov": 10, "resolution": [9, 9]},
+        "render": {"integrator": "path", "estimator": "optimal-direct",
+                   "techniques": [{"technique": "bsdf", "samples": 1},
+                                  {"technique": "environment", "samples": 1}]},
+        "materials": {"none": {"type": "interface"}},
+        "media": {"ink": {"sigma_a": [0.5, 0.25, 1.0], "sigma_s": 0}},
+        "objects": [{"solid": "sphere([0, 0, 0], 1)", "material": "none", "medium": "ink"}],
+        "environment": {"radiance": 1},
+    }
+    img = frepray.render(frepray.load_dict(d), spp=4, seed=1).image()
+    centre = img[4, 4]
+    assert np.allclose(centre, np.exp([-1.0, -0.5, -2.0]), rtol=2e-3), centre
+    # An emitting ball seen by the camera shows its emission.
+    lamp = {
+        "camera": {"eye": [0, -4, 0], "target": [0, 0, 0], "fov": 10, "resolution": [9, 9]},
+        "materials": {"lamp": {"type": "diffuse", "reflectance": 0, "emission": [3, 2, 1]}},
+        "objects": [{"solid": "sphere([0, 0, 0], 1)", "material": "lamp"}],
+    }
+    img = frepray.render(frepray.load_dict(lamp), spp=2, seed=1).image()
+    assert np.allclose(img[4, 4], [3, 2, 1]), img[4, 4]
+    d["media"]["ink"]["g"] = 1.5
+    with pytest.raises(frepray.SceneError) as e:
+        frepray.load_dict(d)
+    assert e.value.key == "media.ink.g"
