@@ -94,9 +94,19 @@ fn scene(file: &Path) -> Result<(), String> {
             n => format!("; {n} media: {}", data.medium_names.join(", ")),
         }
     );
+    let emitting = data
+        .lights
+        .area
+        .iter()
+        .filter(|l| l.kind == frepray::LightKind::Solid)
+        .count();
     out!(
-        "lights:        {} area, {} point/spot, environment: {}",
+        "lights:        {} area{}, {} point/spot, environment: {}",
         data.lights.area.len(),
+        match emitting {
+            0 => String::new(),
+            n => format!(" ({n} of them emitting objects)"),
+        },
         data.lights.delta.len(),
         if data.environment.is_some() {
             "yes"

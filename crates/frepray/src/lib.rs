@@ -59,7 +59,9 @@ pub use render::integrator::{Aov, IntegratorKind, RenderOptions};
 pub use render::{
     BlockDetail, Film, Image, PixelDetail, RenderState, RenderStats, StateHeader, Tonemap,
 };
-pub use scene::{Overrides, RenderSettings, SceneData, SceneError, SceneFormat, ATTRIBUTE_PREFIX};
+pub use scene::{
+    LightKind, Overrides, RenderSettings, SceneData, SceneError, SceneFormat, ATTRIBUTE_PREFIX,
+};
 pub use settings::{Settings, Unused};
 
 /// The limits a render is checked against before it starts: threads, memory (with an
