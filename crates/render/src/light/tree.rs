@@ -132,22 +132,20 @@ impl LightTree {
     pub fn sample(&self, p: DVec3, n: DVec3, u: f64) -> Option<(usize, f64)> {
         MEMO.with_borrow_mut(|memo| {
             memo.start(self.id, p, n);
-            let (mut i, mut u, mut pmf, mut trail) = (0, u, 1.0, 0u64);
-            for d in 0.. {
+            let (mut i, mut u, mut pmf) = (0, u, 1.0);
+            loop {
                 let node = &self.nodes[i];
                 if node.leaf {
                     return (self.importance(i, p, n) > 0.0).then_some((node.index as usize, pmf));
                 }
-                let [pa, pb] = memo.split(d, trail, || self.split(i, p, n))?;
+                let [pa, pb] = memo.split(i, || self.split(i, p, n))?;
                 if u < pa {
                     (u, pmf, i) = ((u / pa).min(ONE_MINUS_EPSILON), pmf * pa, i + 1);
                 } else {
                     let next = node.index as usize;
                     (u, pmf, i) = (((u - pa) / pb).min(ONE_MINUS_EPSILON), pmf * pb, next);
-                    trail |= 1 << d;
                 }
             }
-            unreachable!("a path ends at a leaf")
         })
     }
 
@@ -161,7 +159,7 @@ impl LightTree {
             memo.start(self.id, p, n);
             let (mut i, mut pmf) = (0, 1.0);
             for d in 0..depth as usize {
-                let Some([pa, pb]) = memo.split(d, trail, || self.split(i, p, n)) else {
+                let Some([pa, pb]) = memo.split(i, || self.split(i, p, n)) else {
                     return 0.0;
                 };
                 if trail >> d & 1 == 0 {
@@ -179,30 +177,31 @@ impl LightTree {
     }
 }
 
-/// The branch probabilities along the last path a thread took through a tree at one
-/// shading point. The draws at a vertex descend the same tree from the same point many
-/// times — a light technique's draw, then the pmf of the light it drew (and of the
-/// lights each other draw's direction crosses) — and their paths share their first
-/// levels or all of them: those levels' importances are evaluated once. The values are
-/// the ones the descent would compute, so results are bit for bit the same.
+/// The branch probabilities of the nodes a thread visited in one tree at one shading
+/// point, by node (a direct-mapped cache of [`MEMO_SLOTS`] entries). The draws at a
+/// vertex descend the same tree from the same point many times — a light technique's
+/// draw, then the pmf of the light it drew, and of the lights each other draw's direction
+/// crosses — and their paths share their first levels or more: those nodes' importances
+/// are evaluated once. The values are the ones the descent would compute, so results are
+/// bit for bit the same.
 struct Memo {
     /// The tree ([`LightTree`]'s id) and the point (p, n, as bits) the entries hold for.
     key: (u64, [u64; 6]),
-    /// Entries 0 … depth − 1 are valid.
-    depth: usize,
-    /// The branches of the path the entries lie on (bits below `depth − 1`).
-    trail: u64,
-    /// Per depth, the split at the path's node there.
-    splits: [Option<[f64; 2]>; 64],
+    /// The entries' generation: entries of another generation are stale.
+    generation: u32,
+    /// Per slot: (generation, node, split).
+    slots: [(u32, u32, Option<[f64; 2]>); MEMO_SLOTS],
 }
+
+/// Entries of [`Memo`] (a power of two: a node's slot is its index modulo it).
+const MEMO_SLOTS: usize = 256;
 
 thread_local! {
     static MEMO: std::cell::RefCell<Memo> = const {
         std::cell::RefCell::new(Memo {
             key: (u64::MAX, [0; 6]),
-            depth: 0,
-            trail: 0,
-            splits: [None; 64],
+            generation: 1,
+            slots: [(0, 0, None); MEMO_SLOTS],
         })
     };
 }
@@ -213,25 +212,29 @@ impl Memo {
     fn start(&mut self, tree: u64, p: DVec3, n: DVec3) {
         let key = (tree, [p.x, p.y, p.z, n.x, n.y, n.z].map(f64::to_bits));
         if self.key != key {
-            (self.key, self.depth) = (key, 0);
+            self.key = key;
+            self.generation = self.generation.wrapping_add(1);
+            if self.generation == 0 {
+                // Wrapped: no entry may look current.
+                self.slots = [(0, 0, None); MEMO_SLOTS];
+                self.generation = 1;
+            }
         }
     }
 
-    /// The split at depth `d` of the path with branches `trail` (bits below d): the
-    /// entry where the memo's path is the same down to d, else `compute`'s, recorded.
+    /// The split at node `node`: the entry where it holds it, else `compute`'s, recorded.
     #[inline]
     fn split(
         &mut self,
-        d: usize,
-        trail: u64,
+        node: usize,
         compute: impl FnOnce() -> Option<[f64; 2]>,
     ) -> Option<[f64; 2]> {
-        let below = (1u64 << d) - 1;
-        if d < self.depth && (self.trail ^ trail) & below == 0 {
-            return self.splits[d];
+        let slot = &mut self.slots[node % MEMO_SLOTS];
+        if slot.0 == self.generation && slot.1 == node as u32 {
+            return slot.2;
         }
         let s = compute();
-        (self.depth, self.trail, self.splits[d]) = (d + 1, trail & below, s);
+        *slot = (self.generation, node as u32, s);
         s
     }
 }

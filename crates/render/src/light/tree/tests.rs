@@ -227,7 +227,7 @@ fn pmf_in_full(tree: &LightTree, p: DVec3, n: DVec3, k: usize) -> f64 {
     }
 }
 
-/// The memo of the last descent changes no value: pmfs and draws interleaved across two
+/// The memo of node splits changes no value: pmfs and draws interleaved across two
 /// trees, several points and many lights equal the descents evaluated in full, bit for
 /// bit.
 #[test]
@@ -239,8 +239,8 @@ fn the_memo_changes_no_value() {
     let pts = points(4, 9);
     let mut rng = Mix(12);
     for step in 0..20_000 {
-        // Runs of a few steps on one tree and point (the memo's single slot reused, over
-        // paths sharing a prefix or not), then another.
+        // Runs of a few steps on one tree and point (the memo's entries reused, over paths
+        // sharing nodes or not, slots shared by nodes 256 apart), then another.
         let tree = &trees[(step / 7) % 2];
         let (p, n) = pts[(step / 3) % pts.len()];
         let count = tree.trails.len();
