@@ -212,7 +212,10 @@ impl Walk {
 /// times the transmittance to it, through index-matched boundaries and media; where
 /// another surface is in the way, its emission (0 unless it is an emitting object's
 /// outside) times the transmittance to it. The ray starts in `medium`, object `skip`
-/// left out.
+/// left out. Out of line and cold: scenes without media or emitting objects never call
+/// it, and their shadow-ray path stays inlined.
+#[cold]
+#[inline(never)]
 pub(crate) fn transmitted(
     scene: &Scene,
     ray: &Ray,

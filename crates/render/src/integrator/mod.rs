@@ -176,19 +176,6 @@ impl Integrator {
                 Combine::Estimator(k) => k.counts_zero_samples(),
                 Combine::Heuristic(_) => false,
             };
-        let lights_only = |t: &Technique| {
-            matches!(
-                t,
-                Technique::LightPower
-                    | Technique::LightUniform
-                    | Technique::LightSpatial
-                    | Technique::LightBvh
-                    | Technique::LightTrained
-                    | Technique::LightArea
-                    | Technique::Environment
-                    | Technique::Light(_)
-            )
-        };
         let bsdf_count = tally
             .techniques
             .iter()
@@ -200,7 +187,7 @@ impl Integrator {
             && tally
                 .techniques
                 .iter()
-                .all(|t| *t == Technique::Bsdf || lights_only(t));
+                .all(|&t| t == Technique::Bsdf || crate::technique::samples_lights(t));
         Ok(Self {
             unlit_bsdf_draws_fail,
             sampler: Sampler::new(o.seed),

@@ -112,8 +112,10 @@ fn incident_from(
         Some(h) => (h.t, h.radiance),
         None => (f64::INFINITY, scene.lights.environment_radiance(ray.d)),
     };
+    // Through media and index-matched boundaries, or by a nearest-hit ray where an
+    // object in the way may be the light (out of line: other scenes keep this inlined).
     if scene.participating || scene.has_emitting_objects() {
-        return incident_beyond(scene, ray, t_max, le, skip, medium, rays);
+        return transmitted(scene, ray, t_max, le, skip, medium, rays);
     }
     if le == Rgb::ZERO {
         return Rgb::ZERO;
@@ -126,29 +128,6 @@ fn incident_from(
     } else {
         le
     }
-}
-
-/// [`incident_from`] in scenes with media or emitting objects: through media and
-/// index-matched boundaries, or by a nearest-hit ray (an object in the way may be the
-/// light). Out of line and cold, so that other scenes keep the any-hit path inlined.
-#[cold]
-#[inline(never)]
-fn incident_beyond(
-    scene: &Scene,
-    ray: &Ray,
-    t_max: f64,
-    le: Rgb,
-    skip: Option<usize>,
-    medium: Option<usize>,
-    rays: &mut impl RayLog,
-) -> Rgb {
-    if scene.participating {
-        return transmitted(scene, ray, t_max, le, skip, medium, rays);
-    }
-    rays.begin(RayKind::Shadow);
-    let hit = scene.intersect_skipping(ray, 0.0, t_max, skip);
-    rays.end(RayKind::Shadow);
-    hit.map_or(le, |h| scene.surface_emission(&h, ray.d))
 }
 
 /// The MIS light a ray reaches if nothing but lights were in the scene: the nearest

@@ -198,6 +198,12 @@ fn mixes(t: Technique) -> bool {
     )
 }
 
+/// Whether `t` draws only directions toward lights (a mixture over them, one light, or
+/// the environment): its pdf is 0 along a direction that crosses no light.
+pub(crate) fn samples_lights(t: Technique) -> bool {
+    mixes(t) || matches!(t, Technique::Light(_) | Technique::Environment)
+}
+
 /// Fills `out[k]` with `techniques[k].pdf(ctx, wi)`, the light mixtures' over the lights
 /// `crossed` lists where the caller found them ([`Lights::along`]), and the BSDF's
 /// `bsdf_pdf` where the caller has it ([`crate::bsdf::Bsdf::f_pdf`]). Otherwise, where
