@@ -56,8 +56,11 @@ pub struct GpuStats {
     pub stages: StageTimes,
     /// Waves.
     pub waves: u32,
-    /// Samples the CPU rendered because a ray overflowed a fixed capacity.
+    /// Samples the CPU rendered because the GPU could not answer a ray exactly (a fixed
+    /// capacity or loop budget ran out, or f32 rounding left a hit or miss open).
     pub cpu_fallbacks: u64,
+    /// The pixel (y·width + x) of each of those samples, in the order rendered.
+    pub fallback_pixels: Vec<u32>,
     /// Where the per-pixel sums were kept.
     pub sums: SumsOn,
     /// The most loop iterations one invocation ran, per kernel: camera and
@@ -106,7 +109,7 @@ impl std::fmt::Display for GpuStats {
             "GPU stages: camera rays {:.1} ms, shade {:.1} ms, shadow rays {:.1} ms, \
              continuation rays {:.1} ms (GPU timestamps); readback {:.1} ms, accumulate \
              {:.1} ms (sums on the {}); setup {:.1} ms; {} waves; {} samples rendered on \
-             the CPU after an overflow; most loop iterations per invocation {:?}",
+             the CPU (rays the GPU could not answer exactly); most loop iterations per invocation {:?}",
             ms(s.camera),
             ms(s.shade),
             ms(s.shadow),

@@ -25,7 +25,7 @@ use scene::{SceneData, SceneFormat};
 use std::ops::Range;
 use std::path::Path;
 use std::sync::atomic::AtomicBool;
-use std::sync::OnceLock;
+use std::sync::{Mutex, OnceLock};
 
 /// Every feature the GPU integrator covers: a box floor with a point checker, a
 /// perturbed sphere, a plain sphere, a perturbed ellipsoid, a CSG tree of plain
@@ -248,6 +248,16 @@ fn job<'a>(
 }
 
 fn gpu_render(g: &gpu::Gpu, s: &(SceneData, Scene, RenderOptions), r: Range<u32>) -> RenderState {
+    gpu_render_noting(g, s, r, &Mutex::new(Vec::new()))
+}
+
+/// [`gpu_render`], adding the pixels of the samples the CPU rendered to `fallbacks`.
+fn gpu_render_noting(
+    g: &gpu::Gpu,
+    s: &(SceneData, Scene, RenderOptions),
+    r: Range<u32>,
+    fallbacks: &Mutex<Vec<u32>>,
+) -> RenderState {
     let stop = AtomicBool::new(false);
     let h = host(s);
     let (state, stats, gs) = render_range(g, &job(s, &h, r), &stop, &|_, _| {}).unwrap();
@@ -258,7 +268,15 @@ fn gpu_render(g: &gpu::Gpu, s: &(SceneData, Scene, RenderOptions), r: Range<u32>
             "kernel {k}: {n} loop iterations in one invocation"
         );
     }
-    assert_eq!(gs.cpu_fallbacks, 0, "no ray of these scenes overflows");
+    // Rays the GPU cannot answer exactly (a grazing quadric or tape crossing within f32
+    // rounding) are rendered by the CPU: few.
+    assert!(
+        gs.cpu_fallbacks * 100 <= stats.samples,
+        "{} of {} samples rendered on the CPU",
+        gs.cpu_fallbacks,
+        stats.samples
+    );
+    fallbacks.lock().unwrap().extend(&gs.fallback_pixels);
     state
 }
 
@@ -329,20 +347,25 @@ fn merged(states: &[RenderState]) -> RenderState {
 /// Same seed: the images follow the same paths (the GPU's numbers are the CPU's to 24
 /// bits), so besides the z-test fewer than 1 % of the pixels may differ by more than 1 %
 /// (GPU.md §9); this is what catches a bias hidden in the noise, e.g. self-shadowing.
-fn assert_correlated(a: &[RenderState], b: &[RenderState]) {
+/// Pixels in `skip` are left out.
+fn assert_correlated(a: &[RenderState], b: &[RenderState], skip: &[u32]) {
     let (w, h) = size();
     let (a, b) = (merged(a), merged(b));
     let mut far = 0;
     for y in 0..h {
         for x in 0..w {
+            if skip.contains(&(y * w + x)) {
+                continue;
+            }
             let (p, q) = (a.rgb(x, y).to_array(), b.rgb(x, y).to_array());
             let (sp, sq) = (p.iter().sum::<f64>(), q.iter().sum::<f64>());
             far += usize::from((sp - sq).abs() > 1e-2 * sp.abs().max(sq.abs()).max(1e-3));
         }
     }
     eprintln!(
-        "same seed: {far} of {} pixels differ by more than 1 %",
-        w * h
+        "same seed: {far} of {} pixels differ by more than 1 % ({} left out: progressive, a sample on the CPU)",
+        w * h,
+        skip.len()
     );
     assert!(
         far * 100 < (w * h) as usize,
@@ -362,7 +385,8 @@ fn assert_agree(
     z_max: f64,
 ) -> (Vec<RenderState>, Vec<RenderState>) {
     let (w, h) = size();
-    let gpu_subs = subs(|r| gpu_render(g, s, r));
+    let fallbacks = Mutex::new(Vec::new());
+    let gpu_subs = subs(|r| gpu_render_noting(g, s, r, &fallbacks));
     let cpu_subs = subs(|r| cpu_render(cpu, r));
     let (over, z) = compare(&spread(&gpu_subs), &spread(&cpu_subs));
     let cells = (w * h * 3) as usize;
@@ -376,7 +400,14 @@ fn assert_agree(
         "{label}: image means: z = {z:?}"
     );
     if s.2.seed == cpu.2.seed {
-        assert_correlated(&gpu_subs, &cpu_subs);
+        // The progressive estimator's result depends on the order in which a pixel's
+        // samples join its record, and a sample the CPU rendered joins the GPU's sums
+        // first: those pixels follow other milestones (they are few, `gpu_render`).
+        let mut skip = fallbacks.into_inner().unwrap();
+        if s.2.method != mis::Method::OptimalProgressive {
+            skip.clear();
+        }
+        assert_correlated(&gpu_subs, &cpu_subs, &skip);
     }
     (gpu_subs, cpu_subs)
 }
@@ -833,7 +864,7 @@ fn gpu_sums_equal_the_cpu_sums_of_the_same_draws() {
             },
         )
         .unwrap();
-        (state, gs.sums)
+        (state, gs.sums, gs.fallback_pixels)
     };
     let cases: [(&str, mis::Method, IntegratorKind, u32); 5] = [
         ("balance", mis::Method::Balance, IntegratorKind::Direct, 0),
@@ -866,15 +897,15 @@ fn gpu_sums_equal_the_cpu_sums_of_the_same_draws() {
         if per_light > 0 {
             s.2.aovs = Aov::ALL.to_vec();
         }
-        let (cpu, on) = render(&s, SumsOn::Cpu);
+        let (cpu, on, fallbacks) = render(&s, SumsOn::Cpu);
         assert_eq!(on, SumsOn::Cpu, "{label}");
-        let (f64s, on) = render(&s, SumsOn::GpuF64);
-        let (df, on_df) = render(&s, SumsOn::GpuDoubleFloat);
+        let (f64s, on, _) = render(&s, SumsOn::GpuF64);
+        let (df, on_df, _) = render(&s, SumsOn::GpuDoubleFloat);
         assert_eq!(on_df, SumsOn::GpuDoubleFloat, "{label}");
         if method == mis::Method::OptimalProgressive {
             assert_eq!(on, SumsOn::GpuF64, "{label}");
             for (gpu, on) in [(&f64s, on), (&df, on_df)] {
-                check_progressive(&format!("{label}, sums {on}"), &s, gpu, &cpu);
+                check_progressive(&format!("{label}, sums {on}"), &s, gpu, &cpu, &fallbacks);
             }
             continue;
         }
@@ -913,12 +944,14 @@ fn gpu_sums_equal_the_cpu_sums_of_the_same_draws() {
 /// block whose N is a solve point holds exactly the α that the `mis` crate solves from
 /// its moments (so α was solved at that N, from the GPU's own sums); and each block's α
 /// within 10⁻⁵ of its largest |α| of the CPU's (measured: 3.8·10⁻⁷; a single word of α
-/// can differ by 6 % of itself where it is near 0).
+/// can differ by 6 % of itself where it is near 0). Pixels with a sample the CPU rendered
+/// (`fallbacks`) are left out: there the samples join in another order.
 fn check_progressive(
     label: &str,
     s: &(SceneData, Scene, RenderOptions),
     gpu: &RenderState,
     cpu: &RenderState,
+    fallbacks: &[u32],
 ) {
     let acc = render::integrator::Accumulator::new(&s.1, &s.2).unwrap();
     let kernel = acc.kernel().unwrap();
@@ -929,11 +962,18 @@ fn check_progressive(
     let alpha = 4..4 + 3 * t;
     let mut worst = [0f64; 3];
     let mut solved = 0;
-    for (g, c) in gpu
+    for (pix, (g, c)) in gpu
         .data()
         .chunks_exact(stride)
         .zip(cpu.data().chunks_exact(stride))
+        .enumerate()
     {
+        if fallbacks.contains(&(pix as u32)) {
+            // A sample the CPU rendered joins the GPU's sums first where they are on
+            // the GPU, in sample order where they are on the CPU: another order of the
+            // progressive estimator's milestones.
+            continue;
+        }
         let close = |a: f64, b: f64, tol: f64, what: &str| {
             assert!(
                 (a - b).abs() <= tol * b.abs(),
@@ -1088,7 +1128,8 @@ fn unsupported_scenes_are_refused_by_name() {
 /// random points in random directions, a third aimed at random points of the CSG,
 /// blended and perturbed objects and the CSG of perturbed and expression parts, a third
 /// grazing the CSG box's faces. Hit/miss must agree except on grazing rays (|cos| <
-/// 0.02 at the hit that one side found, at most 1 % of rays); matched hits agree to |Δt| ≤ 2·10⁻⁴·max(1, t); every query stays below
+/// 0.02 at the hit that one side found, at most 1 % of rays); matched hits agree to |Δt| ≤ 2·10⁻⁴·max(1, t); rays
+/// the GPU leaves open (for the CPU) are counted, at most 1 %; every query stays below
 /// 30 000 loop iterations.
 #[test]
 fn ray_batch_matches_the_cpu_intersection() {
@@ -1149,10 +1190,14 @@ fn ray_batch_matches_the_cpu_intersection() {
     let gpu_rays: Vec<([f32; 3], [f32; 3])> = rays.iter().map(|(o, d)| (f(*o), f(*d))).collect();
     let host = CpuHost::new(&scene, &RenderOptions::default()).unwrap();
     let got = gpu::direct::probe(g, &data, &host, &gpu_rays).unwrap();
-    let (mut flips, mut grazing_flips, mut worst) = (0, 0, 0.0f64);
+    let (mut flips, mut grazing_flips, mut worst, mut open) = (0, 0, 0.0f64, 0);
     for ((o, d), (gr, p)) in rays.iter().zip(gpu_rays.iter().zip(&got)) {
         assert!(p.loops < 30_000, "{} loop iterations", p.loops);
-        assert_ne!(p.status, 2, "overflow");
+        if p.status == 2 {
+            // Left open (for the CPU): not compared, counted.
+            open += 1;
+            continue;
+        }
         // The CPU intersects the GPU's (f32) ray, in f64.
         let ray = frep::Ray::new(
             glam::DVec3::from_array(gr.0.map(f64::from)),
@@ -1180,11 +1225,12 @@ fn ray_batch_matches_the_cpu_intersection() {
         }
     }
     eprintln!(
-        "ray batch: {} rays, {flips} hit/miss flips ({grazing_flips} grazing), worst |Δt|/max(1, t) {worst:.2e}",
+        "ray batch: {} rays, {open} left to the CPU, {flips} hit/miss flips ({grazing_flips} grazing), worst |Δt|/max(1, t) {worst:.2e}",
         rays.len()
     );
     assert_eq!(flips, grazing_flips, "a non-grazing ray flipped");
     assert!(flips * 100 <= rays.len(), "{flips} flips");
+    assert!(open * 100 <= rays.len(), "{open} left to the CPU");
     assert!(worst <= 2e-4, "|Δt| {worst}");
 }
 
@@ -1198,9 +1244,9 @@ fn ray_batch_matches_the_cpu_intersection() {
 /// of a grazing or edge ray's point, or at a sliver of the CPU's crossings thinner than
 /// 10⁻³. A tree the GPU refuses or a ray it overflows (handed to the CPU) is counted,
 /// not compared. A quarter of the rays graze by construction: at most 6 % of all rays
-/// may disagree for the reasons above. (Perturbed parts are left out: the kernel's f32
-/// scan misses a perturbed sphere's exit from a start just past its entry, which its
-/// CPU twin `first_crossing_f32` shows too; see docs/geometry.md.)
+/// may disagree for the reasons above. (Perturbed parts are left out to keep the
+/// compile time; frep's `f32_scan_finds_exits_searched_from_just_past_an_entry` checks
+/// the kernel's twin on the perturbed leaves of random trees.)
 #[test]
 fn random_csg_trees_match_the_cpu() {
     use rand::SeedableRng;

@@ -390,11 +390,11 @@ fn relative_peak(m: &Model, o: DVec3, d: DVec3, a: f64, b: f64) -> f64 {
 const NEAR_TANGENT: f64 = 1.0;
 
 /// Per model, 4 096 rays through the twin against frep's f64 tracer (same bounds and
-/// f64 resolution): the same hit or miss on every ray the twin decides within its soft
-/// budget but near-tangent ones (the sliver between one tracer's crossing and its next
-/// crossing, which the other skips, within [`NEAR_TANGENT`] × f32 rounding of F = 0:
-/// [`relative_peak`]), none undecided, |Δt| within [`TOLERANCE`], loop counts below
-/// 30 000.
+/// f64 resolution): the same hit or miss on every ray the twin decides but near-tangent
+/// ones (the sliver between one tracer's crossing and its next crossing, which the other
+/// skips, within [`NEAR_TANGENT`] × f32 rounding of F = 0: [`relative_peak`]), at most
+/// 1 % undecided (left to the CPU), |Δt| within [`TOLERANCE`], loop counts within
+/// [`BUDGET`].
 #[test]
 fn twin_traces_like_frep() {
     let mut rng = Rng(21);
@@ -406,18 +406,20 @@ fn twin_traces_like_frep() {
         let view = surface.view();
         let size = m.bounds.extent().length();
         let (mut hits, mut undecided, mut flips, mut max_dt, mut max_loops) = (0, 0, 0, 0f64, 0);
-        let (mut late, mut late_flips, mut near, mut max_peak) = (0, 0, 0, 0f64);
+        let (mut near, mut max_peak, mut grazing_undecided) = (0, 0f64, 0);
         for (i, r) in rs.iter().enumerate() {
             let (o, d) = (Vec3::new(r[0], r[1], r[2]), Vec3::new(r[3], r[4], r[5]));
             let twin = solid.trace(o, d, r[6], r[7]);
             max_loops = max_loops.max(twin.loops);
-            late += twin.late as usize;
             let ray = Ray::new(o.as_dvec3(), d.as_dvec3());
             let want = view
                 .trace(&ray, r[6] as f64, r[7] as f64, false)
                 .map(|h| h.0);
             match (twin.hit, want) {
-                (TapeHit::Undecided, _) => undecided += 1,
+                (TapeHit::Undecided, _) => {
+                    undecided += 1;
+                    grazing_undecided += (2048..3072).contains(&i) as usize;
+                }
                 (TapeHit::Hit(t), Some(w)) => {
                     hits += 1;
                     max_dt = max_dt.max((t as f64 - w).abs() / size.max(w.abs()));
@@ -442,10 +444,10 @@ fn twin_traces_like_frep() {
                         _ => unreachable!("an agreeing pair"),
                     };
                     let peak = relative_peak(&m, o64, d64, a, b);
-                    match (twin.late, peak <= NEAR_TANGENT) {
-                        (true, _) => late_flips += 1,
-                        (false, true) => near += 1,
-                        (false, false) => flips += 1,
+                    if peak <= NEAR_TANGENT {
+                        near += 1;
+                    } else {
+                        flips += 1;
                     }
                     max_peak = max_peak.max(peak);
                     eprintln!(
@@ -456,20 +458,24 @@ fn twin_traces_like_frep() {
             }
         }
         eprintln!(
-            "{}: {} rays, {hits} hits, {flips} flips against f64 and {near} near-tangent (|F| up to {max_peak:.2e} ε₃₂·S), {late} late ({late_flips} of them flipped), {undecided} undecided, max |Δt|/max(size, t) {max_dt:.2e}, max loops {max_loops}",
+            "{}: {} rays, {hits} hits, {flips} flips against f64 and {near} near-tangent (|F| up to {max_peak:.2e} ε₃₂·S), {undecided} undecided (for the CPU; {grazing_undecided} of them of the 1 024 grazing), max |Δt|/max(size, t) {max_dt:.2e}, max loops {max_loops}",
             m.name,
             rs.len()
         );
-        assert!(max_loops < 30_000, "{max_loops}");
-        // Rays decided within the budget agree with frep; late rays (segments decided by
-        // their end signs, as frep past its segment budget) may miss a thin crossing.
+        assert!(max_loops <= BUDGET, "{max_loops}");
+        // Every ray the twin decides agrees with frep; the ones it leaves to the CPU are
+        // few (rays whose signs lie within f32 rounding of F = 0 near their crossing).
         assert_eq!(flips, 0, "{}", m.name);
-        assert_eq!(undecided, 0, "{}", m.name);
+        assert!(
+            (undecided - grazing_undecided) * 100 <= rs.len(),
+            "{}: {undecided} undecided",
+            m.name
+        );
         assert!(max_dt < TOLERANCE, "{}: {max_dt:e}", m.name);
     }
 }
 
-/// The same rays through the kernel: outcome, t, late flag and loop count bit for bit
+/// The same rays through the kernel: outcome, t and loop count bit for bit
 /// the twin's.
 #[test]
 fn tracer_matches_its_twin() {
@@ -501,7 +507,7 @@ fn same_trace(a: &Traced, b: &Traced) -> bool {
         (TapeHit::Hit(x), TapeHit::Hit(y)) => x.to_bits() == y.to_bits(),
         (x, y) => x == y,
     };
-    hit && a.late == b.late && a.loops == b.loops
+    hit && a.loops == b.loops
 }
 
 fn run_rays(g: &Gpu, solid: &TapeSolid, rs: &[TestRay], name: &str) -> Vec<u32> {
@@ -539,10 +545,10 @@ fn padded_sphere(terms: usize) -> Expr {
     Expr::new(&t)
 }
 
-/// The loop budget (GPU.md §3.1): a tape too long for one bisection within the budget
-/// leaves every ray undecided (never a miss); a tape leaving a few evaluations before
-/// the soft budget decides rays by end signs, flagged late. GPU and twin agree, and no
-/// invocation passes [`BUDGET`].
+/// The loop budget (GPU.md §3.1): a tape too long for the two end signs within the
+/// budget leaves every ray undecided (never a miss); a tape leaving a few dozen
+/// evaluations leaves some undecided and answers the rest as a shorter tape would. GPU
+/// and twin agree, and no invocation passes [`BUDGET`].
 #[test]
 fn loop_budget_is_kept_and_reported() {
     let Some(g) = common::gpu(GpuOptions::default()) else {
@@ -550,7 +556,7 @@ fn loop_budget_is_kept_and_reported() {
     };
     let bounds = Aabb::new(DVec3::splat(-1.0), DVec3::splat(1.0));
     let mut rng = Rng(5);
-    for (terms, want_late, want_undecided) in [(325, true, false), (400, false, true)] {
+    for (terms, want_all_undecided) in [(800, false), (20_000, true)] {
         let e = padded_sphere(terms);
         let solid = TapeSolid::new(
             GpuTape::new(&Bytecode::compile(&e).unwrap()).unwrap(),
@@ -570,7 +576,7 @@ fn loop_budget_is_kept_and_reported() {
             })
             .collect();
         let out = run_rays(&g, &solid, &rs, "padded sphere");
-        let (mut late, mut undecided, mut max_loops) = (0, 0, 0);
+        let (mut undecided, mut max_loops) = (0, 0);
         for (i, r) in rs.iter().enumerate() {
             let (o, d) = (Vec3::new(r[0], r[1], r[2]), Vec3::new(r[3], r[4], r[5]));
             let twin = solid.trace(o, d, r[6], r[7]);
@@ -581,28 +587,40 @@ fn loop_budget_is_kept_and_reported() {
             );
             assert!(twin.loops <= BUDGET, "{}", twin.loops);
             max_loops = max_loops.max(twin.loops);
-            late += twin.late as usize;
             undecided += (twin.hit == TapeHit::Undecided) as usize;
-            if i % 2 == 0 && twin.hit != TapeHit::Undecided {
-                // From inside, the end signs differ: always a hit.
-                assert!(matches!(twin.hit, TapeHit::Hit(_)), "ray {i}: {twin:?}");
+            match twin.hit {
+                TapeHit::Undecided => {}
+                // The unit sphere: from inside, a hit at 1; from outside, at |o| − 1
+                // along the line through the centre's nearest point, or none.
+                TapeHit::Hit(t) if i % 2 == 0 => assert!((t - 1.0).abs() < 1e-4, "ray {i}: {t}"),
+                TapeHit::Hit(t) => {
+                    let (o, d) = (o.as_dvec3(), d.as_dvec3());
+                    let b = o.dot(d);
+                    let want = -b - (b * b - o.length_squared() + 1.0).sqrt();
+                    assert!(
+                        (t as f64 - want).abs() < 1e-4,
+                        "ray {i}: {t} against {want}"
+                    );
+                }
+                // Every ray from outside aims at a point inside the sphere.
+                TapeHit::Miss => panic!("ray {i} missed"),
             }
         }
         eprintln!(
-            "{} ops: {late} late, {undecided} undecided of {}, max loops {max_loops}",
+            "{} ops: {undecided} undecided of {}, max loops {max_loops}",
             solid.tape.len(),
             rs.len()
         );
-        assert_eq!(late > 0, want_late);
-        assert_eq!(undecided == rs.len(), want_undecided);
+        assert!(undecided > 0);
+        assert_eq!(undecided == rs.len(), want_all_undecided);
     }
 }
 
 /// Several solids in one kernel (a scene's expression solids, `TapeSolid::scene_wgsl`):
-/// each ray traced after `use_tape(k)` equals, bit for bit (outcome, t, late flag, loop
-/// count), the twin of solid k with its tape padded to the longest (the kernel's one
-/// interpreter runs every tape at that length); and the padded twin finds what the
-/// unpadded one finds (outcome and t) wherever neither ran late.
+/// each ray traced after `use_tape(k)` equals, bit for bit (outcome, t, loop count), the
+/// twin of solid k with its tape padded to the longest (the kernel's one interpreter runs
+/// every tape at that length); and the padded twin finds what the unpadded one finds
+/// (outcome and t) wherever both decide.
 #[test]
 fn several_solids_in_one_kernel_match_their_padded_twins() {
     let Some(g) = common::gpu(GpuOptions::default()) else {
@@ -679,7 +697,7 @@ fn trace(@builtin(global_invocation_id) id: vec3<u32>) {{
             models[k].name
         );
         let plain = solids[k].trace(o, d, r[6], r[7]);
-        if !plain.late && !twin.late {
+        if plain.hit != TapeHit::Undecided && twin.hit != TapeHit::Undecided {
             compared += 1;
             let same = match (plain.hit, twin.hit) {
                 (TapeHit::Hit(x), TapeHit::Hit(y)) => x.to_bits() == y.to_bits(),
@@ -702,4 +720,121 @@ fn trace(@builtin(global_invocation_id) id: vec3<u32>) {{
         "{compared} of {} compared",
         all.len()
     );
+}
+
+/// Thin and singular shapes as expressions (the tape path, not the exact quadrics): a
+/// fin 2.5 mm thick, a needle 2.5 mm across, and a double cone (half-angle 30°) with
+/// its apex at the origin, each within the cube of half-size 1.
+fn thin_shapes() -> Vec<(&'static str, Expr)> {
+    use frep::Tree;
+    let (x, y, z) = (Tree::x(), Tree::y(), Tree::z());
+    let one = Tree::constant(1.0);
+    let slab = |v: &Tree| one.clone() - v.abs();
+    let fin = (Tree::constant(0.00125) - x.abs())
+        .min(&slab(&y))
+        .min(&slab(&z));
+    let needle = (Tree::constant(0.00125) - (x.square() + y.square()).sqrt()).min(&slab(&z));
+    let (c2, s2) = (0.75, 0.25); // cos² 30°, sin² 30°
+    let cone = (z.square() * c2 - (x.square() + y.square()) * s2).min(&slab(&z));
+    vec![
+        ("fin", Expr::new(&fin)),
+        ("needle", Expr::new(&needle)),
+        ("cone", Expr::new(&cone)),
+    ]
+}
+
+/// Camera rays through the pixel centres of 27 views (9 azimuths × 3 elevations) of
+/// `res`² pixels, 30° field of view, from 1.5 diagonals away, aimed at the centre.
+fn pixel_centre_rays(bounds: &Aabb, res: usize) -> Vec<TestRay> {
+    let c = bounds.center();
+    let r = 1.5 * bounds.extent().length();
+    let h = 15f64.to_radians().tan();
+    let mut out = Vec::new();
+    for az in (0..360).step_by(40) {
+        for el in [-20.0f64, 15.0, 50.0] {
+            let (a, e) = ((az as f64).to_radians(), el.to_radians());
+            let eye = c + r * DVec3::new(e.cos() * a.cos(), e.cos() * a.sin(), e.sin());
+            let fwd = (c - eye).normalize();
+            let right = fwd.cross(DVec3::Z).normalize();
+            let up = right.cross(fwd);
+            for j in 0..res {
+                for i in 0..res {
+                    let u = ((i as f64 + 0.5) / res as f64 * 2.0 - 1.0) * h;
+                    let v = (1.0 - (j as f64 + 0.5) / res as f64 * 2.0) * h;
+                    let (o, d) = (
+                        eye.as_vec3(),
+                        (fwd + u * right + v * up).normalize().as_vec3(),
+                    );
+                    out.push([o.x, o.y, o.z, d.x, d.y, d.z, 0.0, f32::INFINITY]);
+                }
+            }
+        }
+    }
+    out
+}
+
+/// The tracer never answers wrongly (issue: an f32 value's sign gave colonnade false hits
+/// on near-zero sheets and misses where the budget ran low): at the pixel centres of 27
+/// views of colonnade.vm, a fin and a needle 2.5 mm thick and a double cone's apex,
+/// every ray the twin decides has frep's f64 outcome, and t within [`TOLERANCE`]; the
+/// rest are counted (the CPU traces them).
+#[test]
+fn pixel_centres_are_never_answered_wrongly() {
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let m = read_file(&root.join("models/fidget/colonnade.vm")).unwrap();
+    let colonnade = Expr::new(&m.shape.to_tree().unwrap());
+    let cube = Aabb::new(DVec3::splat(-2.0), DVec3::splat(2.0));
+    let mut shapes = vec![("colonnade", colonnade, m.domain.unwrap_or(cube))];
+    shapes.extend(thin_shapes().into_iter().map(|(n, e)| (n, e, cube)));
+    let mut rng = Rng(8);
+    for (name, expr, domain) in shapes {
+        let bounds = frep::bounds::expr_bounds(&expr, domain);
+        let solid = TapeSolid::new(
+            GpuTape::new(&Bytecode::compile(&expr).unwrap()).unwrap(),
+            &bounds,
+        );
+        let surface = ExprSurface::new(expr.clone(), bounds);
+        let view = surface.view();
+        let size = bounds.extent().length();
+        let mut rs = pixel_centre_rays(&bounds, 16);
+        if name == "needle" {
+            // Too thin for pixel centres: rays through points of its axis.
+            rs = (0..4096)
+                .map(|_| {
+                    let p = DVec3::new(0.0, 0.0, rng.range(-0.9, 0.9));
+                    let o = p - 3.0 * rng.unit();
+                    let (o, d) = (o.as_vec3(), (p - o).normalize().as_vec3());
+                    [o.x, o.y, o.z, d.x, d.y, d.z, 0.0, f32::INFINITY]
+                })
+                .collect();
+        }
+        let (mut hits, mut undecided, mut wrong) = (0, 0, 0);
+        for r in &rs {
+            let (o, d) = (Vec3::new(r[0], r[1], r[2]), Vec3::new(r[3], r[4], r[5]));
+            let twin = solid.trace(o, d, r[6], r[7]).hit;
+            let ray = Ray::new(o.as_dvec3(), d.as_dvec3());
+            let want = view.trace(&ray, 0.0, f64::INFINITY, false).map(|h| h.0);
+            let ok = match (twin, want) {
+                (TapeHit::Undecided, _) => {
+                    undecided += 1;
+                    true
+                }
+                (TapeHit::Miss, None) => true,
+                (TapeHit::Hit(t), Some(w)) => {
+                    hits += 1;
+                    (t as f64 - w).abs() <= TOLERANCE * size.max(w)
+                }
+                _ => false,
+            };
+            if !ok {
+                wrong += 1;
+                eprintln!("{name}: ray {r:?}: twin {twin:?}, frep {want:?}");
+            }
+        }
+        eprintln!(
+            "{name}: {} pixel centres, {hits} hits, {wrong} wrong, {undecided} undecided (for the CPU)",
+            rs.len()
+        );
+        assert_eq!(wrong, 0, "{name}");
+    }
 }

@@ -242,7 +242,19 @@ fn first_crossing_within<T: Float, S: Source<T>>(
         max_splits,
         streamed: Cell::new(false),
     };
-    let t = ray.chunk(lo, hi, sign, 0).ok().flatten();
+    let t = match ray.chunk(lo, hi, sign, 0) {
+        Ok(t) => t,
+        // The range ends where the ray leaves the bounds of {F' ≥ 0} with F' ≥ 0 within
+        // rounding there: the crossing is at that end (a perturbation's support ending
+        // just past the crossing left its sign within rounding; f32 missed such exits).
+        Err(s) if s > T::zero() && hi < t_max => Some(hi),
+        // Its sign there unknown: the GPU kernel hands the ray to the CPU.
+        Err(s) if s == T::zero() && hi < t_max => {
+            ray.streamed.set(true);
+            None
+        }
+        Err(_) => None,
+    };
     (t, ray.streamed.get())
 }
 

@@ -502,6 +502,7 @@ impl<'a> Waves<'a> {
             let index = start + slot / band_len;
             let rec = &mut data_words[pix as usize * stride..(pix as usize + 1) * stride];
             t.stats.cpu_fallbacks += 1;
+            t.stats.fallback_pixels.push(pix);
             self.host
                 .cpu_sample(pix % w, pix / w, index, rec, &mut t.rays);
         }
@@ -546,6 +547,7 @@ impl<'a> Waves<'a> {
                 || (0..depths).any(|k| vertex(k).chunks_exact(DRAW_WORDS).any(|d| d[7] == 12.0));
             if overflow {
                 t.stats.cpu_fallbacks += 1;
+                t.stats.fallback_pixels.push(pix as u32);
                 self.host.cpu_sample(x, y, index, rec, &mut t.rays);
                 continue;
             }

@@ -114,7 +114,11 @@ fn csg_run(o: vec3<f32>, d: vec3<f32>) -> vec3<f32> {
         }
         if (node.x == 0u) {
             if (nl == SPAN_LISTS || top + 4u > SPAN_POOL) { return vec3<f32>(0.0, 0.0, 2.0); }
-            let ps = positive_set(q_local(quadrics[objects[node.y].first_op].c, o, d));
+            // About the ray's vertex (quadric_centred); open: for the CPU.
+            let cq = quadric_centred(quadrics[objects[node.y].first_op].c, o, d, cs_w.x, cs_w.y);
+            if (cq.open) { return vec3<f32>(0.0, 0.0, 2.0); }
+            var ps = positive_set(cq.k);
+            ps.s = ps.s + vec4<f32>(cq.tc);
             ls_at[nl] = top;
             nl++;
             for (var w = 0u; w < 2u * ps.n; w++) {

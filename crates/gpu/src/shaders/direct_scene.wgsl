@@ -30,6 +30,7 @@ fn scene_trace(o: vec3<f32>, d: vec3<f32>, t_max: f32, any_hit: bool) -> SceneHi
             var t = 0.0;
             if (sh.kind == 1u) {
                 let r = plain_intersection(sh, o, d, 0.0, res.t);
+                if (r.z == 2.0) { return SceneHit(2u, 0.0, 0u); }
                 found = r.z == 1.0;
                 t = r.x;
                 leaf = bitcast<u32>(r.y);
@@ -38,6 +39,7 @@ fn scene_trace(o: vec3<f32>, d: vec3<f32>, t_max: f32, any_hit: bool) -> SceneHi
                 in_csg = true;
             } else if (objects[leaf].kind == 0u) {
                 let r = quadric_first_crossing(quadrics[objects[leaf].first_op], o, d, 0.0, res.t);
+                if (r.y == 2.0) { return SceneHit(2u, 0.0, 0u); }
                 found = r.y == 1.0;
                 t = r.x;
             } else {

@@ -18,7 +18,8 @@ fn clip_box(lo: vec3<f32>, hi: vec3<f32>, o: vec3<f32>, inv: vec3<f32>, t0: f32,
 
 // frep's Solid::plain_intersection in f32: the inside set along the ray is the
 // intersection of the parts' positive sets; its first end in (t_min, t_max), with the
-// leaf that makes it. (t, leaf bits, 1) or (0, 0, 0).
+// leaf that makes it. (t, leaf bits, 1), (0, 0, 0), or (0, 0, 2) where a part's
+// outcome lies within rounding (quadric_centred).
 fn plain_intersection(sh: GpuShape, o: vec3<f32>, d: vec3<f32>, t_min: f32, t_max: f32) -> vec3<f32> {
     var a: array<f32, 10>;
     var b: array<f32, 10>;
@@ -32,7 +33,11 @@ fn plain_intersection(sh: GpuShape, o: vec3<f32>, d: vec3<f32>, t_min: f32, t_ma
     for (var k = 0u; k < sh.count; k++) {
         loops++;
         let leaf = sh.first + k;
-        let ps = positive_set(q_local(quadrics[objects[leaf].first_op].c, o, d));
+        // About the ray's vertex, as quadric_first_crossing; open: for the CPU.
+        let cq = quadric_centred(quadrics[objects[leaf].first_op].c, o, d, t_min, t_max);
+        if (cq.open) { return vec3<f32>(0.0, 0.0, 2.0); }
+        var ps = positive_set(cq.k);
+        ps.s = ps.s + vec4<f32>(cq.tc);
         var na: array<f32, 10>;
         var nb: array<f32, 10>;
         var nka: array<u32, 10>;

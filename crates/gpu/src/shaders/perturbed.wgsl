@@ -788,7 +788,13 @@ fn perturbed_first_crossing(oi: u32, o: vec3<f32>, d: vec3<f32>, t_min: f32, t_m
         let f = run(lo, hi, n_brk > 0u);
         if (f.state == 2u) { return ScanResult(1u, f.t); }
         if (f.state == 1u) { return ScanResult(0u, 0.0); }
-        if (np == 0u) { return ScanResult(0u, 0.0); }
+        if (np == 0u) {
+            // The range ends at the bounds of {F' ≥ 0}: F' ≥ 0 there within rounding,
+            // the crossing is at that end; its sign unknown, for the CPU.
+            if (scan_s > 0.0 && hi < t_max) { return ScanResult(1u, hi); }
+            if (scan_s == 0.0 && hi < t_max) { return ScanResult(2u, 0.0); }
+            return ScanResult(0u, 0.0);
+        }
         np--;
         lo = hi;
         hi = pend_hi[np];
