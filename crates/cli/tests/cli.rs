@@ -654,8 +654,8 @@ fn depth_and_normals_write_png_views() {
 }
 
 /// `--backend gpu` refuses, before any work and naming the feature, a scene the GPU back
-/// end does not cover (an expression with a transcendental, whose WGSL builtin differs
-/// from libm; a triangle mesh; a mesh light), exiting non-zero; `--backend auto` renders it on the CPU and says why;
+/// end does not cover (an expression with `exp`, a transcendental its tapes lack; a
+/// triangle mesh; a mesh light), exiting non-zero; `--backend auto` renders it on the CPU and says why;
 /// without any adapter both say what to install.
 #[test]
 fn gpu_backend_refuses_by_name_and_auto_falls_back() {
@@ -673,10 +673,10 @@ fn gpu_backend_refuses_by_name_and_auto_falls_back() {
     let cases = [
         (
             format!(
-                "{head}[[objects]]\nsolid = \"sphere([0, 0, 0], 1) + 0.05 * sin(8 * x)\"\n\
+                "{head}[[objects]]\nsolid = \"sphere([0, 0, 0], 1) + 0.05 * exp(-8 * x * x)\"\n\
                  material = \"clay\"\n\n{lamp}"
             ),
-            "Sin",
+            "Exp",
         ),
         (
             format!("{head}[[objects]]\nmodel = \"tri.obj\"\nmaterial = \"clay\"\n\n{lamp}"),
@@ -771,7 +771,7 @@ fn gpu_backend_refuses_by_name_and_auto_falls_back() {
 /// data (the model, its material, key light and sky), and it renders on the GPU, where
 /// its image agrees with the CPU's (same seed: the channel means within 2 %), or is
 /// refused naming what is missing; `--backend auto` falls back to the CPU for a model
-/// the GPU does not cover (a transcendental), and says why.
+/// the GPU does not cover (`exp`), and says why.
 #[test]
 fn bare_models_render_on_either_backend() {
     let d = out_dir("model-backend");
@@ -831,7 +831,11 @@ fn bare_models_render_on_either_backend() {
         assert!(!d.join("g.exr").exists());
     }
     let wavy = d.join("wavy.frep");
-    std::fs::write(&wavy, "output sphere([0, 0, 0], 1) + 0.05 * sin(8 * x)\n").unwrap();
+    std::fs::write(
+        &wavy,
+        "output sphere([0, 0, 0], 1) + 0.05 * exp(-8 * x * x)\n",
+    )
+    .unwrap();
     let auto = frepray()
         .args(["render", wavy.to_str().unwrap(), "--backend", "auto", "-o"])
         .arg(d.join("a.png"))

@@ -83,6 +83,12 @@ pub use adapter::{adapters, AdapterSummary, Gpu, GpuError, GpuInfo, GpuOptionErr
 /// `rmax` as Rust's f32 `min`/`max`): prepend once to a kernel that uses
 /// [`perturbed::PERTURBED_WGSL`] or a tape ([`tape::GpuTape::wgsl`] includes it).
 pub const FLOAT_WGSL: &str = include_str!("shaders/float.wgsl");
+
+/// The trigonometric polynomials the kernels share (`sincos_small`, `env_atan01`,
+/// `env_atan2`): the lights, the environment and the expression tapes' `sin`, `cos` and
+/// `atan2`; their Rust twins are [`light::sincos_small`], [`env::atan01`], [`env::atan2`].
+pub const TRIG_WGSL: &str = include_str!("shaders/trig.wgsl");
+
 pub use kernel::Kernel;
 
 /// Workgroups (x, y) of 64 invocations for `n` invocations of a kernel that reads its

@@ -10,10 +10,15 @@
 //! round-to-nearest (lavapipe) half an ulp would do; the margin covers WGSL's looser
 //! `/` and `sqrt` on real GPUs (unverified there).
 //!
-//! **Ops.** Only those of the shipped polynomial and CSG models: var, const, `powi` with
-//! 0 ≤ n ≤ 15, neg, abs, sqrt, square, `+ − × /`, min, max. Transcendentals, rounding,
-//! `mod` and logic are refused by [`GpuTape::new`]: their f32 results on a GPU are not
-//! Rust's, so they need their own twin (not done).
+//! **Ops.** var, const, `powi` with 0 ≤ n ≤ 15, neg, abs, sqrt, square, `+ − × /`, min,
+//! max, and `sin`, `cos` and `atan2` (HyperFun's gyroid and twist, smooth_blob): WGSL's
+//! builtins are not libm's, so these are polynomials written alike in WGSL and Rust
+//! ([`sin_cos`], [`crate::env::atan2`]), within a few ulps of libm for |x| < 10⁴. Their
+//! intervals are their values at the ends, widened by the polynomials' error bound
+//! ([`TRIG_ERR`]), and ±1 where an extremum lies inside (sin, cos), or by the corners of
+//! the box where it neither holds the origin nor crosses the cut along the negative x
+//! axis, else [−π, π] (atan2). Other transcendentals, rounding, `mod` and logic are
+//! refused by [`GpuTape::new`].
 
 use frep::bytecode::{Bytecode, Instr, IMM};
 use frep::{BinaryOp, UnaryOp};
@@ -42,6 +47,9 @@ pub fn tape_consts_wgsl() -> String {
         ("OP_DIV", binary_opcode(BinaryOp::Div)),
         ("OP_MIN", binary_opcode(BinaryOp::Min)),
         ("OP_MAX", binary_opcode(BinaryOp::Max)),
+        ("OP_SIN", unary_opcode(UnaryOp::Sin)),
+        ("OP_COS", unary_opcode(UnaryOp::Cos)),
+        ("OP_ATAN2", binary_opcode(BinaryOp::Atan2)),
         ("IMM", IMM),
     ];
     ops.iter()
@@ -94,7 +102,12 @@ impl GpuTape {
                 Instr::PowI(_, _, n) => (0..=MAX_POWI).contains(&n),
                 Instr::Unary(_, op, _) => matches!(
                     op,
-                    UnaryOp::Neg | UnaryOp::Abs | UnaryOp::Sqrt | UnaryOp::Square
+                    UnaryOp::Neg
+                        | UnaryOp::Abs
+                        | UnaryOp::Sqrt
+                        | UnaryOp::Square
+                        | UnaryOp::Sin
+                        | UnaryOp::Cos
                 ),
                 Instr::Binary(_, op, ..) => matches!(
                     op,
@@ -104,6 +117,7 @@ impl GpuTape {
                         | BinaryOp::Div
                         | BinaryOp::Min
                         | BinaryOp::Max
+                        | BinaryOp::Atan2
                 ),
             };
             if !ok {
@@ -161,15 +175,17 @@ impl GpuTape {
     /// `TAPE_LEN` (GPU.md §3.4). The kernel declares `tape: array<u32>`.
     pub fn wgsl(&self) -> String {
         format!(
-            "const REG_COUNT: u32 = {}u;\nconst TAPE_LEN: u32 = {}u;\n{}{}{TAPE_WGSL}",
+            "const REG_COUNT: u32 = {}u;\nconst TAPE_LEN: u32 = {}u;\n{}{}{}{TAPE_WGSL}",
             self.registers.max(1),
             self.len(),
             crate::FLOAT_WGSL,
+            crate::TRIG_WGSL,
             tape_consts_wgsl()
         )
     }
 
-    /// F at p: the twin of the kernel's `eval_point`, equal to [`Bytecode::eval_f32`].
+    /// F at p: the twin of the kernel's `eval_point`, equal to [`Bytecode::eval_f32`] but
+    /// for `sin`, `cos` and `atan2` (polynomials, a few ulps from libm's).
     pub fn eval_point(&self, p: [f32; 3]) -> f32 {
         let mut r = [0f32; 256];
         let mut out = 0;
@@ -185,6 +201,8 @@ impl GpuTape {
                         UnaryOp::Abs => a.abs(),
                         UnaryOp::Sqrt => a.sqrt(),
                         UnaryOp::Square => a * a,
+                        UnaryOp::Sin => sin_cos(a, false),
+                        UnaryOp::Cos => sin_cos(a, true),
                         _ => f32::NAN,
                     };
                     (o, v)
@@ -199,6 +217,7 @@ impl GpuTape {
                         BinaryOp::Div => a / b,
                         BinaryOp::Min => a.min(b),
                         BinaryOp::Max => a.max(b),
+                        BinaryOp::Atan2 => crate::env::atan2(a, b),
                         _ => f32::NAN,
                     };
                     (o, v)
@@ -255,6 +274,10 @@ impl GpuTape {
                             (v, i_div(ad, [2.0 * v[0], 2.0 * v[1]]))
                         }
                         UnaryOp::Square => (i_square(av), i_mul([2.0 * a[0], 2.0 * a[1]], ad)),
+                        UnaryOp::Sin => (i_sin_cos(av, false), i_mul(i_sin_cos(av, true), ad)),
+                        UnaryOp::Cos => {
+                            (i_sin_cos(av, true), i_mul(i_neg(i_sin_cos(av, false)), ad))
+                        }
                         _ => (NAN2, NAN2),
                     };
                     (o, v, d)
@@ -295,6 +318,14 @@ impl GpuTape {
                                 (i_max(av, bv), hull(ad, bd))
                             }
                         }
+                        // d atan2(a, b) = (b·da − a·db)/(a² + b²).
+                        BinaryOp::Atan2 => (
+                            i_atan2(av, bv),
+                            i_div(
+                                i_sub(i_mul(bv, ad), i_mul(av, bd)),
+                                i_add(i_square(av), i_square(bv)),
+                            ),
+                        ),
                         _ => (NAN2, NAN2),
                     };
                     (o, v, d)
@@ -316,6 +347,95 @@ impl GpuTape {
 
 type I2 = [f32; 2];
 const NAN2: I2 = [f32::NAN, f32::NAN];
+
+/// |x| below which [`sin_cos`] reduces exactly enough (k·π/2 with k < 2¹⁶, the high
+/// part of π/2 having 8 significant bits); past it, NaN (and [−1, 1] for intervals).
+pub const TRIG_MAX: f32 = 1.0e4;
+
+/// A bound on the error of [`sin_cos`] (reduction below 10⁻⁷ at |x| < 10⁴, Taylor
+/// truncation 3·10⁻⁸, Horner's rounding a few ulps of 1) and of [`crate::env::atan2`]
+/// (two ulps of π): the widening of their intervals.
+pub const TRIG_ERR: f32 = 1.0e-6;
+
+/// sin x (`cos` false) or cos x for |x| < [`TRIG_MAX`], else NaN: the nearest quarter
+/// turn k·π/2 taken out in two parts (Cody & Waite 1980), the rest to
+/// [`crate::light::sincos_small`]. The kernel's `t_sin_cos`, operation for operation.
+pub fn sin_cos(x: f32, cos: bool) -> f32 {
+    // (NaN fails the test too.)
+    let reduced = x.abs() < TRIG_MAX;
+    if !reduced {
+        return f32::NAN;
+    }
+    let k = (x * f32::from_bits(0x3f22_f983) + 0.5).floor();
+    let r = (x - k * f32::from_bits(0x3fc9_0000)) - k * f32::from_bits(0x39fd_aa22);
+    let (s, c) = crate::light::sincos_small(r);
+    let q = (k as i32).wrapping_add(i32::from(cos)) & 3;
+    match q {
+        0 => s,
+        1 => c,
+        2 => -s,
+        _ => -c,
+    }
+}
+
+/// sin (`cos` false) or cos over `a`: the values at the ends widened by [`TRIG_ERR`],
+/// reaching 1 (−1) where a maximum (minimum) lies within the ends (widened by the same
+/// margin), clamped to [−1, 1]; [−1, 1] for a span of 2π or more or past [`TRIG_MAX`].
+fn i_sin_cos(a: I2, cos: bool) -> I2 {
+    if any_nan(a) {
+        return NAN2;
+    }
+    let big = a[0].abs().max(a[1].abs());
+    let narrow = a[1] - a[0] < 6.0 && big < TRIG_MAX;
+    if !narrow {
+        return [-1.0, 1.0];
+    }
+    let (va, vb) = (sin_cos(a[0], cos), sin_cos(a[1], cos));
+    let mut lo = va.min(vb) - TRIG_ERR;
+    let mut hi = va.max(vb) + TRIG_ERR;
+    // Maxima at p + 2πm, minima at p + π + 2πm (p = π/2 for sin, 0 for cos).
+    let two_pi = f32::from_bits(0x40c9_0fdb);
+    let margin = TRIG_ERR * (1.0 + big);
+    let p = if cos {
+        0.0
+    } else {
+        f32::from_bits(0x3fc9_0fdb)
+    };
+    let holds = |p: f32| {
+        let m = ((a[0] - margin - p) / two_pi).ceil();
+        p + two_pi * m <= a[1] + margin
+    };
+    if holds(p) {
+        hi = 1.0;
+    }
+    if holds(p + f32::from_bits(0x4049_0fdb)) {
+        lo = -1.0;
+    }
+    [lo.max(-1.0), hi.min(1.0)]
+}
+
+/// atan2 over the box y × x: [−π, π] where the box meets x ≤ 0 with y spanning 0 (the
+/// origin or the cut), else the corners' angles widened by [`TRIG_ERR`] (over a box
+/// that holds neither, the angle is continuous and its extremes lie at corners).
+fn i_atan2(y: I2, x: I2) -> I2 {
+    if any_nan(y) || any_nan(x) {
+        return NAN2;
+    }
+    let pi = f32::from_bits(0x4049_0fdb) + TRIG_ERR;
+    if x[0] <= 0.0 && y[0] <= 0.0 && y[1] >= 0.0 {
+        return [-pi, pi];
+    }
+    let c = [
+        crate::env::atan2(y[0], x[0]),
+        crate::env::atan2(y[0], x[1]),
+        crate::env::atan2(y[1], x[0]),
+        crate::env::atan2(y[1], x[1]),
+    ];
+    [
+        rmin(rmin(c[0], c[1]), rmin(c[2], c[3])) - TRIG_ERR,
+        rmax(rmax(c[0], c[1]), rmax(c[2], c[3])) + TRIG_ERR,
+    ]
+}
 
 /// x^n as compiler-rt's `__powisf2` computes it (Rust's `f32::powi`), n ≤ 15.
 pub fn powi(x: f32, n: u32) -> f32 {
@@ -478,6 +598,87 @@ mod tests {
         assert_eq!(up(f32::MAX), f32::INFINITY);
         assert_eq!(up(f32::NEG_INFINITY), f32::MIN);
         assert!(up(f32::NAN).is_nan());
+    }
+
+    /// A small deterministic generator for the tests below.
+    fn lcg(seed: &mut u64) -> f64 {
+        *seed = seed
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        (*seed >> 11) as f64 / (1u64 << 53) as f64
+    }
+
+    #[test]
+    fn sin_cos_are_within_their_bound_of_libm() {
+        let mut seed = 3;
+        let mut worst = 0f64;
+        for k in 0..200_000 {
+            let scale = [1.0, 10.0, 100.0, 9_999.0][k % 4];
+            let x = ((lcg(&mut seed) * 2.0 - 1.0) * scale) as f32;
+            let xd = f64::from(x);
+            for (cos, want) in [(false, xd.sin()), (true, xd.cos())] {
+                let e = (f64::from(sin_cos(x, cos)) - want).abs();
+                worst = worst.max(e);
+                assert!(e <= f64::from(TRIG_ERR) / 4.0, "{x}: cos {cos}: {e:e}");
+            }
+        }
+        assert!(sin_cos(1e4, false).is_nan() && sin_cos(f32::NAN, true).is_nan());
+        eprintln!("sin, cos: largest error {worst:e}");
+    }
+
+    #[test]
+    fn atan2_is_within_its_bound_of_libm() {
+        let mut seed = 4;
+        for _ in 0..200_000 {
+            let y = ((lcg(&mut seed) * 2.0 - 1.0) * 10.0) as f32;
+            let x = ((lcg(&mut seed) * 2.0 - 1.0) * 10.0) as f32;
+            let e = (f64::from(crate::env::atan2(y, x)) - f64::from(y).atan2(f64::from(x))).abs();
+            assert!(e <= f64::from(TRIG_ERR) / 2.0, "atan2({y}, {x}): {e:e}");
+        }
+    }
+
+    /// The intervals hold the f64 function at points of random intervals and boxes
+    /// (wide, narrow, around extrema, across the cut), and their derivative lanes hold
+    /// the f64 derivative.
+    #[test]
+    fn trig_intervals_are_sound() {
+        let mut seed = 5;
+        for k in 0..50_000 {
+            let scale = [0.01, 1.0, 5.0, 100.0][k % 4];
+            let c = (lcg(&mut seed) * 2.0 - 1.0) * [2.0, 10.0, 1_000.0][k % 3];
+            let (a, b) = (c as f32, (c + lcg(&mut seed) * scale) as f32);
+            if b < a {
+                continue;
+            }
+            for cos in [false, true] {
+                let v = i_sin_cos([a, b], cos);
+                for j in 0..=16 {
+                    let t = f64::from(a) + (f64::from(b) - f64::from(a)) * f64::from(j) / 16.0;
+                    let f = if cos { t.cos() } else { t.sin() };
+                    assert!(
+                        f64::from(v[0]) <= f && f <= f64::from(v[1]),
+                        "[{a}, {b}] cos {cos}: {v:?} misses {f} at {t}"
+                    );
+                }
+            }
+            let y = [a, b];
+            let x0 = (lcg(&mut seed) * 2.0 - 1.0) as f32 * 3.0;
+            let x = [x0, x0 + (lcg(&mut seed) as f32) * 0.5];
+            let v = i_atan2(y, x);
+            for i in 0..=8 {
+                for j in 0..=8 {
+                    let yy =
+                        f64::from(y[0]) + (f64::from(y[1]) - f64::from(y[0])) * f64::from(i) / 8.0;
+                    let xx =
+                        f64::from(x[0]) + (f64::from(x[1]) - f64::from(x[0])) * f64::from(j) / 8.0;
+                    let f = yy.atan2(xx);
+                    assert!(
+                        f64::from(v[0]) <= f && f <= f64::from(v[1]),
+                        "atan2 over {y:?} × {x:?}: {v:?} misses {f}"
+                    );
+                }
+            }
+        }
     }
 
     #[test]

@@ -8,6 +8,7 @@ use common::Rng;
 use glam::{DMat3, DVec2, DVec3};
 use gpu::env::{self, GpuEnv, ENV_WGSL};
 use gpu::light::{GPU_AREA_LIGHT_WGSL, LIGHT_WGSL};
+use gpu::TRIG_WGSL;
 use gpu::{GpuOptions, Kernel};
 use render::light::{EnvMap, Environment};
 use render::Rgb;
@@ -140,7 +141,7 @@ fn env_kernel_equals_its_twin_bit_for_bit() {
     let mut buf = Vec::new();
     let envs: Vec<GpuEnv> = environments(&mut buf).into_iter().map(|e| e.0).collect();
     let cs = cases(envs.len());
-    let src = format!("{GPU_AREA_LIGHT_WGSL}{LIGHT_WGSL}{ENV_WGSL}{KERNEL}");
+    let src = format!("{TRIG_WGSL}{GPU_AREA_LIGHT_WGSL}{LIGHT_WGSL}{ENV_WGSL}{KERNEL}");
     let k = Kernel::new(&g, &src, "env_case", 3).unwrap();
     let c_words: Vec<u32> = cs.iter().flatten().map(|x| x.to_bits()).collect();
     let b_words: Vec<u32> = buf.iter().map(|x| x.to_bits()).collect();

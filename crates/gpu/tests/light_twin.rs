@@ -7,6 +7,7 @@ use common::Rng;
 
 use glam::{DVec2, DVec3};
 use gpu::light::{self, GpuAreaLight, Select, GPU_AREA_LIGHT_WGSL, IMPORTANCE_WORDS, LIGHT_WGSL};
+use gpu::TRIG_WGSL;
 use gpu::{GpuOptions, Kernel};
 use render::light::{AreaLight, Shape};
 use render::Rgb;
@@ -272,7 +273,7 @@ fn light_kernel_equals_its_twin_bit_for_bit() {
     let (sel, area_off) = tables(&ls);
     assert_eq!(area_off, 2 * gl.len() as u32 + 2);
     let cs = cases(&ls);
-    let src = format!("{GPU_AREA_LIGHT_WGSL}{LIGHT_WGSL}{KERNEL}");
+    let src = format!("{TRIG_WGSL}{GPU_AREA_LIGHT_WGSL}{LIGHT_WGSL}{KERNEL}");
     let k = Kernel::new(&g, &src, "lights_case", 3).unwrap();
     let c_words: Vec<u32> = cs.iter().flatten().map(|x| x.to_bits()).collect();
     let s_words: Vec<u32> = sel.iter().map(|x| x.to_bits()).collect();

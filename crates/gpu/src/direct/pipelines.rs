@@ -13,7 +13,7 @@ use crate::quadric::QUADRIC_WGSL;
 use crate::record::wave_consts_wgsl;
 use crate::sampler::PHILOX_WGSL;
 use crate::tape_trace::TapeSolid;
-use crate::{Gpu, GpuError, FLOAT_WGSL};
+use crate::{Gpu, GpuError, FLOAT_WGSL, TRIG_WGSL};
 
 impl DirectScene {
     /// The WGSL that defines `use_tape`, `trace_tape` and `tape_normal`: the tape
@@ -30,6 +30,7 @@ fn tape_normal(p: vec3<f32>) -> vec3<f32> { return vec3<f32>(0.0, 0.0, 1.0); }
         }
         let src = TapeSolid::scene_wgsl(&self.tapes)
             .replacen(FLOAT_WGSL, "", 1)
+            .replacen(TRIG_WGSL, "", 1)
             .replacen("var<private> loops: u32;", "", 1)
             .replacen(
                 "const MIN_POS: f32 = 0x1p-126f; // f32::MIN_POSITIVE",
@@ -84,6 +85,7 @@ pub(crate) struct Pipelines {
 fn kernel_source(tape_wgsl: &str) -> String {
     [
         FLOAT_WGSL,
+        TRIG_WGSL,
         LAYOUT_WGSL,
         PERTURBED_WGSL,
         QUADRIC_WGSL,

@@ -17,43 +17,10 @@ const ENV_CONSTANT: u32 = 1u;
 const ENV_MAP: u32 = 2u;
 
 fn e_pi() -> f32 { return bitcast<f32>(0x40490fdbu); }
-fn e_half_pi() -> f32 { return bitcast<f32>(0x3fc90fdbu); }
-fn e_quarter_pi() -> f32 { return bitcast<f32>(0x3f490fdbu); }
 fn e_two_pi() -> f32 { return bitcast<f32>(0x40c90fdbu); }
 fn e_two_pi2() -> f32 { return bitcast<f32>(0x419de9e6u); }   // 2π²
 fn e_inv_4pi() -> f32 { return bitcast<f32>(0x3da2f983u); }
-fn e_tan_pi8() -> f32 { return bitcast<f32>(0x3ed413cdu); }
 fn e_below_one() -> f32 { return bitcast<f32>(0x3f7fffffu); } // 1 − 2⁻²⁴
-
-// atan a for a ∈ [0, 1]: above tan(π/8) as π/4 + atan((a − 1)/(a + 1)); Taylor to x¹⁵
-// on |x| ≤ tan(π/8) (truncation below 2e-8).
-fn env_atan01(a: f32) -> f32 {
-    var x = a;
-    var base = 0.0;
-    if (a > e_tan_pi8()) {
-        x = (a - 1.0) / (a + 1.0);
-        base = e_quarter_pi();
-    }
-    let x2 = x * x;
-    let p = 1.0 + x2 * (-bitcast<f32>(0x3eaaaaabu) + x2 * (bitcast<f32>(0x3e4ccccdu)
-        + x2 * (-bitcast<f32>(0x3e124925u) + x2 * (bitcast<f32>(0x3de38e39u)
-        + x2 * (-bitcast<f32>(0x3dba2e8cu) + x2 * (bitcast<f32>(0x3d9d89d9u)
-        - x2 * bitcast<f32>(0x3d888889u)))))));
-    return base + x * p;
-}
-
-// atan2(y, x) in [−π, π], 0 at the origin.
-fn env_atan2(y: f32, x: f32) -> f32 {
-    let ax = abs(x);
-    let ay = abs(y);
-    let hi = max(ax, ay);
-    if (hi == 0.0) { return 0.0; }
-    var r = env_atan01(min(ax, ay) / hi);
-    if (ay > ax) { r = e_half_pi() - r; }
-    if (x < 0.0) { r = e_pi() - r; }
-    if (y < 0.0) { r = -r; }
-    return r;
-}
 
 // A direction's map coordinates (u = φ/2π, v = θ/π, θ from the map's +z) and sin θ.
 struct EnvUv { u: f32, v: f32, sin_t: f32 }

@@ -19,16 +19,6 @@ fn l_cross(a: vec3<f32>, b: vec3<f32>) -> vec3<f32> {
 fn l_safe_sqrt(x: f32) -> f32 { return sqrt(max(x, 0.0)); }
 fn l_neg_bit(x: f32) -> bool { return (bitcast<u32>(x) & 0x80000000u) != 0u; }
 
-// sin a, cos a for |a| ≤ π/4: Taylor to a⁹ / a⁸, Horner (light.rs sincos_small).
-fn sincos_small(a: f32) -> vec2<f32> {
-    let x2 = a * a;
-    let s = a * (1.0 + x2 * (-bitcast<f32>(0x3e2aaaabu) + x2 * (bitcast<f32>(0x3c088889u)
-        + x2 * (-bitcast<f32>(0x39500d01u) + x2 * bitcast<f32>(0x3638ef1du)))));
-    let c = 1.0 + x2 * (-0.5 + x2 * (bitcast<f32>(0x3d2aaaabu)
-        + x2 * (-bitcast<f32>(0x3ab60b61u) + x2 * bitcast<f32>(0x37d00d01u))));
-    return vec2<f32>(s, c);
-}
-
 // (sin 2πu, cos 2πu): the nearest quarter turn out exactly, the rest to sincos_small.
 fn sincos_2pi(u: f32) -> vec2<f32> {
     let k = floor(4.0 * u + 0.5);

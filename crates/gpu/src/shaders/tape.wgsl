@@ -4,7 +4,8 @@
 // f32, Bytecode::eval_f32's twin) and `eval_interval` (F and dF/dt as intervals, a vec4
 // (lo, hi, dlo, dhi), widened outward after every op, §6.2.3). The CPU twins are in
 // gpu::tape. Supported ops: var, const, powi (0 ≤ n ≤ 15), neg, abs, sqrt, square, add,
-// sub, mul, div, min, max; gpu::tape::GpuTape refuses others.
+// sub, mul, div, min, max, sin, cos, atan2 (TRIG_WGSL's polynomials); gpu::tape::GpuTape
+// refuses others.
 // The kernel prepends the opcodes (OP_VAR, …) and IMM from frep's encoding
 // (gpu::tape::tape_consts_wgsl), REG_COUNT and TAPE_LEN (per pipeline, §3.4) and binds `tape:
 // array<u32>`. Each loop iteration runs four instructions and adds one to `loops` (§3.1):
@@ -96,6 +97,55 @@ fn hull(a: vec2<f32>, b: vec2<f32>) -> vec2<f32> {
     return vec2<f32>(min(a.x, b.x), max(a.y, b.y));
 }
 
+// gpu::tape::sin_cos: sin x (or cos x) for |x| < 10⁴, else NaN; the quarter turn out in
+// two parts (Cody & Waite), the rest to sincos_small.
+fn t_sin_cos(x: f32, cosine: bool) -> f32 {
+    if (!(abs(x) < 1.0e4)) { return nan(); }
+    let k = floor(x * bitcast<f32>(0x3f22f983u) + 0.5);
+    let r = (x - k * bitcast<f32>(0x3fc90000u)) - k * bitcast<f32>(0x39fdaa22u);
+    let sc = sincos_small(r);
+    let q = (i32(k) + select(0, 1, cosine)) & 3;
+    if (q == 0) { return sc.x; }
+    if (q == 1) { return sc.y; }
+    if (q == 2) { return -sc.x; }
+    return -sc.y;
+}
+
+// gpu::tape::i_sin_cos: the ends' values widened by TRIG_ERR, ±1 where an extremum lies
+// within, [−1, 1] past a span of 6 or |x| ≥ 10⁴.
+fn i_sin_cos(a: vec2<f32>, cosine: bool) -> vec2<f32> {
+    if (any_nan(a)) { return nan2(); }
+    let big = max(abs(a.x), abs(a.y));
+    if (!(a.y - a.x < 6.0 && big < 1.0e4)) { return vec2<f32>(-1.0, 1.0); }
+    let va = t_sin_cos(a.x, cosine);
+    let vb = t_sin_cos(a.y, cosine);
+    var lo = min(va, vb) - 1.0e-6;
+    var hi = max(va, vb) + 1.0e-6;
+    let two_pi = bitcast<f32>(0x40c90fdbu);
+    let margin = 1.0e-6 * (1.0 + big);
+    var p = bitcast<f32>(0x3fc90fdbu);
+    if (cosine) { p = 0.0; }
+    let m_hi = ceil((a.x - margin - p) / two_pi);
+    if (p + two_pi * m_hi <= a.y + margin) { hi = 1.0; }
+    let p_lo = p + bitcast<f32>(0x40490fdbu);
+    let m_lo = ceil((a.x - margin - p_lo) / two_pi);
+    if (p_lo + two_pi * m_lo <= a.y + margin) { lo = -1.0; }
+    return vec2<f32>(max(lo, -1.0), min(hi, 1.0));
+}
+
+// gpu::tape::i_atan2: [−π, π] where the box meets x ≤ 0 with y spanning 0, else the
+// corners' angles widened by TRIG_ERR.
+fn i_atan2(y: vec2<f32>, x: vec2<f32>) -> vec2<f32> {
+    if (any_nan(y) || any_nan(x)) { return nan2(); }
+    let pi = bitcast<f32>(0x40490fdbu) + 1.0e-6;
+    if (x.x <= 0.0 && y.x <= 0.0 && y.y >= 0.0) { return vec2<f32>(-pi, pi); }
+    let c0 = env_atan2(y.x, x.x);
+    let c1 = env_atan2(y.x, x.y);
+    let c2 = env_atan2(y.y, x.x);
+    let c3 = env_atan2(y.y, x.y);
+    return vec2<f32>(rmin(rmin(c0, c1), rmin(c2, c3)) - 1.0e-6, rmax(rmax(c0, c1), rmax(c2, c3)) + 1.0e-6);
+}
+
 var<private> preg: array<f32, REG_COUNT>;
 
 // Instruction k at p (Bytecode::eval_f32's arm); returns its output register.
@@ -125,6 +175,9 @@ fn point_op(k: u32, p: vec3<f32>) -> u32 {
             case OP_DIV: { v = a / b; }
             case OP_MIN: { v = rmin(a, b); }
             case OP_MAX: { v = rmax(a, b); }
+            case OP_SIN: { v = t_sin_cos(a, false); }
+            case OP_COS: { v = t_sin_cos(a, true); }
+            case OP_ATAN2: { v = env_atan2(a, b); }
             default: { v = nan(); }
         }
         preg[o] = v;
@@ -196,6 +249,12 @@ fn interval_op(k: u32, x: vec4<f32>, y: vec4<f32>, z: vec4<f32>) -> u32 {
             }
             case OP_MAX: {
                 if (a.x >= b.y) { v = a.xy; d = a.zw; } else if (b.x >= a.y) { v = b.xy; d = b.zw; } else { v = i_max(a.xy, b.xy); d = hull(a.zw, b.zw); }
+            }
+            case OP_SIN: { v = i_sin_cos(a.xy, false); d = i_mul(i_sin_cos(a.xy, true), a.zw); }
+            case OP_COS: { v = i_sin_cos(a.xy, true); d = i_mul(i_neg(i_sin_cos(a.xy, false)), a.zw); }
+            case OP_ATAN2: {
+                v = i_atan2(a.xy, b.xy);
+                d = i_div(i_sub(i_mul(b.xy, a.zw), i_mul(a.xy, b.zw)), i_add(i_square(a.xy), i_square(b.xy)));
             }
             default: { v = nan2(); d = nan2(); }
         }
