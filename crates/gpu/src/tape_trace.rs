@@ -214,6 +214,9 @@ impl TapeSolid {
         let mut steps = 0u32;
         let mut s_lo = false;
         let (mut retried, mut retried_end) = (false, false);
+        // Whether the window starts where the ray enters the bounds and ends where it
+        // leaves them (before t_max), fixed before either end moves in by ε.
+        let (entered, exits) = (t0 > t_min, t1 < t_max);
         loop {
             *loops += 1;
             // One loop iteration (and one more per segment pushed, the kernel's push
@@ -224,7 +227,7 @@ impl TapeSolid {
                     let Some(top) = st.pop() else {
                         return if st.lost {
                             TapeHit::Undecided
-                        } else if t1 < t_max && ib0 {
+                        } else if exits && ib0 {
                             TapeHit::Hit(t1)
                         } else {
                             TapeHit::Miss
@@ -326,7 +329,9 @@ impl TapeSolid {
                 (_, None) => return TapeHit::Undecided,
                 (Phase::Start, Some(inside)) => {
                     ia0 = inside;
-                    if t0 > t_min && ia0 {
+                    // Inside where the ray enters the bounds: a crossing there (not where
+                    // the window starts at t_min, even one moved in by ε).
+                    if entered && ia0 {
                         return TapeHit::Hit(t0);
                     }
                     phase = Phase::End;

@@ -856,3 +856,47 @@ fn pixel_centres_are_never_answered_wrongly() {
         assert_eq!(wrong, 0, "{name}");
     }
 }
+
+/// Rays that start exactly on the unit sphere (F = 0 at the origin of the window, an open
+/// sign that moves the window's start in by ε) and head inside: the answer is the exit,
+/// not a crossing at the moved start; and rays from inside whose window ends exactly on
+/// the surface (t_max there, the end moved in) have no crossing in (t_min, t_max).
+#[test]
+fn windows_starting_or_ending_on_the_surface_are_not_crossings() {
+    let bounds = Aabb::new(DVec3::splat(-1.0), DVec3::splat(1.0));
+    let solid = TapeSolid::new(
+        GpuTape::new(&Bytecode::compile(&padded_sphere(0)).unwrap()).unwrap(),
+        &bounds,
+    );
+    let mut rng = Rng(12);
+    let starts = [
+        Vec3::X,
+        Vec3::Y,
+        Vec3::Z,
+        Vec3::NEG_X,
+        Vec3::NEG_Y,
+        Vec3::NEG_Z,
+    ];
+    for (k, o) in starts.iter().cycle().take(600).enumerate() {
+        // Inward: a direction with d·o < 0; the exit is at t = −2·o·d.
+        let mut d = rng.unit().as_vec3();
+        if d.dot(*o) > -0.1 {
+            d = (d - 1.5 * o).normalize();
+        }
+        let exit = -2.0 * o.dot(d);
+        match solid.trace(*o, d, 0.0, f32::INFINITY).hit {
+            TapeHit::Hit(t) => assert!(
+                (t - exit).abs() < 1e-4,
+                "ray {k}: {t} against the exit {exit}"
+            ),
+            TapeHit::Undecided => {}
+            TapeHit::Miss => panic!("ray {k} from {o} along {d} missed its exit {exit}"),
+        }
+        // From the centre to exactly the surface point o: no crossing before t_max = 1.
+        let hit = solid.trace(Vec3::ZERO, *o, 0.0, 1.0).hit;
+        assert!(
+            matches!(hit, TapeHit::Miss | TapeHit::Undecided),
+            "{o}: {hit:?}"
+        );
+    }
+}

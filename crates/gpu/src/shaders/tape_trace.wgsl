@@ -56,6 +56,10 @@ fn trace_tape(o: vec3<f32>, d: vec3<f32>, t_min: f32, t_max: f32) -> TraceResult
     var s_lo = false;
     var retried = false;
     var retried_end = false;
+    // Whether the window starts where the ray enters the bounds and ends where it leaves
+    // them (before t_max), fixed before either end moves in by EPS.
+    let entered = t0 > t_min;
+    let exits = t1 < t_max;
     // Up to three pushes per iteration (ring order: pushed last, popped first).
     var push_n = 0u;
     var pa: array<f32, 3>;
@@ -82,7 +86,7 @@ fn trace_tape(o: vec3<f32>, d: vec3<f32>, t_min: f32, t_max: f32) -> TraceResult
         if (phase == 2u) {
             if (n == 0u) {
                 if (lost) { return TraceResult(2u, 0.0); }
-                if (t1 < t_max && ib0) { return TraceResult(1u, t1); }
+                if (exits && ib0) { return TraceResult(1u, t1); }
                 return TraceResult(0u, 0.0);
             }
             n--;
@@ -169,7 +173,9 @@ fn trace_tape(o: vec3<f32>, d: vec3<f32>, t_min: f32, t_max: f32) -> TraceResult
         }
         if (phase == 0u) {
             ia0 = inside;
-            if (t0 > t_min && ia0) { return TraceResult(1u, t0); }
+            // Inside where the ray enters the bounds: a crossing there (not where the
+            // window starts at t_min, even one moved in by EPS).
+            if (entered && ia0) { return TraceResult(1u, t0); }
             phase = 1u;
             pt = t1;
         } else if (phase == 1u) {
