@@ -430,21 +430,23 @@ mod tests {
             COUNT_ZERO_DRAWS.with(|c| c.set(false));
             r.unwrap().0.image()
         };
+        // BSDF, light-power and light-area draws to depth 3.
+        let options = |integrator, method, spp, seed| RenderOptions {
+            integrator,
+            method,
+            techniques: vec![
+                (Technique::Bsdf, 1),
+                (Technique::LightPower, 1),
+                (Technique::LightArea, 1),
+            ],
+            spp,
+            seed,
+            max_depth: 3,
+            ..RenderOptions::default()
+        };
         for integrator in [IntegratorKind::Direct, IntegratorKind::Path] {
             for method in [Method::Balance, Method::Power] {
-                let o = RenderOptions {
-                    integrator,
-                    method,
-                    techniques: vec![
-                        (Technique::Bsdf, 1),
-                        (Technique::LightPower, 1),
-                        (Technique::LightArea, 1),
-                    ],
-                    spp: 4,
-                    seed: 5,
-                    max_depth: 3,
-                    ..RenderOptions::default()
-                };
+                let o = options(integrator, method, 4, 5);
                 assert!(!Integrator::new(&o).unwrap().zero_draws_count);
                 let (fast, every) = (render(&o, false), render(&o, true));
                 let bits =
@@ -478,19 +480,7 @@ mod tests {
                 Method::OptimalUncorrelated,
                 Method::OptimalProgressive,
             ] {
-                let o = RenderOptions {
-                    integrator,
-                    method,
-                    techniques: vec![
-                        (Technique::Bsdf, 1),
-                        (Technique::LightPower, 1),
-                        (Technique::LightArea, 1),
-                    ],
-                    spp: 8,
-                    seed: 6,
-                    max_depth: 3,
-                    ..RenderOptions::default()
-                };
+                let o = options(integrator, method, 8, 6);
                 let (fast, slow) = (shortcut(&o, true), shortcut(&o, false));
                 assert!(fast.data().iter().any(|&v| v > 0.0));
                 for (a, b) in fast.data().iter().zip(slow.data()) {
