@@ -14,7 +14,9 @@ use crate::ray::{slab_f32, Aabb, Ray};
 use glam::DVec3;
 
 mod order;
+mod wide;
 pub use order::{EntryOrder, Queue};
+pub use wide::WideNode;
 
 /// The most items a leaf holds.
 const MAX_LEAF: usize = 4;
@@ -65,6 +67,7 @@ pub struct BvhNode {
 #[derive(Clone, Debug, Default)]
 pub struct Bvh {
     nodes: Vec<BvhNode>,
+    wide: Vec<WideNode>,
     order: Vec<u32>,
     item_bounds: Vec<Aabb>,
     unbounded: Vec<u32>,
@@ -327,6 +330,7 @@ impl Bvh {
             build.node(&mut finite, 0, 0);
         }
         Self {
+            wide: WideNode::build(&build.nodes),
             nodes: build.nodes,
             item_bounds: finite.iter().map(|&i| boxes[i as usize]).collect(),
             order: finite,
@@ -337,6 +341,11 @@ impl Bvh {
     /// The flattened nodes, root first (empty when no item has a finite box).
     pub fn nodes(&self) -> &[BvhNode] {
         &self.nodes
+    }
+
+    /// The wide nodes ([`WideNode::build`]).
+    pub fn wide(&self) -> &[WideNode] {
+        &self.wide
     }
 
     /// Item indices in leaf order: a leaf holds `order[offset..offset + count]`.
@@ -363,6 +372,7 @@ impl Bvh {
     pub fn as_ref(&self) -> BvhRef<'_> {
         BvhRef {
             nodes: &self.nodes,
+            wide: &self.wide,
             order: &self.order,
             item_bounds: &self.item_bounds,
             unbounded: &self.unbounded,
@@ -414,6 +424,9 @@ impl Bvh {
 pub struct BvhRef<'a> {
     /// The nodes, root first ([`Bvh::nodes`]).
     pub nodes: &'a [BvhNode],
+    /// The same tree four boxes at a time ([`WideNode::build`]; empty: walked as a
+    /// binary tree).
+    pub wide: &'a [WideNode],
     /// Item indices in leaf order ([`Bvh::order`]).
     pub order: &'a [u32],
     /// The items' boxes in leaf order ([`Bvh::item_bounds`]).
@@ -479,7 +492,8 @@ impl BvhRef<'_> {
 
     /// The traversal both queries share: `offer(item, &mut t_max)` for each item met,
     /// nearer subtrees first, unbounded items before all; it may shrink t_max, and
-    /// stops the walk by returning true.
+    /// stops the walk by returning true. Four boxes at a time where the tree has its
+    /// wide nodes and the ray a finite slab (the same offers, bit for bit: `bvh/wide.rs`).
     fn walk(
         &self,
         ray: &Ray,
@@ -496,6 +510,40 @@ impl BvhRef<'_> {
             return;
         }
         let slab = Slab::new(ray);
+        if self.wide.is_empty() || !slab.finite {
+            self.walk_binary(&slab, t_min, t_max, offer)
+        } else {
+            self.walk_wide_here(&slab, t_min, t_max, &mut offer)
+        }
+    }
+
+    /// The wide walk with the best lane tests this CPU has.
+    #[inline(always)]
+    fn walk_wide_here(
+        &self,
+        slab: &Slab,
+        t_min: f64,
+        t_max: f64,
+        offer: &mut impl FnMut(u32, &mut f64) -> bool,
+    ) {
+        #[cfg(target_arch = "x86_64")]
+        self.walk_wide::<wide::Sse2>(slab, t_min, t_max, offer);
+        #[cfg(not(target_arch = "x86_64"))]
+        self.walk_wide::<wide::Scalar>(slab, t_min, t_max, offer)
+    }
+
+    /// The finite items' part of [`Self::walk`] over the binary nodes, one box at a time.
+    #[inline(always)]
+    fn walk_binary(
+        &self,
+        slab: &Slab,
+        t_min: f64,
+        mut t_max: f64,
+        mut offer: impl FnMut(u32, &mut f64) -> bool,
+    ) {
+        if self.nodes.is_empty() {
+            return;
+        }
         let neg = slab.neg;
         let mut stack = Stack::new();
         let mut cur = 0usize;
@@ -618,7 +666,7 @@ mod tests {
     use rand::{Rng, SeedableRng};
     use rand_pcg::Pcg64;
 
-    fn random_boxes(rng: &mut Pcg64, n: usize) -> Vec<Aabb> {
+    pub(super) fn random_boxes(rng: &mut Pcg64, n: usize) -> Vec<Aabb> {
         (0..n)
             .map(|_| {
                 let c = DVec3::new(
@@ -634,6 +682,25 @@ mod tests {
                 Aabb::new(c - h, c + h)
             })
             .collect()
+    }
+
+    /// A ray from [-8, 8]³ in a direction from [-1, 1]³, parallel to the xz plane with
+    /// probability `parallel` (axis-parallel slabs: 1/d = ∞).
+    pub(super) fn random_ray(rng: &mut Pcg64, parallel: f64) -> Ray {
+        let o = DVec3::new(
+            rng.gen_range(-8.0..8.0),
+            rng.gen_range(-8.0..8.0),
+            rng.gen_range(-8.0..8.0),
+        );
+        let mut d = DVec3::new(
+            rng.gen_range(-1.0..1.0),
+            rng.gen_range(-1.0..1.0),
+            rng.gen_range(-1.0..1.0),
+        );
+        if rng.gen_bool(parallel) {
+            d.y = 0.0;
+        }
+        Ray::new(o, d)
     }
 
     /// The brute-force answer: every box the segment meets.
@@ -707,20 +774,7 @@ mod tests {
             }
             let bvh = Bvh::new(&boxes);
             for _ in 0..300 {
-                let o = DVec3::new(
-                    rng.gen_range(-8.0..8.0),
-                    rng.gen_range(-8.0..8.0),
-                    rng.gen_range(-8.0..8.0),
-                );
-                let mut d = DVec3::new(
-                    rng.gen_range(-1.0..1.0),
-                    rng.gen_range(-1.0..1.0),
-                    rng.gen_range(-1.0..1.0),
-                );
-                if rng.gen_bool(0.2) {
-                    d.y = 0.0; // axis-parallel slabs: 1/d = ∞
-                }
-                let ray = Ray::new(o, d);
+                let ray = random_ray(&mut rng, 0.2);
                 let (t0, t1) = (
                     rng.gen_range(-2.0..5.0),
                     if rng.gen_bool(0.3) {

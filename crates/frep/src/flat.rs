@@ -8,7 +8,7 @@
 //! GPU mirrors them as structs of the same fields (GPU.md §5.2). The CPU intersects over
 //! these arrays directly, through [`crate::PerturbedView`] and [`crate::ExprView`].
 
-use crate::bvh::{BvhNode, BvhRef};
+use crate::bvh::{BvhNode, BvhRef, WideNode};
 use crate::expr::Node;
 use crate::interval_trace::ExprView;
 use crate::occupancy::GridView;
@@ -90,6 +90,8 @@ pub enum Leaf {
         perturbations: Span,
         /// Its BVH nodes in [`Flat::bvh_nodes`].
         bvh_nodes: Span,
+        /// Its BVH's wide nodes in [`Flat::bvh_wide`].
+        bvh_wide: Span,
         /// Its BVH item order and item boxes in [`Flat::bvh_order`] and
         /// [`Flat::bvh_item_bounds`].
         bvh_items: Span,
@@ -149,6 +151,9 @@ pub struct Flat {
     pub perturbations: Vec<Perturbation>,
     /// BVH nodes over perturbation supports ([`crate::Bvh::nodes`]).
     pub bvh_nodes: Vec<BvhNode>,
+    /// The same BVHs' wide nodes ([`crate::bvh::WideNode::build`]): CPU walks only.
+    #[cfg_attr(feature = "serde", serde(skip))]
+    pub bvh_wide: Vec<WideNode>,
     /// BVH item order ([`crate::Bvh::order`]).
     pub bvh_order: Vec<u32>,
     /// BVH item boxes in leaf order ([`crate::Bvh::item_bounds`]).
@@ -179,6 +184,8 @@ impl Flat {
         self.perturbations.extend_from_slice(s.perturbations());
         let n0 = self.bvh_nodes.len();
         self.bvh_nodes.extend_from_slice(bvh.nodes());
+        let w0 = self.bvh_wide.len();
+        self.bvh_wide.extend_from_slice(bvh.wide());
         let i0 = self.bvh_order.len();
         self.bvh_order.extend_from_slice(bvh.order());
         self.bvh_item_bounds.extend_from_slice(bvh.item_bounds());
@@ -188,6 +195,7 @@ impl Flat {
             base,
             perturbations: Span::since(p0, self.perturbations.len()),
             bvh_nodes: Span::since(n0, self.bvh_nodes.len()),
+            bvh_wide: Span::since(w0, self.bvh_wide.len()),
             bvh_items: Span::since(i0, self.bvh_order.len()),
             bvh_unbounded: Span::since(u0, self.bvh_unbounded.len()),
             bounds: s.bounds(),
@@ -235,6 +243,7 @@ impl Flat {
                 base,
                 perturbations,
                 bvh_nodes,
+                bvh_wide,
                 bvh_items,
                 bvh_unbounded,
                 bounds,
@@ -243,6 +252,7 @@ impl Flat {
                 perturbations: &self.perturbations[perturbations.range()],
                 bvh: BvhRef {
                     nodes: &self.bvh_nodes[bvh_nodes.range()],
+                    wide: &self.bvh_wide[bvh_wide.range()],
                     order: &self.bvh_order[bvh_items.range()],
                     item_bounds: &self.bvh_item_bounds[bvh_items.range()],
                     unbounded: &self.bvh_unbounded[bvh_unbounded.range()],
