@@ -9,6 +9,7 @@
 mod area;
 mod delta;
 mod environment;
+mod importance_pair;
 mod select;
 mod tree;
 

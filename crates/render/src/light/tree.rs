@@ -13,6 +13,7 @@
 //! their bounds (pbrt-v4 splits by a surface-area-orientation cost; a median split keeps
 //! the depth at ⌈log₂ n⌉, which bounds the trail to 64 levels for any count).
 
+use super::importance_pair::importance_pair;
 use super::select::{importance_of, ImportanceBounds};
 use crate::distribution::ONE_MINUS_EPSILON;
 use glam::DVec3;
@@ -121,8 +122,11 @@ impl LightTree {
     /// neither can shine on p.
     #[inline]
     fn split(&self, i: usize, p: DVec3, n: DVec3) -> Option<[f64; 2]> {
-        let (a, b) = (i + 1, self.nodes[i].index as usize);
-        let (wa, wb) = (self.importance(a, p, n), self.importance(b, p, n));
+        let (a, b) = (
+            &self.nodes[i + 1],
+            &self.nodes[self.nodes[i].index as usize],
+        );
+        let [wa, wb] = importance_pair((&a.bounds, a.phi), (&b.bounds, b.phi), p, n);
         let total = wa + wb;
         (total > 0.0 && total.is_finite()).then(|| [wa / total, wb / total])
     }
