@@ -56,13 +56,12 @@ pub struct LightHit {
     pub radiance: Rgb,
 }
 
-/// The light BVH over area lights, by their importance bounds and power.
-fn light_tree(area: &[AreaLight]) -> Option<LightTree> {
-    let lights: Vec<_> = area
-        .iter()
+/// The area lights' importance bounds and the luminance of their power, what
+/// [`importance_of`] reads.
+fn importance_inputs(area: &[AreaLight]) -> Vec<(ImportanceBounds, f64)> {
+    area.iter()
         .map(|l| (l.importance_bounds(), luminance(l.power())))
-        .collect();
-    LightTree::new(&lights)
+        .collect()
 }
 
 /// All lights of a scene, with the distributions used to choose among them.
@@ -80,6 +79,9 @@ pub struct Lights {
     bvh: Bvh,
     /// The light BVH of [`Selection::Bvh`] (None without an area light).
     tree: Option<LightTree>,
+    /// Per area light, [`importance_inputs`]: found once, read by every
+    /// [`Selection::Spatial`] query (which sums over every light).
+    importance: Vec<(ImportanceBounds, f64)>,
 }
 
 impl Lights {
@@ -98,9 +100,11 @@ impl Lights {
         let by_power = (!power.is_empty()).then(|| Distribution1D::new(&power));
         let areas: Vec<f64> = area.iter().map(|l| l.area()).collect();
         let by_area = (!areas.is_empty()).then(|| Distribution1D::new(&areas));
+        let importance = importance_inputs(&area);
         Self {
             bvh: Bvh::new(&area.iter().map(AreaLight::bounds).collect::<Vec<_>>()),
-            tree: light_tree(&area),
+            tree: LightTree::new(&importance),
+            importance,
             area,
             delta,
             environment,
@@ -125,9 +129,11 @@ impl Lights {
             area.len(),
             "by_area"
         );
+        let importance = importance_inputs(&area);
         Self {
             bvh: Bvh::new(&area.iter().map(AreaLight::bounds).collect::<Vec<_>>()),
-            tree: light_tree(&area),
+            tree: LightTree::new(&importance),
+            importance,
             area,
             delta,
             environment,

@@ -9,6 +9,7 @@
 //! lights included), as MIS needs (Veach 1997, §9.2). Both are O(number of lights) per
 //! query.
 
+use super::importance_pair::importance_pair;
 use super::{AreaLight, LightHit, LightSample, Lights, Shape, TrainedSelection};
 use crate::color::luminance;
 use crate::warp::safe_sqrt;
@@ -179,7 +180,26 @@ impl Lights {
 
     /// Σ over area lights of [`importance`] at (p, n).
     pub(super) fn importance_total(&self, p: DVec3, n: DVec3) -> f64 {
-        self.area.iter().map(|l| importance(l, p, n)).sum()
+        // Two lights at a time, summed in order: the same sum bit for bit.
+        let mut sum = 0.0;
+        let mut pairs = self.importance.chunks_exact(2);
+        for pair in &mut pairs {
+            let [(a, phi_a), (b, phi_b)] = [pair[0], pair[1]];
+            let [wa, wb] = importance_pair((&a, phi_a), (&b, phi_b), p, n);
+            sum += wa;
+            sum += wb;
+        }
+        for (b, phi) in pairs.remainder() {
+            sum += importance_of(b, *phi, p, n);
+        }
+        sum
+    }
+
+    /// [`importance`] of area light `k`, from its bounds found once.
+    #[inline]
+    fn importance_of_light(&self, k: usize, p: DVec3, n: DVec3) -> f64 {
+        let (b, phi) = &self.importance[k];
+        importance_of(b, *phi, p, n)
     }
 
     /// The probability of the environment under [`Selection::Spatial`].
@@ -216,7 +236,7 @@ impl Lights {
                 if k == self.area.len() {
                     pe
                 } else if total > 0.0 {
-                    (1.0 - pe) * importance(&self.area[k], p, n) / total
+                    (1.0 - pe) * self.importance_of_light(k, p, n) / total
                 } else {
                     0.0
                 }
@@ -287,8 +307,8 @@ impl Lights {
                 let target = (uc - pe) / (1.0 - pe) * total;
                 let mut acc = 0.0;
                 let mut last = None;
-                for (i, l) in self.area.iter().enumerate() {
-                    let w = importance(l, p, n);
+                for i in 0..self.area.len() {
+                    let w = self.importance_of_light(i, p, n);
                     if w > 0.0 {
                         acc += w;
                         last = Some(i);
