@@ -517,7 +517,7 @@ impl BvhRef<'_> {
         }
     }
 
-    /// The wide walk with the best lane tests this CPU has.
+    /// The wide walk: SSE2 lanes on x86-64 (part of its baseline), scalar ones elsewhere.
     #[inline(always)]
     fn walk_wide_here(
         &self,

@@ -9,8 +9,8 @@
 //! caller's closure. An AVX walk has to be a separate function compiled for AVX, and
 //! calling it made every caller keep its closure in memory, small trees included: on
 //! scenes/many-lights.toml (trees of 3 and 7 nodes, walked binary either way) 4 % more
-//! instructions, where the inlined SSE2 walk costs nothing extra. At 10 000 lights the
-//! AVX walk saved 12 % of the render's instructions and SSE2 7 %
+//! instructions, where the inlined SSE2 walk costs nothing extra. At 10 000 lights (f64
+//! boxes, whole runs) the AVX walk saved 12 % of the instructions and SSE2 7 %
 //! (docs/notebook/2026-12-05-wide-bvh.md). Dispatch pays once per batch of rays, not per
 //! ray: the lane tests are a [`Lanes`] type, ready for batched stages.
 //!
