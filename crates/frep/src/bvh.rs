@@ -532,7 +532,8 @@ impl BvhRef<'_> {
         self.walk_wide::<wide::Scalar>(slab, t_min, t_max, offer)
     }
 
-    /// The finite items' part of [`Self::walk`] over the binary nodes, one box at a time.
+    /// The finite items' part of [`Self::walk`] over the binary nodes (at least one),
+    /// one box at a time.
     #[inline(always)]
     fn walk_binary(
         &self,
@@ -541,9 +542,6 @@ impl BvhRef<'_> {
         mut t_max: f64,
         mut offer: impl FnMut(u32, &mut f64) -> bool,
     ) {
-        if self.nodes.is_empty() {
-            return;
-        }
         let neg = slab.neg;
         let mut stack = Stack::new();
         let mut cur = 0usize;
