@@ -490,6 +490,98 @@ pub fn importance(buf: &[f32], at: usize, p: V3, n: V3) -> f32 {
     }
 }
 
+/// f32 words of one light-BVH node in [`tree_records`].
+pub const TREE_NODE_WORDS: usize = IMPORTANCE_WORDS;
+/// f32 words of one light's trail in [`tree_records`].
+pub const TREE_TRAIL_WORDS: usize = 3;
+
+/// A light BVH (`render::light::LightTree`) as the kernels read it: per node its
+/// [`importance_record`] (the node's bounds and power) with the second child's or the
+/// light's index (bits) in word 10 and 1 in word 11 for a leaf; then per light its trail
+/// (low and high 32 bits, as bits) and the trail's length. Returns the words and where
+/// the trails start in them.
+pub fn tree_records(t: &state::LightTreeTable) -> (Vec<f32>, usize) {
+    let mut out =
+        Vec::with_capacity(TREE_NODE_WORDS * t.nodes.len() + TREE_TRAIL_WORDS * t.trails.len());
+    for node in &t.nodes {
+        let mut r = importance_record(&node.bounds);
+        r[10] = f32::from_bits(node.index);
+        r[11] = f32::from(u8::from(node.leaf));
+        out.extend(r);
+    }
+    let trails = out.len();
+    for &(trail, depth) in &t.trails {
+        out.extend([
+            f32::from_bits(trail as u32),
+            f32::from_bits((trail >> 32) as u32),
+            f32::from_bits(u32::from(depth)),
+        ]);
+    }
+    (out, trails)
+}
+
+/// The largest f32 below 1.
+const ONE_MINUS_EPSILON: f32 = f32::from_bits(0x3f7f_ffff);
+
+/// The branch probabilities at inner node `i` of the tree at `buf[nodes..]`, None where
+/// neither child shines on p (`LightTree::split`; the kernel's `tree_split`).
+fn tree_split(buf: &[f32], nodes: usize, i: usize, p: V3, n: V3) -> Option<[f32; 2]> {
+    let at = nodes + TREE_NODE_WORDS * i;
+    let wa = importance(buf, at + TREE_NODE_WORDS, p, n);
+    let b = buf[at + 10].to_bits() as usize;
+    let wb = importance(buf, nodes + TREE_NODE_WORDS * b, p, n);
+    let total = wa + wb;
+    (total > 0.0 && total.is_finite()).then(|| [wa / total, wb / total])
+}
+
+/// The light the tree at `buf[nodes..]` ([`tree_records`]) draws with `u` ∈ [0, 1) at
+/// (p, n), and its probability; None where no light can shine on p (`LightTree::sample`;
+/// the kernel's `tree_sample`, at most 65 steps).
+pub fn tree_sample(buf: &[f32], nodes: usize, p: V3, n: V3, u: f32) -> Option<(u32, f32)> {
+    let (mut i, mut u, mut pmf) = (0, u, 1.0f32);
+    for _ in 0..65 {
+        let at = nodes + TREE_NODE_WORDS * i;
+        let index = buf[at + 10].to_bits();
+        if buf[at + 11] != 0.0 {
+            return (importance(buf, at, p, n) > 0.0).then_some((index, pmf));
+        }
+        let [pa, pb] = tree_split(buf, nodes, i, p, n)?;
+        if u < pa {
+            (u, pmf, i) = ((u / pa).min(ONE_MINUS_EPSILON), pmf * pa, i + 1);
+        } else {
+            let next = index as usize;
+            (u, pmf, i) = (((u - pa) / pb).min(ONE_MINUS_EPSILON), pmf * pb, next);
+        }
+    }
+    None
+}
+
+/// The probability that [`tree_sample`] draws light `k` at (p, n): the product of the
+/// same branch probabilities along its trail at `buf[trails..]` (`LightTree::pmf`; the
+/// kernel's `tree_pmf`).
+pub fn tree_pmf(buf: &[f32], nodes: usize, trails: usize, p: V3, n: V3, k: usize) -> f32 {
+    let t = trails + TREE_TRAIL_WORDS * k;
+    let trail = u64::from(buf[t].to_bits()) | u64::from(buf[t + 1].to_bits()) << 32;
+    let depth = buf[t + 2].to_bits().min(64);
+    let (mut i, mut pmf) = (0, 1.0f32);
+    for d in 0..depth {
+        let Some([pa, pb]) = tree_split(buf, nodes, i, p, n) else {
+            return 0.0;
+        };
+        if trail >> d & 1 == 0 {
+            (pmf, i) = (pmf * pa, i + 1);
+        } else {
+            let next = buf[nodes + TREE_NODE_WORDS * i + 10].to_bits() as usize;
+            (pmf, i) = (pmf * pb, next);
+        }
+    }
+    if importance(buf, nodes + TREE_NODE_WORDS * i, p, n) > 0.0 {
+        pmf
+    } else {
+        0.0
+    }
+}
+
 /// How a light technique picks a light (pbrt-v4 §12.5; `render::light::Selection`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Select {

@@ -612,11 +612,13 @@ fn path_images_agree() {
 /// heuristic; the spatial light selection (`light-spatial`, ∝ each light's importance at
 /// the shading point) without and with the map; the trained selection (`light-trained`,
 /// its table trained on the CPU) on the test scene and on the teaser's rooms (whose
-/// walls, a union of more than 8 boxes, are a CSG tree of grouped nodes). Same seed,
-/// the same z-tests as the other scenes. The test command runs the dome and one case
-/// that holds the map, the `environment` technique and the spatial and trained
-/// selections together (each draw's MIS weight takes every technique's pdf, so each
-/// pdf is checked against its draws); `FREPRAY_LONG=1` every case.
+/// walls, a union of more than 8 boxes, are a CSG tree of grouped nodes); the light BVH
+/// (`light-bvh`, its tree built on the CPU) on the test scene, under the map and on the
+/// rooms. Same seed, the same z-tests as the other scenes. The test command runs the
+/// dome, one case that holds the map, the `environment` technique and the spatial and
+/// trained selections together (each draw's MIS weight takes every technique's pdf, so
+/// each pdf is checked against its draws), and the rooms with the light BVH's 16
+/// lights; `FREPRAY_LONG=1` every case.
 #[test]
 fn environments_and_light_selections_agree() {
     let Some(g) = device() else { return };
@@ -681,6 +683,26 @@ fn environments_and_light_selections_agree() {
             false,
         ),
         (
+            "light BVH, bsdf + light-bvh + light-area",
+            techniques(
+                "{ technique = \"bsdf\", samples = 1 }, { technique = \"light-bvh\", samples = 1 }, { technique = \"light-area\", samples = 1 }",
+            ),
+            false,
+        ),
+        (
+            "map, bsdf + light-bvh (the environment at ½)",
+            techniques("{ technique = \"bsdf\", samples = 1 }, { technique = \"light-bvh\", samples = 1 }")
+                + "\n" + &map,
+            false,
+        ),
+        (
+            "the teaser's rooms, light-bvh + light-uniform (16 lights)",
+            include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/../../scenes/rooms.toml"))
+                .replace("resolution = [320, 240]", "resolution = [48, 36]")
+                .replace("technique = \"light-trained\"", "technique = \"light-bvh\""),
+            false,
+        ),
+        (
             "cosine-weighted directions, bsdf + cosine + light",
             techniques(
                 "{ technique = \"bsdf\", samples = 1 }, { technique = \"cosine\", samples = 1 }, { technique = \"light\", samples = 1 }",
@@ -689,7 +711,7 @@ fn environments_and_light_selections_agree() {
         ),
     ];
     let quick = [
-        true, false, false, false, false, false, false, false, true, true,
+        true, false, false, false, false, false, false, false, true, false, false, true, true,
     ];
     for (_, (label, text, path)) in cases
         .into_iter()

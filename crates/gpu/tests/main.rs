@@ -7,6 +7,7 @@ mod device;
 mod direct_image;
 mod env_twin;
 mod layout;
+mod light_tree_twin;
 mod light_twin;
 mod perturbed_twin;
 mod quadric_twin;

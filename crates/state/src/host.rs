@@ -39,6 +39,30 @@ pub struct LightBounds {
     pub power: f64,
 }
 
+/// One node of a light BVH (`render::light::LightTree`, Conty Estevez & Kulla 2018):
+/// the bounds of the lights below it with their total power, and its light (a leaf) or
+/// its second child's index (an inner node, whose first child follows it).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LightTreeNode {
+    /// The bounds and the luminance of the power of the lights below.
+    pub bounds: LightBounds,
+    /// A leaf's light, or an inner node's second child.
+    pub index: u32,
+    /// Whether the node is a leaf.
+    pub leaf: bool,
+}
+
+/// A light BVH over the area lights as another back end reads it: its nodes in depth-first
+/// order (the root first), and per light the path to its leaf (bit d set where it takes
+/// the second child at depth d) with the path's length.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LightTreeTable {
+    /// The nodes.
+    pub nodes: Vec<LightTreeNode>,
+    /// Per light: (trail, depth).
+    pub trails: Vec<(u64, u8)>,
+}
+
 /// The CPU renderer of one scene and one set of render options, as another back end
 /// sees it.
 pub trait Host: Sync {
@@ -52,6 +76,9 @@ pub trait Host: Sync {
     /// The importance bounds of an area light of the scene's data (None for a light
     /// that is not an area light).
     fn light_bounds(&self, light: &scene::Light) -> Option<LightBounds>;
+    /// The light BVH of `light-bvh` over the scene's area lights, in their order (None
+    /// without an area light).
+    fn light_tree(&self) -> Option<LightTreeTable>;
     /// Renders sample `index` of pixel (x, y) on the CPU into its record `rec`, for the
     /// samples the other back end could not finish (a ray past a fixed capacity).
     fn cpu_sample(&self, x: u32, y: u32, index: u32, rec: &mut [f64], rays: &mut RayCounts);

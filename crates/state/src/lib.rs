@@ -32,7 +32,7 @@ pub use aov::Aov;
 pub use color::Rgb;
 pub use counts::{CpuStages, RayCounts, RayKind, TIMED_EVERY};
 pub use error::Error;
-pub use host::{CoatAlbedo, Host, LightBounds};
+pub use host::{CoatAlbedo, Host, LightBounds, LightTreeNode, LightTreeTable};
 pub use image::{Film, Image, Tonemap};
 pub use options::{uses_mis, RenderOptions, MAX_TECHNIQUES};
 pub use options_error::OptionsError;

@@ -93,11 +93,13 @@ pub(super) struct Frame {
     /// Where the live and continuation queues' entries start in `stats` (words), and
     /// the first pixel of the wave's band.
     pub(super) wave: [u32; 4],
+    /// The light BVH's nodes and trails in `tables` (u32::MAX: none; `light::tree_records`).
+    pub(super) tree: [u32; 4],
 }
 
 const _: () = assert!(size_of::<GpuShape>() == 48);
 const _: () = assert!(size_of::<GpuMaterial>() == 112);
-const _: () = assert!(size_of::<Frame>() == 352);
+const _: () = assert!(size_of::<Frame>() == 368);
 
 /// The scene and options as the kernels read them.
 #[derive(Clone, Debug, Default)]
@@ -497,6 +499,14 @@ impl DirectScene {
                 self.tables.extend(light::importance_record(&b));
             }
         }
+        // The light BVH of `light-bvh`, as the CPU built it.
+        f.tree = [u32::MAX; 4];
+        if let Some(t) = host.light_tree() {
+            let at = self.tables.len();
+            let (words, trails) = light::tree_records(&t);
+            self.tables.extend(words);
+            f.tree = [at as u32, (at + trails) as u32, t.nodes.len() as u32, 0];
+        }
         f.env = GpuEnv::pack(data, &mut self.tables);
         if self.tables.is_empty() {
             self.tables.push(0.0);
@@ -563,6 +573,7 @@ impl DirectScene {
                 Technique::LightSpatial => 6,
                 Technique::LightTrained => 7,
                 Technique::CosineHemisphere => 8,
+                Technique::LightBvh => 9,
                 t => return Err(unsupported(format!("technique {}", t.name()))),
             };
             f.tech[k / 4][k % 4] = code;

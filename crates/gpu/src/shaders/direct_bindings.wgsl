@@ -49,6 +49,9 @@ struct Frame {
     // Where the live and continuation queues' entries start in `stats` (words), and the
     // first pixel of the band the wave covers (its `pixels` pixels in raster order).
     wave: vec4<u32>,
+    // The light BVH in sel_buf: its nodes and trails (0xffffffff: none), its nodes'
+    // count (gpu::light::tree_records).
+    tree: vec4<u32>,
 }
 
 // One scene object: a single leaf (kind 0) or an intersection of plain-quadric leaves
@@ -136,5 +139,6 @@ const T_ENV: u32 = 5u;
 const T_SPATIAL: u32 = 6u;
 const T_TRAINED: u32 = 7u;
 const T_COSINE: u32 = 8u;
+const T_BVH: u32 = 9u;
 
 fn bsdf_table(i: u32) -> f32 { return sel_buf[i]; }

@@ -77,6 +77,16 @@ fn spatial_select(p: vec3<f32>, n: vec3<f32>, uc: f32) -> u32 {
     return last;
 }
 
+// The light BVH's selection (render::light::Selection::Bvh): the environment as the
+// spatial selection has it, the area lights with the rest by the tree's descent.
+fn bvh_select(p: vec3<f32>, n: vec3<f32>, uc: f32) -> u32 {
+    let pe = spatial_env();
+    if (uc < pe) { return frame.n_lights; }
+    if (frame.tree.x == 0xffffffffu) { return 0xffffffffu; }
+    let u = min((uc - pe) / (1.0 - pe), l_one_minus_eps());
+    return bitcast<u32>(tree_sample(frame.tree.x, p, n, u).x);
+}
+
 // The trained selection (state::TrainedSelection): whether its table covers the
 // MIS lights, and the offset of the pmf row of p's cell (points outside the grid go to
 // the nearest cell).
@@ -154,6 +164,25 @@ fn tech_pdf(code: u32, one: u32, p: vec3<f32>, n: vec3<f32>, nf: vec3<f32>, wi: 
                 loops++;
                 let pm = (1.0 - pe) * importance_of(i, p, n) / total;
                 if (pm > 0.0) { sum += pm * light_pdf_li(lights[i], p, wi); }
+            }
+        }
+        if (pe > 0.0) { sum += pe * env_pdf(frame.env, wi); }
+        return sum;
+    }
+    if (code == T_BVH) {
+        // Σ P(k | p, n) p_k(wi), each light's probability from the tree where its
+        // density is not 0 (the CPU's terms over the lights wi crosses), then the
+        // environment (Lights::pdf_selected_over).
+        let pe = spatial_env();
+        var sum = 0.0;
+        if (frame.tree.x != 0xffffffffu) {
+            for (var i = 0u; i < frame.n_lights; i++) {
+                loops++;
+                let pl = light_pdf_li(lights[i], p, wi);
+                if (pl > 0.0) {
+                    let pm = (1.0 - pe) * tree_pmf(frame.tree.x, frame.tree.y, p, n, i);
+                    if (pm > 0.0) { sum += pm * pl; }
+                }
             }
         }
         if (pe > 0.0) { sum += pe * env_pdf(frame.env, wi); }

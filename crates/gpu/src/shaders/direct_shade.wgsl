@@ -127,6 +127,8 @@ fn shade(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
             li = spatial_select(p, n, uc);
         } else if (code == T_TRAINED) {
             li = trained_select(p, uc);
+        } else if (code == T_BVH) {
+            li = bvh_select(p, n, uc);
         } else if (code != T_ONE) {
             let sel = light_select(frame.power_off, code == T_POWER, n_mis(), uc);
             li = bitcast<u32>(sel.x);

@@ -324,3 +324,77 @@ fn light_importance(at: u32, p: vec3<f32>, n: vec3<f32>) -> f32 {
     if (r > 0.0) { return r; }
     return 0.0;
 }
+
+// A light BVH in sel_buf (light.rs tree_records; render::light::LightTree): 12 words per
+// node from `nodes` (its importance record, with the second child's or the light's index
+// in word 10 and 1 in word 11 for a leaf), 3 per light from `trails` (the path to its
+// leaf, low and high 32 bits, and the path's length).
+fn l_one_minus_eps() -> f32 { return bitcast<f32>(0x3f7fffffu); }
+
+// The branch probabilities at inner node i, or (−1, −1) where neither child shines on p
+// (LightTree::split).
+fn tree_split(nodes: u32, i: u32, p: vec3<f32>, n: vec3<f32>) -> vec2<f32> {
+    let at = nodes + 12u * i;
+    let wa = light_importance(at + 12u, p, n);
+    let wb = light_importance(nodes + 12u * bitcast<u32>(sel_buf[at + 10u]), p, n);
+    let total = wa + wb;
+    if (!(total > 0.0) || (bitcast<u32>(total) & 0x7f800000u) == 0x7f800000u) {
+        return vec2<f32>(-1.0);
+    }
+    return vec2<f32>(wa / total, wb / total);
+}
+
+// The light the tree draws with u ∈ [0, 1) at (p, n) and its probability (index bits,
+// pmf); index 0xffffffff where none can shine on p (LightTree::sample). A descent goes
+// to higher node indices and a tree of n lights is ⌈log₂ n⌉ deep: 65 steps bound it.
+fn tree_sample(nodes: u32, p: vec3<f32>, n: vec3<f32>, u_in: f32) -> vec2<f32> {
+    var i = 0u;
+    var u = u_in;
+    var pmf = 1.0;
+    for (var d = 0u; d < 65u; d++) {
+        let at = nodes + 12u * i;
+        let index = bitcast<u32>(sel_buf[at + 10u]);
+        if (sel_buf[at + 11u] != 0.0) {
+            if (light_importance(at, p, n) > 0.0) { return vec2<f32>(bitcast<f32>(index), pmf); }
+            break;
+        }
+        let s = tree_split(nodes, i, p, n);
+        if (s.x < 0.0) { break; }
+        if (u < s.x) {
+            u = min(u / s.x, l_one_minus_eps());
+            pmf = pmf * s.x;
+            i = i + 1u;
+        } else {
+            u = min((u - s.x) / s.y, l_one_minus_eps());
+            pmf = pmf * s.y;
+            i = index;
+        }
+    }
+    return vec2<f32>(bitcast<f32>(0xffffffffu), 0.0);
+}
+
+// The probability that tree_sample draws light k at (p, n): the product of the same
+// branch probabilities along its trail (LightTree::pmf).
+fn tree_pmf(nodes: u32, trails: u32, p: vec3<f32>, n: vec3<f32>, k: u32) -> f32 {
+    let t = trails + 3u * k;
+    let lo = bitcast<u32>(sel_buf[t]);
+    let hi = bitcast<u32>(sel_buf[t + 1u]);
+    let depth = min(bitcast<u32>(sel_buf[t + 2u]), 64u);
+    var i = 0u;
+    var pmf = 1.0;
+    for (var d = 0u; d < depth; d++) {
+        let s = tree_split(nodes, i, p, n);
+        if (s.x < 0.0) { return 0.0; }
+        var bit = (lo >> d) & 1u;
+        if (d >= 32u) { bit = (hi >> (d - 32u)) & 1u; }
+        if (bit == 0u) {
+            pmf = pmf * s.x;
+            i = i + 1u;
+        } else {
+            pmf = pmf * s.y;
+            i = bitcast<u32>(sel_buf[nodes + 12u * i + 10u]);
+        }
+    }
+    if (light_importance(nodes + 12u * i, p, n) > 0.0) { return pmf; }
+    return 0.0;
+}

@@ -6,9 +6,9 @@
 use super::{Integrator, RayCounts, RenderOptions};
 use crate::bsdf::CoatTable;
 use crate::color::luminance;
-use crate::light::{AreaLight, TrainedSelection};
+use crate::light::{AreaLight, LightTree, TrainedSelection};
 use crate::scene::Scene;
-use state::{CoatAlbedo, Host, LightBounds, OptionsError, Tally};
+use state::{CoatAlbedo, Host, LightBounds, LightTreeTable, OptionsError, Tally};
 
 /// The `direct` and `path` integrators' bookkeeping for samples shaded elsewhere: a
 /// [`Tally`] (through `Deref`) and the CPU integrator behind it.
@@ -107,6 +107,10 @@ impl Host for CpuHost<'_> {
 
     fn light_bounds(&self, light: &scene::Light) -> Option<LightBounds> {
         AreaLight::from_data(light).map(|l| LightBounds::from(&l))
+    }
+
+    fn light_tree(&self) -> Option<LightTreeTable> {
+        self.scene.lights.tree().map(LightTree::table)
     }
 
     fn cpu_sample(&self, x: u32, y: u32, index: u32, rec: &mut [f64], rays: &mut RayCounts) {

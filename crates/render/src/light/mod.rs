@@ -153,6 +153,10 @@ impl Lights {
     pub fn environment(&self) -> Option<&Environment> {
         self.environment.as_ref()
     }
+    /// The light BVH of [`Selection::Bvh`] (None without an area light).
+    pub fn tree(&self) -> Option<&LightTree> {
+        self.tree.as_ref()
+    }
     /// The nearest area light along `ray` (unit direction) with t in (t_min, t_max).
     pub fn intersect(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<LightHit> {
         let mut n = DVec3::ZERO;

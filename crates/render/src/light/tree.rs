@@ -181,6 +181,36 @@ impl LightTree {
     }
 }
 
+impl LightTree {
+    /// The tree as another back end reads it: the same nodes in the same order, and the
+    /// lights' trails ([`state::LightTreeTable`]).
+    pub fn table(&self) -> state::LightTreeTable {
+        let nodes = self
+            .nodes
+            .iter()
+            .map(|node| {
+                let b = &node.bounds;
+                state::LightTreeNode {
+                    bounds: state::LightBounds {
+                        center: b.center,
+                        radius: b.radius,
+                        axis: b.axis,
+                        cos_o: b.cos_o,
+                        two_sided: b.two_sided,
+                        power: node.phi,
+                    },
+                    index: node.index,
+                    leaf: node.leaf,
+                }
+            })
+            .collect();
+        state::LightTreeTable {
+            nodes,
+            trails: self.trails.clone(),
+        }
+    }
+}
+
 /// The branch probabilities of the nodes a thread visited in one tree at one shading
 /// point, by node (a direct-mapped cache of [`MEMO_SLOTS`] entries). The draws at a
 /// vertex descend the same tree from the same point many times — a light technique's
