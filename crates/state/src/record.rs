@@ -124,16 +124,37 @@ impl Pixel<'_> {
                     self.add(f * scale);
                 }
             }
-            Combine::Estimator(kernel) => self.add_estimated(it, kernel, depth, k, f, pdfs, light),
+            Combine::Estimator(kernel) if it.record.lights == 1 => {
+                self.add_estimated_one(it, kernel, depth, k, f, pdfs)
+            }
+            Combine::Estimator(kernel) => {
+                self.add_estimated_per_light(it, kernel, depth, k, f, pdfs, light)
+            }
         }
     }
 
-    /// [`Pixel::add_draw`] into an estimator's blocks: one call that holds the estimator's
-    /// sums inlined, outside the heuristics' short path (which stays inlined in the
-    /// caller's loop).
+    /// [`Pixel::add_draw`] into a vertex's one estimator block: the sums in a call of
+    /// their own, outside the heuristics' short path (which stays inlined in the caller's
+    /// loop), and small enough to need few saved registers.
+    #[inline(never)]
+    fn add_estimated_one(
+        &mut self,
+        it: &Tally,
+        kernel: &mis::Kernel,
+        depth: usize,
+        k: usize,
+        f: Rgb,
+        pdfs: &[f64],
+    ) {
+        let r = it.record.depth_light(depth, 0);
+        kernel.add_sample(&mut self.rec[r], self.key, k, &f.to_array(), pdfs);
+    }
+
+    /// [`Pixel::add_draw`] in per-light mode: the draw into its light's block, a failed
+    /// draw into every other.
     #[inline(never)]
     #[allow(clippy::too_many_arguments)]
-    fn add_estimated(
+    fn add_estimated_per_light(
         &mut self,
         it: &Tally,
         kernel: &mis::Kernel,
@@ -143,11 +164,6 @@ impl Pixel<'_> {
         pdfs: &[f64],
         light: Option<usize>,
     ) {
-        if it.record.lights == 1 {
-            let r = it.record.depth_light(depth, 0);
-            kernel.add_sample(&mut self.rec[r], self.key, k, &f.to_array(), pdfs);
-            return;
-        }
         for l in 0..it.record.lights {
             let r = it.record.depth_light(depth, l);
             if Some(l) == light {
@@ -159,22 +175,29 @@ impl Pixel<'_> {
     }
 
     /// Technique `k` produced no draw (or a delta-lobe draw) at vertex `depth`.
-    #[inline]
+    #[inline(always)]
     pub fn add_failed(&mut self, it: &Tally, depth: usize, k: usize) {
         if self.mute {
             return;
         }
         if let Combine::Estimator(kernel) = &it.combine {
             // One addition for optimal-direct without per-light blocks (most failed and
-            // unlit draws), with no block slicing.
+            // unlit draws), with no block slicing and no call (the optimal estimators
+            // count every unlit BSDF draw here).
             if let (1, Some((at, add))) = (it.record.lights, kernel.failed_word(k)) {
                 self.rec[it.record.depth_light(depth, 0).start + at] += add;
                 return;
             }
-            for l in 0..it.record.lights {
-                let r = it.record.depth_light(depth, l);
-                kernel.add_failed(&mut self.rec[r], self.key, k);
-            }
+            self.add_failed_blocks(kernel, it, depth, k);
+        }
+    }
+
+    /// [`Pixel::add_failed`] into every block of the vertex, out of the caller's loop.
+    #[inline(never)]
+    fn add_failed_blocks(&mut self, kernel: &mis::Kernel, it: &Tally, depth: usize, k: usize) {
+        for l in 0..it.record.lights {
+            let r = it.record.depth_light(depth, l);
+            kernel.add_failed(&mut self.rec[r], self.key, k);
         }
     }
 

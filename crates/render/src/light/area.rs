@@ -347,7 +347,8 @@ impl AreaLight {
                     0.0
                 }
             })
-            .sum()
+            // From +0 (`sum` starts at −0): no crossing is a density of +0.
+            .fold(0.0, |s, x| s + x)
     }
     /// The light's preferred sampling: the cone of directions subtended by a sphere
     /// seen from outside (uniform in solid angle, pbrt-v4 §6.2.4); uniform area

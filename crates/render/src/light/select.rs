@@ -213,6 +213,7 @@ impl Lights {
 
     /// P(MIS light k | p, n) under `sel` (`total`: [`Self::importance_total`], for
     /// [`Selection::Spatial`]).
+    #[inline]
     pub(super) fn pmf_with(
         &self,
         sel: Selection<'_>,
@@ -386,16 +387,47 @@ impl Lights {
         crossed: Option<&Crossed>,
     ) -> f64 {
         if let Selection::One(k) = sel {
-            return if k < self.count() {
-                self.pdf_one(p, k, wi)
-            } else {
-                0.0
+            return match crossed {
+                // An area light's density is 0 off the lights the draw's ray crosses
+                // (the list the mixtures' pdfs sum over: padded boxes hold every
+                // direction of positive density); evaluated only where the list holds it.
+                Some(c) if k < self.area.len() && !c.lights().contains(&(k as u32)) => 0.0,
+                _ if k < self.count() => self.pdf_one(p, k, wi),
+                _ => 0.0,
             };
         }
-        let total = match sel {
-            Selection::Spatial => self.importance_total(p, n),
-            _ => 0.0,
-        };
+        // The selections whose probabilities do not depend on (p, n) without the general
+        // dispatch per light (most pdfs of `light` and `light-uniform`): the same terms.
+        match sel {
+            Selection::Power => {
+                let d = self.by_power.as_ref();
+                self.pdf_mixture_over(p, wi, crossed, |k| d.map_or(0.0, |d| d.pmf(k)))
+            }
+            Selection::Uniform => {
+                let pm = 1.0 / self.count() as f64;
+                self.pdf_mixture_over(p, wi, crossed, |_| pm)
+            }
+            _ => {
+                let total = match sel {
+                    Selection::Spatial => self.importance_total(p, n),
+                    _ => 0.0,
+                };
+                self.pdf_mixture_over(p, wi, crossed, |k| self.pmf_with(sel, p, n, k, total))
+            }
+        }
+    }
+
+    /// Σ_k pmf(k) · p_k(wi) over the area lights `crossed` lists (None: found by the
+    /// BVH here), then the environment; p_k evaluated only where pmf(k) > 0. `pmf` is
+    /// [`Self::pmf_with`]'s for MIS lights (every index here is one).
+    #[inline(always)]
+    fn pdf_mixture_over(
+        &self,
+        p: DVec3,
+        wi: DVec3,
+        crossed: Option<&Crossed>,
+        pmf: impl Fn(usize) -> f64,
+    ) -> f64 {
         // P(k)·p_k, p_k evaluated only where P(k) > 0.
         #[inline(always)]
         fn term(pm: f64, pdf: impl FnOnce() -> f64) -> f64 {
@@ -405,7 +437,6 @@ impl Lights {
                 0.0
             }
         }
-        let pmf = |k: usize| self.pmf_with(sel, p, n, k, total);
         // Only the area lights the ray from p along wi crosses have density there.
         let mut sum = 0.0;
         match crossed {
