@@ -9,7 +9,12 @@ prints MSamples/s and the time per sample relative to N = 10.
     python3 bench/lights/scaling.py target/release/frepray --counts 1,10,100,1000,10000 \
         --techniques light-power,light-spatial,light-bvh -- --spp 4 --width 160 --height 120
 
-Arguments after `--` go to every `frepray render`."""
+Arguments after `--` go to every `frepray render`. With `--backend gpu` among them the
+rate is the GPU's: samples over the sum of its stage times (camera, shade, shadow and
+continuation rays, by GPU timestamps), without the setup that compiles the kernels.
+
+    python3 bench/lights/scaling.py target/release/frepray --counts 10,1000,10000 \
+        --techniques light-bvh -- --backend gpu --spp 4 --width 80 --height 60"""
 
 import argparse
 import random
@@ -47,6 +52,11 @@ def msamples(binary, scene, technique, rest):
         out = subprocess.run(cmd, capture_output=True, text=True)
         if out.returncode != 0:
             sys.exit(f"{' '.join(cmd)} failed:\n{out.stderr[-2000:]}")
+        g = re.search(r"GPU stages: camera rays ([0-9.]+) ms, shade ([0-9.]+) ms, "
+                      r"shadow rays ([0-9.]+) ms, continuation rays ([0-9.]+) ms", out.stderr)
+        n = re.search(r"([0-9]+) samples", out.stderr)
+        if g and n:
+            return int(n.group(1)) / (sum(float(x) for x in g.groups()) * 1e3)
         m = re.search(r"\(([0-9.]+) MSamples/s\)", out.stderr)
         if not m:
             sys.exit(f"no MSamples/s in:\n{out.stderr[-2000:]}")

@@ -95,11 +95,14 @@ pub(super) struct Frame {
     pub(super) wave: [u32; 4],
     /// The light BVH's nodes and trails in `tables` (u32::MAX: none; `light::tree_records`).
     pub(super) tree: [u32; 4],
+    /// The BVH over the area lights' boxes in `nodes` and `items`: its first node, node
+    /// count, first item ([`DirectScene::pack_light_boxes`]).
+    pub(super) lbvh: [u32; 4],
 }
 
 const _: () = assert!(size_of::<GpuShape>() == 48);
 const _: () = assert!(size_of::<GpuMaterial>() == 112);
-const _: () = assert!(size_of::<Frame>() == 368);
+const _: () = assert!(size_of::<Frame>() == 384);
 
 /// The scene and options as the kernels read them.
 #[derive(Clone, Debug, Default)]
@@ -159,6 +162,7 @@ impl DirectScene {
         for obj in &data.objects {
             s.pack_object(data, obj)?;
         }
+        s.pack_light_boxes(data);
         s.pack_frame(data, o, host)?;
         s.pack_trained(host.trained());
         Ok(s)
@@ -461,6 +465,56 @@ impl DirectScene {
         }
         self.frame.n_delta = data.lights.delta.len() as u32;
         Ok(())
+    }
+
+    /// A BVH over the area lights' boxes after the objects' nodes and items (escape
+    /// layout, [`crate::layout::skip_nodes`]): the kernels' light queries (the nearest
+    /// light along a ray, the mixtures' pdfs) visit only the lights whose box a ray
+    /// crosses, as the CPU's do, instead of every light. A box holds its light's shape
+    /// widened by 10⁻⁴ of its extent and distance from the origin: more than the f32
+    /// rims and edges of `light::pdf_li` and `light::pdf_area` reach.
+    fn pack_light_boxes(&mut self, data: &SceneData) {
+        self.frame.lbvh = [0; 4];
+        if data.lights.area.is_empty() {
+            return;
+        }
+        let v = |a: [f64; 3]| glam::DVec3::from_array(a);
+        let boxes: Vec<frep::Aabb> = data
+            .lights
+            .area
+            .iter()
+            .map(|l| {
+                let (lo, hi) = match l.kind {
+                    LightKind::Rect => {
+                        let c = [v(l.p0), v(l.p0) + v(l.e1), v(l.p0) + v(l.e2)];
+                        let far = c[1] + v(l.e2);
+                        (
+                            c[0].min(c[1]).min(c[2]).min(far),
+                            c[0].max(c[1]).max(c[2]).max(far),
+                        )
+                    }
+                    // Spheres and disks (a disk within the sphere of its radius).
+                    _ => (v(l.p0) - l.radius, v(l.p0) + l.radius),
+                };
+                let pad =
+                    1e-4 * ((hi - lo).max_element() + lo.abs().max(hi.abs()).max_element()) + 1e-6;
+                frep::Aabb::new(lo - pad, hi + pad)
+            })
+            .collect();
+        let bvh = frep::Bvh::new(&boxes);
+        let view = bvh.as_ref();
+        let (nodes, items) = (
+            crate::layout::skip_nodes(&view),
+            crate::layout::item_boxes(&view),
+        );
+        self.frame.lbvh = [
+            self.nodes.len() as u32,
+            nodes.len() as u32,
+            self.items.len() as u32,
+            0,
+        ];
+        self.nodes.extend(nodes);
+        self.items.extend(items);
     }
 
     /// The trained selection's grid (low corner, cells per unit) and pmfs after the

@@ -52,6 +52,9 @@ struct Frame {
     // The light BVH in sel_buf: its nodes and trails (0xffffffff: none), its nodes'
     // count (gpu::light::tree_records).
     tree: vec4<u32>,
+    // The BVH over the area lights' boxes in `nodes` and `items` (escape layout): its
+    // first node, node count, first item.
+    lbvh: vec4<u32>,
 }
 
 // One scene object: a single leaf (kind 0) or an intersection of plain-quadric leaves

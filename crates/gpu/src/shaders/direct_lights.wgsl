@@ -4,15 +4,63 @@
 // along −d (0 from a non-emitting side); t = ∞ when none.
 struct LightHit { t: f32, index: u32, le: vec3<f32>, n: vec3<f32> }
 
+// Whether o + t·d, t ∈ [0, t_max], meets the box (the f32 slab test, ignoring the NaN
+// of a zero direction component as frep's does; inv = 1/d).
+fn lbox_hit(lo: vec3<f32>, hi: vec3<f32>, o: vec3<f32>, inv: vec3<f32>, t_max: f32) -> bool {
+    var near = 0.0;
+    var far = t_max;
+    let a = (lo - o) * inv;
+    let b = (hi - o) * inv;
+    near = rmax(near, rmin(a.x, b.x)); far = rmin(far, rmax(a.x, b.x));
+    near = rmax(near, rmin(a.y, b.y)); far = rmin(far, rmax(a.y, b.y));
+    near = rmax(near, rmin(a.z, b.z)); far = rmin(far, rmax(a.z, b.z));
+    return near <= far;
+}
+
+// A walk over the area lights whose box a ray crosses, in the light BVH's leaf order
+// (frame.lbvh, escape layout, GPU.md §6.1): a cursor, so that each light query keeps
+// its own loop body. `t_max` may shrink as a nearest-hit query finds lights.
+struct LightWalk { node: u32, item: u32, end: u32, t_max: f32, o: vec3<f32>, inv: vec3<f32> }
+
+fn light_walk(o: vec3<f32>, d: vec3<f32>, t_max: f32) -> LightWalk {
+    return LightWalk(0u, 0u, 0u, t_max, o, vec3<f32>(1.0 / d.x, 1.0 / d.y, 1.0 / d.z));
+}
+
+// The next light of the walk (its index), or 0xffffffff at its end.
+fn light_next(w: ptr<function, LightWalk>) -> u32 {
+    loop {
+        loops++;
+        if ((*w).item < (*w).end) {
+            let b = items[frame.lbvh.z + (*w).item];
+            (*w).item += 1u;
+            if (lbox_hit(vec3<f32>(b.lo_x, b.lo_y, b.lo_z), vec3<f32>(b.hi_x, b.hi_y, b.hi_z), (*w).o, (*w).inv, (*w).t_max)) {
+                return b.item;
+            }
+            continue;
+        }
+        if ((*w).node >= frame.lbvh.y) { return 0xffffffffu; }
+        let n = nodes[frame.lbvh.x + (*w).node];
+        let count = n.count_axis & 0x3fffffffu;
+        let hit = lbox_hit(vec3<f32>(n.lo_x, n.lo_y, n.lo_z), vec3<f32>(n.hi_x, n.hi_y, n.hi_z), (*w).o, (*w).inv, (*w).t_max);
+        if (hit && count > 0u) {
+            (*w).item = n.offset;
+            (*w).end = n.offset + count;
+        }
+        if (hit || count > 0u) { (*w).node += 1u; } else { (*w).node = n.offset; }
+    }
+    return 0xffffffffu;
+}
+
 fn nearest_light(o: vec3<f32>, d: vec3<f32>, t_max: f32) -> LightHit {
     var h = LightHit(inf(), 0u, vec3<f32>(0.0), vec3<f32>(0.0));
     var best = t_max;
-    for (var i = 0u; i < frame.n_lights; i++) {
-        loops++;
+    var w = light_walk(o, d, t_max);
+    for (var i = light_next(&w); i != 0xffffffffu; i = light_next(&w)) {
         let l = lights[i];
         let c = light_intersect(l, o, d, 0.0, best);
         if (c.x > 0.0) {
             best = c.x;
+            w.t_max = best;
             var le = vec3<f32>(0.0);
             if (light_emits(l, c.yzw, -d)) { le = l.radiance.xyz; }
             h = LightHit(c.x, i, le, c.yzw);
@@ -142,8 +190,8 @@ fn tech_pdf(code: u32, one: u32, p: vec3<f32>, n: vec3<f32>, nf: vec3<f32>, wi: 
         if (!trained_usable()) { return 0.0; }
         let row = trained_row(p);
         var sum = 0.0;
-        for (var i = 0u; i < frame.n_lights; i++) {
-            loops++;
+        var w = light_walk(p, wi, inf());
+        for (var i = light_next(&w); i != 0xffffffffu; i = light_next(&w)) {
             let pm = sel_buf[row + i];
             if (pm > 0.0) { sum += pm * light_pdf_li(lights[i], p, wi); }
         }
@@ -160,8 +208,8 @@ fn tech_pdf(code: u32, one: u32, p: vec3<f32>, n: vec3<f32>, nf: vec3<f32>, wi: 
         var sum = 0.0;
         let total = importance_total(p, n);
         if (total > 0.0) {
-            for (var i = 0u; i < frame.n_lights; i++) {
-                loops++;
+            var w = light_walk(p, wi, inf());
+            for (var i = light_next(&w); i != 0xffffffffu; i = light_next(&w)) {
                 let pm = (1.0 - pe) * importance_of(i, p, n) / total;
                 if (pm > 0.0) { sum += pm * light_pdf_li(lights[i], p, wi); }
             }
@@ -176,8 +224,8 @@ fn tech_pdf(code: u32, one: u32, p: vec3<f32>, n: vec3<f32>, nf: vec3<f32>, wi: 
         let pe = spatial_env();
         var sum = 0.0;
         if (frame.tree.x != 0xffffffffu) {
-            for (var i = 0u; i < frame.n_lights; i++) {
-                loops++;
+            var w = light_walk(p, wi, inf());
+            for (var i = light_next(&w); i != 0xffffffffu; i = light_next(&w)) {
                 let pl = light_pdf_li(lights[i], p, wi);
                 if (pl > 0.0) {
                     let pm = (1.0 - pe) * tree_pmf(frame.tree.x, frame.tree.y, p, n, i);
@@ -193,8 +241,8 @@ fn tech_pdf(code: u32, one: u32, p: vec3<f32>, n: vec3<f32>, nf: vec3<f32>, wi: 
         return light_pdf_li(lights[one], p, wi);
     }
     var sum = 0.0;
-    for (var i = 0u; i < frame.n_lights; i++) {
-        loops++;
+    var w = light_walk(p, wi, inf());
+    for (var i = light_next(&w); i != 0xffffffffu; i = light_next(&w)) {
         if (code == T_AREA) {
             let pm = pmf_at(frame.area_off, i);
             if (pm > 0.0) { sum += pm * light_pdf_area(lights[i], p, wi); }
