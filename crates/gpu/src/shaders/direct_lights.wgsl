@@ -179,86 +179,110 @@ fn pmf_at(off: u32, i: u32) -> f32 {
     return sel_buf[off + 1u + (n + 1u) + i];
 }
 
-// The solid-angle pdf of technique `code` (light index `one` for T_ONE) at wi, the
-// BSDF's being `bsdf_pdf`, `nf` the normal on the viewer's side
-// (render::technique::Technique::pdf).
-fn tech_pdf(code: u32, one: u32, p: vec3<f32>, n: vec3<f32>, nf: vec3<f32>, wi: vec3<f32>, bsdf_pdf: f32) -> f32 {
-    if (code == T_BSDF) { return bsdf_pdf; }
-    if (code == T_COSINE) { return max(dot(nf, wi), 0.0) * BSDF_INV_PI; }
-    if (code == T_ENV) { return env_pdf(frame.env, wi); }
-    if (code == T_TRAINED) {
-        if (!trained_usable()) { return 0.0; }
-        let row = trained_row(p);
-        var sum = 0.0;
-        var w = light_walk(p, wi, inf());
-        for (var i = light_next(&w); i != 0xffffffffu; i = light_next(&w)) {
-            let pm = sel_buf[row + i];
-            if (pm > 0.0) { sum += pm * light_pdf_li(lights[i], p, wi); }
-        }
-        if (frame.env.kind != ENV_NONE) {
-            let pm = sel_buf[row + frame.n_lights];
-            if (pm > 0.0) { sum += pm * env_pdf(frame.env, wi); }
-        }
-        return sum;
-    }
-    if (code == T_SPATIAL) {
-        // Σ P(k | p, n) p_k(wi): (1 − P(env)) · importance_k / total over the area
-        // lights, then the environment (Lights::pdf_selected_over).
-        let pe = spatial_env();
-        var sum = 0.0;
-        let total = importance_total(p, n);
-        if (total > 0.0) {
-            var w = light_walk(p, wi, inf());
-            for (var i = light_next(&w); i != 0xffffffffu; i = light_next(&w)) {
-                let pm = (1.0 - pe) * importance_of(i, p, n) / total;
-                if (pm > 0.0) { sum += pm * light_pdf_li(lights[i], p, wi); }
+// Whether technique `code` mixes over the area lights: its pdf sums over the lights a
+// direction crosses (render::technique::mixes).
+fn mixes(code: u32) -> bool {
+    return code == T_POWER || code == T_UNIFORM || code == T_AREA || code == T_SPATIAL
+        || code == T_TRAINED || code == T_BVH;
+}
+
+// Every technique's solid-angle pdf at wi (render::technique::pdfs), the BSDF's being
+// `bsdf_pdf`, `nf` the normal on the viewer's side. One walk over the lights wi crosses
+// serves every mixture, each light's own pdf found once; each mixture sums its terms
+// P(k | p, n) p_k(wi) in the walk's order, then the environment's
+// (Lights::pdf_selected_over).
+fn tech_pdfs(p: vec3<f32>, n: vec3<f32>, nf: vec3<f32>, wi: vec3<f32>, bsdf_pdf: f32) -> array<f32, 8> {
+    var out: array<f32, 8>;
+    var mixing = false;
+    var spatial = false;
+    var by_li = false;
+    for (var t = 0u; t < frame.n_tech; t++) {
+        loops++;
+        let code = tech_code(t);
+        if (mixes(code)) {
+            mixing = true;
+            spatial = spatial || code == T_SPATIAL;
+            by_li = by_li || code != T_AREA;
+        } else if (code == T_BSDF) {
+            out[t] = bsdf_pdf;
+        } else if (code == T_COSINE) {
+            out[t] = max(dot(nf, wi), 0.0) * BSDF_INV_PI;
+        } else if (code == T_ENV) {
+            out[t] = env_pdf(frame.env, wi);
+        } else if (code == T_ONE) {
+            let one = tech_light(t);
+            if (one == frame.n_lights) {
+                out[t] = env_pdf(frame.env, wi);
+            } else {
+                out[t] = light_pdf_li(lights[one], p, wi);
             }
         }
-        if (pe > 0.0) { sum += pe * env_pdf(frame.env, wi); }
-        return sum;
     }
-    if (code == T_BVH) {
-        // Σ P(k | p, n) p_k(wi), each light's probability from the tree where its
-        // density is not 0 (the CPU's terms over the lights wi crosses), then the
-        // environment (Lights::pdf_selected_over).
-        let pe = spatial_env();
-        var sum = 0.0;
-        if (frame.tree.x != 0xffffffffu) {
-            var w = light_walk(p, wi, inf());
-            for (var i = light_next(&w); i != 0xffffffffu; i = light_next(&w)) {
-                let pl = light_pdf_li(lights[i], p, wi);
-                if (pl > 0.0) {
-                    let pm = (1.0 - pe) * tree_pmf(frame.tree.x, frame.tree.y, p, n, i);
-                    if (pm > 0.0) { sum += pm * pl; }
-                }
-            }
-        }
-        if (pe > 0.0) { sum += pe * env_pdf(frame.env, wi); }
-        return sum;
-    }
-    if (code == T_ONE) {
-        if (one == frame.n_lights) { return env_pdf(frame.env, wi); }
-        return light_pdf_li(lights[one], p, wi);
-    }
-    var sum = 0.0;
+    if (!mixing) { return out; }
+    // What the point-dependent selections read once: the environment's share, the
+    // spatial selection's total, the trained selection's row.
+    let pe = spatial_env();
+    var total = 0.0;
+    if (spatial) { total = importance_total(p, n); }
+    let trained = trained_usable();
+    var row = 0u;
+    if (trained) { row = trained_row(p); }
+    let tree = frame.tree.x != 0xffffffffu;
     var w = light_walk(p, wi, inf());
     for (var i = light_next(&w); i != 0xffffffffu; i = light_next(&w)) {
-        if (code == T_AREA) {
-            let pm = pmf_at(frame.area_off, i);
-            if (pm > 0.0) { sum += pm * light_pdf_area(lights[i], p, wi); }
-        } else {
-            var pm = 1.0 / f32(n_mis());
-            if (code == T_POWER) { pm = pmf_at(frame.power_off, i); }
-            if (pm > 0.0) { sum += pm * light_pdf_li(lights[i], p, wi); }
+        let l = lights[i];
+        var pl = 0.0;
+        if (by_li) { pl = light_pdf_li(l, p, wi); }
+        for (var t = 0u; t < frame.n_tech; t++) {
+            loops++;
+            let code = tech_code(t);
+            if (code == T_AREA) {
+                let pm = pmf_at(frame.area_off, i);
+                if (pm > 0.0) { out[t] += pm * light_pdf_area(l, p, wi); }
+            } else if (code == T_BVH) {
+                // The tree's pmf only where the light has density (a descent per light).
+                if (tree && pl > 0.0) {
+                    let pm = (1.0 - pe) * tree_pmf(frame.tree.x, frame.tree.y, p, n, i);
+                    if (pm > 0.0) { out[t] += pm * pl; }
+                }
+            } else if (code == T_SPATIAL) {
+                if (total > 0.0) {
+                    let pm = (1.0 - pe) * importance_of(i, p, n) / total;
+                    if (pm > 0.0) { out[t] += pm * pl; }
+                }
+            } else if (code == T_TRAINED) {
+                if (trained) {
+                    let pm = sel_buf[row + i];
+                    if (pm > 0.0) { out[t] += pm * pl; }
+                }
+            } else if (code == T_POWER || code == T_UNIFORM) {
+                var pm = 1.0 / f32(n_mis());
+                if (code == T_POWER) { pm = pmf_at(frame.power_off, i); }
+                if (pm > 0.0) { out[t] += pm * pl; }
+            }
         }
     }
-    // The environment last, as Lights::pdf_selected_over (not a by-area light).
-    if (code != T_AREA && frame.env.kind != ENV_NONE) {
-        var pm = 1.0 / f32(n_mis());
-        if (code == T_POWER) { pm = pmf_at(frame.power_off, frame.n_lights); }
-        if (pm > 0.0) { sum += pm * env_pdf(frame.env, wi); }
+    // The environment last (not a by-area light).
+    if (frame.env.kind != ENV_NONE) {
+        let pd = env_pdf(frame.env, wi);
+        for (var t = 0u; t < frame.n_tech; t++) {
+            loops++;
+            let code = tech_code(t);
+            if (code == T_SPATIAL || code == T_BVH) {
+                if (pe > 0.0) { out[t] += pe * pd; }
+            } else if (code == T_TRAINED) {
+                if (trained) {
+                    let pm = sel_buf[row + frame.n_lights];
+                    if (pm > 0.0) { out[t] += pm * pd; }
+                }
+            } else if (code == T_POWER || code == T_UNIFORM) {
+                var pm = 1.0 / f32(n_mis());
+                if (code == T_POWER) { pm = pmf_at(frame.power_off, frame.n_lights); }
+                if (pm > 0.0) { out[t] += pm * pd; }
+            }
+        }
     }
-    return sum;
+    return out;
 }
 
 fn tech_code(k: u32) -> u32 { return frame.tech[k / 4u][k % 4u] & 0xffu; }

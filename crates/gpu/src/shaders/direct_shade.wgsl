@@ -196,10 +196,7 @@ fn shade(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
         let wi_l = to_local(f, wi);
         let ev = bsdf_eval(m, wo_l, wi_l);
         fc = ev.xyz * abs(dot(wi, n));
-        for (var t = 0u; t < frame.n_tech; t++) {
-            loops++;
-            pdfs[t] = tech_pdf(tech_code(t), tech_light(t), p, n, nf, wi, ev.w);
-        }
+        pdfs = tech_pdfs(p, n, nf, wi, ev.w);
         // A light draw's own density is the mixture's, and it fails where that is not
         // positive (Lights::sample_selected, sample_by_area).
         let own = pdfs[k];
