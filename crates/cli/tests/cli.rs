@@ -49,6 +49,8 @@ fn renders_every_model_framed() {
         "models/examples/bumpy_ball.frep",
         "models/examples/machined_part.frep",
         "models/examples/smooth_blob.frep",
+        "models/examples/lattice.frep",
+        "models/examples/capsule.hf",
     ];
     let dir = out_dir("models");
     for m in models {
@@ -673,10 +675,10 @@ fn gpu_backend_refuses_by_name_and_auto_falls_back() {
     let cases = [
         (
             format!(
-                "{head}[[objects]]\nsolid = \"sphere([0, 0, 0], 1) + 0.05 * exp(-8 * x * x)\"\n\
+                "{head}[[objects]]\nsolid = \"sphere([0, 0, 0], 1) - 0.05 * (0.5 * x)^300\"\n\
                  material = \"clay\"\n\n{lamp}"
             ),
-            "Exp",
+            "PowI",
         ),
         (
             format!("{head}[[objects]]\nmodel = \"tri.obj\"\nmaterial = \"clay\"\n\n{lamp}"),
@@ -833,7 +835,7 @@ fn bare_models_render_on_either_backend() {
     let wavy = d.join("wavy.frep");
     std::fs::write(
         &wavy,
-        "output sphere([0, 0, 0], 1) + 0.05 * exp(-8 * x * x)\n",
+        "output sphere([0, 0, 0], 1) - 0.05 * (0.5 * x)^300\n",
     )
     .unwrap();
     let auto = frepray()

@@ -62,6 +62,7 @@
 mod adapter;
 pub mod bsdf;
 pub mod direct;
+pub mod elementary;
 pub mod env;
 mod kernel;
 pub mod layout;

@@ -157,10 +157,11 @@ impl TapeSolid {
             })
             .collect();
         format!(
-            "const REG_COUNT: u32 = {}u;\nconst TAPE_LEN: u32 = {len}u;\n{}{}{}{}\n\
+            "const REG_COUNT: u32 = {}u;\nconst TAPE_LEN: u32 = {len}u;\nconst ELEMENTARY: bool = {};\n{}{}{}{}\n\
              var<private> EPS: f32;\nvar<private> BLO: vec3<f32>;\nvar<private> BHI: vec3<f32>;\n\
              fn use_tape(k: u32) {{\n    switch k {{\n{cases}        default: {{}}\n    }}\n}}\n{TRACE_WGSL}",
             regs.max(1),
+            solids.iter().any(|s| s.tape.elementary()),
             crate::FLOAT_WGSL,
             crate::TRIG_WGSL,
             crate::tape::tape_consts_wgsl(),
@@ -258,7 +259,7 @@ impl TapeSolid {
                 let (pb_lo, pb_hi) = (ok + down(hi * dk), ok + up(hi * dk));
                 [down(pa_lo.min(pb_lo)), up(pa_hi.max(pb_hi)), dk, dk]
             };
-            let r = self.tape.eval_interval(c(0), c(1), c(2));
+            let (r, wrap) = self.tape.eval_interval_wrap(c(0), c(1), c(2));
             if phase == Phase::Segment {
                 if r[0] > 0.0 || r[1] < 0.0 {
                     continue;
@@ -270,7 +271,13 @@ impl TapeSolid {
                         steps = 0;
                     }
                 } else {
+                    // At a mod's wrap where one lies inside (a jump, which halving
+                    // would close in on only at ε), kept ε from the ends so that the
+                    // piece holding the jump is at most ε; else at the middle.
                     m = a + (b - a) * 0.5;
+                    if wrap < 1.0 && b - a > 4.0 * eps_t {
+                        m = (a + (b - a) * wrap).max(a + eps_t).min(b - eps_t);
+                    }
                     pt = m;
                     phase = Phase::Split;
                 }
@@ -357,11 +364,11 @@ impl TapeSolid {
                 (Phase::SplitLo, Some(inside)) => {
                     s_lo = inside;
                     phase = Phase::SplitHi;
-                    pt = m + 0.5 * eps_t;
+                    pt = split_hi(m, eps_t);
                 }
                 (Phase::SplitHi, Some(inside)) => {
                     phase = Phase::Segment;
-                    let (lo, hi) = (m - 0.5 * eps_t, m + 0.5 * eps_t);
+                    let (lo, hi) = (m - 0.5 * eps_t, split_hi(m, eps_t));
                     st.push((hi, b, inside, ib));
                     st.push((lo, hi, s_lo, inside));
                     st.push((a, lo, ia, s_lo));
@@ -378,6 +385,14 @@ impl TapeSolid {
             }
         }
     }
+}
+
+/// The upper end of the piece of at most ε around a split point m whose sign is open
+/// (the lower is m − ε/2): the float below (m − ε/2) + ε, so that the piece is never
+/// longer than ε once rounded, and is decided by its end signs instead of split again
+/// about the same open point.
+fn split_hi(m: f32, eps_t: f32) -> f32 {
+    down((m - 0.5 * eps_t) + eps_t)
 }
 
 /// The segment stack, a ring: when full, a push drops the bottom entry (the farthest

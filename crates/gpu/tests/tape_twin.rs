@@ -3,16 +3,18 @@
 //! `Bytecode::eval_f32`, intervals holding the point values, rays against frep's f64
 //! interval tracer; and the tracer's loop budget (GPU.md §3.1, §9).
 //!
-//! Models: shipped ones whose ops the interpreter has (tanglecube.vm, s2_csg.hf,
-//! s3_blend.hf, bumpy_ball.frep, machined_part.frep, table.frep: thin plates and legs;
-//! s4_gyroid.hf, s5_twist.hf and smooth_blob.frep with sin, cos and atan2).
+//! Models: shipped ones (tanglecube.vm, s2_csg.hf, s3_blend.hf, bumpy_ball.frep,
+//! machined_part.frep, table.frep: thin plates and legs; s4_gyroid.hf, s5_twist.hf and
+//! smooth_blob.frep with sin, cos and atan2; lattice.frep with mod, exp and log;
+//! capsule.hf, whose `if` on z becomes compare, and, or and not), and [`ELEMENTARY_BALL`]
+//! with tan, asin, acos, atan, floor, ceil, round and x²⁰.
 
 use crate::common;
 use common::Rng;
 
 use frep::bytecode::Bytecode;
 use frep::expr::eval_nodes;
-use frep::read::read_file;
+use frep::read::{read_file, read_str, Format};
 use frep::{Aabb, Dual, Expr, ExprSurface, Node, Ray};
 use glam::{DVec3, Vec3};
 use gpu::tape::GpuTape;
@@ -50,13 +52,25 @@ struct Model {
     name: &'static str,
     expr: Expr,
     bounds: Aabb,
-    /// Whether it has sin, cos or atan2 (the twin's polynomials, not libm's).
-    trig: bool,
+    /// Whether it has operations the twin computes its own way, not libm's: sin, cos,
+    /// atan2, exp, ln, tan, asin, acos, atan (polynomials) and mod (from a rounded
+    /// quotient).
+    polynomial: bool,
 }
+
+/// A ball wobbled by tan, asin, acos and atan, with triangle waves made of round,
+/// floor and ceil (continuous, their steps cancelled by abs), and a steep x²⁰ term.
+const ELEMENTARY_BALL: &str = "
+let r2 = x^2 + y^2 + z^2
+let tri(t) = abs(t - round(t)) + abs(t - floor(t) - 0.5) + abs(ceil(t) - t - 0.5)
+let wobble = 0.03 * atan(4 * z) + 0.02 * asin(0.9 * cos(3 * y)) + 0.02 * acos(0.9 * sin(3 * x)) + 0.02 * tan(0.5 * z)
+bounds([-1.3, -1.3, -1.3], [1.3, 1.3, 1.3])
+output 1 - r2 + wobble + 0.05 * tri(3 * x) - 0.2 * (0.8 * x)^20
+";
 
 fn models() -> Vec<Model> {
     let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..");
-    let files: [(&str, PathBuf, f64); 9] = [
+    let files: [(&str, PathBuf, f64); 11] = [
         ("tanglecube", root.join("models/fidget/tanglecube.vm"), 5.0),
         ("s2_csg", root.join("models/canonical/s2_csg.hf"), 1.6),
         ("s3_blend", root.join("models/canonical/s3_blend.hf"), 1.6),
@@ -78,23 +92,34 @@ fn models() -> Vec<Model> {
             root.join("models/examples/smooth_blob.frep"),
             2.0,
         ),
+        ("lattice", root.join("models/examples/lattice.frep"), 1.2),
+        ("capsule", root.join("models/examples/capsule.hf"), 1.5),
     ];
+    let elementary = ("elementary", PathBuf::new(), 1.3);
     files
         .into_iter()
+        .chain([elementary])
         .map(|(name, path, r)| {
-            let m = read_file(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+            let m = if name == "elementary" {
+                read_str(ELEMENTARY_BALL, Format::Frep, "elementary.frep").unwrap()
+            } else {
+                read_file(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+            };
             let expr = Expr::new(&m.shape.to_tree().expect("a regular shape"));
             let domain = m
                 .domain
                 .unwrap_or(Aabb::new(DVec3::splat(-r), DVec3::splat(r)));
             let bounds = frep::bounds::expr_bounds(&expr, domain);
             assert!(!bounds.is_empty() && bounds.is_finite(), "{name}");
-            let trig = matches!(name, "s4_gyroid" | "s5_twist" | "smooth_blob");
+            let polynomial = matches!(
+                name,
+                "s4_gyroid" | "s5_twist" | "smooth_blob" | "lattice" | "elementary"
+            );
             Model {
                 name,
                 expr,
                 bounds,
-                trig,
+                polynomial,
             }
         })
         .collect()
@@ -197,8 +222,9 @@ fn twin_equals_eval_f32_and_is_sound() {
         let (pts, boxes) = samples(&m, &mut rng);
         for p in &pts {
             let (twin, want) = (t.eval_point(*p), code.eval_f32(*p));
-            // sin, cos and atan2 are polynomials within 2.5·10⁻⁷ of libm's.
-            let close = m.trig && (twin - want).abs() <= 1e-5 * (1.0 + want.abs());
+            // sin, cos, atan2, exp, ln, tan, asin, acos, atan are polynomials within a
+            // few ulps of libm's.
+            let close = m.polynomial && (twin - want).abs() <= 1e-5 * (1.0 + want.abs());
             assert!(
                 same(twin, want) || close,
                 "{}: at {p:?} twin {twin}, eval_f32 {want}",
@@ -237,7 +263,7 @@ fn twin_equals_eval_f32_and_is_sound() {
             }
         }
         eprintln!(
-            "{}: {} ops; {} points equal to eval_f32 (within 10⁻⁵ where trigonometric); {values} values and {derivs} derivatives inside their intervals",
+            "{}: {} ops; {} points equal to eval_f32 (within 10⁻⁵ where polynomial); {values} values and {derivs} derivatives inside their intervals",
             m.name,
             t.len(),
             pts.len()

@@ -4,9 +4,13 @@
 //! values 0 and 1 (a condition). Operations on numbers are computed at once; anything
 //! touching a tree builds a tree. Conditions that depend on the coordinates become
 //! 0/1-valued trees built from `compare`, and a choice between two values is
-//! `or(and(c, a), and(1 − c, b))`: `and(c, a)` is `a` where c ≠ 0 and 0 elsewhere, so
+//! `or(and(c, a), and(not(c), b))`: `and(c, a)` is `a` where c ≠ 0 and 0 elsewhere, so
 //! the sum picks `a` where c = 1 and `b` where c = 0, even where the other side is NaN
-//! or infinite (it is never multiplied by 0).
+//! or infinite (it is never multiplied by 0). Conditions use only operations that are
+//! exact on 0/1 values without rounding — `compare`, `max`, `min`, `not` — so that an
+//! interval evaluation, which widens every sum and product outward, keeps a decided
+//! condition a point (`1 − c` would widen 0 to a "maybe 0" everywhere, and with it make
+//! every choice the hull of both sides).
 
 use crate::expr::{Expr, Node};
 use crate::tree::{BinaryOp, Tree, UnaryOp};
@@ -74,20 +78,19 @@ pub(crate) fn binary(op: BinaryOp, a: &Val, b: &Val) -> Val {
     apply(&[a, b], |t| Tree::binary(op, t[0].clone(), t[1].clone()))
 }
 
-/// 1 where a < b, else 0.
+/// 1 where a < b, else 0 (also where either is NaN): max(compare(b, a), 0).
 fn lt_tree(a: &Tree, b: &Tree) -> Tree {
-    Tree::unary(
-        UnaryOp::Not,
-        Tree::binary(BinaryOp::Compare, a.clone(), b.clone()) + 1.0,
-    )
+    Tree::binary(BinaryOp::Compare, b.clone(), a.clone()).max(&Tree::constant(0.0))
 }
 
 /// 1 where a > b, else 0.
 fn gt_tree(a: &Tree, b: &Tree) -> Tree {
-    Tree::unary(
-        UnaryOp::Not,
-        Tree::binary(BinaryOp::Compare, a.clone(), b.clone()) - 1.0,
-    )
+    lt_tree(b, a)
+}
+
+/// 1 where the 0/1 value c is 0, else 0.
+fn not_tree(c: &Tree) -> Tree {
+    Tree::unary(UnaryOp::Not, c.clone())
 }
 
 /// A comparison, HyperFun's way (`=` and `/=` with tolerance [`EPS`]).
@@ -118,11 +121,11 @@ pub(crate) fn compare(op: Cmp, a: &Val, b: &Val) -> Val {
     let eps = Tree::constant(EPS);
     Val::Cond(match op {
         Cmp::Lt => lt_tree(&x, &y),
-        Cmp::Ge => 1.0 - lt_tree(&x, &y),
+        Cmp::Ge => not_tree(&lt_tree(&x, &y)),
         Cmp::Gt => gt_tree(&x, &y),
-        Cmp::Le => 1.0 - gt_tree(&x, &y),
+        Cmp::Le => not_tree(&gt_tree(&x, &y)),
         Cmp::Eq => lt_tree(&(x - y).abs(), &eps),
-        Cmp::Ne => 1.0 - lt_tree(&(x - y).abs(), &eps),
+        Cmp::Ne => not_tree(&lt_tree(&(x - y).abs(), &eps)),
     })
 }
 
@@ -131,7 +134,7 @@ pub(crate) fn truth(a: &Val) -> Val {
     match a {
         Val::Num(v) => Val::Num((v.abs() >= EPS) as u8 as f64),
         Val::Cond(_) => a.clone(),
-        Val::Tree(t) => Val::Cond(1.0 - lt_tree(&t.abs(), &Tree::constant(EPS))),
+        Val::Tree(t) => Val::Cond(not_tree(&lt_tree(&t.abs(), &Tree::constant(EPS)))),
     }
 }
 
@@ -153,7 +156,7 @@ pub(crate) fn and(a: &Val, b: &Val) -> Val {
                 a
             }
         }
-        _ => Val::Cond(a.tree() * b.tree()),
+        _ => Val::Cond(a.tree().min(&b.tree())),
     }
 }
 
@@ -183,7 +186,7 @@ pub(crate) fn or(a: &Val, b: &Val) -> Val {
 pub(crate) fn not(a: &Val) -> Val {
     match truth(a) {
         Val::Num(v) => Val::Num(1.0 - v),
-        c => Val::Cond(1.0 - c.tree()),
+        c => Val::Cond(not_tree(&c.tree())),
     }
 }
 
@@ -198,7 +201,7 @@ pub(crate) fn select(cond: &Val, a: &Val, b: &Val) -> Val {
     }
     let c = c.tree();
     let pick_a = Tree::binary(BinaryOp::And, c.clone(), a.tree());
-    let pick_b = Tree::binary(BinaryOp::And, 1.0 - c, b.tree());
+    let pick_b = Tree::binary(BinaryOp::And, not_tree(&c), b.tree());
     Val::Tree(Tree::binary(BinaryOp::Or, pick_a, pick_b))
 }
 

@@ -3,9 +3,10 @@
 // immediate) run by a loop over a switch, in two flavours: `eval_point` (F at a point in
 // f32, Bytecode::eval_f32's twin) and `eval_interval` (F and dF/dt as intervals, a vec4
 // (lo, hi, dlo, dhi), widened outward after every op, §6.2.3). The CPU twins are in
-// gpu::tape. Supported ops: var, const, powi (0 ≤ n ≤ 15), neg, abs, sqrt, square, add,
-// sub, mul, div, min, max, sin, cos, atan2 (TRIG_WGSL's polynomials); gpu::tape::GpuTape
-// refuses others.
+// gpu::tape. Every op of frep's bytecode: var, const, powi (|n| ≤ 255), neg, abs, sqrt,
+// square, add, sub, mul, div, min, max, sin, cos, atan2 (TRIG_WGSL's polynomials), and
+// exp, ln, tan, asin, acos, atan, floor, ceil, round, not, mod, compare, and, or
+// (elementary.wgsl, appended).
 // The kernel prepends the opcodes (OP_VAR, …) and IMM from frep's encoding
 // (gpu::tape::tape_consts_wgsl), REG_COUNT and TAPE_LEN (per pipeline, §3.4) and binds `tape:
 // array<u32>`. Each loop iteration runs four instructions and adds one to `loops` (§3.1):
@@ -35,21 +36,22 @@ fn w4(lo: f32, hi: f32) -> vec2<f32> { return vec2<f32>(down4(lo), up4(hi)); }
 fn nan2() -> vec2<f32> { return vec2<f32>(nan(), nan()); }
 fn any_nan(a: vec2<f32>) -> bool { return is_nan(a.x) || is_nan(a.y); }
 
-// x^n, 0 ≤ n ≤ 15, by compiler-rt's __powisf2 (what Rust's f32::powi calls): square and
-// multiply from the lowest bit, written out for four bits.
+// x^n, 0 ≤ n ≤ 255, by compiler-rt's __powisf2 (what Rust's f32::powi calls): square and
+// multiply from the lowest bit, eight bits.
 fn powi(x: f32, n: u32) -> f32 {
     var a = x;
     var r = 1.0;
-    if ((n & 1u) != 0u) { r = r * a; }
-    if (n < 2u) { return r; }
-    a = a * a;
-    if ((n & 2u) != 0u) { r = r * a; }
-    if (n < 4u) { return r; }
-    a = a * a;
-    if ((n & 4u) != 0u) { r = r * a; }
-    if (n < 8u) { return r; }
-    a = a * a;
-    if ((n & 8u) != 0u) { r = r * a; }
+    for (var bit = 0u; bit < 8u; bit++) {
+        if ((n & (1u << bit)) != 0u) { r = r * a; }
+        if (n < (2u << bit)) { break; }
+        a = a * a;
+    }
+    return r;
+}
+// x^n for |n| ≤ 255 (the tape's immediate as i32 bits): 1/x^|n| for n < 0.
+fn powi_signed(x: f32, n: i32) -> f32 {
+    let r = powi(x, u32(abs(n)));
+    if (n < 0) { return 1.0 / r; }
     return r;
 }
 
@@ -88,7 +90,15 @@ fn i_powi(a: vec2<f32>, n: u32) -> vec2<f32> {
     // x^n by repeated products is monotone on b (rounding to nearest is), within n ulps.
     let lo = powi(b.x, n);
     let hi = powi(b.y, n);
-    return vec2<f32>(down4(down4(down4(down4(lo)))), up4(up4(up4(up4(hi)))));
+    if (n <= 15u) { return vec2<f32>(down4(down4(down4(down4(lo)))), up4(up4(up4(up4(hi))))); }
+    // n − 1 roundings: relative error below (n − 1)·2⁻²⁴, widened by n·2⁻²³ and an ulp.
+    let f = f32(n) * bitcast<f32>(0x34000000u);
+    return vec2<f32>(down(lo * select(1.0 + f, 1.0 - f, lo >= 0.0)), up(hi * select(1.0 - f, 1.0 + f, hi >= 0.0)));
+}
+fn i_powi_signed(a: vec2<f32>, n: i32) -> vec2<f32> {
+    let v = i_powi(a, u32(abs(n)));
+    if (n < 0) { return i_div(vec2<f32>(1.0, 1.0), v); }
+    return v;
 }
 fn i_min(a: vec2<f32>, b: vec2<f32>) -> vec2<f32> { return vec2<f32>(rmin(a.x, b.x), rmin(a.y, b.y)); }
 fn i_max(a: vec2<f32>, b: vec2<f32>) -> vec2<f32> { return vec2<f32>(rmax(a.x, b.x), rmax(a.y, b.y)); }
@@ -164,7 +174,7 @@ fn point_op(k: u32, p: vec3<f32>) -> u32 {
         switch op {
             case OP_VAR: { v = p[ia]; }
             case OP_CONST: { v = imm; }
-            case OP_POWI: { v = powi(a, tape[tape_base + 2u * k + 1u]); }
+            case OP_POWI: { v = powi_signed(a, bitcast<i32>(tape[tape_base + 2u * k + 1u])); }
             case OP_NEG: { v = -a; }
             case OP_ABS: { v = abs(a); }
             case OP_SQRT: { v = sqrt(a); }
@@ -178,6 +188,11 @@ fn point_op(k: u32, p: vec3<f32>) -> u32 {
             case OP_SIN: { v = t_sin_cos(a, false); }
             case OP_COS: { v = t_sin_cos(a, true); }
             case OP_ATAN2: { v = env_atan2(a, b); }
+            case OP_EXP, OP_LN, OP_TAN, OP_ASIN, OP_ACOS, OP_ATAN, OP_FLOOR, OP_CEIL, OP_ROUND,
+                OP_NOT, OP_MOD, OP_COMPARE, OP_AND, OP_OR: {
+                v = nan();
+                if (ELEMENTARY) { v = elementary_point(op, a, b); }
+            }
             default: { v = nan(); }
         }
         preg[o] = v;
@@ -199,6 +214,9 @@ fn eval_point(p: vec3<f32>) -> f32 {
 }
 
 var<private> ireg: array<vec4<f32>, REG_COUNT>;
+// Where along the box the nearest wrap of a `mod` lies, as a fraction (2: none), from
+// the last eval_interval (gpu::elementary::wrap_fraction): the tracer splits there.
+var<private> wrap_hint: f32;
 
 // F and dF/dt over a box: x, y, z are (lo, hi, dlo, dhi) of each coordinate. Values
 // widened by 1 ulp after each op, 4 after `/` and sqrt, 16 after powi (§6.2.3);
@@ -226,11 +244,11 @@ fn interval_op(k: u32, x: vec4<f32>, y: vec4<f32>, z: vec4<f32>) -> u32 {
             }
             case OP_CONST: { v = vec2<f32>(imm, imm); }
             case OP_POWI: {
-                let n = tape[tape_base + 2u * k + 1u];
-                v = i_powi(a.xy, n);
-                if (n > 0u) {
+                let n = bitcast<i32>(tape[tape_base + 2u * k + 1u]);
+                v = i_powi_signed(a.xy, n);
+                if (n != 0) {
                     let nf = f32(n);
-                    d = i_mul(i_mul(vec2<f32>(nf, nf), i_powi(a.xy, n - 1u)), a.zw);
+                    d = i_mul(i_mul(vec2<f32>(nf, nf), i_powi_signed(a.xy, n - 1)), a.zw);
                 }
             }
             case OP_NEG: { v = i_neg(a.xy); d = i_neg(a.zw); }
@@ -256,6 +274,16 @@ fn interval_op(k: u32, x: vec4<f32>, y: vec4<f32>, z: vec4<f32>) -> u32 {
                 v = i_atan2(a.xy, b.xy);
                 d = i_div(i_sub(i_mul(b.xy, a.zw), i_mul(a.xy, b.zw)), i_add(i_square(a.xy), i_square(b.xy)));
             }
+            case OP_EXP, OP_LN, OP_TAN, OP_ASIN, OP_ACOS, OP_ATAN, OP_FLOOR, OP_CEIL, OP_ROUND,
+                OP_NOT, OP_MOD, OP_COMPARE, OP_AND, OP_OR: {
+                v = nan2();
+                d = nan2();
+                if (ELEMENTARY) {
+                    let r = elementary_interval(op, a, b);
+                    v = r.xy;
+                    d = r.zw;
+                }
+            }
             default: { v = nan2(); d = nan2(); }
         }
         ireg[o] = vec4<f32>(v, d);
@@ -264,6 +292,7 @@ fn interval_op(k: u32, x: vec4<f32>, y: vec4<f32>, z: vec4<f32>) -> u32 {
 
 // F and dF/dt over a box, four ops per loop iteration.
 fn eval_interval(x: vec4<f32>, y: vec4<f32>, z: vec4<f32>) -> vec4<f32> {
+    wrap_hint = 2.0;
     var out = 0u;
     for (var k = 0u; k < TAPE_LEN; k += 4u) {
         loops++;

@@ -125,7 +125,12 @@ fn trace_tape(o: vec3<f32>, d: vec3<f32>, t_min: f32, t_max: f32) -> TraceResult
                     steps = 0u;
                 }
             } else {
+                // At a mod's wrap where one lies inside (a jump, which halving would
+                // close in on only at ε), kept ε from the ends; else at the middle.
                 m = a + (b - a) * 0.5;
+                if (wrap_hint < 1.0 && b - a > 4.0 * eps_t) {
+                    m = min(max(a + (b - a) * wrap_hint, a + eps_t), b - eps_t);
+                }
                 pt = m;
                 phase = 3u;
             }
@@ -201,11 +206,11 @@ fn trace_tape(o: vec3<f32>, d: vec3<f32>, t_min: f32, t_max: f32) -> TraceResult
         } else if (phase == 5u) {
             s_lo = inside;
             phase = 6u;
-            pt = m + 0.5 * eps_t;
+            pt = split_hi(m, eps_t);
         } else if (phase == 6u) {
             phase = 2u;
             let lo3 = m - 0.5 * eps_t;
-            let hi3 = m + 0.5 * eps_t;
+            let hi3 = split_hi(m, eps_t);
             let sl = select(0u, 1u, s_lo);
             let sh = select(0u, 1u, inside);
             pa[0] = hi3;
@@ -224,3 +229,8 @@ fn trace_tape(o: vec3<f32>, d: vec3<f32>, t_min: f32, t_max: f32) -> TraceResult
     }
     return TraceResult(0u, 0.0);
 }
+
+// The upper end of the piece of at most ε around an open split point m (the lower is
+// m − ε/2): below (m − ε/2) + ε, so that rounding never makes the piece longer than ε
+// and it is decided by its end signs, not split about the same open point again.
+fn split_hi(m: f32, eps_t: f32) -> f32 { return down((m - 0.5 * eps_t) + eps_t); }
