@@ -51,6 +51,7 @@ fn renders_every_model_framed() {
         "models/examples/smooth_blob.frep",
         "models/examples/lattice.frep",
         "models/examples/capsule.hf",
+        "models/examples/superellipsoid.hf",
     ];
     let dir = out_dir("models");
     for m in models {

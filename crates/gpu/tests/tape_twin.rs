@@ -6,7 +6,8 @@
 //! Models: shipped ones (tanglecube.vm, s2_csg.hf, s3_blend.hf, bumpy_ball.frep,
 //! machined_part.frep, table.frep: thin plates and legs; s4_gyroid.hf, s5_twist.hf and
 //! smooth_blob.frep with sin, cos and atan2; lattice.frep with mod, exp and log;
-//! capsule.hf, whose `if` on z becomes compare, and, or and not), and [`ELEMENTARY_BALL`]
+//! capsule.hf, whose `if` on z becomes compare, and, or and not; superellipsoid.hf,
+//! fractional powers as exp and log), and [`ELEMENTARY_BALL`]
 //! with tan, asin, acos, atan, floor, ceil, round and x²⁰.
 
 use crate::common;
@@ -70,7 +71,7 @@ output 1 - r2 + wobble + 0.05 * tri(3 * x) - 0.2 * (0.8 * x)^20
 
 fn models() -> Vec<Model> {
     let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..");
-    let files: [(&str, PathBuf, f64); 11] = [
+    let files: [(&str, PathBuf, f64); 12] = [
         ("tanglecube", root.join("models/fidget/tanglecube.vm"), 5.0),
         ("s2_csg", root.join("models/canonical/s2_csg.hf"), 1.6),
         ("s3_blend", root.join("models/canonical/s3_blend.hf"), 1.6),
@@ -94,6 +95,11 @@ fn models() -> Vec<Model> {
         ),
         ("lattice", root.join("models/examples/lattice.frep"), 1.2),
         ("capsule", root.join("models/examples/capsule.hf"), 1.5),
+        (
+            "superellipsoid",
+            root.join("models/examples/superellipsoid.hf"),
+            1.5,
+        ),
     ];
     let elementary = ("elementary", PathBuf::new(), 1.3);
     files
@@ -113,7 +119,12 @@ fn models() -> Vec<Model> {
             assert!(!bounds.is_empty() && bounds.is_finite(), "{name}");
             let polynomial = matches!(
                 name,
-                "s4_gyroid" | "s5_twist" | "smooth_blob" | "lattice" | "elementary"
+                "s4_gyroid"
+                    | "s5_twist"
+                    | "smooth_blob"
+                    | "lattice"
+                    | "superellipsoid"
+                    | "elementary"
             );
             Model {
                 name,
