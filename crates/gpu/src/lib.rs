@@ -70,6 +70,7 @@ pub mod light;
 pub mod perturbed;
 pub mod progressive;
 pub mod quadric;
+pub mod r_bound;
 mod readback;
 pub mod record;
 pub mod sampler;

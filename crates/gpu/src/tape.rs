@@ -22,16 +22,18 @@
 //! round, mod, compare, and, or and not are [`crate::elementary`]'s.
 
 use crate::elementary as el;
+use crate::r_bound;
 use frep::bytecode::{Bytecode, Instr, IMM};
 use frep::{BinaryOp, UnaryOp};
 use std::fmt;
 
-/// The interpreter's WGSL (`eval_point`, `eval_interval`, interval helpers, and
-/// [`crate::elementary`]'s operations); see [`GpuTape::wgsl`] for the constants it
+/// The interpreter's WGSL (`eval_point`, `eval_interval`, interval helpers,
+/// [`crate::elementary`]'s operations and [`crate::r_bound`]'s narrowing); see [`GpuTape::wgsl`] for the constants it
 /// needs, [`tape_consts_wgsl`] among them.
 pub const TAPE_WGSL: &str = concat!(
     include_str!("shaders/tape.wgsl"),
-    include_str!("shaders/elementary.wgsl")
+    include_str!("shaders/elementary.wgsl"),
+    include_str!("shaders/r_bound.wgsl")
 );
 
 /// The interpreter's opcodes (`OP_VAR`, `OP_ADD`, …: its `case` labels) and the
@@ -109,6 +111,8 @@ pub struct GpuTape {
     words: Vec<u32>,
     registers: usize,
     instrs: Vec<Instr>,
+    /// Each instruction's R-function mark ([`crate::r_bound`]), also in `words`.
+    marks: Vec<Option<r_bound::Mark>>,
 }
 
 impl GpuTape {
@@ -124,10 +128,19 @@ impl GpuTape {
                 }
             }
         }
+        let marks = r_bound::marks(&instrs);
+        let mut words = code.words().to_vec();
+        for (k, m) in marks.iter().enumerate() {
+            if let Some(m) = m {
+                debug_assert_eq!(words[2 * k + 1], 0, "a register-register sum");
+                words[2 * k + 1] = m.word();
+            }
+        }
         Ok(Self {
-            words: code.words().to_vec(),
+            words,
             registers: code.registers(),
             instrs,
+            marks,
         })
     }
 
@@ -173,6 +186,12 @@ impl GpuTape {
         })
     }
 
+    /// Whether the tape has an R-function the kernel narrows ([`crate::r_bound`]): the
+    /// kernel's `RBOUND` constant, false to compile the narrowing out.
+    pub fn r_functions(&self) -> bool {
+        self.marks.iter().any(Option::is_some)
+    }
+
     /// Registers the tape uses.
     pub fn registers(&self) -> usize {
         self.registers
@@ -198,10 +217,11 @@ impl GpuTape {
     /// `TAPE_LEN` (GPU.md §3.4). The kernel declares `tape: array<u32>`.
     pub fn wgsl(&self) -> String {
         format!(
-            "const REG_COUNT: u32 = {}u;\nconst TAPE_LEN: u32 = {}u;\nconst ELEMENTARY: bool = {};\n{}{}{}{TAPE_WGSL}",
+            "const REG_COUNT: u32 = {}u;\nconst TAPE_LEN: u32 = {}u;\nconst ELEMENTARY: bool = {};\nconst RBOUND: bool = {};\n{}{}{}{TAPE_WGSL}",
             self.registers.max(1),
             self.len(),
             self.elementary(),
+            self.r_functions(),
             crate::FLOAT_WGSL,
             crate::TRIG_WGSL,
             tape_consts_wgsl()
@@ -277,11 +297,12 @@ impl GpuTape {
     /// segment (the kernel's `wrap_hint`).
     pub fn eval_interval_wrap(&self, x: [f32; 4], y: [f32; 4], z: [f32; 4]) -> ([f32; 4], f32) {
         let mut wrap = 2f32;
+        let mut side = [[f32::NEG_INFINITY, f32::INFINITY]; r_bound::SLOTS];
         let mut r = [[0f32; 4]; 256];
         let mut out = 0;
         let v2 = |a: [f32; 4]| [a[0], a[1]];
         let d2 = |a: [f32; 4]| [a[2], a[3]];
-        for &ins in &self.instrs {
+        for (&ins, &mark) in self.instrs.iter().zip(&self.marks) {
             let (o, v, d) = match ins {
                 Instr::Var(o, k) => {
                     let c = [x, y, z][k as usize];
@@ -354,8 +375,23 @@ impl GpuTape {
                     let (a, b) = (get(a), get(b));
                     let (av, ad, bv, bd) = (v2(a), d2(a), v2(b), d2(b));
                     let (v, d) = match op {
-                        BinaryOp::Add => (i_add(av, bv), i_add(ad, bd)),
-                        BinaryOp::Sub => (i_sub(av, bv), i_sub(ad, bd)),
+                        BinaryOp::Add | BinaryOp::Sub => {
+                            let v = if op == BinaryOp::Add {
+                                (i_add(av, bv), i_add(ad, bd))
+                            } else {
+                                (i_sub(av, bv), i_sub(ad, bd))
+                            };
+                            match mark {
+                                Some(r_bound::Mark::Stash { slot, union }) => {
+                                    side[slot as usize] = r_bound::corners(av, bv, union);
+                                    v
+                                }
+                                Some(r_bound::Mark::Narrow { slot }) => {
+                                    (r_bound::narrow(v.0, side[slot as usize]), v.1)
+                                }
+                                None => v,
+                            }
+                        }
                         BinaryOp::Mul => (i_mul(av, bv), i_add(i_mul(ad, bv), i_mul(av, bd))),
                         BinaryOp::Div => {
                             let v = i_div(av, bv);

@@ -157,11 +157,12 @@ impl TapeSolid {
             })
             .collect();
         format!(
-            "const REG_COUNT: u32 = {}u;\nconst TAPE_LEN: u32 = {len}u;\nconst ELEMENTARY: bool = {};\n{}{}{}{}\n\
+            "const REG_COUNT: u32 = {}u;\nconst TAPE_LEN: u32 = {len}u;\nconst ELEMENTARY: bool = {};\nconst RBOUND: bool = {};\n{}{}{}{}\n\
              var<private> EPS: f32;\nvar<private> BLO: vec3<f32>;\nvar<private> BHI: vec3<f32>;\n\
              fn use_tape(k: u32) {{\n    switch k {{\n{cases}        default: {{}}\n    }}\n}}\n{TRACE_WGSL}",
             regs.max(1),
             solids.iter().any(|s| s.tape.elementary()),
+            solids.iter().any(|s| s.tape.r_functions()),
             crate::FLOAT_WGSL,
             crate::TRIG_WGSL,
             crate::tape::tape_consts_wgsl(),

@@ -258,8 +258,20 @@ fn interval_op(k: u32, x: vec4<f32>, y: vec4<f32>, z: vec4<f32>) -> u32 {
             }
             case OP_SQRT: { v = i_sqrt(a.xy); d = i_div(a.zw, 2.0 * v); }
             case OP_SQUARE: { v = i_square(a.xy); d = i_mul(2.0 * a.xy, a.zw); }
-            case OP_ADD: { v = i_add(a.xy, b.xy); d = i_add(a.zw, b.zw); }
-            case OP_SUB: { v = i_sub(a.xy, b.xy); d = i_sub(a.zw, b.zw); }
+            case OP_ADD, OP_SUB: {
+                if (op == OP_ADD) {
+                    v = i_add(a.xy, b.xy);
+                    d = i_add(a.zw, b.zw);
+                } else {
+                    v = i_sub(a.xy, b.xy);
+                    d = i_sub(a.zw, b.zw);
+                }
+                // An R-function's mark (gpu::r_bound), in a register-register sum's
+                // immediate word.
+                if (RBOUND && ia != IMM && ib != IMM) {
+                    v = r_mark(tape[tape_base + 2u * k + 1u], a.xy, b.xy, v);
+                }
+            }
             case OP_MUL: { v = i_mul(a.xy, b.xy); d = i_add(i_mul(a.zw, b.xy), i_mul(a.xy, b.zw)); }
             case OP_DIV: { v = i_div(a.xy, b.xy); d = i_div(i_sub(a.zw, i_mul(v, b.zw)), b.xy); }
             case OP_MIN: {
