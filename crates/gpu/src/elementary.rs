@@ -28,8 +28,8 @@
 //! hold. frep's own dual numbers give such steps a zero derivative.
 
 use crate::env::atan2;
+use crate::tape::{any_nan, hull, I2, NAN2, TRIG_ERR};
 use crate::tape::{down, i_add, i_div, i_mul, i_sin_cos, i_sqrt, i_square, i_sub, sin_cos, up};
-use crate::tape::{I2, NAN2, TRIG_ERR};
 
 /// Below this, [`exp`] is 0 (e^−87 = 1.6·10⁻³⁸, just above the least normal f32).
 pub const EXP_LO: f32 = -87.0;
@@ -218,10 +218,6 @@ fn up8(x: f32) -> f32 {
 
 fn down8(x: f32) -> f32 {
     (0..EXP_LN_ULPS).fold(x, |x, _| down(x))
-}
-
-fn any_nan(a: I2) -> bool {
-    a[0].is_nan() || a[1].is_nan()
 }
 
 /// e^a: exp at the ends (held within [`EXP_LO`], [`EXP_HI`], where it is finite and
@@ -413,16 +409,28 @@ pub(crate) fn i_and_or(a: I2, ad: I2, b: I2, bd: I2, or: bool) -> (I2, I2) {
     }
 }
 
-fn hull(a: I2, b: I2) -> I2 {
-    if any_nan(a) || any_nan(b) {
-        return NAN2;
-    }
-    [a[0].min(b[0]), a[1].max(b[1])]
+/// One of these unary operations over a with derivative lane ad: (value, derivative)
+/// intervals (the kernel's `elementary_interval`). None for the tape's other operations.
+pub(crate) fn unary(op: frep::UnaryOp, a: I2, ad: I2) -> Option<(I2, I2)> {
+    use frep::UnaryOp as U;
+    let v = match op {
+        U::Floor => return Some(i_step(a, 0)),
+        U::Ceil => return Some(i_step(a, 1)),
+        U::Round => return Some(i_step(a, 2)),
+        U::Not => return Some(i_not(a)),
+        U::Asin | U::Acos => i_asin_acos(a, op == U::Acos),
+        U::Exp => i_exp(a),
+        U::Ln => i_ln(a),
+        U::Tan => i_tan(a),
+        U::Atan => i_atan(a),
+        U::Neg | U::Abs | U::Sqrt | U::Square | U::Sin | U::Cos => return None,
+    };
+    Some((v, chain(op, a, ad, v)))
 }
 
 /// d(asin) = da/√(1 − a²), d(acos) its negative, d(atan) = da/(1 + a²),
 /// d(tan) = (1 + tan²)·da, d(exp) = e^a·da, d(ln) = da/a: the chain rule in intervals.
-pub(crate) fn chain(op: frep::UnaryOp, a: I2, ad: I2, v: I2) -> I2 {
+fn chain(op: frep::UnaryOp, a: I2, ad: I2, v: I2) -> I2 {
     use frep::UnaryOp as U;
     let one = [1.0, 1.0];
     match op {
@@ -442,14 +450,7 @@ pub(crate) fn chain(op: frep::UnaryOp, a: I2, ad: I2, v: I2) -> I2 {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// A small deterministic generator.
-    fn lcg(seed: &mut u64) -> f64 {
-        *seed = seed
-            .wrapping_mul(6_364_136_223_846_793_005)
-            .wrapping_add(1_442_695_040_888_963_407);
-        (*seed >> 11) as f64 / (1u64 << 53) as f64
-    }
+    use crate::tape::tests::lcg;
 
     /// |got − want| in ulps of want as an f32.
     fn ulps(got: f32, want: f64) -> f64 {
@@ -558,31 +559,6 @@ mod tests {
         assert!(modulo(1.0, 0.0).is_nan() && compare(f32::NAN, 1.0).is_nan());
     }
 
-    /// One unary interval operation's value and derivative lanes, as the tape twin
-    /// computes them.
-    fn unary(op: frep::UnaryOp, a: I2, ad: I2) -> (I2, I2) {
-        use frep::UnaryOp as U;
-        match op {
-            U::Floor => i_step(a, 0),
-            U::Ceil => i_step(a, 1),
-            U::Round => i_step(a, 2),
-            U::Not => i_not(a),
-            U::Asin | U::Acos => {
-                let v = i_asin_acos(a, op == U::Acos);
-                (v, chain(op, a, ad, v))
-            }
-            _ => {
-                let v = match op {
-                    U::Exp => i_exp(a),
-                    U::Ln => i_ln(a),
-                    U::Tan => i_tan(a),
-                    _ => i_atan(a),
-                };
-                (v, chain(op, a, ad, v))
-            }
-        }
-    }
-
     fn inside(x: f64, i: I2) -> bool {
         f64::from(i[0]) <= x && x <= f64::from(i[1])
     }
@@ -617,7 +593,7 @@ mod tests {
                 (lcg(&mut seed) * 2.0 + 1.0) as f32,
             ];
             for op in ops {
-                let (v, d) = unary(op, a, ad);
+                let (v, d) = unary(op, a, ad).expect("one of this module's operations");
                 if v[0].is_nan() {
                     continue;
                 }

@@ -230,10 +230,7 @@ mod tests {
         let t = frep::csg::r_union(&a, &b, 0.0);
         let (g, e) = (tape(&t), Expr::new(&t));
         let mut seed = 9u64;
-        let mut next = || {
-            seed = seed.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1);
-            (seed >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut next = || crate::tape::tests::lcg(&mut seed);
         for k in 0..20_000 {
             let half = [2.0, 0.1, 1e-4, 1e-7][k % 4];
             let lo: [f64; 3] = [0, 1, 2].map(|_| next() * 10.0 - 4.0);

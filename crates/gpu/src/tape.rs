@@ -344,23 +344,7 @@ impl GpuTape {
                         UnaryOp::Cos => {
                             (i_sin_cos(av, true), i_mul(i_neg(i_sin_cos(av, false)), ad))
                         }
-                        UnaryOp::Exp | UnaryOp::Ln | UnaryOp::Tan | UnaryOp::Atan => {
-                            let v = match op {
-                                UnaryOp::Exp => el::i_exp(av),
-                                UnaryOp::Ln => el::i_ln(av),
-                                UnaryOp::Tan => el::i_tan(av),
-                                _ => el::i_atan(av),
-                            };
-                            (v, el::chain(op, av, ad, v))
-                        }
-                        UnaryOp::Asin | UnaryOp::Acos => {
-                            let v = el::i_asin_acos(av, op == UnaryOp::Acos);
-                            (v, el::chain(op, av, ad, v))
-                        }
-                        UnaryOp::Floor => el::i_step(av, 0),
-                        UnaryOp::Ceil => el::i_step(av, 1),
-                        UnaryOp::Round => el::i_step(av, 2),
-                        UnaryOp::Not => el::i_not(av),
+                        _ => el::unary(op, av, ad).expect("elementary's operation"),
                     };
                     (o, v, d)
                 }
@@ -601,7 +585,7 @@ fn rmax(a: f32, b: f32) -> f32 {
     a.max(b)
 }
 
-fn any_nan(a: I2) -> bool {
+pub(crate) fn any_nan(a: I2) -> bool {
     a[0].is_nan() || a[1].is_nan()
 }
 
@@ -712,7 +696,7 @@ fn i_max(a: I2, b: I2) -> I2 {
     [rmax(a[0], b[0]), rmax(a[1], b[1])]
 }
 
-fn hull(a: I2, b: I2) -> I2 {
+pub(crate) fn hull(a: I2, b: I2) -> I2 {
     if any_nan(a) || any_nan(b) {
         return NAN2;
     }
@@ -720,7 +704,7 @@ fn hull(a: I2, b: I2) -> I2 {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
     #[test]
@@ -735,8 +719,9 @@ mod tests {
         assert!(up(f32::NAN).is_nan());
     }
 
-    /// A small deterministic generator for the tests below.
-    fn lcg(seed: &mut u64) -> f64 {
+    /// A small deterministic generator for the tests here and in [`crate::elementary`]
+    /// and [`crate::r_bound`].
+    pub(crate) fn lcg(seed: &mut u64) -> f64 {
         *seed = seed
             .wrapping_mul(6_364_136_223_846_793_005)
             .wrapping_add(1_442_695_040_888_963_407);
