@@ -24,20 +24,35 @@ pub const RECORD_WGSL: &str = include_str!("shaders/record.wgsl");
 /// f32 words of a slot's hit record in the wave's `hits` buffer (the `direct` kernels'
 /// layout, `shaders/direct_bindings.wgsl`).
 pub const HIT_WORDS: usize = 40;
-/// f32 words of one draw record in the wave's `draws` buffer.
-pub const DRAW_WORDS: usize = 20;
+/// f32 words of a draw record before its techniques' pdfs: [o, t_max], [wi, status],
+/// [f or g, flags].
+pub const DRAW_HEAD_WORDS: usize = 12;
+
+/// The most techniques a draw record holds pdfs for: as many as a render may list
+/// (`state::MAX_TECHNIQUES`).
+pub const MAX_DRAW_TECHNIQUES: usize = state::MAX_TECHNIQUES;
+
+/// f32 words of one draw record in the wave's `draws` buffer for `n_tech` techniques:
+/// the head and the pdfs, padded to whole vec4s (the kernels' `draw_vec4s`).
+pub const fn draw_words(n_tech: u32) -> usize {
+    DRAW_HEAD_WORDS + 4 * n_tech.div_ceil(4) as usize
+}
 
 /// Where the overflow list starts in the tally buffer (in u32 words).
 pub const TALLY_LIST: usize = 8;
 
-/// WGSL constants of the wave's records, from [`HIT_WORDS`] and [`DRAW_WORDS`]: the
-/// vec4s of a hit and of a draw record (`HIT_WORDS`, `DRAW_WORDS`), prepended to the
-/// kernels that read or write them so that no shader repeats them by hand.
+/// WGSL constants of the wave's records, from [`HIT_WORDS`], [`DRAW_HEAD_WORDS`] and
+/// [`draw_words`]: the vec4s of a hit record (`HIT_WORDS`), of a draw record's head
+/// (`DRAW_HEAD`), the most techniques (`MAX_TECH`) and a draw record's vec4s for
+/// `n_tech` techniques (`draw_vec4s`), prepended to the kernels that read or write them
+/// so that no shader repeats them by hand.
 pub fn wave_consts_wgsl() -> String {
     format!(
-        "const HIT_WORDS: u32 = {}u;\nconst DRAW_WORDS: u32 = {}u;\n",
+        "const HIT_WORDS: u32 = {}u;\nconst DRAW_HEAD: u32 = {}u;\nconst MAX_TECH: u32 = {}u;\n\
+         fn draw_vec4s(n_tech: u32) -> u32 {{ return DRAW_HEAD + (n_tech + 3u) / 4u; }}\n",
         HIT_WORDS / 4,
-        DRAW_WORDS / 4
+        DRAW_HEAD_WORDS / 4,
+        MAX_DRAW_TECHNIQUES,
     )
 }
 
@@ -135,7 +150,7 @@ pub struct RecordParams {
     /// Padding.
     pub pad: u32,
     /// n_k, as f32.
-    pub counts: [[f32; 4]; 2],
+    pub counts: [[f32; 4]; MAX_DRAW_TECHNIQUES / 4],
 }
 
 impl RecordParams {
@@ -158,7 +173,7 @@ impl RecordParams {
             Some(mis::Heuristic::Maximum) => (heuristic::MAXIMUM, 0.0),
             Some(mis::Heuristic::Cutoff { c }) => (heuristic::CUTOFF, c as f32),
         };
-        let mut counts = [[0.0; 4]; 2];
+        let mut counts = [[0.0; 4]; MAX_DRAW_TECHNIQUES / 4];
         for (k, &n) in linear.counts.iter().enumerate() {
             counts[k / 4][k % 4] = n as f32;
         }
@@ -238,13 +253,14 @@ impl Slot<'_> {
         }
     }
     fn draw_at(&self, depth: u32, j: u32) -> usize {
-        ((depth * self.p.slots + self.slot) * self.p.per_slot + j) as usize * DRAW_WORDS
+        ((depth * self.p.slots + self.slot) * self.p.per_slot + j) as usize
+            * draw_words(self.p.n_tech)
     }
     fn n(&self, k: u32) -> f32 {
         self.p.counts[k as usize / 4][k as usize % 4]
     }
     fn pdf(&self, at: usize, k: u32) -> f32 {
-        self.draws[at + 12 + k as usize]
+        self.draws[at + DRAW_HEAD_WORDS + k as usize]
     }
     fn q(&self, at: usize, k: u32) -> f32 {
         self.n(k) * self.pdf(at, k)
@@ -590,7 +606,7 @@ impl RecordTerms {
         let draws = init(
             "draws",
             bytemuck::cast_slice(if draws.is_empty() {
-                &[0.0; DRAW_WORDS]
+                &[0.0; draw_words(MAX_DRAW_TECHNIQUES as u32)]
             } else {
                 draws
             }),
@@ -954,7 +970,9 @@ mod tests {
     fn shared_constants_are_generated() {
         let wave = wave_consts_wgsl();
         assert!(wave.contains("const HIT_WORDS: u32 = 10u;"));
-        assert!(wave.contains("const DRAW_WORDS: u32 = 5u;"));
+        assert!(wave.contains("const DRAW_HEAD: u32 = 3u;"));
+        assert!(wave.contains("const MAX_TECH: u32 = 32u;"));
+        assert_eq!((draw_words(8), draw_words(9), draw_words(32)), (20, 24, 44));
         let record = record_consts_wgsl();
         for line in [
             "const OUTSIDE: u32 = 1u;",

@@ -729,6 +729,75 @@ fn environments_and_light_selections_agree() {
     }
 }
 
+/// More techniques than a vec4 pair of pdfs: all thirteen of the test scene under the
+/// sky map at once (every selection, `cosine`, `environment` and `light#0`–`light#3`, so
+/// each draw's record holds 13 pdfs and optimal-direct's moments are 13 × 13), also on
+/// `path` (depth 3, power heuristic). Same seed, the same z-tests; the test command runs
+/// optimal-direct, `FREPRAY_LONG=1` also balance and `path`.
+#[test]
+fn many_techniques_agree() {
+    let Some(g) = device() else { return };
+    let sky = concat!(env!("CARGO_MANIFEST_DIR"), "/../../scenes/sky.exr");
+    let map = format!("[environment]\nmap = \"{sky}\"\nscale = 0.5\n");
+    let techniques = |names: &[&str]| {
+        let list: Vec<String> = names
+            .iter()
+            .map(|t| format!("{{ technique = \"{t}\", samples = 1 }}"))
+            .collect();
+        let start = SCENE.find("techniques = [").unwrap();
+        let end = start + SCENE[start..].find("]\nseed").unwrap() + 1;
+        format!(
+            "{}techniques = [{}]{}\n{map}",
+            &SCENE[..start],
+            list.join(", "),
+            &SCENE[end..]
+        )
+    };
+    let all = techniques(&[
+        "bsdf",
+        "light",
+        "light-area",
+        "light-uniform",
+        "light-spatial",
+        "light-trained",
+        "light-bvh",
+        "cosine",
+        "environment",
+        "light#0",
+        "light#1",
+        "light#2",
+        "light#3",
+    ]);
+    for (label, method, path) in common::cases(vec![
+        (
+            true,
+            (
+                "13 techniques, optimal-direct",
+                mis::Method::OptimalDirect,
+                false,
+            ),
+        ),
+        (
+            false,
+            ("13 techniques, balance", mis::Method::Balance, false),
+        ),
+        (
+            false,
+            ("13 techniques, path, power", mis::Method::Power, true),
+        ),
+    ]) {
+        let mut s = load(&all);
+        assert_eq!(s.2.techniques.len(), 13);
+        s.2.method = method;
+        if path {
+            s.2.integrator = render::integrator::IntegratorKind::Path;
+            s.2.max_depth = 3;
+            s.2.rr_depth = 2;
+        }
+        assert_agree(g, label, &s, &s, 3.0);
+    }
+}
+
 /// Same seed, same frames: on scenes/cornell.toml (`path`; walls whose normals have
 /// z = ±0) the GPU draws the directions the CPU draws, so pixel by pixel the images
 /// differ only where f32 rounding turns a path (a roulette or visibility decision near

@@ -9,7 +9,7 @@
 use crate::common;
 
 use common::Rng;
-use gpu::direct::{add_slot, DRAW_WORDS, HIT_WORDS};
+use gpu::direct::{add_slot, draw_words, DRAW_HEAD_WORDS, HIT_WORDS};
 use gpu::record::{slot_terms, RecordParams, RecordTerms, TALLY_LIST};
 use gpu::GpuOptions;
 use render::integrator::{Accumulator, IntegratorKind, RayCounts, Record, RenderOptions};
@@ -118,6 +118,38 @@ fn cases() -> Vec<(String, RenderOptions)> {
             },
         ));
     }
+    // Ten techniques, their pdfs over three vec4s of a draw record (T² moments).
+    for method in [
+        mis::Method::Balance,
+        mis::Method::Power,
+        mis::Method::OptimalDirect,
+        mis::Method::OptimalProgressive,
+    ] {
+        out.push((
+            format!("{} over ten techniques", method.name()),
+            RenderOptions {
+                method,
+                techniques: vec![
+                    (Technique::Bsdf, 1),
+                    (Technique::LightPower, 1),
+                    (Technique::LightArea, 1),
+                    (Technique::LightUniform, 1),
+                    (Technique::LightSpatial, 1),
+                    (Technique::LightBvh, 1),
+                    (Technique::CosineHemisphere, 1),
+                    (Technique::Light(0), 1),
+                    (Technique::Light(1), 2),
+                    (Technique::Light(2), 1),
+                ],
+                params: mis::Params {
+                    warmup: 1000,
+                    train: 1000,
+                    ..mis::Params::default()
+                },
+                ..base.clone()
+            },
+        ));
+    }
     for integrator in [
         IntegratorKind::Depth,
         IntegratorKind::Normals,
@@ -139,7 +171,8 @@ fn cases() -> Vec<(String, RenderOptions)> {
 fn wave(rng: &mut Rng, p: &RecordParams, lights: u32) -> (Vec<f32>, Vec<f32>) {
     let slots = p.slots as usize;
     let mut hits = vec![0f32; slots * HIT_WORDS];
-    let mut draws = vec![0f32; p.max_depth as usize * slots * p.per_slot as usize * DRAW_WORDS];
+    let words = draw_words(p.n_tech);
+    let mut draws = vec![0f32; p.max_depth as usize * slots * p.per_slot as usize * words];
     let value = |rng: &mut Rng, zero: f64| {
         if rng.next() < zero {
             0.0
@@ -156,8 +189,8 @@ fn wave(rng: &mut Rng, p: &RecordParams, lights: u32) -> (Vec<f32>, Vec<f32>) {
         let len = (rng.next() * f64::from(p.max_depth + 1)) as u32;
         for d in 0..p.max_depth {
             for j in 0..p.per_slot {
-                let at = ((d * p.slots + slot as u32) * p.per_slot + j) as usize * DRAW_WORDS;
-                let r = &mut draws[at..at + DRAW_WORDS];
+                let at = ((d * p.slots + slot as u32) * p.per_slot + j) as usize * words;
+                let r = &mut draws[at..at + words];
                 if d >= len {
                     r[7] = if rng.next() < 0.002 { 12.0 } else { 0.0 };
                     continue;
@@ -178,7 +211,7 @@ fn wave(rng: &mut Rng, p: &RecordParams, lights: u32) -> (Vec<f32>, Vec<f32>) {
                 flags |= 4 * light;
                 r[11] = flags as f32;
                 for t in 0..p.n_tech as usize {
-                    r[12 + t] = value(rng, 0.2);
+                    r[DRAW_HEAD_WORDS + t] = value(rng, 0.2);
                 }
             }
         }
@@ -300,13 +333,14 @@ fn twin_adds_what_the_cpu_accumulator_adds() {
         let mut pdfs = vec![0f64; (p.max_depth * p.n_draws) as usize * t];
         for slot in 0..p.slots {
             let hw = &c.hits[slot as usize * HIT_WORDS..(slot as usize + 1) * HIT_WORDS];
-            let per = p.per_slot as usize * DRAW_WORDS;
+            let words = draw_words(p.n_tech);
+            let per = p.per_slot as usize * words;
             let vertex = |d: u32| {
                 let at = (d * p.slots + slot) as usize * per;
                 &c.draws[at..at + per]
             };
             let overflow = hw[3] == 2.0
-                || (0..p.max_depth).any(|d| vertex(d).chunks(DRAW_WORDS).any(|r| r[7] == 12.0));
+                || (0..p.max_depth).any(|d| vertex(d).chunks(words).any(|r| r[7] == 12.0));
             assert_eq!(overflow, slots[slot as usize].overflow, "{}", c.label);
             if overflow {
                 continue;

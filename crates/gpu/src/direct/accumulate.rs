@@ -1,7 +1,7 @@
 //! The render's sums on the CPU: a read-back wave's hit and draw records added to the
 //! pixels' records through the render's [`Tally`].
 
-use crate::record::DRAW_WORDS;
+use crate::record::{draw_words, DRAW_HEAD_WORDS};
 use state::{RayCounts, ShadedDraw, ShadedVertex, Tally};
 
 /// Adds one slot's hit record `hw` and its draw records (`vertex(depth)`: the
@@ -21,6 +21,7 @@ pub fn add_slot<'v>(
     rays: &mut RayCounts,
 ) {
     let t_count = acc.techniques.len();
+    let words = draw_words(t_count as u32);
     rays.camera += 1;
     // The first hit's depth, normal and albedo (words 8 and 9).
     let aovs = [hw[35], hw[32], hw[33], hw[34], hw[36], hw[37], hw[38]].map(f64::from);
@@ -34,7 +35,7 @@ pub fn add_slot<'v>(
         .take_while(|&k| n_draws > 0 && vertex(k)[7] != 0.0)
         .count();
     for k in 0..shaded {
-        for (j, d) in vertex(k as u32).chunks_exact(DRAW_WORDS).enumerate() {
+        for (j, d) in vertex(k as u32).chunks_exact(words).enumerate() {
             match d[7] {
                 4.0 | 5.0 => rays.shadow += 1,
                 6.0 => rays.secondary += 1,
@@ -43,7 +44,7 @@ pub fn add_slot<'v>(
             if j < n_draws as usize {
                 let at = (k * n_draws as usize + j) * t_count;
                 for (t, p) in pdfs[at..at + t_count].iter_mut().enumerate() {
-                    *p = f64::from(d[12 + t]);
+                    *p = f64::from(d[DRAW_HEAD_WORDS + t]);
                 }
             }
         }
@@ -59,7 +60,7 @@ pub fn add_slot<'v>(
         let flags = |d: &[f32]| d[11] as u32;
         mis[k] = flags(records) & 2 == 0;
         let sum = &mut vertex_outside[k];
-        for (j, d) in records.chunks_exact(DRAW_WORDS).enumerate() {
+        for (j, d) in records.chunks_exact(words).enumerate() {
             // Outside MIS: point and spot lights (j > Σ n_k) and delta lobes,
             // where their light arrived.
             let outside = j > n_draws as usize || flags(d) & 1 != 0;
@@ -70,7 +71,7 @@ pub fn add_slot<'v>(
             }
         }
         let draws = records
-            .chunks_exact(DRAW_WORDS)
+            .chunks_exact(words)
             .take(if mis[k] { n_draws as usize } else { 0 })
             .enumerate()
             .map(|(j, d)| {

@@ -5,7 +5,7 @@
 use super::pack::{DirectScene, Frame};
 use super::pipelines::Pipelines;
 use super::{SumsOn, WaveOptions, WAVE_DRAWS};
-use crate::record::{DRAW_WORDS, HIT_WORDS};
+use crate::record::{draw_words, HIT_WORDS};
 use crate::tape_trace::TapeSolid;
 use crate::{Gpu, GpuError};
 use state::{LinearRecord, Tally};
@@ -77,6 +77,8 @@ pub(super) struct WaveShape {
     pub(super) depths: u32,
     /// Draw records per slot over all depths.
     pub(super) per_slot_draws: u32,
+    /// f32 words of a draw record ([`draw_words`]).
+    pub(super) draw_words: u32,
     /// f64 words of a pixel's record.
     pub(super) stride: usize,
     /// The most pixels a band covers.
@@ -89,7 +91,8 @@ pub(super) struct WaveShape {
 
 impl WaveShape {
     /// The bands and waves of a render of `width × height` pixels: a wave's draws
-    /// within [`WAVE_DRAWS`], a band's sums (pixels × stride f64 words, where the GPU
+    /// within [`WAVE_DRAWS`] (a half or a third of it where a draw record holds more
+    /// than 8 techniques' pdfs, so that a wave's draws stay within 40 MiB), a band's sums (pixels × stride f64 words, where the GPU
     /// keeps them: the record returned) within one binding.
     pub(super) fn new(
         gpu: &Gpu,
@@ -102,6 +105,8 @@ impl WaveShape {
         let nd1 = pack.frame.per_slot;
         let depths = pack.frame.max_depth;
         let per_slot_draws = nd1 * depths.max(1);
+        let draw_words = draw_words(pack.frame.n_tech) as u32;
+        let wave_draws = WAVE_DRAWS / draw_words.div_ceil(20);
         // The image in bands of consecutive pixels (raster order), each rendered through
         // all its samples before the next: the buffers hold one band's waves, whatever
         // the image's size.
@@ -116,10 +121,10 @@ impl WaveShape {
         let band = how
             .band_pixels
             .unwrap_or(u32::MAX)
-            .min((WAVE_DRAWS / per_slot_draws).max(1))
+            .min((wave_draws / per_slot_draws).max(1))
             .min(sums_fit.min(u64::from(u32::MAX)) as u32)
             .clamp(1, pixels);
-        let per_wave = (WAVE_DRAWS / (band * per_slot_draws)).max(1);
+        let per_wave = (wave_draws / (band * per_slot_draws)).max(1);
         let shape = Self {
             width,
             pixels,
@@ -127,6 +132,7 @@ impl WaveShape {
             nd1,
             depths,
             per_slot_draws,
+            draw_words,
             stride,
             band,
             per_wave,
@@ -142,7 +148,7 @@ impl WaveShape {
 
     /// Bytes of the draw records of `slots` slots.
     pub(super) fn draw_bytes(&self, slots: u64) -> u64 {
-        slots * u64::from(self.per_slot_draws) * DRAW_WORDS as u64 * 4
+        slots * u64::from(self.per_slot_draws) * u64::from(self.draw_words) * 4
     }
 }
 

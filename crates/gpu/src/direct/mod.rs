@@ -60,7 +60,7 @@ pub(crate) mod pipelines;
 mod probe;
 mod waves;
 
-pub use crate::record::{DRAW_WORDS, HIT_WORDS};
+pub use crate::record::{draw_words, DRAW_HEAD_WORDS, HIT_WORDS};
 pub use crate::stats::{GpuStats, StageTimes, SumsOn};
 pub use accumulate::add_slot;
 pub use pack::{DirectScene, GpuMaterial, GpuShape};
@@ -92,8 +92,8 @@ pub const DIRECT_WGSL: &str = concat!(
 /// At most this many draws (slots × draws per slot) per wave: 40 MiB of draw records.
 pub const WAVE_DRAWS: u32 = 1 << 19;
 
-/// Techniques the kernels can hold.
-pub const MAX_GPU_TECHNIQUES: usize = 8;
+/// Techniques the kernels can hold: as many as a render may list.
+pub const MAX_GPU_TECHNIQUES: usize = crate::record::MAX_DRAW_TECHNIQUES;
 
 /// Expression solids a scene may hold on the GPU (their tapes share one interpreter,
 /// GPU.md §6.2).

@@ -84,8 +84,8 @@ pub(super) struct Frame {
     pub(super) right: [f32; 4],
     pub(super) up: [f32; 4],
     pub(super) forward: [f32; 4],
-    pub(super) tech: [[u32; 4]; 2],
-    pub(super) count: [[u32; 4]; 2],
+    pub(super) tech: [[u32; 4]; MAX_GPU_TECHNIQUES / 4],
+    pub(super) count: [[u32; 4]; MAX_GPU_TECHNIQUES / 4],
     pub(super) env: GpuEnv,
     /// The trained selection's table in `tables` (u32::MAX: none), cells per axis, MIS
     /// lights covered.
@@ -102,7 +102,7 @@ pub(super) struct Frame {
 
 const _: () = assert!(size_of::<GpuShape>() == 48);
 const _: () = assert!(size_of::<GpuMaterial>() == 112);
-const _: () = assert!(size_of::<Frame>() == 384);
+const _: () = assert!(size_of::<Frame>() == 576);
 
 /// The scene and options as the kernels read them.
 #[derive(Clone, Debug, Default)]

@@ -5,7 +5,7 @@ use super::buffers::{bind, scene_buffers};
 use super::pack::DirectScene;
 use super::pipelines::kernels;
 use crate::readback::read_back;
-use crate::record::{DRAW_WORDS, HIT_WORDS};
+use crate::record::{draw_words, HIT_WORDS};
 use crate::{Gpu, GpuError};
 use scene::SceneData;
 use state::{Host, RenderOptions};
@@ -41,10 +41,11 @@ pub fn probe(
     pack.frame.slots = n;
     pack.frame.mode = 3;
     let d = &gpu.device;
-    let mut input = vec![[0f32; 4]; n as usize * DRAW_WORDS / 4];
+    let vec4s = draw_words(pack.frame.n_tech) / 4;
+    let mut input = vec![[0f32; 4]; n as usize * vec4s];
     for (i, (o, dir)) in rays.iter().enumerate() {
-        input[i * DRAW_WORDS / 4] = [o[0], o[1], o[2], 0.0];
-        input[i * DRAW_WORDS / 4 + 1] = [dir[0], dir[1], dir[2], 0.0];
+        input[i * vec4s] = [o[0], o[1], o[2], 0.0];
+        input[i * vec4s + 1] = [dir[0], dir[1], dir[2], 0.0];
     }
     let draws = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
         label: Some("rays"),

@@ -9,7 +9,7 @@ use super::pack::DirectScene;
 use super::pipelines::{kernels, Pipelines};
 use super::{GpuStats, SumsOn};
 use crate::readback::read_back;
-use crate::record::{GpuSums, WaveTally, DRAW_WORDS, HIT_WORDS};
+use crate::record::{draw_words, GpuSums, WaveTally, HIT_WORDS};
 use crate::{Gpu, GpuError};
 use scene::SceneData;
 use state::{Host, RayCounts, RenderOptions, RenderState, RenderStats, StateHeader};
@@ -530,6 +530,7 @@ impl<'a> Waves<'a> {
         let (w, stride, nd1, depths, n_draws) = (s.width, s.stride, s.nd1, s.depths, s.n_draws);
         let (hv, dv) = (words(hit_data), words(draw_data));
         let t_count = self.host.tally().techniques.len();
+        let words = draw_words(t_count as u32);
         let mut pdfs = vec![0.0f64; (depths * n_draws) as usize * t_count];
         let data_words = t.state.data_mut();
         for slot in 0..slots as usize {
@@ -540,11 +541,11 @@ impl<'a> Waves<'a> {
             let hw = &hv[slot * HIT_WORDS..(slot + 1) * HIT_WORDS];
             // The draws of vertex `depth`, the extra draw last.
             let vertex = |depth: u32| {
-                let at = ((depth * slots) as usize + slot) * nd1 as usize * DRAW_WORDS;
-                &dv[at..at + nd1 as usize * DRAW_WORDS]
+                let at = ((depth * slots) as usize + slot) * nd1 as usize * words;
+                &dv[at..at + nd1 as usize * words]
             };
             let overflow = hw[3] == 2.0
-                || (0..depths).any(|k| vertex(k).chunks_exact(DRAW_WORDS).any(|d| d[7] == 12.0));
+                || (0..depths).any(|k| vertex(k).chunks_exact(words).any(|d| d[7] == 12.0));
             if overflow {
                 t.stats.cpu_fallbacks += 1;
                 t.stats.fallback_pixels.push(pix as u32);

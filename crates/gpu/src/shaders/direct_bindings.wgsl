@@ -40,8 +40,8 @@ struct Frame {
     right: vec4<f32>,
     up: vec4<f32>,
     forward: vec4<f32>,
-    tech: array<vec4<u32>, 2>,
-    count: array<vec4<u32>, 2>,
+    tech: array<vec4<u32>, 8>,
+    count: array<vec4<u32>, 8>,
     env: GpuEnv,
     // The trained selection's table in sel_buf (0xffffffff: none; lo.xyz, scale.xyz,
     // then res³ pmfs over `z` lights), its cells per axis, the lights it covers.
@@ -96,7 +96,8 @@ struct GpuMaterial { bsdf: GpuBsdf, tex_kind: u32, pad0: u32, pad1: u32, pad2: u
 // [β, ·], then the continuation the shade pass chose: [o, traced], [wi, survives],
 // [β after it and roulette, ·]; then the camera ray's first hit for AOVs: [its outward
 // normal, depth], [albedo, ·] (integrator/aov.rs).
-// HIT_WORDS (those vec4s) and DRAW_WORDS (vec4s per draw in `draws`) come from
+// HIT_WORDS (those vec4s), DRAW_HEAD (the vec4s of a draw record before its pdfs,
+// one per 4 techniques), MAX_TECH and draw_vec4s (vec4s per draw in `draws`) come from
 // gpu::record, prepended by gpu::record::wave_consts_wgsl.
 const FLAG_HIDE: u32 = 1u;
 const FLAG_CENTER: u32 = 2u;

@@ -191,8 +191,8 @@ fn mixes(code: u32) -> bool {
 // serves every mixture, each light's own pdf found once; each mixture sums its terms
 // P(k | p, n) p_k(wi) in the walk's order, then the environment's
 // (Lights::pdf_selected_over).
-fn tech_pdfs(p: vec3<f32>, n: vec3<f32>, nf: vec3<f32>, wi: vec3<f32>, bsdf_pdf: f32) -> array<f32, 8> {
-    var out: array<f32, 8>;
+fn tech_pdfs(p: vec3<f32>, n: vec3<f32>, nf: vec3<f32>, wi: vec3<f32>, bsdf_pdf: f32) -> array<f32, MAX_TECH> {
+    var out: array<f32, MAX_TECH>;
     var mixing = false;
     var spatial = false;
     var by_li = false;

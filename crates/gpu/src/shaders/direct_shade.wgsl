@@ -190,7 +190,7 @@ fn shade(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
             return;
         }
     }
-    var pdfs: array<f32, 8>;
+    var pdfs: array<f32, MAX_TECH>;
     var fc = vec3<f32>(0.0);
     if (ok) {
         let wi_l = to_local(f, wi);
@@ -210,8 +210,11 @@ fn shade(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
         atomicMax(&stats[2], loops);
         return;
     }
-    draws[at + 3u] = vec4<f32>(pdfs[0], pdfs[1], pdfs[2], pdfs[3]);
-    draws[at + 4u] = vec4<f32>(pdfs[4], pdfs[5], pdfs[6], pdfs[7]);
+    for (var c = 0u; c < (frame.n_tech + 3u) / 4u; c++) {
+        loops++;
+        let k = 4u * c;
+        draws[at + DRAW_HEAD + c] = vec4<f32>(pdfs[k], pdfs[k + 1u], pdfs[k + 2u], pdfs[k + 3u]);
+    }
     // Per-light mode: the MIS light the draw's ray reaches, objects ignored (the nearest
     // area light, else the environment; render::integrator::vertex::light_reached),
     // as 4 × (1 + index) in the flags (0: none).

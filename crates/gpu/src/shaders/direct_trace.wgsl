@@ -31,7 +31,7 @@ fn camera_ray(px: vec3<u32>) -> array<vec3<f32>, 2> {
 // Draw records per slot and depth: the techniques' Σ n_k, the extra BSDF draw, then one
 // per point or spot light (frame.per_slot in all).
 fn draw_at(slot: u32, j: u32) -> u32 {
-    return ((frame.depth * frame.slots + slot) * frame.per_slot + j) * DRAW_WORDS;
+    return ((frame.depth * frame.slots + slot) * frame.per_slot + j) * draw_vec4s(frame.n_tech);
 }
 
 fn write_vertex(at: u32, p: vec3<f32>, leaf: u32, wo: vec3<f32>, beta: vec3<f32>) {
@@ -113,7 +113,7 @@ fn trace_continuation(slot: u32) {
 fn trace_shadow(q: u32) {
     if (q >= atomicLoad(&stats[QUEUE_LEN])) { return; }
     let i = atomicLoad(&stats[QUEUE_ITEMS + q]);
-    let at = (frame.depth * frame.slots * frame.per_slot + i) * DRAW_WORDS;
+    let at = (frame.depth * frame.slots * frame.per_slot + i) * draw_vec4s(frame.n_tech);
     let h = scene_trace(draws[at].xyz, draws[at + 1u].xyz, draws[at].w, true);
     if (h.status == 2u) {
         draws[at + 1u].w = S_OVERFLOW + 10.0;
@@ -124,12 +124,12 @@ fn trace_shadow(q: u32) {
     }
 }
 
-// A ray batch for tests (mode 3): ray i from draws[5i] (origin) and draws[5i + 1]
-// (direction); the nearest object hit into hits[8i] = (t, leaf key, status, loops) and
+// A ray batch for tests (mode 3): ray i from draw record i's [o, ·] (origin) and
+// [wi, ·] (direction); the nearest object hit into hits[8i] = (t, leaf key, status, loops) and
 // hits[8i + 1] = its normal.
 fn probe(i: u32) {
-    let o = draws[i * DRAW_WORDS].xyz;
-    let d = draws[i * DRAW_WORDS + 1u].xyz;
+    let o = draws[i * draw_vec4s(frame.n_tech)].xyz;
+    let d = draws[i * draw_vec4s(frame.n_tech) + 1u].xyz;
     let h = scene_trace(o, d, inf(), false);
     var n = vec3<f32>(0.0);
     if (h.status == 1u) { n = leaf_normal(h.leaf, o + h.t * d); }

@@ -23,7 +23,7 @@ struct RecordParams {
     lights: u32, block: u32, min_depth: u32, n_tech: u32,
     n_draws: u32, per_slot: u32, max_depth: u32, start: u32,
     aov_image: u32, param: f32, moments: u32, pad: u32,
-    counts: array<vec4<f32>, 2>,
+    counts: array<vec4<f32>, 8>,
 }
 
 @group(0) @binding(0) var<uniform> rp: RecordParams;
@@ -32,7 +32,8 @@ struct RecordParams {
 @group(0) @binding(3) var<storage, read_write> terms: array<f32>;
 @group(0) @binding(4) var<storage, read_write> tally: array<atomic<u32>>;
 
-// HIT_WORDS, DRAW_WORDS (vec4s of a hit and a draw record), the record's words OUTSIDE
+// HIT_WORDS, DRAW_HEAD, draw_vec4s (vec4s of a hit record, of a draw record's head, of
+// a draw record), the record's words OUTSIDE
 // and AOV, TALLY_LIST and how draws enter the record (C_AOV, C_OUTSIDE, C_WEIGHTED,
 // C_DIRECT, C_UNCORRELATED, C_PROGRESSIVE) come from gpu::record's constants, prepended
 // by gpu::record::record_consts_wgsl, and so do the heuristics' codes (H_BALANCE, H_POWER,
@@ -45,10 +46,10 @@ fn add(w: u32, v: f32) { terms[base + w] = terms[base + w] + v; }
 fn add3(w: u32, v: vec3<f32>) { add(w, v.x); add(w + 1u, v.y); add(w + 2u, v.z); }
 
 fn draw_at(depth: u32, slot: u32, j: u32) -> u32 {
-    return ((depth * rp.slots + slot) * rp.per_slot + j) * DRAW_WORDS;
+    return ((depth * rp.slots + slot) * rp.per_slot + j) * draw_vec4s(rp.n_tech);
 }
 fn n(k: u32) -> f32 { return rp.counts[k / 4u][k % 4u]; }
-fn pdf(at: u32, k: u32) -> f32 { return draws[at + 3u + k / 4u][k % 4u]; }
+fn pdf(at: u32, k: u32) -> f32 { return draws[at + DRAW_HEAD + k / 4u][k % 4u]; }
 fn q(at: u32, k: u32) -> f32 { return n(k) * pdf(at, k); }
 
 // s = Σ n_k p_k, or -1 where the draw of technique k counts as failed (mis::Layout::is_valid).
