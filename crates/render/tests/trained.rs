@@ -44,18 +44,18 @@ fn training_learns_visibility() {
     let open = trained_selection(&scene(false), &o).unwrap().unwrap();
     let hidden = trained_selection(&scene(true), &o).unwrap().unwrap();
     for t in [&open, &hidden] {
-        assert!((t.pmf(p).iter().sum::<f64>() - 1.0).abs() < 1e-12);
+        assert!((t.pmfs(p).iter().sum::<f64>() - 1.0).abs() < 1e-12);
     }
     println!(
         "P(sphere light) open {:.3}, hidden {:.3}",
-        open.pmf(p)[0],
-        hidden.pmf(p)[0]
+        open.pmfs(p)[0],
+        hidden.pmfs(p)[0]
     );
-    assert!(open.pmf(p)[0] > 0.2, "{:?}", open.pmf(p));
+    assert!(open.pmfs(p)[0] > 0.2, "{:?}", open.pmfs(p));
     assert!(
-        (hidden.pmf(p)[0] - TRAIN_FLOOR / 2.0).abs() < 1e-3,
+        (hidden.pmfs(p)[0] - TRAIN_FLOOR / 2.0).abs() < 1e-3,
         "{:?}",
-        hidden.pmf(p)
+        hidden.pmfs(p)
     );
     // No trained technique, no training.
     let plain = options(IntegratorKind::Direct, Method::Balance, &MIX, 1, 4);
@@ -122,28 +122,28 @@ fn training_options_change_what_is_learned() {
     );
     let (hidden, open) = (DVec3::new(0.5, 0.1, 0.0), DVec3::new(-0.9, -0.8, 0.0));
     let global = with(scene::Training { grid: 1, ..d });
-    assert_eq!(global.pmf(hidden), global.pmf(open));
+    assert_eq!(global.pmfs(hidden), global.pmfs(open));
     let cells = with(d);
-    assert_ne!(cells.pmf(hidden), cells.pmf(open));
+    assert_ne!(cells.pmfs(hidden), cells.pmfs(open));
     println!(
         "P(sphere light) at the hidden point: grid 8 {:.3}, grid 1 {:.3}",
-        cells.pmf(hidden)[0],
-        global.pmf(hidden)[0]
+        cells.pmfs(hidden)[0],
+        global.pmfs(hidden)[0]
     );
     assert!(
-        global.pmf(hidden)[0] > 3.0 * cells.pmf(hidden)[0],
+        global.pmfs(hidden)[0] > 3.0 * cells.pmfs(hidden)[0],
         "{:?}",
-        global.pmf(hidden)
+        global.pmfs(hidden)
     );
     let half = with(scene::Training { floor: 0.5, ..d });
     assert!(
-        (half.pmf(hidden)[0] - 0.25).abs() < 1e-3,
+        (half.pmfs(hidden)[0] - 0.25).abs() < 1e-3,
         "{:?}",
-        half.pmf(hidden)
+        half.pmfs(hidden)
     );
     let uniform = with(scene::Training { floor: 1.0, ..d });
     for p in [hidden, open] {
-        assert!(uniform.pmf(p).iter().all(|&q| (q - 0.5).abs() < 1e-15));
+        assert!(uniform.pmfs(p).iter().all(|&q| (q - 0.5).abs() < 1e-15));
     }
     assert_ne!(with(scene::Training { spp: 1, ..d }), cells);
     let o = RenderOptions {

@@ -517,8 +517,9 @@ impl DirectScene {
         self.items.extend(items);
     }
 
-    /// The trained selection's grid (low corner, cells per unit) and pmfs after the
-    /// other tables.
+    /// The trained selection after the other tables: its grid (low corner, cells per
+    /// unit), floor, entry offsets per cell and entries (light, running share, share),
+    /// the layout `direct_lights.wgsl`'s `trained_entries` reads.
     fn pack_trained(&mut self, trained: Option<&TrainedSelection>) {
         self.frame.trained = [u32::MAX, 0, 0, 0];
         if let Some(t) = trained {
@@ -526,7 +527,16 @@ impl DirectScene {
             self.frame.trained = [self.tables.len() as u32, res as u32, t.lights() as u32, 0];
             self.tables.extend(lo.as_vec3().to_array());
             self.tables.extend(scale.as_vec3().to_array());
-            self.tables.extend(t.table().iter().map(|&p| p as f32));
+            self.tables.push(t.floor() as f32);
+            let start = t.offsets();
+            self.tables.extend(start.iter().map(|&s| f32::from_bits(s)));
+            for (c, w) in start.windows(2).enumerate() {
+                for e in w[0] as usize..w[1] as usize {
+                    let (light, cum, share) = t.entry(c, e);
+                    self.tables
+                        .extend([f32::from_bits(light), cum as f32, share as f32]);
+                }
+            }
         }
     }
 

@@ -135,14 +135,16 @@ fn bvh_select(p: vec3<f32>, n: vec3<f32>, uc: f32) -> u32 {
     return bitcast<u32>(tree_sample(frame.tree.x, p, n, u).x);
 }
 
-// The trained selection (state::TrainedSelection): whether its table covers the
-// MIS lights, and the offset of the pmf row of p's cell (points outside the grid go to
-// the nearest cell).
+// The trained selection (state::TrainedSelection), a sparse table in sel_buf from
+// frame.trained.x: lo.xyz, scale.xyz, the floor ε, res³ + 1 entry offsets (cell c's
+// entries are [start_c, start_c+1)), then per entry (light, running share, share), in
+// light order within its cell. trained_usable: whether it covers the MIS lights.
 fn trained_usable() -> bool {
     return frame.trained.x != 0xffffffffu && frame.trained.z == n_mis();
 }
 
-fn trained_row(p: vec3<f32>) -> u32 {
+// The cell of p (points outside the grid go to the nearest cell).
+fn trained_cell(p: vec3<f32>) -> u32 {
     let off = frame.trained.x;
     let res = frame.trained.y;
     let lo = vec3<f32>(sel_buf[off], sel_buf[off + 1u], sel_buf[off + 2u]);
@@ -153,25 +155,54 @@ fn trained_row(p: vec3<f32>) -> u32 {
     for (var k = 0u; k < 3u; k++) {
         if (q[k] == q[k]) { c[k] = u32(clamp(q[k], 0.0, m)); }
     }
-    return off + 6u + ((c.z * res + c.y) * res + c.x) * frame.trained.z;
+    return (c.z * res + c.y) * res + c.x;
 }
 
-// The MIS light the trained pmf at p picks with uc (0xffffffff: none).
+// Cell c's entries [x, y), and where entry 0 starts in sel_buf (z).
+fn trained_entries(c: u32) -> vec3<u32> {
+    let at = frame.trained.x + 7u;
+    let res = frame.trained.y;
+    return vec3<u32>(bitcast<u32>(sel_buf[at + c]), bitcast<u32>(sel_buf[at + c + 1u]), at + res * res * res + 1u);
+}
+
+// P(MIS light k) in cell c: (1 − ε)·share_k + ε/L, uniform in a cell that measured
+// nothing (TrainedSelection::pmf); a binary search over the cell's lights.
+fn trained_pmf(c: u32, k: u32) -> f32 {
+    let r = trained_entries(c);
+    let n = f32(frame.trained.z);
+    if (r.x == r.y) { return 1.0 / n; }
+    var lo = r.x;
+    var hi = r.y;
+    while (lo < hi) {
+        loops++;
+        let mid = (lo + hi) / 2u;
+        if (bitcast<u32>(sel_buf[r.z + 3u * mid]) < k) { lo = mid + 1u; } else { hi = mid; }
+    }
+    var share = 0.0;
+    if (lo < r.y && bitcast<u32>(sel_buf[r.z + 3u * lo]) == k) { share = sel_buf[r.z + 3u * lo + 2u]; }
+    let eps = sel_buf[frame.trained.x + 6u];
+    return (1.0 - eps) * share + eps / n;
+}
+
+// The MIS light the trained pmf at p picks with uc (0xffffffff: none): uniformly for
+// uc < ε or in a cell that measured nothing, else the first entry whose running share
+// exceeds (uc − ε)/(1 − ε) (TrainedSelection::select).
 fn trained_select(p: vec3<f32>, uc: f32) -> u32 {
     if (!trained_usable()) { return 0xffffffffu; }
-    let row = trained_row(p);
+    let r = trained_entries(trained_cell(p));
     let n = frame.trained.z;
-    var acc = 0.0;
-    for (var i = 0u; i < n; i++) {
+    let eps = sel_buf[frame.trained.x + 6u];
+    if (r.x == r.y) { return min(u32(uc * f32(n)), n - 1u); }
+    if (uc < eps) { return min(u32(uc / eps * f32(n)), n - 1u); }
+    let u = (uc - eps) / (1.0 - eps);
+    var lo = r.x;
+    var hi = r.y - 1u;
+    while (lo < hi) {
         loops++;
-        acc += sel_buf[row + i];
-        if (uc < acc) { return i; }
+        let mid = (lo + hi) / 2u;
+        if (sel_buf[r.z + 3u * mid + 1u] <= u) { lo = mid + 1u; } else { hi = mid; }
     }
-    for (var i = n; i > 0u; i--) {
-        loops++;
-        if (sel_buf[row + i - 1u] > 0.0) { return i - 1u; }
-    }
-    return 0xffffffffu;
+    return bitcast<u32>(sel_buf[r.z + 3u * lo]);
 }
 
 fn pmf_at(off: u32, i: u32) -> f32 {
@@ -220,13 +251,13 @@ fn tech_pdfs(p: vec3<f32>, n: vec3<f32>, nf: vec3<f32>, wi: vec3<f32>, bsdf_pdf:
     }
     if (!mixing) { return out; }
     // What the point-dependent selections read once: the environment's share, the
-    // spatial selection's total, the trained selection's row.
+    // spatial selection's total, the trained selection's cell.
     let pe = spatial_env();
     var total = 0.0;
     if (spatial) { total = importance_total(p, n); }
     let trained = trained_usable();
-    var row = 0u;
-    if (trained) { row = trained_row(p); }
+    var cell = 0u;
+    if (trained) { cell = trained_cell(p); }
     let tree = frame.tree.x != 0xffffffffu;
     var w = light_walk(p, wi, inf());
     for (var i = light_next(&w); i != 0xffffffffu; i = light_next(&w)) {
@@ -252,7 +283,7 @@ fn tech_pdfs(p: vec3<f32>, n: vec3<f32>, nf: vec3<f32>, wi: vec3<f32>, bsdf_pdf:
                 }
             } else if (code == T_TRAINED) {
                 if (trained) {
-                    let pm = sel_buf[row + i];
+                    let pm = trained_pmf(cell, i);
                     if (pm > 0.0) { out[t] += pm * pl; }
                 }
             } else if (code == T_POWER || code == T_UNIFORM) {
@@ -272,7 +303,7 @@ fn tech_pdfs(p: vec3<f32>, n: vec3<f32>, nf: vec3<f32>, wi: vec3<f32>, bsdf_pdf:
                 if (pe > 0.0) { out[t] += pe * pd; }
             } else if (code == T_TRAINED) {
                 if (trained) {
-                    let pm = sel_buf[row + frame.n_lights];
+                    let pm = trained_pmf(cell, frame.n_lights);
                     if (pm > 0.0) { out[t] += pm * pd; }
                 }
             } else if (code == T_POWER || code == T_UNIFORM) {

@@ -5,7 +5,8 @@
 //! `L · lum(f_s · |cos θ| · Li) / p` is measured with a shadow ray (visibility included,
 //! L the number of MIS lights: the uniform choice's 1/L undone). The sums per cell of a
 //! `grid`³ grid over the bounding box of those points (default [`TRAIN_GRID`]) are the
-//! weights of [`TrainedSelection::with_floor`], with the options' `floor`.
+//! weights of [`TrainedSelection::from_draws`], with the options' `floor` (a sparse
+//! table: only the lights measured in a cell are kept there).
 //!
 //! The pass draws from its own random streams (the render's seed with a salt), so it is
 //! the same for every sample range of a render (split renders merge) and for any thread
@@ -101,17 +102,11 @@ impl Integrator {
             (DVec3::ZERO, DVec3::ONE)
         };
         let (grid, floor) = (self.training.grid as usize, self.training.floor);
-        let cells = grid * grid * grid;
-        let empty =
-            TrainedSelection::with_floor(lo, hi, grid, lights, &vec![0.0; cells * lights], floor);
-        let mut weights = vec![0.0; cells * lights];
-        for (p, k, value) in draws {
-            if value.is_finite() && value > 0.0 {
-                weights[empty.cell(p) * lights + k] += value;
-            }
-        }
-        Some(TrainedSelection::with_floor(
-            lo, hi, grid, lights, &weights, floor,
+        let cells = draws
+            .into_iter()
+            .map(|(p, k, value)| (TrainedSelection::cell_of(lo, hi, grid, p), k, value));
+        Some(TrainedSelection::from_draws(
+            lo, hi, grid, lights, floor, cells,
         ))
     }
 }

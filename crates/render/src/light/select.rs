@@ -6,8 +6,9 @@
 //! the environment's own sampling), so a strategy is only its selection pmf `P(k | x)`,
 //! and its density of a direction ω at the shading point x is the mixture
 //! `p(ω) = Σ_k P(k | x) · p_k(ω)` over every light the direction meets (lights behind
-//! lights included), as MIS needs (Veach 1997, §9.2). Both are O(number of lights) per
-//! query.
+//! lights included), as MIS needs (Veach 1997, §9.2). Per draw and per pmf, uniform
+//! selection costs O(1), power selection O(log n) and O(1), the light BVH and the trained
+//! table O(log n), the spatial selection O(n) (it sums every light's importance).
 
 use super::importance_pair::importance_pair;
 use super::{AreaLight, LightHit, LightSample, Lights, Shape, TrainedSelection};
@@ -230,7 +231,7 @@ impl Lights {
             Selection::Power => self.by_power.as_ref().map_or(0.0, |d| d.pmf(k)),
             Selection::Uniform => 1.0 / count as f64,
             Selection::One(j) => f64::from(u8::from(j == k)),
-            Selection::Trained(t) if t.lights() == count => t.pmf(p)[k],
+            Selection::Trained(t) if t.lights() == count => t.pmf(p, k),
             Selection::Trained(_) => 0.0,
             Selection::Spatial => {
                 let pe = self.spatial_env();
@@ -277,15 +278,7 @@ impl Lights {
                 if t.lights() != count {
                     return None;
                 }
-                let pmf = t.pmf(p);
-                let mut acc = 0.0;
-                for (i, &w) in pmf.iter().enumerate() {
-                    acc += w;
-                    if uc < acc {
-                        return Some(i);
-                    }
-                }
-                pmf.iter().rposition(|&w| w > 0.0)
+                Some(t.select(p, uc))
             }
             Selection::Bvh => {
                 let pe = self.spatial_env();
