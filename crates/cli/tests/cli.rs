@@ -696,9 +696,10 @@ fn gpu_backend_refuses_by_name_and_auto_falls_back() {
             format!(
                 "{head}[materials.marble]\ntype = \"diffuse\"\n\
                  reflectance = {{ pattern = {{ kind = \"marble\", a = 0.9, b = 0.2 }} }}\n\n\
-                 [[objects]]\nsolid = \"sphere([0, 0, 0], 1)\"\nmaterial = \"marble\"\n\n{lamp}"
+                 [[objects]]\nsolid = \"sphere([0, 0, 0], 1)\"\nmaterial = \"marble\"\n\
+                 transform = {{ translate = [0, 0, 0.5] }}\n\n{lamp}"
             ),
-            "marble pattern texture",
+            "has a transform and a pattern texture",
         ),
         (
             format!(

@@ -67,6 +67,7 @@ pub mod env;
 mod kernel;
 pub mod layout;
 pub mod light;
+pub mod noise;
 pub mod perturbed;
 pub mod progressive;
 pub mod quadric;

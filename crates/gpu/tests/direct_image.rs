@@ -798,6 +798,22 @@ fn many_techniques_agree() {
     }
 }
 
+/// Solid pattern textures (noise.wgsl): scenes/textures.toml's five patterns (noise,
+/// fBm, turbulence, marble on plastic, wood) on `direct`; same seed, the same z-tests.
+#[test]
+fn pattern_textures_agree() {
+    let Some(g) = device() else { return };
+    let text = include_str!(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../scenes/textures.toml"
+    ))
+    .replace("resolution = [320, 160]", "resolution = [48, 36]");
+    let mut s = load(&text);
+    s.2.integrator = render::integrator::IntegratorKind::Direct;
+    s.2.max_depth = 1;
+    assert_agree(g, "pattern textures", &s, &s, 3.0);
+}
+
 /// Same seed, same frames: on scenes/cornell.toml (`path`; walls whose normals have
 /// z = ±0) the GPU draws the directions the CPU draws, so pixel by pixel the images
 /// differ only where f32 rounding turns a path (a roulette or visibility decision near

@@ -9,6 +9,7 @@ mod env_twin;
 mod layout;
 mod light_tree_twin;
 mod light_twin;
+mod noise_twin;
 mod perturbed_twin;
 mod quadric_twin;
 mod record_twin;

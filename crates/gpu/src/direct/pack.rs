@@ -42,13 +42,17 @@ pub struct GpuShape {
 pub struct GpuMaterial {
     /// The BSDF.
     pub bsdf: GpuBsdf,
-    /// 0 constant, 1 point checker.
+    /// The colour's texture: 0 constant, 1 point checker, 2 solid pattern.
     pub tex_kind: u32,
-    /// Padding.
-    pub pad: [u32; 3],
-    /// Even cells' colour and the scale.
+    /// The pattern ([`crate::noise::pattern_code`]).
+    pub tex_pattern: u32,
+    /// The pattern's octaves.
+    pub tex_octaves: u32,
+    /// 1: the blended pattern colour is clamped to [0, 1] (plastic's diffuse colour).
+    pub tex_clamp: u32,
+    /// The checker's even cells' colour (the pattern's colour at 0) and the scale.
     pub a: [f32; 4],
-    /// Odd cells' colour.
+    /// The odd cells' colour (the pattern's colour at 1).
     pub b: [f32; 4],
 }
 
@@ -152,6 +156,8 @@ impl DirectScene {
     /// selection), or says what the GPU cannot do.
     pub fn new(data: &SceneData, o: &RenderOptions, host: &dyn Host) -> Result<Self, GpuError> {
         let mut s = DirectScene::default();
+        // Perlin's permutation first: the noise patterns read it at tables[0..256].
+        s.tables.extend(scene::PERLIN_PERM.map(f32::from));
         if data.camera_medium.is_some() {
             return Err(unsupported(
                 "the camera sits in a participating medium; media render on the CPU",
@@ -239,6 +245,13 @@ impl DirectScene {
         if obj.interior.is_some() || obj.exterior.is_some() {
             return Err(unsupported(format!(
                 "object '{}' bounds a participating medium; media render on the CPU",
+                obj.name
+            )));
+        }
+        if obj.placement.is_some() && self.materials[obj.material.index()].tex_kind == 2 {
+            return Err(unsupported(format!(
+                "object '{}' has a transform and a pattern texture (read in the object's own \
+                 space); it renders on the CPU",
                 obj.name
             )));
         }
@@ -358,6 +371,15 @@ impl DirectScene {
                 _ => (None, false),
             };
             let mut tex = (0, [0.0; 4], [0.0; 4]);
+            let mut pattern = (0, 0);
+            // Plastic's diffuse colour is clamped to [0, 1] (render::bsdf::plastic).
+            let c = |v: [f64; 3]| {
+                if clamp {
+                    v.map(|x| x.clamp(0.0, 1.0))
+                } else {
+                    v
+                }
+            };
             if let Some(id) = colour {
                 match &data.textures[id.index()] {
                     TextureData::Constant { .. } => {}
@@ -367,13 +389,6 @@ impl DirectScene {
                         scale,
                         space: TextureSpace::Point,
                     } => {
-                        let c = |v: [f64; 3]| {
-                            if clamp {
-                                v.map(|x| x.clamp(0.0, 1.0))
-                            } else {
-                                v
-                            }
-                        };
                         tex = (1, f4(c(*a), *scale), f4(c(*b), 0.0));
                     }
                     TextureData::Checker { .. } => {
@@ -386,11 +401,16 @@ impl DirectScene {
                             "material '{name}' has an image texture"
                         )))
                     }
-                    TextureData::Pattern { kind, .. } => {
-                        return Err(unsupported(format!(
-                            "material '{name}' has a {} pattern texture",
-                            kind.name()
-                        )))
+                    TextureData::Pattern {
+                        kind,
+                        a,
+                        b,
+                        scale,
+                        octaves,
+                    } => {
+                        // Blended, then clamped as the CPU clamps plastic's colour.
+                        tex = (2, f4(*a, *scale), f4(*b, 0.0));
+                        pattern = (crate::noise::pattern_code(*kind), *octaves);
                     }
                 }
             }
@@ -424,7 +444,9 @@ impl DirectScene {
             self.materials.push(GpuMaterial {
                 bsdf,
                 tex_kind: tex.0,
-                pad: [0; 3],
+                tex_pattern: pattern.0,
+                tex_octaves: pattern.1,
+                tex_clamp: u32::from(clamp),
                 a: tex.1,
                 b: tex.2,
             });

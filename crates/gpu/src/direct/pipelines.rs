@@ -8,6 +8,7 @@ use crate::bsdf::{BSDF_STRUCT_WGSL, BSDF_WGSL};
 use crate::env::ENV_WGSL;
 use crate::layout::LAYOUT_WGSL;
 use crate::light::{GPU_AREA_LIGHT_WGSL, LIGHT_WGSL};
+use crate::noise::NOISE_WGSL;
 use crate::perturbed::PERTURBED_WGSL;
 use crate::quadric::QUADRIC_WGSL;
 use crate::record::wave_consts_wgsl;
@@ -86,6 +87,7 @@ fn kernel_source(tape_wgsl: &str) -> String {
     [
         FLOAT_WGSL,
         TRIG_WGSL,
+        NOISE_WGSL,
         LAYOUT_WGSL,
         PERTURBED_WGSL,
         QUADRIC_WGSL,

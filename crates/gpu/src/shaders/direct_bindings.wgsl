@@ -61,9 +61,14 @@ struct Frame {
 // (kind 1), over `count` leaves (GpuObject) from `first`.
 struct GpuShape { kind: u32, first: u32, count: u32, material: u32, lo: vec4<f32>, hi: vec4<f32> }
 
-// A material: its BSDF with constant colours, and a point-space checker replacing
-// bsdf.rgb where tex_kind is 1 (a.xyz, b.xyz, scale in a.w).
-struct GpuMaterial { bsdf: GpuBsdf, tex_kind: u32, pad0: u32, pad1: u32, pad2: u32, a: vec4<f32>, b: vec4<f32> }
+// A material: its BSDF with constant colours, and a point-space checker (tex_kind 1:
+// a.xyz, b.xyz, scale in a.w) or a solid pattern (tex_kind 2: noise.wgsl's pattern
+// tex_pattern with tex_octaves blending a.xyz at 0 to b.xyz at 1, scale in a.w, then
+// clamped to [0, 1] where tex_clamp is 1) replacing bsdf.rgb.
+struct GpuMaterial { bsdf: GpuBsdf, tex_kind: u32, tex_pattern: u32, tex_octaves: u32, tex_clamp: u32, a: vec4<f32>, b: vec4<f32> }
+
+// Perlin's permutation for noise.wgsl, at the start of sel_buf (DirectScene::new).
+fn noise_perm(i: u32) -> u32 { return u32(sel_buf[i]); }
 
 @group(0) @binding(0) var<uniform> frame: Frame;
 @group(0) @binding(1) var<storage, read> shapes: array<GpuShape>;

@@ -107,20 +107,6 @@ fn hull(a: vec2<f32>, b: vec2<f32>) -> vec2<f32> {
     return vec2<f32>(min(a.x, b.x), max(a.y, b.y));
 }
 
-// gpu::tape::sin_cos: sin x (or cos x) for |x| < 10⁴, else NaN; the quarter turn out in
-// two parts (Cody & Waite), the rest to sincos_small.
-fn t_sin_cos(x: f32, cosine: bool) -> f32 {
-    if (!(abs(x) < 1.0e4)) { return nan(); }
-    let k = floor(x * bitcast<f32>(0x3f22f983u) + 0.5);
-    let r = (x - k * bitcast<f32>(0x3fc90000u)) - k * bitcast<f32>(0x39fdaa22u);
-    let sc = sincos_small(r);
-    let q = (i32(k) + select(0, 1, cosine)) & 3;
-    if (q == 0) { return sc.x; }
-    if (q == 1) { return sc.y; }
-    if (q == 2) { return -sc.x; }
-    return -sc.y;
-}
-
 // gpu::tape::i_sin_cos: the ends' values widened by TRIG_ERR, ±1 where an extremum lies
 // within, [−1, 1] past a span of 6 or |x| ≥ 10⁴.
 fn i_sin_cos(a: vec2<f32>, cosine: bool) -> vec2<f32> {

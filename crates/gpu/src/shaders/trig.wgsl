@@ -1,6 +1,6 @@
 // Trigonometric polynomials shared by the kernels (TRIG_WGSL), written operation for
-// operation as their Rust twins (light::sincos_small, env::atan01, env::atan2): WGSL's
-// builtins differ from libm (GPU.md §3.3).
+// operation as their Rust twins (light::sincos_small, tape::sin_cos, env::atan01,
+// env::atan2): WGSL's builtins differ from libm (GPU.md §3.3).
 
 // sin a, cos a for |a| ≤ π/4: Taylor to a⁹ / a⁸, Horner (light.rs sincos_small).
 fn sincos_small(a: f32) -> vec2<f32> {
@@ -40,4 +40,18 @@ fn env_atan2(y: f32, x: f32) -> f32 {
     if (x < 0.0) { r = bitcast<f32>(0x40490fdbu) - r; }
     if (y < 0.0) { r = -r; }
     return r;
+}
+
+// gpu::tape::sin_cos: sin x (or cos x) for |x| < 10⁴, else NaN; the quarter turn out in
+// two parts (Cody & Waite), the rest to sincos_small.
+fn t_sin_cos(x: f32, cosine: bool) -> f32 {
+    if (!(abs(x) < 1.0e4)) { return bitcast<f32>(0x7fc00000u); }
+    let k = floor(x * bitcast<f32>(0x3f22f983u) + 0.5);
+    let r = (x - k * bitcast<f32>(0x3fc90000u)) - k * bitcast<f32>(0x39fdaa22u);
+    let sc = sincos_small(r);
+    let q = (i32(k) + select(0, 1, cosine)) & 3;
+    if (q == 0) { return sc.x; }
+    if (q == 1) { return sc.y; }
+    if (q == 2) { return -sc.x; }
+    return -sc.y;
 }
