@@ -657,8 +657,8 @@ fn depth_and_normals_write_png_views() {
 }
 
 /// `--backend gpu` refuses, before any work and naming the feature, a scene the GPU back
-/// end does not cover (an expression with `exp`, a transcendental its tapes lack; a
-/// triangle mesh; a mesh light), exiting non-zero; `--backend auto` renders it on the CPU and says why;
+/// end does not cover (a power beyond ±255; a triangle mesh; a mesh light; an image
+/// texture; media; emitting objects; a textured roughness), exiting non-zero; `--backend auto` renders it on the CPU and says why;
 /// without any adapter both say what to install.
 #[test]
 fn gpu_backend_refuses_by_name_and_auto_falls_back() {
@@ -694,12 +694,12 @@ fn gpu_backend_refuses_by_name_and_auto_falls_back() {
         ),
         (
             format!(
-                "{head}[materials.marble]\ntype = \"diffuse\"\n\
-                 reflectance = {{ pattern = {{ kind = \"marble\", a = 0.9, b = 0.2 }} }}\n\n\
-                 [[objects]]\nsolid = \"sphere([0, 0, 0], 1)\"\nmaterial = \"marble\"\n\
-                 transform = {{ translate = [0, 0, 0.5] }}\n\n{lamp}"
+                "{head}[materials.sky]\ntype = \"diffuse\"\n\
+                 reflectance = {{ image = {{ file = {:?} }} }}\n\n\
+                 [[objects]]\nsolid = \"sphere([0, 0, 0], 1)\"\nmaterial = \"sky\"\n\n{lamp}",
+                root().join("scenes/sky.exr")
             ),
-            "has a transform and a pattern texture",
+            "image texture",
         ),
         (
             format!(

@@ -799,7 +799,10 @@ fn many_techniques_agree() {
 }
 
 /// Solid pattern textures (noise.wgsl): scenes/textures.toml's five patterns (noise,
-/// fBm, turbulence, marble on plastic, wood) on `direct`; same seed, the same z-tests.
+/// fBm, turbulence, marble on plastic, wood) on `direct`, the marble and wood balls
+/// scaled, turned and moved into place (their patterns read in their own space, which
+/// the same balls untransformed would show shifted and turned); same seed, the same
+/// z-tests.
 #[test]
 fn pattern_textures_agree() {
     let Some(g) = device() else { return };
@@ -807,7 +810,18 @@ fn pattern_textures_agree() {
         env!("CARGO_MANIFEST_DIR"),
         "/../../scenes/textures.toml"
     ))
-    .replace("resolution = [320, 160]", "resolution = [48, 36]");
+    .replace("resolution = [320, 160]", "resolution = [48, 36]")
+    .replace(
+        "solid = \"sphere([1.6, 0, 0.6], 0.6)\"",
+        "solid = \"sphere([0, 0, 0], 0.4)\"\ntransform = [{ scale = 1.5 }, \
+             { rotate = { axis = [1, 1, 0], degrees = 50 } }, { translate = [1.6, 0, 0.6] }]",
+    )
+    .replace(
+        "solid = \"sphere([3.2, 0, 0.6], 0.6)\"",
+        "solid = \"sphere([0, 0, 0], 0.6)\"\ntransform = [{ rotate = { axis = [0, 1, 0], \
+             degrees = 90 } }, { translate = [3.2, 0, 0.6] }]",
+    );
+    assert_eq!(text.matches("transform").count(), 2);
     let mut s = load(&text);
     s.2.integrator = render::integrator::IntegratorKind::Direct;
     s.2.max_depth = 1;

@@ -64,7 +64,8 @@ mod training;
 pub use data::{
     CameraData, CameraKind, EnvMapTable, EnvironmentData, Geometry, ImageId, Lens, Light,
     LightData, LightKind, MapId, MaterialData, MaterialId, MediumData, MediumId, MeshId,
-    ObjectData, PatternKind, SceneData, SolidId, TextureData, TextureId, TextureSpace, PERLIN_PERM,
+    ObjectData, PatternKind, Placement, SceneData, SolidId, TextureData, TextureId, TextureSpace,
+    PERLIN_PERM,
 };
 pub use desc::{
     CameraDesc, CheckerDesc, ColorDesc, EnvironmentDesc, FilmDesc, LightDesc, MaterialDesc,

@@ -54,7 +54,18 @@ pub struct GpuMaterial {
     pub a: [f32; 4],
     /// The odd cells' colour (the pattern's colour at 1).
     pub b: [f32; 4],
+    /// World to the object's own space, where a pattern is read: rows (m_i, t_i) of
+    /// `p ↦ m·p + t` (the identity but for a patterned material's copy for an object with
+    /// a transform, [`DirectScene::local_material`]).
+    pub to_local: [[f32; 4]; 3],
 }
+
+/// Rows of the identity as [`GpuMaterial::to_local`].
+const IDENTITY_ROWS: [[f32; 4]; 3] = [
+    [1.0, 0.0, 0.0, 0.0],
+    [0.0, 1.0, 0.0, 0.0],
+    [0.0, 0.0, 1.0, 0.0],
+];
 
 /// The kernels' uniform block (the WGSL `Frame`).
 #[repr(C)]
@@ -105,7 +116,7 @@ pub(super) struct Frame {
 }
 
 const _: () = assert!(size_of::<GpuShape>() == 48);
-const _: () = assert!(size_of::<GpuMaterial>() == 112);
+const _: () = assert!(size_of::<GpuMaterial>() == 160);
 const _: () = assert!(size_of::<Frame>() == 576);
 
 /// The scene and options as the kernels read them.
@@ -172,6 +183,25 @@ impl DirectScene {
         s.pack_frame(data, o, host)?;
         s.pack_trained(host.trained());
         Ok(s)
+    }
+
+    /// A copy of patterned material `m` that reads its pattern in the space of an object
+    /// placed by `pl` (render::scene::LocalFrame: the inverse of `x ↦ m·x + t`; the world
+    /// where that is singular, as on the CPU), and its index.
+    fn local_material(&mut self, m: u32, pl: &scene::Placement) -> u32 {
+        let mut copy = self.materials[m as usize];
+        let forward = glam::DMat3::from_cols_array(&pl.m).transpose();
+        let det = forward.determinant();
+        if det != 0.0 && det.is_finite() {
+            let inv = forward.inverse();
+            let t = -(inv * glam::DVec3::from_array(pl.t));
+            for (i, row) in copy.to_local.iter_mut().enumerate() {
+                let r = inv.row(i);
+                *row = [r.x as f32, r.y as f32, r.z as f32, t[i] as f32];
+            }
+        }
+        self.materials.push(copy);
+        self.materials.len() as u32 - 1
     }
 
     fn pack_leaf(&mut self, view: &frep::PerturbedView, material: u32) -> u32 {
@@ -248,17 +278,15 @@ impl DirectScene {
                 obj.name
             )));
         }
-        if obj.placement.is_some() && self.materials[obj.material.index()].tex_kind == 2 {
-            return Err(unsupported(format!(
-                "object '{}' has a transform and a pattern texture (read in the object's own \
-                 space); it renders on the CPU",
-                obj.name
-            )));
-        }
         let flat = data.solids.solid(solid).flat();
         let root = flat.nodes.len() - 1;
         let node = &flat.nodes[root];
-        let material = obj.material.0;
+        let mut material = obj.material.0;
+        if let Some(pl) = &obj.placement {
+            if self.materials[material as usize].tex_kind == 2 {
+                material = self.local_material(material, pl);
+            }
+        }
         let first = self.leaves.len() as u32;
         let plain = |k: u32| -> Option<frep::PerturbedView> {
             let n = &flat.nodes[k as usize];
@@ -447,6 +475,7 @@ impl DirectScene {
                 tex_pattern: pattern.0,
                 tex_octaves: pattern.1,
                 tex_clamp: u32::from(clamp),
+                to_local: IDENTITY_ROWS,
                 a: tex.1,
                 b: tex.2,
             });

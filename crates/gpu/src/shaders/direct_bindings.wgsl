@@ -64,8 +64,12 @@ struct GpuShape { kind: u32, first: u32, count: u32, material: u32, lo: vec4<f32
 // A material: its BSDF with constant colours, and a point-space checker (tex_kind 1:
 // a.xyz, b.xyz, scale in a.w) or a solid pattern (tex_kind 2: noise.wgsl's pattern
 // tex_pattern with tex_octaves blending a.xyz at 0 to b.xyz at 1, scale in a.w, then
-// clamped to [0, 1] where tex_clamp is 1) replacing bsdf.rgb.
-struct GpuMaterial { bsdf: GpuBsdf, tex_kind: u32, tex_pattern: u32, tex_octaves: u32, tex_clamp: u32, a: vec4<f32>, b: vec4<f32> }
+// clamped to [0, 1] where tex_clamp is 1) replacing bsdf.rgb; the pattern is read at
+// (dot(lx.xyz, p) + lx.w, …), the point in the object's own space.
+struct GpuMaterial {
+    bsdf: GpuBsdf, tex_kind: u32, tex_pattern: u32, tex_octaves: u32, tex_clamp: u32,
+    a: vec4<f32>, b: vec4<f32>, lx: vec4<f32>, ly: vec4<f32>, lz: vec4<f32>,
+}
 
 // Perlin's permutation for noise.wgsl, at the start of sel_buf (DirectScene::new).
 fn noise_perm(i: u32) -> u32 { return u32(sel_buf[i]); }

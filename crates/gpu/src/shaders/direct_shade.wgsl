@@ -49,9 +49,11 @@ fn shade(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
         m.rgb = select(mat.b, mat.a, r < 0.5);
         m.rgb.w = 0.0;
     } else if (mat.tex_kind == 2u) {
-        // render::texture: a·(1 − t) + b·t with t the pattern at p·scale (objects
-        // without a transform: their own space is the world's).
-        let t = pattern_value(mat.tex_pattern, p * mat.a.w, mat.tex_octaves);
+        // render::texture: a·(1 − t) + b·t with t the pattern at p·scale, p in the
+        // object's own space.
+        let q = vec3<f32>(dot(mat.lx.xyz, p) + mat.lx.w, dot(mat.ly.xyz, p) + mat.ly.w,
+            dot(mat.lz.xyz, p) + mat.lz.w);
+        let t = pattern_value(mat.tex_pattern, q * mat.a.w, mat.tex_octaves);
         var rgb = mat.a.xyz * (1.0 - t) + mat.b.xyz * t;
         if (mat.tex_clamp != 0u) { rgb = clamp(rgb, vec3<f32>(0.0), vec3<f32>(1.0)); }
         m.rgb = vec4<f32>(rgb, 0.0);
