@@ -55,8 +55,8 @@ pub struct GpuMaterial {
     /// The odd cells' colour (the pattern's colour at 1).
     pub b: [f32; 4],
     /// World to the object's own space, where a pattern is read: rows (m_i, t_i) of
-    /// `p ↦ m·p + t` (the identity but for a patterned material's copy for an object with
-    /// a transform, [`DirectScene::local_material`]).
+    /// `p ↦ m·p + t` (the identity, but for the copy of a patterned material that the
+    /// packing makes for each object with a transform).
     pub to_local: [[f32; 4]; 3],
 }
 
