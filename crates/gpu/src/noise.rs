@@ -116,7 +116,7 @@ pub fn pattern_value(kind: u32, p: [f32; 3], octaves: u32) -> f32 {
     v.clamp(0.0, 1.0)
 }
 
-/// The kernels' code of a pattern (`GpuMaterial::tex_pattern`).
+/// The kernels' code of a pattern (`GpuMaterial::tex_code`).
 pub fn pattern_code(kind: scene::PatternKind) -> u32 {
     scene::PatternKind::ALL
         .iter()

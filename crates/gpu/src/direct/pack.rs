@@ -35,32 +35,39 @@ pub struct GpuShape {
     pub hi: [f32; 4],
 }
 
-/// A material: its BSDF with constant colours, and a point-space checker in place of
-/// `bsdf.rgb` where `tex_kind` is 1 (`a.xyz`, `b.xyz`, the scale in `a.w`).
+/// A material: its BSDF with constant colours, and a texture in place of `bsdf.rgb`:
+/// a point-space checker (`tex_kind` 1: `a.xyz`, `b.xyz`, the scale in `a.w`), a solid
+/// pattern (2) or an image by triplanar projection (3), both read in the object's own
+/// space.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GpuMaterial {
     /// The BSDF.
     pub bsdf: GpuBsdf,
-    /// The colour's texture: 0 constant, 1 point checker, 2 solid pattern.
+    /// The colour's texture: 0 constant, 1 point checker, 2 solid pattern, 3 image.
     pub tex_kind: u32,
-    /// The pattern ([`crate::noise::pattern_code`]).
-    pub tex_pattern: u32,
-    /// The pattern's octaves.
-    pub tex_octaves: u32,
-    /// 1: the blended pattern colour is clamped to [0, 1] (plastic's diffuse colour).
+    /// The pattern ([`crate::noise::pattern_code`]), or the image's first word in the
+    /// tables (RGB f32 per pixel, row-major).
+    pub tex_code: u32,
+    /// The pattern's octaves, or the image's width.
+    pub tex_size: u32,
+    /// 1: the texture's colour is clamped to [0, 1] (plastic's diffuse colour).
     pub tex_clamp: u32,
-    /// The checker's even cells' colour (the pattern's colour at 0) and the scale.
+    /// The checker's even cells' colour (the pattern's colour at 0); the scale in `w`.
     pub a: [f32; 4],
-    /// The odd cells' colour (the pattern's colour at 1).
+    /// The odd cells' colour (the pattern's colour at 1); an image's height and
+    /// sharpness in `x` and `y`.
     pub b: [f32; 4],
-    /// World to the object's own space, where a pattern is read: rows (m_i, t_i) of
-    /// `p ↦ m·p + t` (the identity, but for the copy of a patterned material that the
-    /// packing makes for each object with a transform).
+    /// World to the object's own space, where patterns and images are read: rows
+    /// (m_i, t_i) of `p ↦ m·p + t` (the identity, but for the copy of a textured
+    /// material that the packing makes for each object with a transform).
     pub to_local: [[f32; 4]; 3],
+    /// The normals' matrix to the object's space, by rows (w unused): the normal there
+    /// is this times the world normal, normalised.
+    pub normals: [[f32; 4]; 3],
 }
 
-/// Rows of the identity as [`GpuMaterial::to_local`].
+/// Rows of the identity as [`GpuMaterial::to_local`] and [`GpuMaterial::normals`].
 const IDENTITY_ROWS: [[f32; 4]; 3] = [
     [1.0, 0.0, 0.0, 0.0],
     [0.0, 1.0, 0.0, 0.0],
@@ -116,7 +123,7 @@ pub(super) struct Frame {
 }
 
 const _: () = assert!(size_of::<GpuShape>() == 48);
-const _: () = assert!(size_of::<GpuMaterial>() == 160);
+const _: () = assert!(size_of::<GpuMaterial>() == 208);
 const _: () = assert!(size_of::<Frame>() == 576);
 
 /// The scene and options as the kernels read them.
@@ -185,9 +192,10 @@ impl DirectScene {
         Ok(s)
     }
 
-    /// A copy of patterned material `m` that reads its pattern in the space of an object
-    /// placed by `pl` (render::scene::LocalFrame: the inverse of `x ↦ m·x + t`; the world
-    /// where that is singular, as on the CPU), and its index.
+    /// A copy of textured material `m` that reads its pattern or image in the space of
+    /// an object placed by `pl` (render::scene::LocalFrame: the inverse of `x ↦ m·x + t`
+    /// for points, mᵀ for normals; the world where m is singular, as on the CPU), and its
+    /// index.
     fn local_material(&mut self, m: u32, pl: &scene::Placement) -> u32 {
         let mut copy = self.materials[m as usize];
         let forward = glam::DMat3::from_cols_array(&pl.m).transpose();
@@ -198,6 +206,10 @@ impl DirectScene {
             for (i, row) in copy.to_local.iter_mut().enumerate() {
                 let r = inv.row(i);
                 *row = [r.x as f32, r.y as f32, r.z as f32, t[i] as f32];
+            }
+            for (i, row) in copy.normals.iter_mut().enumerate() {
+                let r = forward.col(i);
+                *row = [r.x as f32, r.y as f32, r.z as f32, 0.0];
             }
         }
         self.materials.push(copy);
@@ -283,7 +295,7 @@ impl DirectScene {
         let node = &flat.nodes[root];
         let mut material = obj.material.0;
         if let Some(pl) = &obj.placement {
-            if self.materials[material as usize].tex_kind == 2 {
+            if matches!(self.materials[material as usize].tex_kind, 2 | 3) {
                 material = self.local_material(material, pl);
             }
         }
@@ -373,6 +385,8 @@ impl DirectScene {
     }
 
     fn pack_materials(&mut self, data: &SceneData, host: &dyn Host) -> Result<(), GpuError> {
+        // Each image once in the tables, by image id.
+        let mut images = std::collections::HashMap::new();
         for (i, (m, name)) in data.materials.iter().zip(&data.material_names).enumerate() {
             if data.roughness.get(i).is_some_and(Option::is_some) {
                 return Err(unsupported(format!(
@@ -424,10 +438,23 @@ impl DirectScene {
                             "material '{name}' has a uv-space checker"
                         )))
                     }
-                    TextureData::Image { .. } => {
-                        return Err(unsupported(format!(
-                            "material '{name}' has an image texture"
-                        )))
+                    TextureData::Image {
+                        image,
+                        scale,
+                        sharpness,
+                    } => {
+                        let img = data.images.image(*image);
+                        let at = *images.entry(image.index()).or_insert_with(|| {
+                            let at = self.tables.len() as u32;
+                            self.tables.extend(img.pixels.iter().flatten());
+                            at
+                        });
+                        tex = (
+                            3,
+                            f4([0.0; 3], *scale),
+                            [img.height as f32, *sharpness as f32, 0.0, 0.0],
+                        );
+                        pattern = (at, img.width as u32);
                     }
                     TextureData::Pattern {
                         kind,
@@ -446,6 +473,7 @@ impl DirectScene {
                 TextureData::Constant { rgb } => *rgb,
                 // The checker's colours are written per hit; any value serves here.
                 TextureData::Checker { a, .. } | TextureData::Pattern { a, .. } => *a,
+                // So is an image's.
                 TextureData::Image { .. } => [0.5; 3],
             };
             let bsdf = match *m {
@@ -472,10 +500,11 @@ impl DirectScene {
             self.materials.push(GpuMaterial {
                 bsdf,
                 tex_kind: tex.0,
-                tex_pattern: pattern.0,
-                tex_octaves: pattern.1,
+                tex_code: pattern.0,
+                tex_size: pattern.1,
                 tex_clamp: u32::from(clamp),
                 to_local: IDENTITY_ROWS,
+                normals: IDENTITY_ROWS,
                 a: tex.1,
                 b: tex.2,
             });

@@ -61,14 +61,18 @@ struct Frame {
 // (kind 1), over `count` leaves (GpuObject) from `first`.
 struct GpuShape { kind: u32, first: u32, count: u32, material: u32, lo: vec4<f32>, hi: vec4<f32> }
 
-// A material: its BSDF with constant colours, and a point-space checker (tex_kind 1:
-// a.xyz, b.xyz, scale in a.w) or a solid pattern (tex_kind 2: noise.wgsl's pattern
-// tex_pattern with tex_octaves blending a.xyz at 0 to b.xyz at 1, scale in a.w, then
-// clamped to [0, 1] where tex_clamp is 1) replacing bsdf.rgb; the pattern is read at
-// (dot(lx.xyz, p) + lx.w, …), the point in the object's own space.
+// A material: its BSDF with constant colours, and a texture replacing bsdf.rgb
+// (DirectScene's GpuMaterial): a point-space checker (tex_kind 1: a.xyz, b.xyz, scale in
+// a.w), a solid pattern (2: noise.wgsl's pattern tex_code with tex_size octaves blending
+// a.xyz at 0 to b.xyz at 1, scale in a.w) or an image by triplanar projection (3: RGB
+// f32 pixels from sel_buf[tex_code], tex_size × b.x of them, scale in a.w, sharpness in
+// b.y), clamped to [0, 1] where tex_clamp is 1. Patterns and images are read at the
+// point in the object's own space (dot(lx.xyz, p) + lx.w, …) with the normal there
+// (normalize(dot(nx.xyz, n), …)).
 struct GpuMaterial {
-    bsdf: GpuBsdf, tex_kind: u32, tex_pattern: u32, tex_octaves: u32, tex_clamp: u32,
+    bsdf: GpuBsdf, tex_kind: u32, tex_code: u32, tex_size: u32, tex_clamp: u32,
     a: vec4<f32>, b: vec4<f32>, lx: vec4<f32>, ly: vec4<f32>, lz: vec4<f32>,
+    nx: vec4<f32>, ny: vec4<f32>, nz: vec4<f32>,
 }
 
 // Perlin's permutation for noise.wgsl, at the start of sel_buf (DirectScene::new).

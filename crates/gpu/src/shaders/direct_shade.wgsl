@@ -48,13 +48,21 @@ fn shade(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
         let r = cells - 2.0 * floor(cells * 0.5);
         m.rgb = select(mat.b, mat.a, r < 0.5);
         m.rgb.w = 0.0;
-    } else if (mat.tex_kind == 2u) {
-        // render::texture: a·(1 − t) + b·t with t the pattern at p·scale, p in the
-        // object's own space.
+    } else if (mat.tex_kind >= 2u) {
+        // render::texture, in the object's own space: a·(1 − t) + b·t with t the pattern
+        // at p·scale, or the image's triplanar projection at p·scale.
         let q = vec3<f32>(dot(mat.lx.xyz, p) + mat.lx.w, dot(mat.ly.xyz, p) + mat.ly.w,
-            dot(mat.lz.xyz, p) + mat.lz.w);
-        let t = pattern_value(mat.tex_pattern, q * mat.a.w, mat.tex_octaves);
-        var rgb = mat.a.xyz * (1.0 - t) + mat.b.xyz * t;
+            dot(mat.lz.xyz, p) + mat.lz.w) * mat.a.w;
+        var rgb = vec3<f32>(0.0);
+        if (mat.tex_kind == 2u) {
+            let t = pattern_value(mat.tex_code, q, mat.tex_size);
+            rgb = mat.a.xyz * (1.0 - t) + mat.b.xyz * t;
+        } else {
+            var nl = vec3<f32>(dot(mat.nx.xyz, n), dot(mat.ny.xyz, n), dot(mat.nz.xyz, n));
+            let len = length(nl);
+            nl = select(vec3<f32>(0.0), nl / len, len > 0.0);
+            rgb = triplanar(mat.tex_code, mat.tex_size, u32(mat.b.x), q, nl, mat.b.y);
+        }
         if (mat.tex_clamp != 0u) { rgb = clamp(rgb, vec3<f32>(0.0), vec3<f32>(1.0)); }
         m.rgb = vec4<f32>(rgb, 0.0);
     }
@@ -328,4 +336,43 @@ fn prepare() {
     dispatch_args(QUEUE_ARGS, atomicLoad(&stats[QUEUE_LEN]));
     dispatch_args(LIVE_ARGS, atomicLoad(&stats[LIVE_LEN]) * frame.per_slot);
     dispatch_args(CONT_ARGS, atomicLoad(&stats[CONT_LEN]));
+}
+
+// An image's pixel (i, j), both wrapped into the image (rem_euclid), from its RGB f32
+// pixels at sel_buf[off], w × h of them, row-major.
+fn image_at(off: u32, w: u32, h: u32, i: f32, j: f32) -> vec3<f32> {
+    let fw = f32(w);
+    let fh = f32(h);
+    let ii = min(u32(i - fw * floor(i / fw)), w - 1u);
+    let jj = min(u32(j - fh * floor(j / fh)), h - 1u);
+    let at = off + 3u * (jj * w + ii);
+    return vec3<f32>(sel_buf[at], sel_buf[at + 1u], sel_buf[at + 2u]);
+}
+
+// The image at (u, v), one repeat per unit, v down the rows, bilinear between pixel
+// centres, repeating (render::texture::bilinear).
+fn bilinear(off: u32, w: u32, h: u32, u: f32, v: f32) -> vec3<f32> {
+    let x = (u - floor(u)) * f32(w) - 0.5;
+    let y = (v - floor(v)) * f32(h) - 0.5;
+    let x0 = floor(x);
+    let y0 = floor(y);
+    let fx = x - x0;
+    let fy = y - y0;
+    let top = image_at(off, w, h, x0, y0) * (1.0 - fx) + image_at(off, w, h, x0 + 1.0, y0) * fx;
+    let bottom = image_at(off, w, h, x0, y0 + 1.0) * (1.0 - fx) + image_at(off, w, h, x0 + 1.0, y0 + 1.0) * fx;
+    return top * (1.0 - fy) + bottom * fy;
+}
+
+// Triplanar mapping at p (scaled) with the unit normal n (0: unknown, the z
+// projection), the projections weighted by |n_i|^k (render::texture::triplanar).
+fn triplanar(off: u32, w: u32, h: u32, p: vec3<f32>, n: vec3<f32>, k: f32) -> vec3<f32> {
+    let wt = pow(abs(n), vec3<f32>(k));
+    let sum = wt.x + wt.y + wt.z;
+    if (!(sum > 0.0)) { return bilinear(off, w, h, p.x, -p.y); }
+    let ws = wt / sum;
+    var c = vec3<f32>(0.0);
+    if (ws.x > 0.0) { c += bilinear(off, w, h, p.y, -p.z) * ws.x; }
+    if (ws.y > 0.0) { c += bilinear(off, w, h, p.x, -p.z) * ws.y; }
+    if (ws.z > 0.0) { c += bilinear(off, w, h, p.x, -p.y) * ws.z; }
+    return c;
 }
