@@ -10,6 +10,7 @@ use crate::distribution::{Distribution1D, Distribution2D};
 use crate::images::ImagePool;
 use crate::meshes::MeshPool;
 use crate::solids::SolidPool;
+use glam::{DMat3, DVec3};
 use serde::Serialize;
 
 macro_rules! id {
@@ -361,6 +362,47 @@ pub struct Placement {
     pub m: [f64; 9],
     /// The translation.
     pub t: [f64; 3],
+}
+
+impl Placement {
+    /// The frame that undoes this transform (None where M is singular): where an
+    /// object's textures are read, on every back end.
+    pub fn local_frame(&self) -> Option<LocalFrame> {
+        let m = DMat3::from_cols_array(&self.m).transpose();
+        LocalFrame::undoing(m, DVec3::from_array(self.t))
+    }
+}
+
+/// The inverse of an object's transform: points by `m·x + t`, normals by `normals·n`
+/// (the inverse transpose of `m`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LocalFrame {
+    /// Linear part.
+    pub m: DMat3,
+    /// Translation.
+    pub t: DVec3,
+    /// The normals' matrix.
+    pub normals: DMat3,
+}
+
+impl LocalFrame {
+    /// The frame undoing x ↦ `forward`·x + `t` (None where it is singular).
+    pub fn undoing(forward: DMat3, t: DVec3) -> Option<LocalFrame> {
+        let det = forward.determinant();
+        if det == 0.0 || !det.is_finite() {
+            return None;
+        }
+        let m = forward.inverse();
+        Some(LocalFrame {
+            m,
+            t: -(m * t),
+            normals: forward.transpose(),
+        })
+    }
+    /// A world point and unit normal in the object's space.
+    pub fn apply(&self, p: DVec3, n: DVec3) -> (DVec3, DVec3) {
+        (self.m * p + self.t, (self.normals * n).normalize_or_zero())
+    }
 }
 
 /// What an object is made of.

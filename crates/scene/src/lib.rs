@@ -63,9 +63,9 @@ mod training;
 
 pub use data::{
     CameraData, CameraKind, EnvMapTable, EnvironmentData, Geometry, ImageId, Lens, Light,
-    LightData, LightKind, MapId, MaterialData, MaterialId, MediumData, MediumId, MeshId,
-    ObjectData, PatternKind, Placement, SceneData, SolidId, TextureData, TextureId, TextureSpace,
-    PERLIN_PERM,
+    LightData, LightKind, LocalFrame, MapId, MaterialData, MaterialId, MediumData, MediumId,
+    MeshId, ObjectData, PatternKind, Placement, SceneData, SolidId, TextureData, TextureId,
+    TextureSpace, PERLIN_PERM,
 };
 pub use desc::{
     CameraDesc, CheckerDesc, ColorDesc, EnvironmentDesc, FilmDesc, LightDesc, MaterialDesc,

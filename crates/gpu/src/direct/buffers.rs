@@ -91,9 +91,10 @@ pub(super) struct WaveShape {
 
 impl WaveShape {
     /// The bands and waves of a render of `width × height` pixels: a wave's draws
-    /// within [`WAVE_DRAWS`] (a half or a third of it where a draw record holds more
-    /// than 8 techniques' pdfs, so that a wave's draws stay within 40 MiB), a band's sums (pixels × stride f64 words, where the GPU
-    /// keeps them: the record returned) within one binding.
+    /// within [`WAVE_DRAWS`] (a half or a third of it where a draw record is longer than
+    /// one of 8 techniques, so that a wave's draws stay within 40 MiB), a band's sums
+    /// (pixels × stride f64 words, where the GPU keeps them: the record returned) within
+    /// one binding.
     pub(super) fn new(
         gpu: &Gpu,
         acc: &Tally,
@@ -106,7 +107,7 @@ impl WaveShape {
         let depths = pack.frame.max_depth;
         let per_slot_draws = nd1 * depths.max(1);
         let draw_words = draw_words(pack.frame.n_tech) as u32;
-        let wave_draws = WAVE_DRAWS / draw_words.div_ceil(20);
+        let wave_draws = WAVE_DRAWS / draw_words.div_ceil(crate::record::draw_words(8) as u32);
         // The image in bands of consecutive pixels (raster order), each rendered through
         // all its samples before the next: the buffers hold one band's waves, whatever
         // the image's size.

@@ -193,23 +193,15 @@ impl DirectScene {
     }
 
     /// A copy of textured material `m` that reads its pattern or image in the space of
-    /// an object placed by `pl` (render::scene::LocalFrame: the inverse of `x ↦ m·x + t`
-    /// for points, mᵀ for normals; the world where m is singular, as on the CPU), and its
-    /// index.
+    /// an object placed by `pl` ([`scene::LocalFrame`], as the CPU reads it; the world
+    /// where the transform is singular), and its index.
     fn local_material(&mut self, m: u32, pl: &scene::Placement) -> u32 {
         let mut copy = self.materials[m as usize];
-        let forward = glam::DMat3::from_cols_array(&pl.m).transpose();
-        let det = forward.determinant();
-        if det != 0.0 && det.is_finite() {
-            let inv = forward.inverse();
-            let t = -(inv * glam::DVec3::from_array(pl.t));
-            for (i, row) in copy.to_local.iter_mut().enumerate() {
-                let r = inv.row(i);
-                *row = [r.x as f32, r.y as f32, r.z as f32, t[i] as f32];
-            }
-            for (i, row) in copy.normals.iter_mut().enumerate() {
-                let r = forward.col(i);
-                *row = [r.x as f32, r.y as f32, r.z as f32, 0.0];
+        if let Some(f) = pl.local_frame() {
+            for i in 0..3 {
+                let (r, n) = (f.m.row(i), f.normals.row(i));
+                copy.to_local[i] = [r.x as f32, r.y as f32, r.z as f32, f.t[i] as f32];
+                copy.normals[i] = [n.x as f32, n.y as f32, n.z as f32, 0.0];
             }
         }
         self.materials.push(copy);

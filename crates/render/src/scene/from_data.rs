@@ -2,7 +2,7 @@
 //! in the pool, plastic coats tabulated), lights with the distributions computed at
 //! resolution, and one [`Solid`] built per object.
 
-use super::{Geometry, LocalFrame, Object, Scene};
+use super::{Geometry, Object, Scene};
 use crate::camera::Camera;
 use crate::color::Rgb;
 use crate::distribution::Distribution1D;
@@ -186,10 +186,7 @@ pub(super) fn build(data: &SceneData) -> Scene {
                 ::scene::Geometry::Mesh(m) => Geometry::Mesh(data.meshes.mesh(m).clone()),
             },
             material: o.material.index(),
-            to_local: o.placement.and_then(|p| {
-                let m = glam::DMat3::from_cols_array(&p.m).transpose();
-                LocalFrame::undoing(m, v3(p.t))
-            }),
+            to_local: o.placement.and_then(|p| p.local_frame()),
             interior: o.interior.map(|m| m.index()),
             exterior: o.exterior.map(|m| m.index()),
         })

@@ -35,6 +35,7 @@
 mod from_data;
 
 pub use ::scene::parse_description;
+pub use ::scene::LocalFrame;
 pub use ::scene::{
     CameraDesc, CheckerDesc, ColorDesc, Emitters, EnvironmentDesc, IntegratorKind, LightDesc,
     MaterialDesc, ObjectDesc, Overrides, RenderDesc, RenderSettings, RgbDesc, RotateDesc,
@@ -86,38 +87,6 @@ pub struct Object {
     pub interior: Option<usize>,
     /// Index into [`Scene::media`] of what surrounds it (None: vacuum).
     pub exterior: Option<usize>,
-}
-
-/// The inverse of an object's transform: points by `m·x + t`, normals by `normals·n`
-/// (the inverse transpose of `m`).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct LocalFrame {
-    /// Linear part.
-    pub m: glam::DMat3,
-    /// Translation.
-    pub t: DVec3,
-    /// The normals' matrix.
-    pub normals: glam::DMat3,
-}
-
-impl LocalFrame {
-    /// The frame undoing x ↦ `forward`·x + `t` (None where it is singular).
-    pub fn undoing(forward: glam::DMat3, t: DVec3) -> Option<LocalFrame> {
-        let det = forward.determinant();
-        if det == 0.0 || !det.is_finite() {
-            return None;
-        }
-        let m = forward.inverse();
-        Some(LocalFrame {
-            m,
-            t: -(m * t),
-            normals: forward.transpose(),
-        })
-    }
-    /// A world point and unit normal in the object's space.
-    pub fn apply(&self, p: DVec3, n: DVec3) -> (DVec3, DVec3) {
-        (self.m * p + self.t, (self.normals * n).normalize_or_zero())
-    }
 }
 
 impl Object {
