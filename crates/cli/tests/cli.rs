@@ -657,8 +657,8 @@ fn depth_and_normals_write_png_views() {
 }
 
 /// `--backend gpu` refuses, before any work and naming the feature, a scene the GPU back
-/// end does not cover (a power beyond ±255; a triangle mesh; a mesh light; a uv-space
-/// checker; media; emitting objects; a textured roughness), exiting non-zero; `--backend auto` renders it on the CPU and says why;
+/// end does not cover (a power beyond ±255; a triangle mesh; a mesh light; a conductor's
+/// textured k; media; emitting objects; a textured roughness), exiting non-zero; `--backend auto` renders it on the CPU and says why;
 /// without any adapter both say what to install.
 #[test]
 fn gpu_backend_refuses_by_name_and_auto_falls_back() {
@@ -694,11 +694,11 @@ fn gpu_backend_refuses_by_name_and_auto_falls_back() {
         ),
         (
             format!(
-                "{head}[materials.uv]\ntype = \"diffuse\"\n\
-                 reflectance = {{ checker = {{ a = 0.8, b = 0.2, space = \"uv\" }} }}\n\n\
-                 [[objects]]\nsolid = \"sphere([0, 0, 0], 1)\"\nmaterial = \"uv\"\n\n{lamp}"
+                "{head}[materials.tiles]\ntype = \"conductor\"\neta = 0.2\n\
+                 k = {{ checker = {{ a = 3, b = 1, scale = 4 }} }}\n\n\
+                 [[objects]]\nsolid = \"sphere([0, 0, 0], 1)\"\nmaterial = \"tiles\"\n\n{lamp}"
             ),
-            "uv-space checker",
+            "textured parameter other than its colour",
         ),
         (
             format!(

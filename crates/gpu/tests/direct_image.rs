@@ -877,6 +877,35 @@ fn image_textures_agree() {
     assert_agree(g, "image textures", &s, &s, 3.0);
 }
 
+/// uv checkers: the GPU's geometry carries no surface parameters (only meshes do, which
+/// render on the CPU), so a uv checker is its colour `a` there, as on the CPU's solids.
+/// The test scene's lacquer colour and its copper's η and k as uv checkers whose `b`
+/// differs from `a` by far more than the noise; the GPU render against the CPU render of
+/// the same scene, same seed, the same z-tests.
+#[test]
+fn uv_checkers_agree() {
+    let Some(g) = device() else { return };
+    let uv = |a: &str, b: &str| {
+        format!("{{ checker = {{ a = {a}, b = {b}, scale = 3, space = \"uv\" }} }}")
+    };
+    let text = SCENE
+        .replace(
+            "diffuse = [0.7, 0.6, 0.1]",
+            &format!("diffuse = {}", uv("[0.7, 0.6, 0.1]", "[0.05, 0.1, 0.9]")),
+        )
+        .replace(
+            "metal = \"copper\"",
+            &format!(
+                "eta = {}\nk = {}",
+                uv("[0.2, 0.92, 1.1]", "[1.5, 1.5, 1.5]"),
+                uv("[3.9, 2.45, 2.14]", "[0.5, 0.5, 0.5]")
+            ),
+        );
+    assert_eq!(text.matches("space = \"uv\"").count(), 3);
+    let s = load(&text);
+    assert_agree(g, "uv checkers", &s, &s, 3.0);
+}
+
 /// Same seed, same frames: on scenes/cornell.toml (`path`; walls whose normals have
 /// z = ±0) the GPU draws the directions the CPU draws, so pixel by pixel the images
 /// differ only where f32 rounding turns a path (a roulette or visibility decision near

@@ -393,6 +393,12 @@ impl DirectScene {
             let constant = |id: scene::TextureId| -> Result<[f64; 3], GpuError> {
                 match &data.textures[id.index()] {
                     TextureData::Constant { rgb } => Ok(*rgb),
+                    // Its colour `a` at uv = 0 (see the colour slot above).
+                    TextureData::Checker {
+                        a,
+                        space: TextureSpace::Uv,
+                        ..
+                    } => Ok(*a),
                     _ => Err(unsupported(format!(
                         "material '{name}' has a textured parameter other than its colour"
                     ))),
@@ -425,11 +431,13 @@ impl DirectScene {
                     } => {
                         tex = (1, f4(c(*a), *scale), f4(c(*b), 0.0));
                     }
-                    TextureData::Checker { .. } => {
-                        return Err(unsupported(format!(
-                            "material '{name}' has a uv-space checker"
-                        )))
-                    }
+                    // The GPU's geometry carries no surface parameters (uv = 0, as
+                    // the CPU's solids: only meshes have them), so a uv checker is its
+                    // colour `a` everywhere, as on the CPU: a constant (`rgb` below).
+                    TextureData::Checker {
+                        space: TextureSpace::Uv,
+                        ..
+                    } => {}
                     TextureData::Image {
                         image,
                         scale,
