@@ -658,7 +658,7 @@ fn depth_and_normals_write_png_views() {
 
 /// `--backend gpu` refuses, before any work and naming the feature, a scene the GPU back
 /// end does not cover (a power beyond ±255; a triangle mesh; a mesh light; a conductor's
-/// textured k; media; emitting objects; a textured roughness), exiting non-zero; `--backend auto` renders it on the CPU and says why;
+/// textured k; media; a textured roughness), exiting non-zero; `--backend auto` renders it on the CPU and says why;
 /// without any adapter both say what to install.
 #[test]
 fn gpu_backend_refuses_by_name_and_auto_falls_back() {
@@ -714,13 +714,6 @@ fn gpu_backend_refuses_by_name_and_auto_falls_back() {
                  [[objects]]\nsolid = \"sphere([0, 0, 0], 1)\"\nmaterial = \"none\"\n\n{lamp}"
             ),
             "index-matched interface",
-        ),
-        (
-            format!(
-                "{head}[materials.lamp]\ntype = \"diffuse\"\nemission = 5\n\n\
-                 [[objects]]\nsolid = \"sphere([0, 0, 2], 0.3)\"\nmaterial = \"lamp\"\n\n{ball}"
-            ),
-            "emitting objects",
         ),
         (
             format!(

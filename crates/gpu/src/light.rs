@@ -37,7 +37,8 @@ pub struct GpuAreaLight {
     pub shape: u32,
     /// 1 when a planar light emits on both sides.
     pub two_sided: u32,
-    /// Padding.
+    /// `pad[0]` 1: an emitting object's bounding sphere (a proxy: sampled and counted
+    /// in the pdfs as a sphere light, never met by a ray); else padding.
     pub pad: [u32; 2],
     /// Emitted radiance (rgb) and the area.
     pub radiance: [f32; 4],

@@ -18,7 +18,7 @@ mod random_csg;
 
 use gpu::direct::{render_range, RenderJob};
 use gpu::GpuOptions;
-use render::integrator::{CpuHost, Record, RenderOptions};
+use render::integrator::{CpuHost, IntegratorKind, Record, RenderOptions};
 use render::scene::Scene;
 use render::RenderState;
 use scene::{SceneData, SceneFormat};
@@ -877,6 +877,90 @@ fn image_textures_agree() {
     assert_agree(g, "image textures", &s, &s, 3.0);
 }
 
+/// Emitting objects: the test scene with a glowing ellipsoid (a plain quadric) and its
+/// lacquered expression solid made to glow too (a tape), both reached by light draws
+/// toward their bounding spheres and by BSDF draws, every draw's Li found by a
+/// nearest-hit ray (render::integrator::medium::transmitted), the camera seeing them
+/// directly; same seed, the GPU against the CPU render of the same scene. Quick: `direct`
+/// with balance over the scene's techniques, `path` with power over `bsdf` and
+/// `light-bvh`; `FREPRAY_LONG=1` adds optimal-direct and hidden emitters.
+#[test]
+fn emitting_objects_agree() {
+    let Some(g) = device() else { return };
+    let text = SCENE
+        .replace(
+            "[materials.mirror]",
+            "[materials.glow]\ntype = \"diffuse\"\nreflectance = 0.3\nemission = [3.0, 2.0, 1.2]\n\n\
+             [materials.ember]\ntype = \"plastic\"\ndiffuse = [0.7, 0.6, 0.1]\nroughness = 0.2\n\
+             emission = [1.5, 0.4, 0.1]\n\n[materials.mirror]",
+        )
+        .replace("material = \"lacquer\"", "material = \"ember\"")
+        .replace(
+            "[[lights]]\ntype = \"point\"",
+            "[[objects]]\nsolid = \"ellipsoid([0.5, 0.6, 1.9], [0.35, 0.25, 0.2])\"\n\
+             material = \"glow\"\n\n[[lights]]\ntype = \"point\"",
+        );
+    assert_eq!(text.matches("emission").count(), 2);
+    assert_eq!(text.matches("\"ember\"").count(), 1);
+    let bvh = vec![
+        (render::Technique::Bsdf, 1),
+        (render::Technique::LightBvh, 1),
+    ];
+    for (label, method, integrator, techniques, hide) in common::cases(vec![
+        (
+            true,
+            (
+                "direct, balance",
+                mis::Method::Balance,
+                IntegratorKind::Direct,
+                None,
+                false,
+            ),
+        ),
+        (
+            true,
+            (
+                "path, power, bsdf + light-bvh",
+                mis::Method::Power,
+                IntegratorKind::Path,
+                Some(bvh.clone()),
+                false,
+            ),
+        ),
+        (
+            false,
+            (
+                "direct, optimal-direct",
+                mis::Method::OptimalDirect,
+                IntegratorKind::Direct,
+                None,
+                false,
+            ),
+        ),
+        (
+            false,
+            (
+                "path, balance, emitters hidden",
+                mis::Method::Balance,
+                IntegratorKind::Path,
+                Some(bvh),
+                true,
+            ),
+        ),
+    ]) {
+        let mut s = load(&text);
+        s.2.method = method;
+        s.2.integrator = integrator;
+        s.2.max_depth = 3;
+        s.2.rr_depth = 2;
+        s.2.hide_emitters = hide;
+        if let Some(t) = techniques {
+            s.2.techniques = t;
+        }
+        assert_agree(g, &format!("emitting objects, {label}"), &s, &s, 3.0);
+    }
+}
+
 /// uv checkers: the GPU's geometry carries no surface parameters (only meshes do, which
 /// render on the CPU), so a uv checker is its colour `a` there, as on the CPU's solids.
 /// The test scene's lacquer colour and its copper's η and k as uv checkers whose `b`
@@ -1231,7 +1315,6 @@ fn check_progressive(
 #[test]
 fn bands_give_the_same_records() {
     use gpu::direct::{render_range_with, SumsOn, WaveOptions};
-    use render::integrator::IntegratorKind;
     let (w, h) = size();
     let Some(g) = device() else { return };
     let stop = AtomicBool::new(false);

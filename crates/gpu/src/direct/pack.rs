@@ -65,6 +65,9 @@ pub struct GpuMaterial {
     /// The normals' matrix to the object's space, by rows (w unused): the normal there
     /// is this times the world normal, normalised.
     pub normals: [[f32; 4]; 3],
+    /// The radiance its surface emits on the outer side (rgb; 0: none), as the CPU's
+    /// `Scene::surface_emission`.
+    pub emission: [f32; 4],
 }
 
 /// Rows of the identity as [`GpuMaterial::to_local`] and [`GpuMaterial::normals`].
@@ -123,7 +126,7 @@ pub(super) struct Frame {
 }
 
 const _: () = assert!(size_of::<GpuShape>() == 48);
-const _: () = assert!(size_of::<GpuMaterial>() == 208);
+const _: () = assert!(size_of::<GpuMaterial>() == 224);
 const _: () = assert!(size_of::<Frame>() == 576);
 
 /// The scene and options as the kernels read them.
@@ -507,6 +510,7 @@ impl DirectScene {
                 normals: IDENTITY_ROWS,
                 a: tex.1,
                 b: tex.2,
+                emission: f4(data.emission.get(i).copied().unwrap_or_default(), 0.0),
             });
         }
         Ok(())
@@ -526,7 +530,14 @@ impl DirectScene {
                 LightKind::Triangle => {
                     return Err(unsupported("mesh lights (triangles) render on the CPU"))
                 }
-                LightKind::Solid => return Err(unsupported("emitting objects render on the CPU")),
+                // An emitting object's bounding sphere: light draws sample directions
+                // toward it as toward a sphere light, and the pdfs count it as one, but
+                // no ray meets it (`pad[0]`: the kernels' nearest light skips it);
+                // what a ray toward it receives is the emission of the surface it hits.
+                LightKind::Solid => GpuAreaLight {
+                    pad: [1, 0],
+                    ..GpuAreaLight::sphere(f3(l.p0), l.radius as f32, rad, area)
+                },
                 LightKind::Point | LightKind::Spot => unreachable!("area lights only"),
             });
         }
@@ -687,7 +698,10 @@ impl DirectScene {
             | (u32::from(
                 !o.aovs.is_empty()
                     || !matches!(o.integrator, IntegratorKind::Direct | IntegratorKind::Path),
-            ) << 4);
+            ) << 4)
+            // Emitting objects (render::scene::Scene::has_emitting_objects): light
+            // arriving along a draw is found by a nearest-hit ray.
+            | (u32::from(data.emission.iter().flatten().any(|&e| e != 0.0)) << 5);
         if o.techniques.len() > MAX_GPU_TECHNIQUES {
             return Err(unsupported(format!(
                 "{} techniques (at most {MAX_GPU_TECHNIQUES})",

@@ -69,10 +69,11 @@ struct GpuShape { kind: u32, first: u32, count: u32, material: u32, lo: vec4<f32
 // b.y), clamped to [0, 1] where tex_clamp is 1. Patterns and images are read at the
 // point in the object's own space (dot(lx.xyz, p) + lx.w, …) with the normal there
 // (normalize(dot(nx.xyz, n), …)).
+// `emission`: the radiance its surface sends out on the outer side (0: none).
 struct GpuMaterial {
     bsdf: GpuBsdf, tex_kind: u32, tex_code: u32, tex_size: u32, tex_clamp: u32,
     a: vec4<f32>, b: vec4<f32>, lx: vec4<f32>, ly: vec4<f32>, lz: vec4<f32>,
-    nx: vec4<f32>, ny: vec4<f32>, nz: vec4<f32>,
+    nx: vec4<f32>, ny: vec4<f32>, nz: vec4<f32>, emission: vec4<f32>,
 }
 
 // Perlin's permutation for noise.wgsl, at the start of sel_buf (DirectScene::new).
@@ -117,6 +118,9 @@ const FLAG_CENTER: u32 = 2u;
 const FLAG_ORTHO: u32 = 4u;
 const FLAG_PER_LIGHT: u32 = 8u;
 const FLAG_AOVS: u32 = 16u;
+// Objects emit: the light a draw receives is found by a nearest-hit ray (the object in
+// the way may be the light; render::integrator::medium::transmitted).
+const FLAG_EMITTERS: u32 = 32u;
 // Slot status (hits[·].w of word 0) and draw status (draws[·].w of word 1).
 const S_NONE: f32 = 0.0;      // escaped or met a light: outside sum only
 const S_SURFACE: f32 = 1.0;   // a shading point

@@ -1,7 +1,8 @@
 // --- lights ------------------------------------------------------------------------
 
 // The nearest area light along the ray: (t, index bits) with the radiance it sends back
-// along −d (0 from a non-emitting side); t = ∞ when none.
+// along −d (0 from a non-emitting side); t = ∞ when none. Emitting objects' bounding
+// spheres (pad0 = 1) are not met.
 struct LightHit { t: f32, index: u32, le: vec3<f32>, n: vec3<f32> }
 
 // Whether o + t·d, t ∈ [0, t_max], meets the box (the f32 slab test, ignoring the NaN
@@ -57,6 +58,8 @@ fn nearest_light(o: vec3<f32>, d: vec3<f32>, t_max: f32) -> LightHit {
     var w = light_walk(o, d, t_max);
     for (var i = light_next(&w); i != 0xffffffffu; i = light_next(&w)) {
         let l = lights[i];
+        // An emitting object's bounding sphere is no surface (Lights::intersect).
+        if (l.pad0 != 0u) { continue; }
         let c = light_intersect(l, o, d, 0.0, best);
         if (c.x > 0.0) {
             best = c.x;

@@ -192,7 +192,9 @@ fn shade(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
             write_carried(at, o, wi, gw, F_OUTSIDE + vflags);
         } else {
             let lh = nearest_light(o, wi, inf());
-            let le = incoming(lh, wi);
+            var le = incoming(lh, wi);
+            // With emitting objects the shadow pass finds Li (trace_shadow).
+            if ((frame.flags & FLAG_EMITTERS) != 0u) { le = vec3<f32>(1.0); }
             let traced = any(le != vec3<f32>(0.0));
             write_shadow(i, at, o, wi, lh.t, gw * le, F_OUTSIDE + vflags, traced);
         }
@@ -249,8 +251,10 @@ fn shade(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
     if (carries) {
         write_carried(at, o, wi, beta * fc, reached);
     } else {
-        // render::integrator::vertex::incident.
-        let le = incoming(lh, wi);
+        // render::integrator::vertex::incident (with emitting objects, the shadow pass
+        // finds Li: trace_shadow).
+        var le = incoming(lh, wi);
+        if ((frame.flags & FLAG_EMITTERS) != 0u) { le = vec3<f32>(1.0); }
         let traced = any(fc != vec3<f32>(0.0)) && any(le != vec3<f32>(0.0));
         write_shadow(i, at, o, wi, lh.t, beta * fc * le, reached, traced);
     }

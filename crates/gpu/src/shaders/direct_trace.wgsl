@@ -41,6 +41,14 @@ fn write_vertex(at: u32, p: vec3<f32>, leaf: u32, wo: vec3<f32>, beta: vec3<f32>
     hits[at + 4u] = vec4<f32>(beta, 0.0);
 }
 
+// The radiance the surface of leaf `leaf` at p sends back along −d: its material's
+// emission where d arrives on the outer side, else 0 (Scene::surface_emission).
+fn surface_emission(leaf: u32, p: vec3<f32>, d: vec3<f32>) -> vec3<f32> {
+    let e = materials[objects[leaf & 0x7fffffffu].material].emission.xyz;
+    if (all(e == vec3<f32>(0.0)) || !(dot(d, leaf_normal(leaf, p)) < 0.0)) { return vec3<f32>(0.0); }
+    return e;
+}
+
 fn trace_camera(slot: u32) {
     let px = slot_pixel(slot);
     let ray = camera_ray(px);
@@ -76,6 +84,10 @@ fn trace_camera(slot: u32) {
     }
     write_vertex(at, o + h.t * d, h.leaf, -d, vec3<f32>(1.0));
     hits[at + 8u] = vec4<f32>(hits[at + 1u].xyz, h.t);
+    if ((frame.flags & (FLAG_EMITTERS | FLAG_HIDE)) == FLAG_EMITTERS) {
+        // An emitting object seen directly, outside MIS.
+        hits[at + 3u] = vec4<f32>(surface_emission(h.leaf, o + h.t * d, d), 0.0);
+    }
 }
 
 // The continuation of a slot's path from vertex `depth`: its nearest hit is the extending
@@ -100,7 +112,11 @@ fn trace_continuation(slot: u32) {
     let r = draw_at(slot, frame.carry);
     let w2 = draws[r + 2u];
     var g = vec3<f32>(0.0);
-    if (lh.t < inf() || h.status == 0u) { g = w2.xyz * incoming(lh, d); }
+    if (lh.t < inf() || h.status == 0u) {
+        g = w2.xyz * incoming(lh, d);
+    } else if ((frame.flags & FLAG_EMITTERS) != 0u) {
+        g = w2.xyz * surface_emission(h.leaf, o + h.t * d, d);
+    }
     draws[r + 2u] = vec4<f32>(g, w2.w);
     if (lh.t < inf() || h.status == 0u || cd.w != 1.0) {
         hits[at].w = S_NONE;
@@ -114,6 +130,27 @@ fn trace_shadow(q: u32) {
     if (q >= atomicLoad(&stats[QUEUE_LEN])) { return; }
     let i = atomicLoad(&stats[QUEUE_ITEMS + q]);
     let at = (frame.depth * frame.slots * frame.per_slot + i) * draw_vec4s(frame.n_tech);
+    if ((frame.flags & FLAG_EMITTERS) != 0u && i % frame.per_slot <= frame.n_draws) {
+        // With emitting objects a draw's record holds its integrand without Li, which
+        // this nearest-hit ray finds: the nearest light's or the environment's where no
+        // object comes first, else the emission of the surface met
+        // (render::integrator::medium::transmitted). Point and spot lights' records
+        // (after the draws) keep their any-hit rays.
+        let o = draws[at].xyz;
+        let d = draws[at + 1u].xyz;
+        let lh = nearest_light(o, d, inf());
+        let h = scene_trace(o, d, lh.t, false);
+        if (h.status == 2u) {
+            draws[at + 1u].w = S_OVERFLOW + 10.0;
+            return;
+        }
+        var li = incoming(lh, d);
+        if (h.status == 1u) { li = surface_emission(h.leaf, o + h.t * d, d); }
+        let g = draws[at + 2u];
+        draws[at + 2u] = vec4<f32>(g.xyz * li, g.w);
+        draws[at + 1u].w = select(D_OCCLUDED, D_VISIBLE, any(li != vec3<f32>(0.0)));
+        return;
+    }
     let h = scene_trace(draws[at].xyz, draws[at + 1u].xyz, draws[at].w, true);
     if (h.status == 2u) {
         draws[at + 1u].w = S_OVERFLOW + 10.0;
