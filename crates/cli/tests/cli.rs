@@ -657,9 +657,9 @@ fn depth_and_normals_write_png_views() {
 }
 
 /// `--backend gpu` refuses, before any work and naming the feature, a scene the GPU back
-/// end does not cover (a power beyond ±255; a triangle mesh; a mesh light; a conductor's
-/// textured k; media; a textured roughness), exiting non-zero; `--backend auto` renders it on the CPU and says why;
-/// without any adapter both say what to install.
+/// end does not cover (a power beyond ±255; a triangle mesh; a mesh light; media; an
+/// index-matched interface; a camera in a medium), exiting non-zero; `--backend auto`
+/// renders it on the CPU and says why; without any adapter both say what to install.
 #[test]
 fn gpu_backend_refuses_by_name_and_auto_falls_back() {
     let d = out_dir("gpu-backend");
@@ -694,14 +694,6 @@ fn gpu_backend_refuses_by_name_and_auto_falls_back() {
         ),
         (
             format!(
-                "{head}[materials.tiles]\ntype = \"conductor\"\neta = 0.2\n\
-                 k = {{ checker = {{ a = 3, b = 1, scale = 4 }} }}\n\n\
-                 [[objects]]\nsolid = \"sphere([0, 0, 0], 1)\"\nmaterial = \"tiles\"\n\n{lamp}"
-            ),
-            "textured parameter other than its colour",
-        ),
-        (
-            format!(
                 "{head}[media.smoke]\nsigma_a = 0.1\nsigma_s = 1\n\n\
                  [[objects]]\nsolid = \"sphere([0, 0, 0], 1)\"\nmaterial = \"clay\"\n\
                  medium = \"smoke\"\n\n{lamp}"
@@ -714,14 +706,6 @@ fn gpu_backend_refuses_by_name_and_auto_falls_back() {
                  [[objects]]\nsolid = \"sphere([0, 0, 0], 1)\"\nmaterial = \"none\"\n\n{lamp}"
             ),
             "index-matched interface",
-        ),
-        (
-            format!(
-                "{head}[materials.brushed]\ntype = \"conductor\"\nmetal = \"gold\"\n\
-                 roughness = {{ pattern = {{ kind = \"fbm\", a = 0.1, b = 0.4 }} }}\n\n\
-                 [[objects]]\nsolid = \"sphere([0, 0, 0], 1)\"\nmaterial = \"brushed\"\n\n{lamp}"
-            ),
-            "textured roughness",
         ),
         (
             format!(

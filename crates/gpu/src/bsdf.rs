@@ -45,6 +45,10 @@ pub const PLASTIC: u32 = 3;
 /// (`render::bsdf::CoatTable`).
 pub const COAT_TABLE_LEN: usize = 65;
 
+/// A textured plastic's coat tables per unit of α: its α is rounded to a multiple of
+/// 1/`COAT_STEPS` (`render::material::COAT_STEPS`).
+pub const COAT_STEPS: usize = 32;
+
 /// Below this α a lobe is a delta lobe (`render::bsdf::microfacet::SMOOTH_ALPHA`).
 const SMOOTH_ALPHA: f64 = 1e-3;
 

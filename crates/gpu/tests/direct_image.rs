@@ -961,6 +961,46 @@ fn emitting_objects_agree() {
     }
 }
 
+/// Textured parameters besides a colour: the test scene's copper with an fBm α and a
+/// point-checker k, its glossy plastic with a checker α of 0 and 0.3 (a smooth coat in
+/// half the cells: a delta lobe per hit; the coat tables at α = k/32) and its rough
+/// glass with a marble α reaching 0 (pure specular where α < 10⁻³); same seed, the GPU
+/// against the CPU render of the same scene, `direct` and `path`.
+#[test]
+fn textured_parameters_agree() {
+    let Some(g) = device() else { return };
+    let text = SCENE
+        .replace(
+            "metal = \"copper\"\nroughness = 0.2",
+            "eta = [0.2, 0.92, 1.1]\n\
+             k = { checker = { a = [3.9, 2.45, 2.14], b = [1.0, 4.0, 2.0], scale = 3 } }\n\
+             roughness = { pattern = { kind = \"fbm\", a = 0.05, b = 0.6, scale = 3 } }",
+        )
+        .replace(
+            "eta = 1.5\nroughness = 0.1",
+            "eta = 1.5\nroughness = { checker = { a = 0.0, b = 0.3, scale = 4 } }",
+        )
+        .replace(
+            "type = \"dielectric\"\neta = 1.5\nroughness = 0.2",
+            "type = \"dielectric\"\neta = 1.5\n\
+             roughness = { pattern = { kind = \"marble\", a = 0.0, b = 0.4, scale = 2 } }",
+        );
+    assert_eq!(text.matches("roughness = {").count(), 3);
+    for integrator in [IntegratorKind::Direct, IntegratorKind::Path] {
+        let mut s = load(&text);
+        s.2.integrator = integrator;
+        s.2.max_depth = 3;
+        s.2.rr_depth = 2;
+        assert_agree(
+            g,
+            &format!("textured parameters, {integrator:?}"),
+            &s,
+            &s,
+            3.0,
+        );
+    }
+}
+
 /// uv checkers: the GPU's geometry carries no surface parameters (only meshes do, which
 /// render on the CPU), so a uv checker is its colour `a` there, as on the CPU's solids.
 /// The test scene's lacquer colour and its copper's η and k as uv checkers whose `b`

@@ -3,7 +3,7 @@
 //! tables and the uniform [`Frame`].
 
 use super::{MAX_GPU_DEPTH, MAX_GPU_TAPES, MAX_GPU_TECHNIQUES};
-use crate::bsdf::{GpuBsdf, COAT_TABLE_LEN};
+use crate::bsdf::{GpuBsdf, COAT_STEPS, COAT_TABLE_LEN};
 use crate::env::GpuEnv;
 use crate::layout::{outward, GpuBvhNode, GpuItemBox, GpuObject, GpuPerturbation, GpuQuadric};
 use crate::light::{self, GpuAreaLight};
@@ -35,29 +35,41 @@ pub struct GpuShape {
     pub hi: [f32; 4],
 }
 
-/// A material: its BSDF with constant colours, and a texture in place of `bsdf.rgb`:
-/// a point-space checker (`tex_kind` 1: `a.xyz`, `b.xyz`, the scale in `a.w`), a solid
-/// pattern (2) or an image by triplanar projection (3), both read in the object's own
-/// space.
+/// A texture in place of one of a BSDF's parameters: a point-space checker (`kind` 1:
+/// `a.xyz`, `b.xyz`, the scale in `a.w`), a solid pattern (2) or an image by triplanar
+/// projection (3), both read in the object's own space; 0: none (the BSDF's constant).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
-pub struct GpuMaterial {
-    /// The BSDF.
-    pub bsdf: GpuBsdf,
-    /// The colour's texture: 0 constant, 1 point checker, 2 solid pattern, 3 image.
-    pub tex_kind: u32,
+pub struct GpuTexture {
+    /// 0 none, 1 point checker, 2 solid pattern, 3 image.
+    pub kind: u32,
     /// The pattern ([`crate::noise::pattern_code`]), or the image's first word in the
     /// tables (RGB f32 per pixel, row-major).
-    pub tex_code: u32,
+    pub code: u32,
     /// The pattern's octaves, or the image's width.
-    pub tex_size: u32,
-    /// 1: the texture's colour is clamped to [0, 1] (plastic's diffuse colour).
-    pub tex_clamp: u32,
+    pub size: u32,
+    /// 1: the value is clamped to [0, 1] (plastic's diffuse colour).
+    pub clamp: u32,
     /// The checker's even cells' colour (the pattern's colour at 0); the scale in `w`.
     pub a: [f32; 4],
     /// The odd cells' colour (the pattern's colour at 1); an image's height and
     /// sharpness in `x` and `y`.
     pub b: [f32; 4],
+}
+
+/// Which BSDF parameter each of [`GpuMaterial::tex`] replaces: the colour (diffuse
+/// reflectance, plastic's base, a conductor's η), a conductor's k, and the GGX α (its
+/// first channel, clamped to [0, 1]).
+pub const TEX_SLOTS: usize = 3;
+
+/// A material: its BSDF with constant parameters, and textures in place of some of them.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuMaterial {
+    /// The BSDF.
+    pub bsdf: GpuBsdf,
+    /// The textures of the colour, k and α ([`TEX_SLOTS`]).
+    pub tex: [GpuTexture; TEX_SLOTS],
     /// World to the object's own space, where patterns and images are read: rows
     /// (m_i, t_i) of `p ↦ m·p + t` (the identity, but for the copy of a textured
     /// material that the packing makes for each object with a transform).
@@ -68,6 +80,10 @@ pub struct GpuMaterial {
     /// The radiance its surface emits on the outer side (rgb; 0: none), as the CPU's
     /// `Scene::surface_emission`.
     pub emission: [f32; 4],
+    /// A plastic with a textured α: in `x` the first word of its coat tables at
+    /// α = k/32, k = 0…32 (`render::material::RoughnessMap`), each its internal
+    /// reflectance then [`COAT_TABLE_LEN`] albedos; else unused.
+    pub coats: [u32; 4],
 }
 
 /// Rows of the identity as [`GpuMaterial::to_local`] and [`GpuMaterial::normals`].
@@ -126,7 +142,7 @@ pub(super) struct Frame {
 }
 
 const _: () = assert!(size_of::<GpuShape>() == 48);
-const _: () = assert!(size_of::<GpuMaterial>() == 224);
+const _: () = assert!(size_of::<GpuMaterial>() == 64 + 48 * TEX_SLOTS + 128);
 const _: () = assert!(size_of::<Frame>() == 576);
 
 /// The scene and options as the kernels read them.
@@ -290,7 +306,11 @@ impl DirectScene {
         let node = &flat.nodes[root];
         let mut material = obj.material.0;
         if let Some(pl) = &obj.placement {
-            if matches!(self.materials[material as usize].tex_kind, 2 | 3) {
+            if self.materials[material as usize]
+                .tex
+                .iter()
+                .any(|t| matches!(t.kind, 2 | 3))
+            {
                 material = self.local_material(material, pl);
             }
         }
@@ -379,110 +399,109 @@ impl DirectScene {
         Ok(())
     }
 
+    /// The texture record of `id` (a [`TextureData::Constant`] gives none: the BSDF's
+    /// constant), each image's pixels added to the tables once (`images`: by image id).
+    /// `clamp`: the value is clamped to [0, 1] (plastic's colour).
+    fn texture(
+        &mut self,
+        data: &SceneData,
+        id: scene::TextureId,
+        clamp: bool,
+        images: &mut std::collections::HashMap<usize, u32>,
+    ) -> GpuTexture {
+        let c = |v: [f64; 3]| {
+            if clamp {
+                v.map(|x| x.clamp(0.0, 1.0))
+            } else {
+                v
+            }
+        };
+        let (kind, code, size, a, b) = match &data.textures[id.index()] {
+            TextureData::Constant { .. } => return GpuTexture::default(),
+            TextureData::Checker {
+                a,
+                b,
+                scale,
+                space: TextureSpace::Point,
+            } => (1, 0, 0, f4(c(*a), *scale), f4(c(*b), 0.0)),
+            // The GPU's geometry carries no surface parameters (uv = 0, as the CPU's
+            // solids: only meshes have them), so a uv checker is its colour `a`
+            // everywhere, as on the CPU: a checker of `a` in both cells.
+            TextureData::Checker {
+                a,
+                scale,
+                space: TextureSpace::Uv,
+                ..
+            } => (1, 0, 0, f4(c(*a), *scale), f4(c(*a), 0.0)),
+            TextureData::Image {
+                image,
+                scale,
+                sharpness,
+            } => {
+                let img = data.images.image(*image);
+                let at = *images.entry(image.index()).or_insert_with(|| {
+                    let at = self.tables.len() as u32;
+                    self.tables.extend(img.pixels.iter().flatten());
+                    at
+                });
+                let b = [img.height as f32, *sharpness as f32, 0.0, 0.0];
+                (3, at, img.width as u32, f4([0.0; 3], *scale), b)
+            }
+            // Blended, then clamped as the CPU clamps plastic's colour.
+            TextureData::Pattern {
+                kind,
+                a,
+                b,
+                scale,
+                octaves,
+            } => (
+                2,
+                crate::noise::pattern_code(*kind),
+                *octaves,
+                f4(*a, *scale),
+                f4(*b, 0.0),
+            ),
+        };
+        GpuTexture {
+            kind,
+            code,
+            size,
+            clamp: u32::from(clamp),
+            a,
+            b,
+        }
+    }
+
     fn pack_materials(&mut self, data: &SceneData, host: &dyn Host) -> Result<(), GpuError> {
         // Each image once in the tables, by image id.
         let mut images = std::collections::HashMap::new();
+        let mu: Vec<f64> = (0..COAT_TABLE_LEN)
+            .map(|j| (j as f64 / 64.0).powi(2))
+            .collect();
         for (i, (m, name)) in data.materials.iter().zip(&data.material_names).enumerate() {
-            if data.roughness.get(i).is_some_and(Option::is_some) {
-                return Err(unsupported(format!(
-                    "material '{name}' has a textured roughness"
-                )));
-            }
             if matches!(m, MaterialData::Interface) {
                 return Err(unsupported(format!(
                     "material '{name}' is an index-matched interface; media render on the CPU"
                 )));
             }
-            let constant = |id: scene::TextureId| -> Result<[f64; 3], GpuError> {
-                match &data.textures[id.index()] {
-                    TextureData::Constant { rgb } => Ok(*rgb),
-                    // Its colour `a` at uv = 0 (see the colour slot above).
-                    TextureData::Checker {
-                        a,
-                        space: TextureSpace::Uv,
-                        ..
-                    } => Ok(*a),
-                    _ => Err(unsupported(format!(
-                        "material '{name}' has a textured parameter other than its colour"
-                    ))),
-                }
-            };
-            // The colour slot may be a point-space checker.
-            let (colour, clamp) = match m {
-                MaterialData::Diffuse { reflectance } => (Some(*reflectance), false),
-                MaterialData::Plastic { diffuse, .. } => (Some(*diffuse), true),
-                _ => (None, false),
-            };
-            let mut tex = (0, [0.0; 4], [0.0; 4]);
-            let mut pattern = (0, 0);
-            // Plastic's diffuse colour is clamped to [0, 1] (render::bsdf::plastic).
-            let c = |v: [f64; 3]| {
-                if clamp {
-                    v.map(|x| x.clamp(0.0, 1.0))
-                } else {
-                    v
-                }
-            };
-            if let Some(id) = colour {
-                match &data.textures[id.index()] {
-                    TextureData::Constant { .. } => {}
-                    TextureData::Checker {
-                        a,
-                        b,
-                        scale,
-                        space: TextureSpace::Point,
-                    } => {
-                        tex = (1, f4(c(*a), *scale), f4(c(*b), 0.0));
-                    }
-                    // The GPU's geometry carries no surface parameters (uv = 0, as
-                    // the CPU's solids: only meshes have them), so a uv checker is its
-                    // colour `a` everywhere, as on the CPU: a constant (`rgb` below).
-                    TextureData::Checker {
-                        space: TextureSpace::Uv,
-                        ..
-                    } => {}
-                    TextureData::Image {
-                        image,
-                        scale,
-                        sharpness,
-                    } => {
-                        let img = data.images.image(*image);
-                        let at = *images.entry(image.index()).or_insert_with(|| {
-                            let at = self.tables.len() as u32;
-                            self.tables.extend(img.pixels.iter().flatten());
-                            at
-                        });
-                        tex = (
-                            3,
-                            f4([0.0; 3], *scale),
-                            [img.height as f32, *sharpness as f32, 0.0, 0.0],
-                        );
-                        pattern = (at, img.width as u32);
-                    }
-                    TextureData::Pattern {
-                        kind,
-                        a,
-                        b,
-                        scale,
-                        octaves,
-                    } => {
-                        // Blended, then clamped as the CPU clamps plastic's colour.
-                        tex = (2, f4(*a, *scale), f4(*b, 0.0));
-                        pattern = (crate::noise::pattern_code(*kind), *octaves);
-                    }
-                }
-            }
+            // A textured parameter's constant: any value serves (the texture replaces it
+            // per hit), the checker's `a` where it has one.
             let rgb = |id: scene::TextureId| match &data.textures[id.index()] {
                 TextureData::Constant { rgb } => *rgb,
-                // The checker's colours are written per hit; any value serves here.
                 TextureData::Checker { a, .. } | TextureData::Pattern { a, .. } => *a,
-                // So is an image's.
                 TextureData::Image { .. } => [0.5; 3],
             };
+            let mut tex = [GpuTexture::default(); TEX_SLOTS];
+            let mut coats = [u32::MAX, 0, 0, 0];
             let bsdf = match *m {
-                MaterialData::Diffuse { reflectance } => GpuBsdf::diffuse(rgb(reflectance)),
+                MaterialData::Diffuse { reflectance } => {
+                    tex[0] = self.texture(data, reflectance, false, &mut images);
+                    GpuBsdf::diffuse(rgb(reflectance))
+                }
                 MaterialData::Conductor { eta, k, roughness } => {
-                    GpuBsdf::conductor(constant(eta)?, constant(k)?, roughness)
+                    tex[0] = self.texture(data, eta, false, &mut images);
+                    tex[1] = self.texture(data, k, false, &mut images);
+                    GpuBsdf::conductor(rgb(eta), rgb(k), roughness)
                 }
                 MaterialData::Dielectric { eta, roughness } => GpuBsdf::dielectric(eta, roughness),
                 MaterialData::Interface => unreachable!("refused above"),
@@ -491,26 +510,33 @@ impl DirectScene {
                     eta,
                     roughness,
                 } => {
-                    let mu: Vec<f64> = (0..COAT_TABLE_LEN)
-                        .map(|j| (j as f64 / 64.0).powi(2))
-                        .collect();
+                    // Plastic's diffuse colour is clamped to [0, 1] (render::bsdf::plastic).
+                    tex[0] = self.texture(data, diffuse, true, &mut images);
                     let coat = host.coat_albedo(eta, roughness, &mu);
                     let at = self.tables.len() as u32;
                     self.tables.extend(coat.albedo.iter().map(|&a| a as f32));
+                    if data.roughness.get(i).is_some_and(Option::is_some) {
+                        // The coats at α = k/32 (render::material::RoughnessMap).
+                        coats[0] = self.tables.len() as u32;
+                        for k in 0..=COAT_STEPS {
+                            let c = host.coat_albedo(eta, k as f64 / COAT_STEPS as f64, &mu);
+                            self.tables.push(c.r_int as f32);
+                            self.tables.extend(c.albedo.iter().map(|&a| a as f32));
+                        }
+                    }
                     GpuBsdf::plastic(rgb(diffuse), eta, roughness, coat.r_int, at)
                 }
             };
+            if let Some(Some(id)) = data.roughness.get(i) {
+                tex[2] = self.texture(data, *id, false, &mut images);
+            }
             self.materials.push(GpuMaterial {
                 bsdf,
-                tex_kind: tex.0,
-                tex_code: pattern.0,
-                tex_size: pattern.1,
-                tex_clamp: u32::from(clamp),
+                tex,
                 to_local: IDENTITY_ROWS,
                 normals: IDENTITY_ROWS,
-                a: tex.1,
-                b: tex.2,
                 emission: f4(data.emission.get(i).copied().unwrap_or_default(), 0.0),
+                coats,
             });
         }
         Ok(())
@@ -751,5 +777,19 @@ impl DirectScene {
             slot += n;
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The shade kernel reads a textured plastic's coat tables with the stride and steps
+    /// the packing writes them with.
+    #[test]
+    fn coat_table_constants_match_the_kernel() {
+        let wgsl = super::super::DIRECT_WGSL;
+        assert!(wgsl.contains(&format!("const COAT_STEPS: f32 = {COAT_STEPS}.0;")));
+        assert!(wgsl.contains(&format!("const COAT_WORDS: u32 = {}u;", COAT_TABLE_LEN + 1)));
     }
 }

@@ -61,19 +61,24 @@ struct Frame {
 // (kind 1), over `count` leaves (GpuObject) from `first`.
 struct GpuShape { kind: u32, first: u32, count: u32, material: u32, lo: vec4<f32>, hi: vec4<f32> }
 
-// A material: its BSDF with constant colours, and a texture replacing bsdf.rgb
-// (DirectScene's GpuMaterial): a point-space checker (tex_kind 1: a.xyz, b.xyz, scale in
-// a.w), a solid pattern (2: noise.wgsl's pattern tex_code with tex_size octaves blending
-// a.xyz at 0 to b.xyz at 1, scale in a.w) or an image by triplanar projection (3: RGB
-// f32 pixels from sel_buf[tex_code], tex_size × b.x of them, scale in a.w, sharpness in
-// b.y), clamped to [0, 1] where tex_clamp is 1. Patterns and images are read at the
-// point in the object's own space (dot(lx.xyz, p) + lx.w, …) with the normal there
-// (normalize(dot(nx.xyz, n), …)).
-// `emission`: the radiance its surface sends out on the outer side (0: none).
+// A texture in place of a BSDF parameter (DirectScene's GpuTexture): a point-space
+// checker (kind 1: a.xyz, b.xyz, scale in a.w), a solid pattern (2: noise.wgsl's pattern
+// `code` with `size` octaves blending a.xyz at 0 to b.xyz at 1, scale in a.w) or an
+// image by triplanar projection (3: RGB f32 pixels from sel_buf[code], size × b.x of
+// them, scale in a.w, sharpness in b.y), clamped to [0, 1] where `clamp` is 1; 0: none.
+struct GpuTexture { kind: u32, code: u32, size: u32, clamp: u32, a: vec4<f32>, b: vec4<f32> }
+
+// A material: its BSDF with constant parameters, and textures in place of the colour
+// (bsdf.rgb: diffuse reflectance, plastic's base, a conductor's η), a conductor's k
+// (bsdf.k) and α (the first channel, clamped to [0, 1]); patterns and images are read
+// at the point in the object's own space (dot(lx.xyz, p) + lx.w, …) with the normal
+// there (normalize(dot(nx.xyz, n), …)). `emission`: the radiance its surface sends out
+// on the outer side (0: none). `coats.x`: a plastic with a textured α, its coat tables
+// at α = k/32 (COAT_WORDS words each: r_int, then the albedos).
 struct GpuMaterial {
-    bsdf: GpuBsdf, tex_kind: u32, tex_code: u32, tex_size: u32, tex_clamp: u32,
-    a: vec4<f32>, b: vec4<f32>, lx: vec4<f32>, ly: vec4<f32>, lz: vec4<f32>,
-    nx: vec4<f32>, ny: vec4<f32>, nz: vec4<f32>, emission: vec4<f32>,
+    bsdf: GpuBsdf, tex: array<GpuTexture, 3>,
+    lx: vec4<f32>, ly: vec4<f32>, lz: vec4<f32>,
+    nx: vec4<f32>, ny: vec4<f32>, nz: vec4<f32>, emission: vec4<f32>, coats: vec4<u32>,
 }
 
 // Perlin's permutation for noise.wgsl, at the start of sel_buf (DirectScene::new).

@@ -1,3 +1,8 @@
+// A textured plastic's coat tables (gpu::bsdf::COAT_STEPS per unit of α, COAT_WORDS
+// words each: r_int and gpu::bsdf::COAT_TABLE_LEN albedos).
+const COAT_STEPS: f32 = 32.0;
+const COAT_WORDS: u32 = 66u;
+
 // Draw j of the vertex of slot q / nd at depth 0 (every slot, in slot order: coherent
 // rays), else of the live slot queued at q / nd: technique k's (j < Σ n_k), or the
 // extra BSDF draw that only extends the path (j = Σ n_k). The draws of slots not
@@ -27,13 +32,6 @@ fn shade(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
     let carries = extend && j == frame.carry;
     let hn = hits[ha + 1u];
     let mat = materials[bitcast<u32>(hn.w)];
-    // Delta lobes (render::bsdf::Bxdf::has_specular) and nothing else but them.
-    let spec_mat = mat.bsdf.delta != 0u;
-    let pure = spec_mat && (mat.bsdf.kind == 1u || mat.bsdf.kind == 2u);
-    let vflags = select(0.0, F_PURE, pure);
-    // The extra BSDF draw serves the continuation and, without a BSDF technique, the
-    // delta lobes (Integrator::shade).
-    let extra_used = carries || (frame.carry == frame.n_draws && spec_mat);
     let px = slot_pixel(slot);
     let p = hp.xyz;
     let n = hn.xyz;
@@ -41,31 +39,62 @@ fn shade(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
     let beta = hits[ha + 4u].xyz;
     var m = mat.bsdf;
     m.zero = frame.zero;
-    if (mat.tex_kind == 1u) {
-        // render::texture: cells of p·scale − n·10⁻³, a where their index sum is even.
-        let q = floor(p * mat.a.w - n * 1e-3);
-        let cells = q.x + q.y + q.z;
-        let r = cells - 2.0 * floor(cells * 0.5);
-        m.rgb = select(mat.b, mat.a, r < 0.5);
-        m.rgb.w = 0.0;
-    } else if (mat.tex_kind >= 2u) {
-        // render::texture, in the object's own space: a·(1 − t) + b·t with t the pattern
-        // at p·scale, or the image's triplanar projection at p·scale.
-        let q = vec3<f32>(dot(mat.lx.xyz, p) + mat.lx.w, dot(mat.ly.xyz, p) + mat.ly.w,
-            dot(mat.lz.xyz, p) + mat.lz.w) * mat.a.w;
+    // The textured parameters (render::texture), each slot through one evaluation.
+    for (var s = 0u; s < 3u; s++) {
+        let t = mat.tex[s];
+        if (t.kind == 0u) { continue; }
         var rgb = vec3<f32>(0.0);
-        if (mat.tex_kind == 2u) {
-            let t = pattern_value(mat.tex_code, q, mat.tex_size);
-            rgb = mat.a.xyz * (1.0 - t) + mat.b.xyz * t;
+        if (t.kind == 1u) {
+            // Cells of p·scale − n·10⁻³, a where their index sum is even.
+            let q = floor(p * t.a.w - n * 1e-3);
+            let cells = q.x + q.y + q.z;
+            let r = cells - 2.0 * floor(cells * 0.5);
+            rgb = select(t.b, t.a, r < 0.5).xyz;
         } else {
-            var nl = vec3<f32>(dot(mat.nx.xyz, n), dot(mat.ny.xyz, n), dot(mat.nz.xyz, n));
-            let len = length(nl);
-            nl = select(vec3<f32>(0.0), nl / len, len > 0.0);
-            rgb = triplanar(mat.tex_code, mat.tex_size, u32(mat.b.x), q, nl, mat.b.y);
+            // In the object's own space: a·(1 − t) + b·t with t the pattern at p·scale,
+            // or the image's triplanar projection at p·scale.
+            let q = vec3<f32>(dot(mat.lx.xyz, p) + mat.lx.w, dot(mat.ly.xyz, p) + mat.ly.w,
+                dot(mat.lz.xyz, p) + mat.lz.w) * t.a.w;
+            if (t.kind == 2u) {
+                let v = pattern_value(t.code, q, t.size);
+                rgb = t.a.xyz * (1.0 - v) + t.b.xyz * v;
+            } else {
+                var nl = vec3<f32>(dot(mat.nx.xyz, n), dot(mat.ny.xyz, n), dot(mat.nz.xyz, n));
+                let len = length(nl);
+                nl = select(vec3<f32>(0.0), nl / len, len > 0.0);
+                rgb = triplanar(t.code, t.size, u32(t.b.x), q, nl, t.b.y);
+            }
         }
-        if (mat.tex_clamp != 0u) { rgb = clamp(rgb, vec3<f32>(0.0), vec3<f32>(1.0)); }
-        m.rgb = vec4<f32>(rgb, 0.0);
+        if (t.clamp != 0u) { rgb = clamp(rgb, vec3<f32>(0.0), vec3<f32>(1.0)); }
+        if (s == 0u) {
+            m.rgb = vec4<f32>(rgb, 0.0);
+        } else if (s == 1u) {
+            m.k = vec4<f32>(rgb, 0.0);
+        } else {
+            // α (Material::bsdf_rough): a plastic's coat at the nearest k/32, whose
+            // tables were made for it; a delta lobe below α = 10⁻³ (k = 0).
+            let alpha = clamp(rgb.x, 0.0, 1.0);
+            if (m.kind == 3u) {
+                let c = floor(alpha * COAT_STEPS + 0.5);
+                let at = mat.coats.x + u32(c) * COAT_WORDS;
+                m.r_int = sel_buf[at];
+                m.table = at + 1u;
+                m.alpha_x = c / COAT_STEPS;
+                m.delta = select(0u, 1u, c == 0.0);
+            } else if (m.kind != 0u) {
+                m.alpha_x = alpha;
+                m.delta = select(0u, 1u, alpha < 1e-3 || (m.kind == 2u && m.eta == 1.0));
+            }
+            m.alpha_y = m.alpha_x;
+        }
     }
+    // Delta lobes (render::bsdf::Bxdf::has_specular) and nothing else but them.
+    let spec_mat = m.delta != 0u;
+    let pure = spec_mat && (m.kind == 1u || m.kind == 2u);
+    let vflags = select(0.0, F_PURE, pure);
+    // The extra BSDF draw serves the continuation and, without a BSDF technique, the
+    // delta lobes (Integrator::shade).
+    let extra_used = carries || (frame.carry == frame.n_draws && spec_mat);
     let f = basis(n);
     let wo_l = to_local(f, wo);
     // The normal turned toward the viewer (Technique::CosineHemisphere's axis).
