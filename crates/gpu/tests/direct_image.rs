@@ -1426,8 +1426,16 @@ fn unsupported_scenes_are_refused_by_name() {
         e.contains("CSG nodes") && e.contains("--backend cpu"),
         "{e}"
     );
-    let e = err(&SCENE.replace("scale = 1.0 } }", "scale = 1.0, space = \"uv\" } }"));
-    assert!(e.contains("uv"), "{e}");
+    let e = err(&SCENE
+        .replace(
+            "[materials.mirror]",
+            "[media.fog]\nalbedo = 0.9\nmean_free_path = 2\n\n[materials.mirror]",
+        )
+        .replace(
+            "material = \"glass\"",
+            "material = \"glass\"\nmedium = \"fog\"",
+        ));
+    assert!(e.contains("participating medium"), "{e}");
 
     let e = err(&SCENE.replace(
         "sphere([0, 0, 0], 0.22)",
