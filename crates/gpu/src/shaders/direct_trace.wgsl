@@ -34,18 +34,20 @@ fn draw_at(slot: u32, j: u32) -> u32 {
     return ((frame.depth * frame.slots + slot) * frame.per_slot + j) * draw_vec4s(frame.n_tech);
 }
 
-fn write_vertex(at: u32, p: vec3<f32>, leaf: u32, wo: vec3<f32>, beta: vec3<f32>) {
+fn write_vertex(at: u32, p: vec3<f32>, leaf: u32, n: vec3<f32>, wo: vec3<f32>, beta: vec3<f32>) {
     hits[at] = vec4<f32>(p, S_SURFACE);
-    hits[at + 1u] = vec4<f32>(leaf_normal(leaf, p), bitcast<f32>(objects[leaf & 0x7fffffffu].material));
+    hits[at + 1u] = vec4<f32>(n, bitcast<f32>(objects[leaf & 0x7fffffffu].material));
     hits[at + 2u] = vec4<f32>(wo, 0.0);
     hits[at + 4u] = vec4<f32>(beta, 0.0);
 }
 
-// The radiance the surface of leaf `leaf` at p sends back along −d: its material's
-// emission where d arrives on the outer side, else 0 (Scene::surface_emission).
-fn surface_emission(leaf: u32, p: vec3<f32>, d: vec3<f32>) -> vec3<f32> {
+// The radiance the surface of leaf `leaf` (outward normal n there) sends back along −d:
+// its material's emission where d arrives on the outer side, else 0
+// (Scene::surface_emission). The callers find n (leaf_normal, which runs a tape's
+// interpreter, once per kernel path: llvmpipe inlines every call site).
+fn surface_emission(leaf: u32, n: vec3<f32>, d: vec3<f32>) -> vec3<f32> {
     let e = materials[objects[leaf & 0x7fffffffu].material].emission.xyz;
-    if (all(e == vec3<f32>(0.0)) || !(dot(d, leaf_normal(leaf, p)) < 0.0)) { return vec3<f32>(0.0); }
+    if (all(e == vec3<f32>(0.0)) || !(dot(d, n) < 0.0)) { return vec3<f32>(0.0); }
     return e;
 }
 
@@ -82,11 +84,13 @@ fn trace_camera(slot: u32) {
         hits[at + 3u] = vec4<f32>(le, 0.0);
         return;
     }
-    write_vertex(at, o + h.t * d, h.leaf, -d, vec3<f32>(1.0));
-    hits[at + 8u] = vec4<f32>(hits[at + 1u].xyz, h.t);
+    let p = o + h.t * d;
+    let n = leaf_normal(h.leaf, p);
+    write_vertex(at, p, h.leaf, n, -d, vec3<f32>(1.0));
+    hits[at + 8u] = vec4<f32>(n, h.t);
     if ((frame.flags & (FLAG_EMITTERS | FLAG_HIDE)) == FLAG_EMITTERS) {
         // An emitting object seen directly, outside MIS.
-        hits[at + 3u] = vec4<f32>(surface_emission(h.leaf, o + h.t * d, d), 0.0);
+        hits[at + 3u] = vec4<f32>(surface_emission(h.leaf, n, d), 0.0);
     }
 }
 
@@ -112,17 +116,23 @@ fn trace_continuation(slot: u32) {
     let r = draw_at(slot, frame.carry);
     let w2 = draws[r + 2u];
     var g = vec3<f32>(0.0);
-    if (lh.t < inf() || h.status == 0u) {
+    let p = o + h.t * d;
+    let emitters = (frame.flags & FLAG_EMITTERS) != 0u;
+    let object = lh.t == inf() && h.status == 1u;
+    // The surface met: its normal for its emission and the next vertex.
+    var n = vec3<f32>(0.0);
+    if (object && (emitters || cd.w == 1.0)) { n = leaf_normal(h.leaf, p); }
+    if (!object) {
         g = w2.xyz * incoming(lh, d);
-    } else if ((frame.flags & FLAG_EMITTERS) != 0u) {
-        g = w2.xyz * surface_emission(h.leaf, o + h.t * d, d);
+    } else if (emitters) {
+        g = w2.xyz * surface_emission(h.leaf, n, d);
     }
     draws[r + 2u] = vec4<f32>(g, w2.w);
-    if (lh.t < inf() || h.status == 0u || cd.w != 1.0) {
+    if (!object || cd.w != 1.0) {
         hits[at].w = S_NONE;
         return;
     }
-    write_vertex(at, o + h.t * d, h.leaf, -d, hits[at + 7u].xyz);
+    write_vertex(at, p, h.leaf, n, -d, hits[at + 7u].xyz);
     push(LIVE_LEN, frame.wave.x, slot);
 }
 
@@ -130,30 +140,33 @@ fn trace_shadow(q: u32) {
     if (q >= atomicLoad(&stats[QUEUE_LEN])) { return; }
     let i = atomicLoad(&stats[QUEUE_ITEMS + q]);
     let at = (frame.depth * frame.slots * frame.per_slot + i) * draw_vec4s(frame.n_tech);
-    if ((frame.flags & FLAG_EMITTERS) != 0u && i % frame.per_slot <= frame.n_draws) {
-        // With emitting objects a draw's record holds its integrand without Li, which
-        // this nearest-hit ray finds: the nearest light's or the environment's where no
-        // object comes first, else the emission of the surface met
-        // (render::integrator::medium::transmitted). Point and spot lights' records
-        // (after the draws) keep their any-hit rays.
-        let o = draws[at].xyz;
-        let d = draws[at + 1u].xyz;
-        let lh = nearest_light(o, d, inf());
-        let h = scene_trace(o, d, lh.t, false);
-        if (h.status == 2u) {
-            draws[at + 1u].w = S_OVERFLOW + 10.0;
-            return;
-        }
+    let o = draws[at].xyz;
+    let d = draws[at + 1u].xyz;
+    // With emitting objects a draw's record holds its integrand without Li, which a
+    // nearest-hit ray finds: the nearest light's or the environment's where no object
+    // comes first, else the emission of the surface met
+    // (render::integrator::medium::transmitted). Point and spot lights' records (after
+    // the draws) keep their any-hit rays. (One call of scene_trace: llvmpipe inlines
+    // every call site of the intersectors.)
+    let emitters = (frame.flags & FLAG_EMITTERS) != 0u && i % frame.per_slot <= frame.n_draws;
+    var lh = LightHit(inf(), 0u, vec3<f32>(0.0), vec3<f32>(0.0));
+    var t_max = draws[at].w;
+    if (emitters) {
+        lh = nearest_light(o, d, inf());
+        t_max = lh.t;
+    }
+    let h = scene_trace(o, d, t_max, !emitters);
+    if (h.status == 2u) {
+        draws[at + 1u].w = S_OVERFLOW + 10.0;
+    } else if (emitters) {
         var li = incoming(lh, d);
-        if (h.status == 1u) { li = surface_emission(h.leaf, o + h.t * d, d); }
+        if (h.status == 1u) {
+            let p = o + h.t * d;
+            li = surface_emission(h.leaf, leaf_normal(h.leaf, p), d);
+        }
         let g = draws[at + 2u];
         draws[at + 2u] = vec4<f32>(g.xyz * li, g.w);
         draws[at + 1u].w = select(D_OCCLUDED, D_VISIBLE, any(li != vec3<f32>(0.0)));
-        return;
-    }
-    let h = scene_trace(draws[at].xyz, draws[at + 1u].xyz, draws[at].w, true);
-    if (h.status == 2u) {
-        draws[at + 1u].w = S_OVERFLOW + 10.0;
     } else if (h.status == 1u) {
         draws[at + 1u].w = D_OCCLUDED;
     } else {
