@@ -73,6 +73,18 @@ pub struct SceneFlags {
     /// available]; a larger render is refused before anything runs, with its estimate.
     #[arg(long, value_name = "SIZE", value_parser = frepray::limits::parse_bytes)]
     pub max_memory: Option<u64>,
+    /// How the CPU runs the samples (scenes): `per-ray`, one sample at a time through
+    /// every stage, or `batched`, a tile's samples in batches stage by stage (`direct`
+    /// without media, emitting objects or AOVs; other renders run per ray). The image
+    /// is the same bit for bit.
+    #[arg(long, value_name = "NAME", default_value = "per-ray", value_parser = parse_engine)]
+    pub engine: frepray::Engine,
+}
+
+/// `--engine`'s value.
+fn parse_engine(name: &str) -> Result<frepray::Engine, String> {
+    frepray::Engine::parse(name)
+        .ok_or_else(|| format!("unknown engine {name:?}: per-ray or batched"))
 }
 
 impl SceneFlags {
@@ -106,6 +118,7 @@ impl SceneFlags {
             pixel_center: self.pixel_center,
             stage_times: false,
             max_memory: self.max_memory.unwrap_or(0),
+            engine: self.engine,
         })
     }
 

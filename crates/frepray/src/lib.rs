@@ -55,7 +55,7 @@ pub use model_info::{info as model_info, ModelInfo};
 
 /// The MIS estimators by name (`balance`, `power`, …, `optimal-direct`, …).
 pub use mis::Method;
-pub use render::integrator::{Aov, IntegratorKind, RenderOptions};
+pub use render::integrator::{Aov, Engine, IntegratorKind, RenderOptions};
 pub use render::{
     BlockDetail, Film, Image, PixelDetail, RenderState, RenderStats, StateHeader, Tonemap,
 };

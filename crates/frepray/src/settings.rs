@@ -22,6 +22,8 @@ pub struct Settings {
     pub stage_times: bool,
     /// The memory a render may take in bytes (0: what the system has available).
     pub max_memory: u64,
+    /// How the CPU runs the samples (the image is the same either way).
+    pub engine: crate::Engine,
 }
 
 /// An override that has no effect on a render: the scene keys it sets and what they
@@ -165,6 +167,7 @@ impl Scene {
         o.pixel_center = s.pixel_center;
         o.stage_times = s.stage_times;
         o.max_memory = s.max_memory;
+        o.engine = s.engine;
         o.validate()?;
         render::limits::check_threads(o.threads)?;
         let (width, height) = self.resolution();

@@ -25,7 +25,7 @@
 //! summed).
 
 use crate::error::Error;
-use crate::integrator::{Integrator, IntegratorKind, RayCounts, RenderOptions};
+use crate::integrator::{Integrator, IntegratorKind, RayCounts, RenderOptions, Wave};
 use crate::scene::Scene;
 use rayon::prelude::*;
 pub use state::RenderStats;
@@ -60,6 +60,12 @@ impl Tile {
     ) -> u64 {
         let stride = it.record.stride();
         let started = Instant::now();
+        if it.batched(scene) {
+            let n = self.render_waves(it, scene, (first, start, end), stop);
+            self.samples += n;
+            self.rays.busy_ns += started.elapsed().as_nanos() as u64;
+            return n;
+        }
         let mut n = 0;
         'pixels: for (k, rec) in self.records.chunks_exact_mut(stride).enumerate() {
             let (i, j) = (k as u32 % self.w, k as u32 / self.w);
@@ -74,6 +80,41 @@ impl Tile {
         }
         self.samples += n;
         self.rays.busy_ns += started.elapsed().as_nanos() as u64;
+        n
+    }
+
+    /// [`Self::render`] by the batched engine: the samples in [`Wave`]s of the tile's
+    /// pixels in order, each pixel's samples in index order; `stop` is read before each
+    /// wave, so a stop takes effect within one wave ([`crate::integrator::Wave`]'s
+    /// `BATCH` samples) and records still hold whole samples.
+    fn render_waves(
+        &mut self,
+        it: &Integrator,
+        scene: &Scene,
+        (first, start, end): (u32, u32, u32),
+        stop: &AtomicBool,
+    ) -> u64 {
+        let stride = it.record.stride();
+        let mut wave = Wave::new(it);
+        let mut n = 0;
+        for k in 0..self.records.len() / stride {
+            let (i, j) = (k as u32 % self.w, k as u32 / self.w);
+            let next = first
+                .saturating_add(self.records[k * stride] as u32)
+                .max(start);
+            for s in next..end {
+                wave.push(k, self.x0 + i, self.y0 + j, s);
+                if wave.is_full() {
+                    if stop.load(Ordering::Relaxed) {
+                        return n;
+                    }
+                    n += it.run_wave(scene, &mut wave, &mut self.records, stride, &mut self.rays);
+                }
+            }
+        }
+        if !wave.is_empty() && !stop.load(Ordering::Relaxed) {
+            n += it.run_wave(scene, &mut wave, &mut self.records, stride, &mut self.rays);
+        }
         n
     }
 }

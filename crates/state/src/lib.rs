@@ -34,7 +34,7 @@ pub use counts::{CpuStages, RayCounts, RayKind, TIMED_EVERY};
 pub use error::Error;
 pub use host::{CoatAlbedo, Host, LightBounds, LightTreeNode, LightTreeTable};
 pub use image::{Film, Image, Tonemap};
-pub use options::{uses_mis, RenderOptions, MAX_TECHNIQUES};
+pub use options::{uses_mis, Engine, RenderOptions, MAX_TECHNIQUES};
 pub use options_error::OptionsError;
 pub use record::{Pixel, Record};
 pub use render_state::{fnv1a, BlockDetail, PixelDetail, RenderState, StateHeader};

@@ -77,6 +77,40 @@ pub struct RenderOptions {
     /// Time the render's stages ([`crate::RayCounts::stages`]; `frepray bench` does). Off by
     /// default: the timers cost a few per cent on small scenes.
     pub stage_times: bool,
+    /// How the CPU runs the samples ([`Engine`]); the image is the same either way.
+    pub engine: Engine,
+}
+
+/// How the CPU back end runs a render's samples. Both give the same image bit for bit.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Engine {
+    /// One sample at a time through every stage (the reference).
+    #[default]
+    PerRay,
+    /// A tile's samples in batches, stage by stage over the whole batch (camera rays,
+    /// draws, lights along the draws, shadow rays, pdfs, records): the GPU back end's
+    /// pipeline shape. `direct` without media, emitting objects or AOVs; other renders
+    /// run per ray, and so do the samples whose first hit has a delta lobe.
+    Batched,
+}
+
+impl Engine {
+    /// The engine named `per-ray` or `batched`.
+    pub fn parse(name: &str) -> Option<Engine> {
+        match name {
+            "per-ray" => Some(Engine::PerRay),
+            "batched" => Some(Engine::Batched),
+            _ => None,
+        }
+    }
+
+    /// The engine's name, as [`Engine::parse`] reads it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Engine::PerRay => "per-ray",
+            Engine::Batched => "batched",
+        }
+    }
 }
 
 impl Default for RenderOptions {
@@ -104,6 +138,7 @@ impl Default for RenderOptions {
             max_memory: 0,
             scene_hash: 0,
             stage_times: false,
+            engine: Engine::PerRay,
         }
     }
 }

@@ -53,6 +53,7 @@
 
 mod accumulate;
 mod aov;
+mod batch;
 mod medium;
 mod path;
 mod ray_log;
@@ -62,11 +63,12 @@ mod vertex;
 pub use ::state::OptionsError;
 use ::state::{dims, Combine, Pixel, Tally};
 pub use ::state::{
-    uses_mis, CpuStages, LinearMis, LinearRecord, RayCounts, RayKind, Record, RenderOptions,
-    ShadedDraw, ShadedVertex, MAX_TECHNIQUES, TIMED_EVERY,
+    uses_mis, CpuStages, Engine, LinearMis, LinearRecord, RayCounts, RayKind, Record,
+    RenderOptions, ShadedDraw, ShadedVertex, MAX_TECHNIQUES, TIMED_EVERY,
 };
 pub use accumulate::{Accumulator, CpuHost};
 pub use aov::Aov;
+pub(crate) use batch::Wave;
 use ray_log::RayLog;
 pub use train::TRAIN_SPP;
 
@@ -158,6 +160,8 @@ pub(crate) struct Integrator {
     pub training: scene::Training,
     /// The trained light selection, once [`Self::prepare`] has trained it.
     pub trained: Option<Arc<TrainedSelection>>,
+    /// How the samples run ([`RenderOptions::engine`]).
+    pub engine: Engine,
 }
 
 impl std::ops::Deref for Integrator {
@@ -203,6 +207,7 @@ impl Integrator {
             seed: o.seed,
             training: o.training,
             trained: None,
+            engine: o.engine,
         })
     }
 
@@ -263,6 +268,34 @@ impl Integrator {
                 .camera
                 .ray_through_lens(x, y, u, rng.get_2d(dims::LENS)),
             None => scene.camera.ray(x, y, u),
+        }
+    }
+
+    /// Whether the samples of this render of `scene` run in [`Wave`]s.
+    pub fn batched(&self, scene: &Scene) -> bool {
+        self.engine == Engine::Batched && Wave::covers(self, scene)
+    }
+
+    /// Runs `wave`'s samples into `records` (`stride` words per pixel): [`Wave::run`],
+    /// timed as [`Self::sample`] is.
+    pub fn run_wave<'s>(
+        &self,
+        scene: &'s Scene,
+        wave: &mut Wave<'s>,
+        records: &mut [f64],
+        stride: usize,
+        rays: &mut RayCounts,
+    ) -> u64 {
+        if rays.timing {
+            wave.run(
+                self,
+                scene,
+                records,
+                stride,
+                &mut ray_log::Timed(rays, None),
+            )
+        } else {
+            wave.run(self, scene, records, stride, rays)
         }
     }
 

@@ -100,7 +100,7 @@ pub(crate) fn incident(
 
 /// [`incident`] with the nearest area light along the ray already found.
 #[inline(always)]
-fn incident_from(
+pub(super) fn incident_from(
     scene: &Scene,
     ray: &Ray,
     light: Option<LightHit>,
@@ -134,7 +134,7 @@ fn incident_from(
 /// area light along it (`nearest`), else the environment (index `area().len()`), else
 /// None. It decides which per-light estimator a draw feeds; an object in front of the
 /// light makes the draw's integrand 0, not its light another.
-fn light_reached(scene: &Scene, nearest: Option<LightHit>) -> Option<usize> {
+pub(super) fn light_reached(scene: &Scene, nearest: Option<LightHit>) -> Option<usize> {
     match nearest {
         Some(h) => Some(h.light),
         None => scene
@@ -259,7 +259,7 @@ impl Integrator {
     }
 
     /// Point and spot lights at `v`: Σ f·|cos|·I/d² over the visible ones (outside MIS).
-    fn delta_lights(&self, scene: &Scene, v: &Vertex, rays: &mut impl RayLog) -> Rgb {
+    pub(super) fn delta_lights(&self, scene: &Scene, v: &Vertex, rays: &mut impl RayLog) -> Rgb {
         let mut sum = Rgb::ZERO;
         for l in scene.lights.delta() {
             let Some(ls) = l.sample_li(v.p) else { continue };
