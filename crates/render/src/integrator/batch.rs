@@ -102,6 +102,8 @@ impl Default for Slot {
 pub(crate) struct Wave<'s> {
     /// Per sample: its pixel's index in the tile's records, its pixel and sample index.
     items: Vec<(usize, u32, u32, u32)>,
+    /// Per sample: its pixel and sample index, as the sampler takes them.
+    cells: Vec<(u32, u32, u32)>,
     rng: Vec<SampleStream>,
     kind: Vec<Item>,
     /// The radiance the camera ray sees directly.
@@ -137,6 +139,7 @@ impl<'s> Wave<'s> {
         let slots = technique_of.len() * BATCH;
         Self {
             items: Vec::with_capacity(BATCH),
+            cells: Vec::with_capacity(BATCH),
             rng: Vec::with_capacity(BATCH),
             kind: Vec::with_capacity(BATCH),
             seen: Vec::with_capacity(BATCH),
@@ -189,12 +192,16 @@ impl<'s> Wave<'s> {
         n
     }
 
-    /// Stage 1: random streams, camera rays and their nearest hits.
+    /// Stage 1: random streams (the first blocks of every sample's evaluated together,
+    /// [`crate::Sampler::streams_into`]), camera rays and their nearest hits.
     fn camera(&mut self, it: &Integrator, scene: &'s Scene, rays: &mut impl RayLog) {
-        for &(_, x, y, index) in &self.items {
-            let rng = it.sampler.stream(x, y, index);
+        self.cells.clear();
+        self.cells
+            .extend(self.items.iter().map(|&(_, x, y, index)| (x, y, index)));
+        it.sampler.streams_into(&self.cells, &mut self.rng);
+        for (&(_, x, y, _), rng) in self.items.iter().zip(&self.rng) {
             rays.begin(RayKind::Generate);
-            let ray = it.camera_ray(scene, x, y, &rng);
+            let ray = it.camera_ray(scene, x, y, rng);
             rays.end(RayKind::Generate);
             rays.begin(RayKind::Camera);
             let first = trace(scene, &ray, None);
@@ -210,7 +217,6 @@ impl<'s> Wave<'s> {
                 Some(_) => Item::Shade,
             });
             self.vertex.push(v);
-            self.rng.push(rng);
         }
     }
 
