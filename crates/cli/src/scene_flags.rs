@@ -75,8 +75,8 @@ pub struct SceneFlags {
     pub max_memory: Option<u64>,
     /// How the CPU runs the samples (scenes): `per-ray`, one sample at a time through
     /// every stage, or `batched`, a tile's samples in batches stage by stage (`direct`
-    /// without media, emitting objects or AOVs; other renders run per ray). The image
-    /// is the same bit for bit.
+    /// and `path` without media, emitting objects or AOVs; other renders run per ray).
+    /// The image is the same bit for bit.
     #[arg(long, value_name = "NAME", default_value = "per-ray", value_parser = parse_engine)]
     pub engine: frepray::Engine,
 }

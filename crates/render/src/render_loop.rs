@@ -83,8 +83,9 @@ impl Tile {
         n
     }
 
-    /// [`Self::render`] by the batched engine: the samples in [`Wave`]s of the tile's
-    /// pixels in order, each pixel's samples in index order; `stop` is read before each
+    /// [`Self::render`] by the batched engine: the samples in [`Wave`]s, sample index by
+    /// sample index over the tile's pixels, so that a wave never holds two samples of
+    /// one pixel and each pixel's samples run in index order; `stop` is read before each
     /// wave, so a stop takes effect within one wave ([`crate::integrator::Wave`]'s
     /// `BATCH` samples) and records still hold whole samples.
     fn render_waves(
@@ -95,14 +96,16 @@ impl Tile {
         stop: &AtomicBool,
     ) -> u64 {
         let stride = it.record.stride();
+        let next: Vec<u32> = self
+            .records
+            .chunks_exact(stride)
+            .map(|rec| first.saturating_add(rec[0] as u32).max(start))
+            .collect();
         let mut wave = Wave::new(it);
         let mut n = 0;
-        for k in 0..self.records.len() / stride {
-            let (i, j) = (k as u32 % self.w, k as u32 / self.w);
-            let next = first
-                .saturating_add(self.records[k * stride] as u32)
-                .max(start);
-            for s in next..end {
+        for s in start..end {
+            for (k, _) in next.iter().enumerate().filter(|&(_, &from)| s >= from) {
+                let (i, j) = (k as u32 % self.w, k as u32 / self.w);
                 wave.push(k, self.x0 + i, self.y0 + j, s);
                 if wave.is_full() {
                     if stop.load(Ordering::Relaxed) {
@@ -111,9 +114,12 @@ impl Tile {
                     n += it.run_wave(scene, &mut wave, &mut self.records, stride, &mut self.rays);
                 }
             }
-        }
-        if !wave.is_empty() && !stop.load(Ordering::Relaxed) {
-            n += it.run_wave(scene, &mut wave, &mut self.records, stride, &mut self.rays);
+            if !wave.is_empty() {
+                if stop.load(Ordering::Relaxed) {
+                    return n;
+                }
+                n += it.run_wave(scene, &mut wave, &mut self.records, stride, &mut self.rays);
+            }
         }
         n
     }

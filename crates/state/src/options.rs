@@ -88,9 +88,10 @@ pub enum Engine {
     #[default]
     PerRay,
     /// A tile's samples in batches, stage by stage over the whole batch (camera rays,
-    /// draws, lights along the draws, shadow rays, pdfs, records): the GPU back end's
-    /// pipeline shape. `direct` without media, emitting objects or AOVs; other renders
-    /// run per ray, and so do the samples whose first hit has a delta lobe.
+    /// draws, lights along the draws, shadow and continuation rays, pdfs, records),
+    /// vertex by vertex: the GPU back end's pipeline shape. `direct` and `path` without
+    /// media, emitting objects or AOVs; other renders run per ray, and so do the
+    /// vertices with a delta lobe.
     Batched,
 }
 

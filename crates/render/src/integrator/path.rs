@@ -49,7 +49,7 @@ use crate::sampler::SampleStream;
 use crate::scene::Scene;
 
 /// Smallest roulette termination probability (pbrt-v3 §14.5.1).
-const RR_MIN_Q: f64 = 0.05;
+pub(super) const RR_MIN_Q: f64 = 0.05;
 
 impl Integrator {
     /// One iteration of `direct` or `path` for pixel (x, y).

@@ -48,7 +48,7 @@ pub(crate) fn trace(scene: &Scene, ray: &Ray, skip: Option<usize>) -> Trace {
 }
 
 /// [`trace`] with the lights along the ray already found ([`Lights::along`]).
-fn trace_along(scene: &Scene, ray: &Ray, along: &Along, skip: Option<usize>) -> Trace {
+pub(super) fn trace_along(scene: &Scene, ray: &Ray, along: &Along, skip: Option<usize>) -> Trace {
     let hit = scene.intersect_skipping(ray, 0.0, f64::INFINITY, skip);
     let t_max = hit.map_or(f64::INFINITY, |h| h.t);
     if let Some(l) = along.nearest.filter(|l| l.t < t_max) {
@@ -294,7 +294,7 @@ impl Integrator {
     /// media the continuation is the free flight's stop (`integrator/medium.rs`), drawn
     /// with the numbers of vertex `depth + 1` and the path's throughput `beta` at `v`.
     #[allow(clippy::too_many_arguments)]
-    fn li_of_bsdf_draw(
+    pub(super) fn li_of_bsdf_draw(
         &self,
         scene: &Scene,
         v: &Vertex,
