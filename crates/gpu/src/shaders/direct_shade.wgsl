@@ -193,6 +193,20 @@ fn shade(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
         }
     }
     let o = spawn(p, n, wi);
+    // The nearest light along the draw (one call site: llvmpipe inlines each): for a
+    // shadow ray's Li and t_max, or the MIS light reached in per-light mode. With
+    // emitting objects the shadow pass finds Li by a nearest-hit ray (trace_shadow), so
+    // no walk is needed here.
+    let emitters = (frame.flags & FLAG_EMITTERS) != 0u;
+    let per_light = (frame.flags & FLAG_PER_LIGHT) != 0u;
+    var wants_light = false;
+    if (ok && spec) {
+        wants_light = !carries && !emitters;
+    } else if (ok && j != frame.n_draws) {
+        wants_light = per_light || (!carries && !emitters);
+    }
+    var lh = LightHit(inf(), 0u, vec3<f32>(0.0), vec3<f32>(0.0));
+    if (wants_light) { lh = nearest_light(o, wi, inf()); }
     if (carries) {
         // The path's next ray, β after it, and roulette (render::integrator::path).
         var next = beta * weight;
@@ -220,10 +234,9 @@ fn shade(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
         if (carries) {
             write_carried(at, o, wi, gw, F_OUTSIDE + vflags);
         } else {
-            let lh = nearest_light(o, wi, inf());
             var le = incoming(lh, wi);
             // With emitting objects the shadow pass finds Li (trace_shadow).
-            if ((frame.flags & FLAG_EMITTERS) != 0u) { le = vec3<f32>(1.0); }
+            if (emitters) { le = vec3<f32>(1.0); }
             let traced = any(le != vec3<f32>(0.0));
             write_shadow(i, at, o, wi, lh.t, gw * le, F_OUTSIDE + vflags, traced);
         }
@@ -266,9 +279,6 @@ fn shade(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
     // Per-light mode: the MIS light the draw's ray reaches, objects ignored (the nearest
     // area light, else the environment; render::integrator::vertex::light_reached),
     // as 4 × (1 + index) in the flags (0: none).
-    let per_light = (frame.flags & FLAG_PER_LIGHT) != 0u;
-    var lh = LightHit(inf(), 0u, vec3<f32>(0.0), vec3<f32>(0.0));
-    if (!carries || per_light) { lh = nearest_light(o, wi, inf()); }
     var reached = vflags;
     if (per_light) {
         if (lh.t < inf()) {
@@ -283,7 +293,7 @@ fn shade(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
         // render::integrator::vertex::incident (with emitting objects, the shadow pass
         // finds Li: trace_shadow).
         var le = incoming(lh, wi);
-        if ((frame.flags & FLAG_EMITTERS) != 0u) { le = vec3<f32>(1.0); }
+        if (emitters) { le = vec3<f32>(1.0); }
         let traced = any(fc != vec3<f32>(0.0)) && any(le != vec3<f32>(0.0));
         write_shadow(i, at, o, wi, lh.t, beta * fc * le, reached, traced);
     }

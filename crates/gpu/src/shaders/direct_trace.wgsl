@@ -51,13 +51,71 @@ fn surface_emission(leaf: u32, n: vec3<f32>, d: vec3<f32>) -> vec3<f32> {
     return e;
 }
 
-fn trace_camera(slot: u32) {
-    let px = slot_pixel(slot);
-    let ray = camera_ray(px);
-    let o = ray[0];
-    let d = ray[1];
-    let h = scene_trace(o, d, inf(), false);
+// Each mode of the `trace` kernel in three parts: its ray (set up before the query), the
+// one query every mode shares, and what it does with the answer. llvmpipe inlines every
+// call site, so `scene_trace`, `nearest_light` and `leaf_normal` each have one call site
+// in the kernel, whatever the mode (four calls of `scene_trace` were four inlined copies
+// of every intersector).
+struct TraceRay {
+    o: vec3<f32>,
+    d: vec3<f32>,
+    t_max: f32,
+    // Whether any hit in (0, t_max) will do (a shadow ray without emitting objects).
+    any_hit: bool,
+    // Whether the nearest light before the object hit is wanted.
+    lights: bool,
+    // Whether the ray is traced at all.
+    live: bool,
+    // The slot (camera, continuation), draw record (shadow) or ray (probe) it is for.
+    at: u32,
+}
+
+fn no_ray() -> TraceRay {
+    return TraceRay(vec3<f32>(0.0), vec3<f32>(0.0), inf(), false, false, false, 0u);
+}
+
+fn camera_ray_of(slot: u32) -> TraceRay {
+    let ray = camera_ray(slot_pixel(slot));
+    return TraceRay(ray[0], ray[1], inf(), false, true, true, slot);
+}
+
+// The continuation of a slot's path from vertex `depth`: its nearest hit is the extending
+// draw's Li (a light) and the next vertex (an object), if roulette kept the path.
+fn continuation_ray(slot: u32) -> TraceRay {
     let at = slot * HIT_WORDS;
+    let c = hits[at + 5u];
+    if (hits[at].w != S_SURFACE) { return no_ray(); }
+    if (c.w != 1.0) {
+        hits[at].w = S_NONE;
+        return no_ray();
+    }
+    return TraceRay(c.xyz, hits[at + 6u].xyz, inf(), false, true, true, slot);
+}
+
+// A queued draw's shadow ray. With emitting objects a draw's record holds its integrand
+// without Li, which a nearest-hit ray finds: the nearest light's or the environment's
+// where no object comes first, else the emission of the surface met
+// (render::integrator::medium::transmitted); the objects are queried first and the
+// lights up to the object's t, the same answer but for exact ties. Point and spot
+// lights' records (after the draws) keep their any-hit rays.
+fn shadow_ray(q: u32) -> TraceRay {
+    if (q >= atomicLoad(&stats[QUEUE_LEN])) { return no_ray(); }
+    let i = atomicLoad(&stats[QUEUE_ITEMS + q]);
+    let at = (frame.depth * frame.slots * frame.per_slot + i) * draw_vec4s(frame.n_tech);
+    let emitters = (frame.flags & FLAG_EMITTERS) != 0u && i % frame.per_slot <= frame.n_draws;
+    let t_max = select(draws[at].w, inf(), emitters);
+    return TraceRay(draws[at].xyz, draws[at + 1u].xyz, t_max, !emitters, emitters, true, at);
+}
+
+// A ray batch for tests (mode 3): ray i from draw record i's [o, ·] (origin) and
+// [wi, ·] (direction).
+fn probe_ray(i: u32) -> TraceRay {
+    let at = i * draw_vec4s(frame.n_tech);
+    return TraceRay(draws[at].xyz, draws[at + 1u].xyz, inf(), false, false, true, i);
+}
+
+fn finish_camera(r: TraceRay, h: SceneHit, lh: LightHit, n: vec3<f32>) {
+    let at = r.at * HIT_WORDS;
     hits[at + 3u] = vec4<f32>(0.0);
     // The first hit's AOVs: nothing where the ray escapes (integrator/aov.rs).
     hits[at + 8u] = vec4<f32>(0.0);
@@ -66,7 +124,6 @@ fn trace_camera(slot: u32) {
         hits[at] = vec4<f32>(0.0, 0.0, 0.0, S_OVERFLOW);
         return;
     }
-    let lh = nearest_light(o, d, h.t);
     if (lh.t < inf()) {
         // A light: its depth and normal, albedo 0.
         hits[at + 8u] = vec4<f32>(lh.n, lh.t);
@@ -78,91 +135,54 @@ fn trace_camera(slot: u32) {
     }
     if (h.status == 0u) {
         // Escaped: the environment seen directly, outside MIS.
-        var le = env_radiance(frame.env, d);
+        var le = env_radiance(frame.env, r.d);
         if ((frame.flags & FLAG_HIDE) != 0u) { le = vec3<f32>(0.0); }
         hits[at] = vec4<f32>(0.0, 0.0, 0.0, S_NONE);
         hits[at + 3u] = vec4<f32>(le, 0.0);
         return;
     }
-    let p = o + h.t * d;
-    let n = leaf_normal(h.leaf, p);
-    write_vertex(at, p, h.leaf, n, -d, vec3<f32>(1.0));
+    let p = r.o + h.t * r.d;
+    write_vertex(at, p, h.leaf, n, -r.d, vec3<f32>(1.0));
     hits[at + 8u] = vec4<f32>(n, h.t);
     if ((frame.flags & (FLAG_EMITTERS | FLAG_HIDE)) == FLAG_EMITTERS) {
         // An emitting object seen directly, outside MIS.
-        hits[at + 3u] = vec4<f32>(surface_emission(h.leaf, n, d), 0.0);
+        hits[at + 3u] = vec4<f32>(surface_emission(h.leaf, n, r.d), 0.0);
     }
 }
 
-// The continuation of a slot's path from vertex `depth`: its nearest hit is the extending
-// draw's Li (a light) and the next vertex (an object), if roulette kept the path.
-fn trace_continuation(slot: u32) {
+fn finish_continuation(r: TraceRay, h: SceneHit, lh: LightHit, n: vec3<f32>) {
+    let slot = r.at;
     let at = slot * HIT_WORDS;
-    let c = hits[at + 5u];
-    if (hits[at].w != S_SURFACE) { return; }
-    if (c.w != 1.0) {
-        hits[at].w = S_NONE;
-        return;
-    }
-    let o = c.xyz;
-    let cd = hits[at + 6u];
-    let d = cd.xyz;
-    let h = scene_trace(o, d, inf(), false);
     if (h.status == 2u) {
         hits[at].w = S_OVERFLOW;
         return;
     }
-    let lh = nearest_light(o, d, h.t);
-    let r = draw_at(slot, frame.carry);
-    let w2 = draws[r + 2u];
+    let rec = draw_at(slot, frame.carry);
+    let w2 = draws[rec + 2u];
     var g = vec3<f32>(0.0);
-    let p = o + h.t * d;
-    let emitters = (frame.flags & FLAG_EMITTERS) != 0u;
     let object = lh.t == inf() && h.status == 1u;
-    // The surface met: its normal for its emission and the next vertex.
-    var n = vec3<f32>(0.0);
-    if (object && (emitters || cd.w == 1.0)) { n = leaf_normal(h.leaf, p); }
     if (!object) {
-        g = w2.xyz * incoming(lh, d);
-    } else if (emitters) {
-        g = w2.xyz * surface_emission(h.leaf, n, d);
+        g = w2.xyz * incoming(lh, r.d);
+    } else if ((frame.flags & FLAG_EMITTERS) != 0u) {
+        g = w2.xyz * surface_emission(h.leaf, n, r.d);
     }
-    draws[r + 2u] = vec4<f32>(g, w2.w);
-    if (!object || cd.w != 1.0) {
+    draws[rec + 2u] = vec4<f32>(g, w2.w);
+    if (!object || hits[at + 6u].w != 1.0) {
         hits[at].w = S_NONE;
         return;
     }
-    write_vertex(at, p, h.leaf, n, -d, hits[at + 7u].xyz);
+    write_vertex(at, r.o + h.t * r.d, h.leaf, n, -r.d, hits[at + 7u].xyz);
     push(LIVE_LEN, frame.wave.x, slot);
 }
 
-fn trace_shadow(q: u32) {
-    if (q >= atomicLoad(&stats[QUEUE_LEN])) { return; }
-    let i = atomicLoad(&stats[QUEUE_ITEMS + q]);
-    let at = (frame.depth * frame.slots * frame.per_slot + i) * draw_vec4s(frame.n_tech);
-    let o = draws[at].xyz;
-    let d = draws[at + 1u].xyz;
-    // With emitting objects a draw's record holds its integrand without Li, which a
-    // nearest-hit ray finds: the nearest light's or the environment's where no object
-    // comes first, else the emission of the surface met
-    // (render::integrator::medium::transmitted). Point and spot lights' records (after
-    // the draws) keep their any-hit rays. (One call of scene_trace: llvmpipe inlines
-    // every call site of the intersectors.)
-    let emitters = (frame.flags & FLAG_EMITTERS) != 0u && i % frame.per_slot <= frame.n_draws;
-    var lh = LightHit(inf(), 0u, vec3<f32>(0.0), vec3<f32>(0.0));
-    var t_max = draws[at].w;
-    if (emitters) {
-        lh = nearest_light(o, d, inf());
-        t_max = lh.t;
-    }
-    let h = scene_trace(o, d, t_max, !emitters);
+fn finish_shadow(r: TraceRay, h: SceneHit, lh: LightHit, n: vec3<f32>) {
+    let at = r.at;
     if (h.status == 2u) {
         draws[at + 1u].w = S_OVERFLOW + 10.0;
-    } else if (emitters) {
-        var li = incoming(lh, d);
-        if (h.status == 1u) {
-            let p = o + h.t * d;
-            li = surface_emission(h.leaf, leaf_normal(h.leaf, p), d);
+    } else if (r.lights) {
+        var li = incoming(lh, r.d);
+        if (lh.t == inf() && h.status == 1u) {
+            li = surface_emission(h.leaf, n, r.d);
         }
         let g = draws[at + 2u];
         draws[at + 2u] = vec4<f32>(g.xyz * li, g.w);
@@ -174,36 +194,55 @@ fn trace_shadow(q: u32) {
     }
 }
 
-// A ray batch for tests (mode 3): ray i from draw record i's [o, ·] (origin) and
-// [wi, ·] (direction); the nearest object hit into hits[8i] = (t, leaf key, status, loops) and
-// hits[8i + 1] = its normal.
-fn probe(i: u32) {
-    let o = draws[i * draw_vec4s(frame.n_tech)].xyz;
-    let d = draws[i * draw_vec4s(frame.n_tech) + 1u].xyz;
-    let h = scene_trace(o, d, inf(), false);
-    var n = vec3<f32>(0.0);
-    if (h.status == 1u) { n = leaf_normal(h.leaf, o + h.t * d); }
-    hits[i * HIT_WORDS] = vec4<f32>(h.t, bitcast<f32>(h.leaf), f32(h.status), f32(loops));
-    hits[i * HIT_WORDS + 1u] = vec4<f32>(n, 0.0);
+// The nearest object hit into hits[8i] = (t, leaf key, status, loops) and hits[8i + 1] =
+// its normal.
+fn finish_probe(r: TraceRay, h: SceneHit, n: vec3<f32>) {
+    hits[r.at * HIT_WORDS] = vec4<f32>(h.t, bitcast<f32>(h.leaf), f32(h.status), f32(loops));
+    hits[r.at * HIT_WORDS + 1u] = vec4<f32>(n, 0.0);
 }
 
 @compute @workgroup_size(64)
 fn trace(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nw: vec3<u32>) {
     let i = gid.x + gid.y * nw.x * 64u;
     loops = 0u;
+    var r = no_ray();
     if (frame.mode == 1u) {
-        trace_shadow(i);
-    } else {
-        if (i >= frame.slots) { return; }
+        r = shadow_ray(i);
+    } else if (i < frame.slots) {
         if (frame.mode == 0u) {
-            trace_camera(i);
+            r = camera_ray_of(i);
         } else if (frame.mode == 2u) {
             // The slots the shade pass queued, and no other.
             if (i < atomicLoad(&stats[CONT_LEN])) {
-                trace_continuation(atomicLoad(&stats[frame.wave.y + i]));
+                r = continuation_ray(atomicLoad(&stats[frame.wave.y + i]));
             }
         } else {
-            probe(i);
+            r = probe_ray(i);
+        }
+    }
+    if (r.live) {
+        let h = scene_trace(r.o, r.d, r.t_max, r.any_hit);
+        var lh = LightHit(inf(), 0u, vec3<f32>(0.0), vec3<f32>(0.0));
+        if (r.lights && h.status != 2u) { lh = nearest_light(r.o, r.d, h.t); }
+        // The surface met, where its normal is wanted: the next vertex, an emission, or
+        // the probe's answer.
+        let object = h.status == 1u && lh.t == inf();
+        var wants = object;
+        if (frame.mode == 1u) {
+            wants = object && r.lights;
+        } else if (frame.mode == 2u) {
+            wants = object && ((frame.flags & FLAG_EMITTERS) != 0u || hits[r.at * HIT_WORDS + 6u].w == 1.0);
+        }
+        var n = vec3<f32>(0.0);
+        if (wants) { n = leaf_normal(h.leaf, r.o + h.t * r.d); }
+        if (frame.mode == 0u) {
+            finish_camera(r, h, lh, n);
+        } else if (frame.mode == 1u) {
+            finish_shadow(r, h, lh, n);
+        } else if (frame.mode == 2u) {
+            finish_continuation(r, h, lh, n);
+        } else {
+            finish_probe(r, h, n);
         }
     }
     atomicMax(&stats[select(0u, 1u, frame.mode == 1u)], loops);
