@@ -182,7 +182,8 @@ fn technique_text(t: &Bound<'_, PyAny>) -> PyResult<String> {
 /// estimator per light, as `--per-light`), `pixel_center` (camera rays through pixel
 /// centres, as `--pixel-center`), `trained_grid`, `trained_floor`, `trained_spp` (how
 /// `light-trained` is trained, as `--trained-grid` …); `threads` (0: all
-/// cores); `backend` "cpu", "gpu" (wgpu: `direct` and `path`; a scene it does not cover
+/// cores); `engine` ("per-ray" or "batched": how the CPU runs the samples, as
+/// `--engine`; the same state either way); `backend` "cpu", "gpu" (wgpu: `direct` and `path`; a scene it does not cover
 /// raises RenderError naming what) or "auto" (the GPU where it can, else the CPU, with a
 /// warning saying why). The GIL is released while
 /// rendering; Ctrl-C (in any thread) stops the render and raises KeyboardInterrupt with
@@ -195,7 +196,8 @@ fn technique_text(t: &Bound<'_, PyAny>) -> PyResult<String> {
     techniques = None, integrator = None, threads = 0, backend = "cpu", width = None,
     height = None, max_depth = None, aovs = None, hide_emitters = false, beta = None,
     cutoff = None, ridge = None, per_light = false, pixel_center = false, min_depth = None,
-    trained_grid = None, trained_floor = None, trained_spp = None, cancel = None, resume = None))]
+    trained_grid = None, trained_floor = None, trained_spp = None, cancel = None, resume = None,
+    engine = "per-ray"))]
 #[allow(clippy::too_many_arguments)]
 pub fn render(
     py: Python<'_>,
@@ -224,7 +226,13 @@ pub fn render(
     trained_spp: Option<i128>,
     cancel: Option<PyRef<'_, Cancel>>,
     resume: Option<PyRef<'_, RenderState>>,
+    engine: &str,
 ) -> PyResult<RenderState> {
+    let engine = frepray::Engine::parse(engine).ok_or_else(|| {
+        PyValueError::new_err(format!(
+            "engine {engine:?}: expected \"per-ray\" or \"batched\""
+        ))
+    })?;
     if resume.is_some() && (samples.is_some() || backend.eq_ignore_ascii_case("gpu")) {
         return Err(PyValueError::new_err(
             "resume continues the state's own sample range on the CPU: leave out samples \
@@ -297,6 +305,7 @@ pub fn render(
         },
         threads,
         pixel_center,
+        engine,
         ..Default::default()
     };
     let (mut options, unused) = resolved.options_with(&settings).map_err(|e| to_py(py, e))?;

@@ -93,6 +93,23 @@ def test_per_light_and_pixel_center_equal_the_cli(many_lights, cli, tmp_path, fl
     assert not np.array_equal(plain.image(), st.image())
 
 
+@pytest.mark.parametrize("integrator", ["direct", "path"])
+def test_batched_engine_gives_the_same_state(many_lights, cli, tmp_path, integrator):
+    opts = dict(SMALL, spp=2, seed=6, estimator="optimal-direct", integrator=integrator)
+    per_ray = frepray.render(many_lights, **opts)
+    batched = frepray.render(many_lights, engine="batched", **opts)
+    assert np.array_equal(per_ray.sums(), batched.sums())
+    assert np.array_equal(per_ray.sample_counts(), batched.sample_counts())
+    exr = tmp_path / "cli.exr"
+    run_cli(cli, "render", many_lights.source()[1], "-o", exr, "--spp", "2", "--seed", "6",
+            "--estimator", "optimal-direct", "--integrator", integrator, "--width",
+            str(SMALL["width"]), "--height", str(SMALL["height"]), "--quiet",
+            "--engine", "batched")
+    assert np.array_equal(frepray.read_exr(exr)[0], batched.image())
+    with pytest.raises(ValueError, match="per-ray"):
+        frepray.render(many_lights, engine="simd", **opts)
+
+
 def test_python_states_merge_with_the_cli(many_lights, cli, tmp_path):
     opts = dict(SMALL, seed=4)
     a = frepray.render(many_lights, samples=(0, 2), **opts)
