@@ -36,9 +36,9 @@
 //! **Scope.** Objects that are one perturbed or plain quadric, a CSG tree (boxes,
 //! capped cylinders, unions, differences: by inside spans along the ray, the nodes in
 //! post-order from the root; a perturbed or expression part's spans from its crossings
-//! found one by one, as frep's `Solid::combine` finds them), or an expression solid (up to
-//! [`MAX_GPU_TAPES`] per scene: their tapes share one interpreter compiled into the
-//! kernels, GPU.md §6.2); diffuse, conductor, dielectric and plastic materials
+//! found one by one, as frep's `Solid::combine` finds them), or an expression solid (any
+//! number per scene, within the device's storage binding: their tapes share one
+//! interpreter, GPU.md §6.2); diffuse, conductor, dielectric and plastic materials
 //! rough or smooth (delta lobes outside MIS, as the CPU), with constant or point-space checker colours; sphere,
 //! rectangle and disk lights, point and spot lights, a constant or mapped environment
 //! ([`crate::env`]); the techniques `bsdf`, `light`, `light-uniform`, `light-area`,
@@ -94,10 +94,6 @@ pub const WAVE_DRAWS: u32 = 1 << 19;
 
 /// Techniques the kernels can hold: as many as a render may list.
 pub const MAX_GPU_TECHNIQUES: usize = crate::record::MAX_DRAW_TECHNIQUES;
-
-/// Expression solids a scene may hold on the GPU (their tapes share one interpreter,
-/// GPU.md §6.2).
-pub const MAX_GPU_TAPES: usize = 16;
 
 /// The deepest `path` the GPU renders (a uniform block per depth and pass).
 pub const MAX_GPU_DEPTH: u32 = 64;

@@ -2,7 +2,7 @@
 //! intersections, CSG trees, expression solids), materials, lights, the selection
 //! tables and the uniform [`Frame`].
 
-use super::{MAX_GPU_DEPTH, MAX_GPU_TAPES, MAX_GPU_TECHNIQUES};
+use super::{MAX_GPU_DEPTH, MAX_GPU_TECHNIQUES};
 use crate::bsdf::{GpuBsdf, COAT_STEPS, COAT_TABLE_LEN};
 use crate::env::GpuEnv;
 use crate::layout::{outward, GpuBvhNode, GpuItemBox, GpuObject, GpuPerturbation, GpuQuadric};
@@ -164,9 +164,9 @@ pub struct DirectScene {
     pub materials: Vec<GpuMaterial>,
     /// Area lights.
     pub lights: Vec<GpuAreaLight>,
-    /// The scene's expression solids (at most [`MAX_GPU_TAPES`]: their tapes are
-    /// compiled into the kernels' source, GPU.md §6.2), in the order of their leaves'
-    /// `first_op`.
+    /// The scene's expression solids, in the order of their leaves' `first_op`: their
+    /// tapes share one interpreter, each padded to the size class of the longest
+    /// (GPU.md §6.2), in one binding checked against the device's limit.
     pub tapes: Vec<TapeSolid>,
     /// CSG nodes of kind-2 shapes, post-order: (op, leaf or part count, 0, 0).
     pub csg: Vec<[u32; 4]>,
@@ -252,11 +252,6 @@ impl DirectScene {
         name: &str,
         material: u32,
     ) -> Result<(), GpuError> {
-        if self.tapes.len() >= MAX_GPU_TAPES {
-            return Err(unsupported(format!(
-                "object '{name}': more than {MAX_GPU_TAPES} expression solids"
-            )));
-        }
         let frep::Leaf::Expr {
             code, registers, ..
         } = flat.leaves[leaf]
