@@ -18,7 +18,9 @@
 //! set, each thread finishes the sample it is on and the render ends within one sample
 //! at any `spp`; the state is then marked partial, and each pixel's estimate is still
 //! correct for the whole samples it got (the pixels of a stopped render hold different
-//! numbers of samples, 0 included).
+//! numbers of samples, 0 included). The batched engine ([`crate::integrator::Engine`])
+//! reads the flag before each wave instead, so its render ends within one wave of up to
+//! 64 samples per thread.
 //!
 //! **Statistics.** A *sample* is one iteration of a pixel: one camera ray with the draws
 //! of every technique (DESIGN.md §4). Rays are counted exactly by kind (per tile, then
