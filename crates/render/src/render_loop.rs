@@ -49,8 +49,9 @@ struct Tile {
 
 impl Tile {
     /// Samples `start..end` of every pixel, each pixel's in index order, until `stop`
-    /// is set: it is read before every sample, so that a pixel's record always holds
-    /// whole samples and a stop takes effect within one sample. A pixel whose record
+    /// is set: it is read before every sample (before every wave by the batched
+    /// engine), so that a pixel's record always holds whole samples and a stop takes
+    /// effect within one sample (one wave). A pixel whose record
     /// already holds samples past `start` (a resumed render: `first` + its count N)
     /// starts after them. Returns the samples rendered.
     fn render(
@@ -60,14 +61,26 @@ impl Tile {
         (first, start, end): (u32, u32, u32),
         stop: &AtomicBool,
     ) -> u64 {
-        let stride = it.record.stride();
         let started = Instant::now();
-        if it.batched(scene) {
-            let n = self.render_waves(it, scene, (first, start, end), stop);
-            self.samples += n;
-            self.rays.busy_ns += started.elapsed().as_nanos() as u64;
-            return n;
-        }
+        let n = if it.batched(scene) {
+            self.render_waves(it, scene, (first, start, end), stop)
+        } else {
+            self.render_per_ray(it, scene, (first, start, end), stop)
+        };
+        self.samples += n;
+        self.rays.busy_ns += started.elapsed().as_nanos() as u64;
+        n
+    }
+
+    /// [`Self::render`] by the per-ray engine: each pixel's samples in turn.
+    fn render_per_ray(
+        &mut self,
+        it: &Integrator,
+        scene: &Scene,
+        (first, start, end): (u32, u32, u32),
+        stop: &AtomicBool,
+    ) -> u64 {
+        let stride = it.record.stride();
         let mut n = 0;
         'pixels: for (k, rec) in self.records.chunks_exact_mut(stride).enumerate() {
             let (i, j) = (k as u32 % self.w, k as u32 / self.w);
@@ -80,8 +93,6 @@ impl Tile {
                 n += 1;
             }
         }
-        self.samples += n;
-        self.rays.busy_ns += started.elapsed().as_nanos() as u64;
         n
     }
 

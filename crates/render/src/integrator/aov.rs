@@ -12,8 +12,8 @@
 //! AOVs changes no other random number of the render.
 
 use super::ray_log::RayLog;
-use super::vertex::{trace, Trace, Vertex};
-use super::{Integrator, IntegratorKind, Pixel, RayKind};
+use super::vertex::{Trace, Vertex};
+use super::{Integrator, IntegratorKind, Pixel};
 use crate::color::Rgb;
 use crate::sampler::SampleStream;
 use crate::scene::Scene;
@@ -61,12 +61,7 @@ impl Integrator {
         px: &mut Pixel,
         rays: &mut impl RayLog,
     ) {
-        rays.begin(RayKind::Generate);
-        let ray = self.camera_ray(scene, x, y, rng);
-        rays.end(RayKind::Generate);
-        rays.begin(RayKind::Camera);
-        let t = trace(scene, &ray, None);
-        rays.end(RayKind::Camera);
+        let (ray, t) = self.camera_trace(scene, x, y, rng, rays);
         let a = first_hit(scene, &t, &ray, rng);
         px.add(match self.kind {
             IntegratorKind::Depth => Rgb::splat(a[0]),

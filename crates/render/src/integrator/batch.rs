@@ -36,7 +36,7 @@
 use super::path::RR_MIN_Q;
 use super::ray_log::RayLog;
 use super::vertex::{
-    emitted, incident_from, light_reached, spawn, trace, trace_along, Continuation, Trace, Vertex,
+    emitted, incident_from, light_reached, spawn, trace_along, Continuation, Trace, Vertex,
 };
 use super::{Integrator, IntegratorKind, Pixel, RayKind};
 use crate::color::Rgb;
@@ -250,12 +250,7 @@ impl<'s> Wave<'s> {
         self.wo.clear();
         let camera_emitters = !it.hide_emitters && it.min_depth == 0;
         for (&(pixel, x, y, index), rng) in self.items.iter().zip(&self.rng) {
-            rays.begin(RayKind::Generate);
-            let ray = it.camera_ray(scene, x, y, rng);
-            rays.end(RayKind::Generate);
-            rays.begin(RayKind::Camera);
-            let first = trace(scene, &ray, None);
-            rays.end(RayKind::Camera);
+            let (ray, first) = it.camera_trace(scene, x, y, rng, rays);
             if camera_emitters {
                 pixel_of(records, pixel, stride, index).add(emitted(scene, &first, ray.d));
             }

@@ -299,6 +299,25 @@ impl Integrator {
         }
     }
 
+    /// The camera ray of pixel (x, y) in stream `rng` and what it meets first among
+    /// objects and lights (no media), both queries reported to `rays`.
+    fn camera_trace(
+        &self,
+        scene: &Scene,
+        x: u32,
+        y: u32,
+        rng: &crate::sampler::SampleStream,
+        rays: &mut impl RayLog,
+    ) -> (frep::Ray, vertex::Trace) {
+        rays.begin(RayKind::Generate);
+        let ray = self.camera_ray(scene, x, y, rng);
+        rays.end(RayKind::Generate);
+        rays.begin(RayKind::Camera);
+        let first = vertex::trace(scene, &ray, None);
+        rays.end(RayKind::Camera);
+        (ray, first)
+    }
+
     /// Runs sample `index` of pixel (x, y) into the pixel's record `rec`.
     pub fn sample(
         &self,
