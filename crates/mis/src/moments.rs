@@ -142,11 +142,7 @@ impl<S: AsRef<[f64]>> Moments<S> {
 
     /// [`Moments::matrix_times_counts`] into `out` (length T), without allocating.
     pub fn matrix_times_counts_into(&self, layout: &Layout, out: &mut [f64]) {
-        let a = self.matrix();
-        let n = layout.counts();
-        for (i, o) in out.iter_mut().enumerate() {
-            *o = (0..self.t).map(|k| a[packed_index(i, k)] * n[k]).sum();
-        }
+        matrix_times_counts_sized(self.matrix(), layout.counts(), self.t, out);
     }
 
     /// The full-form estimate `Σα + n·(b̂ − Âα)/N` per channel (Kondapaneni et al. 2019,
@@ -161,16 +157,40 @@ impl<S: AsRef<[f64]>> Moments<S> {
         out: &mut [f64],
     ) {
         let n = layout.counts();
-        for ((o, b), al) in out
-            .iter_mut()
-            .zip(self.vectors().chunks_exact(self.t))
-            .zip(alpha.chunks_exact(self.t))
-        {
-            let nb: f64 = n.iter().zip(b).map(|(x, y)| x * y).sum();
-            let an_alpha: f64 = an.iter().zip(al).map(|(x, y)| x * y).sum();
-            let sum: f64 = al.iter().sum();
-            *o = sum + (nb - an_alpha) / iterations;
-        }
+        full_form_sized(self.vectors(), n, an, alpha, iterations, self.t, out);
+    }
+}
+
+/// [`Moments::matrix_times_counts_into`] over packed `a`, inlined where `t` is a constant.
+#[inline(always)]
+pub(crate) fn matrix_times_counts_sized(a: &[f64], n: &[f64], t: usize, out: &mut [f64]) {
+    let (a, n) = (&a[..packed_len(t)], &n[..t]);
+    for (i, o) in out[..t].iter_mut().enumerate() {
+        *o = (0..t).map(|k| a[packed_index(i, k)] * n[k]).sum();
+    }
+}
+
+/// [`Moments::full_form`] over `b̂` = `vectors`, inlined where `t` is a constant.
+#[inline(always)]
+pub(crate) fn full_form_sized(
+    vectors: &[f64],
+    n: &[f64],
+    an: &[f64],
+    alpha: &[f64],
+    iterations: f64,
+    t: usize,
+    out: &mut [f64],
+) {
+    let (n, an) = (&n[..t], &an[..t]);
+    for ((o, b), al) in out
+        .iter_mut()
+        .zip(vectors.chunks_exact(t))
+        .zip(alpha.chunks_exact(t))
+    {
+        let nb: f64 = n.iter().zip(b).map(|(x, y)| x * y).sum();
+        let an_alpha: f64 = an.iter().zip(al).map(|(x, y)| x * y).sum();
+        let sum: f64 = al.iter().sum();
+        *o = sum + (nb - an_alpha) / iterations;
     }
 }
 
