@@ -140,7 +140,10 @@ impl LightTree {
             loop {
                 let node = &self.nodes[i];
                 if node.leaf {
-                    return (self.importance(i, p, n) > 0.0).then_some((node.index as usize, pmf));
+                    // Below a split the leaf's importance is its branch's share, bit for
+                    // bit (`importance_pair`): a branch taken has a positive one.
+                    let shines = i != 0 || self.importance(i, p, n) > 0.0;
+                    return shines.then_some((node.index as usize, pmf));
                 }
                 let [pa, pb] = memo.split(i, || self.split(i, p, n))?;
                 if u < pa {
@@ -172,7 +175,9 @@ impl LightTree {
                     (pmf, i) = (pmf * pb, self.nodes[i].index as usize);
                 }
             }
-            if self.importance(i, p, n) > 0.0 {
+            // Below a split, a leaf of zero importance has a zero branch probability,
+            // so `pmf` is 0 already; only a lone leaf (the root) needs the test.
+            if depth > 0 || self.importance(i, p, n) > 0.0 {
                 pmf
             } else {
                 0.0
