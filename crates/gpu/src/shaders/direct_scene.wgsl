@@ -60,7 +60,7 @@ fn scene_trace(o: vec3<f32>, d: vec3<f32>, t_max: f32, any_hit: bool) -> SceneHi
                 status = r.status & 3u;
                 t = r.t;
             } else {
-                let r = perturbed_first_crossing(leaf, o, d, ta, tb);
+                let r = perturbed_scan(leaf, o, d, ta, tb);
                 status = r.status;
                 t = r.t;
             }
