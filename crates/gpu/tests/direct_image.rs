@@ -1465,6 +1465,41 @@ fn unsupported_scenes_are_refused_by_name() {
     assert_eq!(tapes(&format!("{SCENE}\n{many}")), own + 16);
 }
 
+/// The kernels differ between scenes by their tape tracer and by whether they scan
+/// perturbed quadrics: the test scene's (perturbed objects and expression solids) call
+/// the scan, a scene of plain shapes compiles a stub in its place, and plain scenes of
+/// other sizes share that kernel.
+#[test]
+fn kernel_variants_follow_the_scene() {
+    let variant = |text: &str| {
+        let s = load(text);
+        let host = CpuHost::new(&s.1, &s.2).unwrap();
+        gpu::direct::DirectScene::new(&s.0, &s.2, &host)
+            .unwrap()
+            .variant_wgsl()
+    };
+    let scan = "return perturbed_first_crossing(";
+    assert!(variant(SCENE).contains(scan));
+    let head = &SCENE[..SCENE.find("[[objects]]").unwrap()];
+    let plain = |r: f64| {
+        format!(
+            "{head}[[objects]]\nsolid = \"box(center = [0, 0, -0.05], size = [10, 10, 0.1])\"\n\
+             material = \"floor\"\n\n[[objects]]\nsolid = \"sphere([0, 0, 0.5], {r})\"\n\
+             material = \"clay\"\n\n[[lights]]\ntype = \"sphere\"\ncenter = [0, 0, 3]\n\
+             radius = 0.2\ncolor = [1, 1, 1]\npower = 50\n"
+        )
+    };
+    let (a, b) = (variant(&plain(0.5)), variant(&plain(0.3)));
+    assert!(!a.contains(scan));
+    assert_eq!(a, b);
+    // A perturbed sphere brings the scan back.
+    let bumpy = plain(0.5).replace(
+        "sphere([0, 0, 0.5], 0.5)",
+        "perturb(sphere([0, 0, 0.5], 0.5), 0.5 * sphere([0.3, 0, 0.8], 0.2)^3)",
+    );
+    assert!(variant(&bumpy).contains(scan));
+}
+
 /// A ray batch through the render kernels' nearest-hit query (GPU.md §9) against the CPU's
 /// f64 intersection, over the test scene's every object kind: 4096 rays, a third from
 /// random points in random directions, a third aimed at random points of the CSG,

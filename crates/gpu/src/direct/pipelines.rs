@@ -22,7 +22,7 @@ impl DirectScene {
     /// quadrics, a stub that hands the ray to the CPU (never called there). The scan is
     /// most of the trace kernel: without it llvmpipe compiles that kernel in 2.5 s
     /// instead of 17.5 s (scenes/cornell.toml). The key of the compiled kernels.
-    fn variant_wgsl(&self) -> String {
+    pub fn variant_wgsl(&self) -> String {
         let scan = if self.leaves.iter().any(|o| o.kind == 1) {
             "fn perturbed_scan(oi: u32, o: vec3<f32>, d: vec3<f32>, t_min: f32, t_max: f32) -> ScanResult {
     return perturbed_first_crossing(oi, o, d, t_min, t_max);
