@@ -17,7 +17,7 @@ use crate::tape_trace::TapeSolid;
 use crate::{Gpu, GpuError, FLOAT_WGSL, TRIG_WGSL};
 
 impl DirectScene {
-    /// What differs between the kernels of scenes: the tape tracer ([`Self::tape_wgsl`])
+    /// What differs between the kernels of scenes: the tape tracer (`tape_wgsl`)
     /// and `perturbed_scan`, the perturbed-quadric scan or, in a scene without perturbed
     /// quadrics, a stub that hands the ray to the CPU (never called there). The scan is
     /// most of the trace kernel: without it llvmpipe compiles that kernel in 2.5 s
