@@ -430,18 +430,26 @@ impl Lights {
                 0.0
             }
         }
-        // Only the area lights the ray from p along wi crosses have density there.
+        // Only the area lights the ray from p along wi crosses have density there. A
+        // light whose box the ray enters but which it misses (p_k = 0) adds +0.0 to a
+        // sum that holds +0.0 or more whatever P(k) is, so P(k) — a walk down the light
+        // BVH for `light-bvh` — is not asked for it: the same sum, bit for bit.
         let mut sum = 0.0;
         match crossed {
             Some(c) => {
                 for (&k, &pdf) in c.lights().iter().zip(c.pdf_li()) {
-                    sum += term(pmf(k as usize), || pdf);
+                    if pdf != 0.0 {
+                        sum += term(pmf(k as usize), || pdf);
+                    }
                 }
             }
             None => self
                 .bvh
                 .for_each_hit(&Ray::new(p, wi), 0.0, f64::INFINITY, |k| {
-                    sum += term(pmf(k), || self.pdf_one(p, k, wi))
+                    let pdf = self.pdf_one(p, k, wi);
+                    if pdf != 0.0 {
+                        sum += term(pmf(k), || pdf);
+                    }
                 }),
         }
         if self.environment.is_some() {
