@@ -62,6 +62,13 @@ pub struct BvhNode {
     pub axis: u32,
 }
 
+/// The wide walk's lanes where no caller picks others: SSE2 on x86-64 (part of its
+/// baseline), scalar ones elsewhere.
+#[cfg(target_arch = "x86_64")]
+type WideLanes = wide::Sse2;
+#[cfg(not(target_arch = "x86_64"))]
+type WideLanes = wide::Scalar;
+
 /// A BVH over a set of boxes (see the module docs). Items are named by their index in
 /// the slice given to [`Bvh::new`].
 #[derive(Clone, Debug, Default)]
@@ -450,6 +457,36 @@ impl BvhRef<'_> {
         });
     }
 
+    /// Whether the wide walk can test its boxes in AVX's four f64 lanes here: the tree
+    /// has wide nodes and the CPU has AVX. A caller that calls [`Self::nearest_avx`]
+    /// then — from a function of its own, compiled for AVX, so that its closure is
+    /// inlined there and its other callers keep theirs in registers — gets the same
+    /// offers, bit for bit (the lanes' arithmetic is SSE2's).
+    pub fn has_avx_walk(&self) -> bool {
+        #[cfg(target_arch = "x86_64")]
+        {
+            !self.wide.is_empty() && std::arch::is_x86_feature_detected!("avx")
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        false
+    }
+
+    /// [`Self::nearest`] with the wide nodes tested in AVX lanes ([`Self::has_avx_walk`]).
+    ///
+    /// # Safety
+    /// The CPU must have AVX.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx")]
+    pub unsafe fn nearest_avx(
+        &self,
+        ray: &Ray,
+        t_min: f64,
+        t_max: f64,
+        hit: impl FnMut(usize, f64) -> Option<f64>,
+    ) -> Option<(usize, f64)> {
+        self.nearest_with::<wide::Avx>(ray, t_min, t_max, hit)
+    }
+
     /// Closest-hit traversal: `hit(item, t_max)` returns the item's hit parameter if it
     /// has one below the current `t_max`, which then shrinks to it, so farther subtrees
     /// are skipped. Returns the nearest (item, t) found. Unbounded items go first.
@@ -458,10 +495,22 @@ impl BvhRef<'_> {
         ray: &Ray,
         t_min: f64,
         t_max: f64,
+        hit: impl FnMut(usize, f64) -> Option<f64>,
+    ) -> Option<(usize, f64)> {
+        self.nearest_with::<WideLanes>(ray, t_min, t_max, hit)
+    }
+
+    /// [`Self::nearest`] with the wide nodes tested in lanes `L`.
+    #[inline(always)]
+    fn nearest_with<L: wide::Lanes>(
+        &self,
+        ray: &Ray,
+        t_min: f64,
+        t_max: f64,
         mut hit: impl FnMut(usize, f64) -> Option<f64>,
     ) -> Option<(usize, f64)> {
         let mut best = None;
-        self.walk(ray, t_min, t_max, |i, t_max| {
+        self.walk::<L>(ray, t_min, t_max, |i, t_max| {
             if let Some(t) = hit(i as usize, *t_max) {
                 if t <= *t_max {
                     *t_max = t;
@@ -483,7 +532,7 @@ impl BvhRef<'_> {
         mut hit: impl FnMut(usize) -> bool,
     ) -> bool {
         let mut found = false;
-        self.walk(ray, t_min, t_max, |i, _| {
+        self.walk::<WideLanes>(ray, t_min, t_max, |i, _| {
             found = hit(i as usize);
             found
         });
@@ -494,7 +543,8 @@ impl BvhRef<'_> {
     /// nearer subtrees first, unbounded items before all; it may shrink t_max, and
     /// stops the walk by returning true. Four boxes at a time where the tree has its
     /// wide nodes and the ray a finite slab (the same offers, bit for bit: `bvh/wide.rs`).
-    fn walk(
+    #[inline(always)]
+    fn walk<L: wide::Lanes>(
         &self,
         ray: &Ray,
         t_min: f64,
@@ -513,23 +563,8 @@ impl BvhRef<'_> {
         if self.wide.is_empty() || !slab.finite {
             self.walk_binary(&slab, t_min, t_max, offer)
         } else {
-            self.walk_wide_here(&slab, t_min, t_max, &mut offer)
+            self.walk_wide::<L>(&slab, t_min, t_max, &mut offer)
         }
-    }
-
-    /// The wide walk: SSE2 lanes on x86-64 (part of its baseline), scalar ones elsewhere.
-    #[inline(always)]
-    fn walk_wide_here(
-        &self,
-        slab: &Slab,
-        t_min: f64,
-        t_max: f64,
-        offer: &mut impl FnMut(u32, &mut f64) -> bool,
-    ) {
-        #[cfg(target_arch = "x86_64")]
-        self.walk_wide::<wide::Sse2>(slab, t_min, t_max, offer);
-        #[cfg(not(target_arch = "x86_64"))]
-        self.walk_wide::<wide::Scalar>(slab, t_min, t_max, offer)
     }
 
     /// The finite items' part of [`Self::walk`] over the binary nodes (at least one),

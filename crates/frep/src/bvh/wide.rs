@@ -5,14 +5,16 @@
 //! "Shallow bounding volume hierarchies for fast SIMD ray tracing of incoherent rays",
 //! 2008).
 //!
-//! **Why SSE2, not AVX picked at run time.** A walk is one call per ray, inlined with the
-//! caller's closure. An AVX walk has to be a separate function compiled for AVX, and
-//! calling it made every caller keep its closure in memory, small trees included: on
-//! scenes/many-lights.toml (trees of 3 and 7 nodes, walked binary either way) 4 % more
-//! instructions, where the inlined SSE2 walk costs nothing extra. At 10 000 lights (f64
-//! boxes, whole runs) the AVX walk saved 12 % of the instructions and SSE2 7 %
-//! (docs/notebook/2026-12-05-wide-bvh.md). Dispatch pays once per batch of rays, not per
-//! ray: the lane tests are a [`Lanes`] type, ready for batched stages.
+//! **SSE2 inlined, AVX where a caller picks it.** A walk is one call per ray, inlined with
+//! the caller's closure, in SSE2's two pairs by default. An AVX walk ([`Avx`], four f64
+//! lanes in one register) has to run in a function compiled for AVX: calling one from
+//! inside the walk made every caller keep its closure in memory, small trees included (on
+//! scenes/many-lights.toml 4 % more instructions; docs/notebook/2026-12-05-wide-bvh.md).
+//! So the choice is the caller's, made above the closure: [`BvhRef::nearest_avx`] from a
+//! function of the caller's own, compiled for AVX, picked at run time where the tree is
+//! large (`render::light::Lights::intersect` from 16 wide nodes on: with 10 000 lights
+//! 9–11 % fewer instructions a sample, the small scenes 0.1 % more). The lane tests are
+//! a [`Lanes`] type, ready for batched stages too.
 //!
 //! **Same walk, bit for bit.** The wide walk offers the caller the same items in the same
 //! order, with the same `t_max` each time, as the binary walk of [`BvhRef::walk`]:
@@ -246,6 +248,53 @@ impl Lanes for Sse2 {
     }
 }
 
+/// The four lanes in one AVX register. Only for walks compiled for AVX (the
+/// `#[target_feature]` walks of [`BvhRef`], picked at run time by their callers): its
+/// operations are inlined there.
+#[cfg(target_arch = "x86_64")]
+pub(super) struct Avx;
+
+#[cfg(target_arch = "x86_64")]
+impl Lanes for Avx {
+    type Ray = [std::arch::x86_64::__m256d; 6];
+    #[inline(always)]
+    fn ray(slab: &Slab) -> Self::Ray {
+        use std::arch::x86_64::_mm256_set1_pd;
+        // SAFETY: only called where the walk is compiled for AVX and the CPU has it.
+        unsafe {
+            let (o, i) = (slab.o, slab.inv);
+            [o.x, o.y, o.z, i.x, i.y, i.z].map(|v| _mm256_set1_pd(v))
+        }
+    }
+    #[inline(always)]
+    fn enter(node: &WideNode, r: &Self::Ray, t0: f64, t1: f64) -> ([f64; 4], u32) {
+        use std::arch::x86_64::{
+            _mm256_cmp_pd, _mm256_cvtps_pd, _mm256_max_pd, _mm256_min_pd, _mm256_movemask_pd,
+            _mm256_mul_pd, _mm256_set1_pd, _mm256_storeu_pd, _mm256_sub_pd, _mm_load_ps,
+            _CMP_LE_OQ,
+        };
+        let mut entry = [0.0; 4];
+        // SAFETY: only called where the walk is compiled for AVX and the CPU has it; each
+        // load reads one lane array (four f32, 16-byte aligned: `WideNode` is
+        // `align(64)`, each array 16 bytes), the store writes `entry`.
+        unsafe {
+            let (mut lo, mut hi) = (_mm256_set1_pd(t0), _mm256_set1_pd(t1));
+            for k in 0..3 {
+                let a = _mm256_cvtps_pd(_mm_load_ps(node.lo[k].as_ptr()));
+                let c = _mm256_cvtps_pd(_mm_load_ps(node.hi[k].as_ptr()));
+                // Sse2's operations, four lanes at once (`minpd`/`maxpd` alike).
+                let a = _mm256_mul_pd(_mm256_sub_pd(a, r[k]), r[3 + k]);
+                let c = _mm256_mul_pd(_mm256_sub_pd(c, r[k]), r[3 + k]);
+                lo = _mm256_max_pd(lo, _mm256_min_pd(a, c));
+                hi = _mm256_min_pd(hi, _mm256_max_pd(a, c));
+            }
+            _mm256_storeu_pd(entry.as_mut_ptr(), lo);
+            let mask = _mm256_movemask_pd(_mm256_cmp_pd::<_CMP_LE_OQ>(lo, hi)) as u32;
+            (entry, mask)
+        }
+    }
+}
+
 /// The order to visit the lanes of a wide node in: `len` lanes, those below `split`
 /// from the binary node's first child, its groups nearer first by the sign of the ray
 /// along the binary node's axis, each group's two lanes likewise by its child's axis
@@ -367,11 +416,22 @@ mod tests {
                         bits(Sse2::enter(node, &Sse2::ray(&slab), t0, t1)),
                         bits(want)
                     );
+                    if std::arch::is_x86_feature_detected!("avx") {
+                        // SAFETY: the CPU has AVX.
+                        let avx = unsafe { avx_enter(node, &slab, t0, t1) };
+                        assert_eq!(bits(avx), bits(want));
+                    }
                 }
                 checked += 1;
             }
         }
         assert!(checked > 100_000);
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx")]
+    unsafe fn avx_enter(node: &WideNode, slab: &Slab, t0: f64, t1: f64) -> ([f64; 4], u32) {
+        Avx::enter(node, &Avx::ray(slab), t0, t1)
     }
 
     /// What a walk offers: (item, t_max at the offer), in order.
@@ -439,8 +499,30 @@ mod tests {
                         stop,
                     );
                     assert_eq!(sse2, binary, "n={n} case {case}");
+                    if std::arch::is_x86_feature_detected!("avx") {
+                        // SAFETY: the CPU has AVX.
+                        let avx = unsafe { avx_offers(r, &slab, t1, &hit_at, stop) };
+                        assert_eq!(avx, binary, "n={n} case {case}");
+                    }
                 }
             }
         }
+    }
+
+    /// [`offers`] of the wide walk in AVX lanes, compiled for AVX as its callers are.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx")]
+    unsafe fn avx_offers(
+        r: BvhRef<'_>,
+        slab: &Slab,
+        t1: f64,
+        hit_at: &dyn Fn(u32) -> Option<f64>,
+        stop: Option<u32>,
+    ) -> Vec<(u32, u64)> {
+        offers(
+            |f| r.walk_wide::<Avx>(slab, 0.0, t1, &mut |i, t| f(i, t)),
+            hit_at,
+            stop,
+        )
     }
 }
