@@ -71,6 +71,14 @@ fn importance_inputs(area: &[AreaLight]) -> Vec<(ImportanceBounds, f64)> {
 /// same branch it cost the small scenes 0.3 % more instructions.)
 const AVX_WIDE_NODES: usize = 16;
 
+/// The BVH over the area lights' boxes, and whether [`Lights::intersect`] walks it in AVX
+/// lanes ([`AVX_WIDE_NODES`]).
+fn light_bvh(area: &[AreaLight]) -> (Bvh, bool) {
+    let bvh = Bvh::new(&area.iter().map(AreaLight::bounds).collect::<Vec<_>>());
+    let avx = bvh.wide().len() >= AVX_WIDE_NODES && bvh.as_ref().has_avx_walk();
+    (bvh, avx)
+}
+
 /// [`Lights::intersect`]'s body over `walk`, a nearest-hit walk of the light BVH: written
 /// once for the inlined walk and the AVX one, each with the closure written at its call.
 macro_rules! nearest_light {
@@ -135,9 +143,9 @@ impl Lights {
         let areas: Vec<f64> = area.iter().map(|l| l.area()).collect();
         let by_area = (!areas.is_empty()).then(|| Distribution1D::new(&areas));
         let importance = importance_inputs(&area);
-        let bvh = Bvh::new(&area.iter().map(AreaLight::bounds).collect::<Vec<_>>());
+        let (bvh, avx_walk) = light_bvh(&area);
         Self {
-            avx_walk: bvh.wide().len() >= AVX_WIDE_NODES && bvh.as_ref().has_avx_walk(),
+            avx_walk,
             bvh,
             tree: LightTree::new(&importance),
             importance,
@@ -166,9 +174,9 @@ impl Lights {
             "by_area"
         );
         let importance = importance_inputs(&area);
-        let bvh = Bvh::new(&area.iter().map(AreaLight::bounds).collect::<Vec<_>>());
+        let (bvh, avx_walk) = light_bvh(&area);
         Self {
-            avx_walk: bvh.wide().len() >= AVX_WIDE_NODES && bvh.as_ref().has_avx_walk(),
+            avx_walk,
             bvh,
             tree: LightTree::new(&importance),
             importance,
