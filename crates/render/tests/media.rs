@@ -394,3 +394,45 @@ lights = [{ type = "sphere", center = [1, -1, 3], radius = 0.3, power = 150 }]
         assert!(one.image().data().iter().any(|&v| v > 0.0));
     }
 }
+
+/// A point light hidden behind an emitting object, in a scene with media: its shadow
+/// rays meet the emitter's surface, which blocks it (the emitter's own light arrives by
+/// the techniques' draws, not again through the point light's shadow ray). Point lights
+/// take no random numbers, so the render equals, bit for bit, the one without the light.
+#[test]
+fn a_point_light_behind_an_emitter_adds_nothing() {
+    let text = |light: &str| {
+        format!(
+            r#"
+camera = {{ eye = [0, -4, 1], target = [0, 0, 0.5], fov = 40, resolution = [8, 6] }}
+materials.none = {{ type = "interface" }}
+materials.floor = {{ type = "diffuse", reflectance = 0.6 }}
+materials.lamp = {{ type = "diffuse", reflectance = 0, emission = [5, 4, 3] }}
+media.smoke = {{ sigma_a = 0.1, sigma_s = [0.8, 1.2, 1.6] }}
+objects = [
+  {{ solid = "sphere([0.6, 0, 0.5], 0.5)", material = "none", medium = "smoke" }},
+  {{ solid = "box(center = [0, 0, 3], size = [20, 20, 0.2])", material = "lamp" }},
+  {{ solid = "box(center = [0, 0, -0.05], size = [6, 6, 0.1])", material = "floor" }},
+]
+{light}
+"#
+        )
+    };
+    let with = scene(&text(
+        r#"lights = [{ type = "point", position = [0, 0, 4], power = 500 }]"#,
+    ));
+    let without = scene(&text(""));
+    let o = options(
+        IntegratorKind::Path,
+        Method::Balance,
+        &crate::common::MIX,
+        4,
+        7,
+    );
+    let (a, b) = (run(&with, &o).0, run(&without, &o).0);
+    assert!(
+        a.data() == b.data(),
+        "the hidden point light changed the image"
+    );
+    assert!(a.data().iter().any(|&v| v > 0.0));
+}

@@ -211,16 +211,19 @@ impl Walk {
 /// Light `le` from `t_max` along `ray` (a light's point, or ∞ for the environment)
 /// times the transmittance to it, through index-matched boundaries and media; where
 /// another surface is in the way, its emission (0 unless it is an emitting object's
-/// outside) times the transmittance to it. The ray starts in `medium`, object `skip`
-/// left out. Out of line and cold: scenes without media or emitting objects never call
-/// it, and their shadow-ray path stays inlined.
+/// outside) times the transmittance to it, or 0 without `emitters` (a point or spot
+/// light's shadow ray, whose blocker's emission its own draws count). The ray starts in
+/// `medium`, object `skip` left out. Out of line and cold: scenes without media or
+/// emitting objects never call it, and their shadow-ray path stays inlined.
 #[cold]
 #[inline(never)]
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn transmitted(
     scene: &Scene,
     ray: &Ray,
     t_max: f64,
     le: Rgb,
+    emitters: bool,
     skip: Option<usize>,
     medium: Option<usize>,
     rays: &mut impl RayLog,
@@ -249,7 +252,8 @@ pub(crate) fn transmitted(
                     }
                 }
             }
-            Some(h) => return tr * scene.surface_emission(&h, ray.d),
+            Some(h) if emitters => return tr * scene.surface_emission(&h, ray.d),
+            Some(_) => return Rgb::ZERO,
         }
         if tr == Rgb::ZERO {
             return Rgb::ZERO;

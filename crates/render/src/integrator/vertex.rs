@@ -115,7 +115,7 @@ pub(super) fn incident_from(
     // Through media and index-matched boundaries, or by a nearest-hit ray where an
     // object in the way may be the light (out of line: other scenes keep this inlined).
     if scene.participating || scene.has_emitting_objects() {
-        return transmitted(scene, ray, t_max, le, skip, medium, rays);
+        return transmitted(scene, ray, t_max, le, true, skip, medium, rays);
     }
     if le == Rgb::ZERO {
         return Rgb::ZERO;
@@ -275,7 +275,7 @@ impl Integrator {
             let skip = v.left_behind(scene, ls.wi);
             if scene.participating {
                 let medium = v.medium_toward(ls.wi);
-                sum += fc * transmitted(scene, &ray, dist, ls.radiance, skip, medium, rays);
+                sum += fc * transmitted(scene, &ray, dist, ls.radiance, false, skip, medium, rays);
                 continue;
             }
             rays.begin(RayKind::Shadow);
