@@ -445,8 +445,8 @@ fn sin_sub_clamped(sin_a: f32, cos_a: f32, sin_b: f32, cos_b: f32) -> f32 {
     }
 }
 
-/// The spatial selection's bound on a light's contribution at p with normal n
-/// (`render::light::importance`, pbrt-v4 §12.6.3) from its [`importance_record`] at
+/// The spatial selection's bound on a light's contribution at p with normal n, n = 0 at
+/// a medium point (`render::light::importance`, pbrt-v4 §12.6.3) from its [`importance_record`] at
 /// `buf[at..]` (the kernel's `light_importance`).
 pub fn importance(buf: &[f32], at: usize, p: V3, n: V3) -> f32 {
     let r = &buf[at..at + IMPORTANCE_WORDS];
@@ -480,9 +480,14 @@ pub fn importance(buf: &[f32], at: usize, p: V3, n: V3) -> f32 {
     if cos_p <= 0.0 {
         return 0.0;
     }
-    let cos_i = dot(n, w).abs();
-    let sin_i = safe_sqrt(1.0 - cos_i * cos_i);
-    let cos_ip = cos_sub_clamped(sin_i, cos_i, sin_b, cos_b);
+    // No normal (a point inside a medium): no cosine to bound (pbrt-v4 likewise).
+    let cos_ip = if n == [0.0; 3] {
+        1.0
+    } else {
+        let cos_i = dot(n, w).abs();
+        let sin_i = safe_sqrt(1.0 - cos_i * cos_i);
+        cos_sub_clamped(sin_i, cos_i, sin_b, cos_b)
+    };
     let v = phi * cos_p * cos_ip / d2;
     if v > 0.0 {
         v
@@ -694,6 +699,70 @@ impl GpuAreaLight {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// At n = 0 (a point inside a medium has no normal) the importance bounds no
+    /// receiver cosine: bit for bit what a normal along the direction to the light's
+    /// bounding sphere gives (θi = 0 ≤ θb, so cos θ'i = 1 exactly), for a sphere, one- and
+    /// two-sided planar lights and a cone, from points outside and inside the bounding
+    /// sphere and at its centre, with zeros of either sign; and never less than any other
+    /// normal gives.
+    #[test]
+    fn importance_at_a_zero_normal_has_no_receiver_cosine() {
+        use glam::DVec3;
+        let bounds = |axis: DVec3, cos_o: f64, two_sided: bool| state::LightBounds {
+            center: DVec3::new(0.5, -1.0, 2.0),
+            radius: 0.75,
+            axis: axis.normalize(),
+            cos_o,
+            two_sided,
+            power: 3.5,
+        };
+        let lights = [
+            bounds(DVec3::Z, -1.0, false),
+            bounds(DVec3::new(0.3, -0.2, 1.0), 1.0, false),
+            bounds(DVec3::new(-1.0, 0.4, 0.1), 1.0, true),
+            bounds(DVec3::new(0.0, 1.0, 1.0), 0.5, false),
+        ];
+        let (mut lit, mut below) = (0, 0);
+        for b in &lights {
+            let r = importance_record(b);
+            for k in 0..=1000 {
+                // A spiral through the bounding sphere's centre out to 4 radii.
+                let t = k as f32 / 1000.0;
+                let a = 40.0 * t;
+                let p = add(
+                    [r[0], r[1], r[2]],
+                    scale([a.cos(), a.sin(), 2.0 * t - 1.0], 3.0 * t),
+                );
+                let v = sub(p, [r[0], r[1], r[2]]);
+                let toward = if dot(v, v) > 0.0 {
+                    normalize3(v)
+                } else {
+                    [r[4], r[5], r[6]]
+                };
+                let want = importance(&r, 0, p, toward);
+                for n in [[0.0; 3], [-0.0, 0.0, -0.0], [-0.0; 3]] {
+                    let got = importance(&r, 0, p, n);
+                    assert_eq!(got.to_bits(), want.to_bits(), "{b:?} at {p:?}, n {n:?}");
+                }
+                lit += usize::from(want > 0.0);
+                // Another normal bounds the cosine: never more than n = 0 gives (up to an
+                // ulp of cos θ'i's rounding above 1).
+                let n = normalize3([t - 0.5, 1.0 - t, 0.25]);
+                let with_n = importance(&r, 0, p, n);
+                assert!(
+                    with_n <= want * (1.0 + 2.0 * f32::EPSILON),
+                    "{with_n} > {want}"
+                );
+                below += usize::from(with_n < want);
+            }
+        }
+        assert!(lit > 2000 && below > 1000, "lit {lit}, below {below}");
+    }
+
+    fn normalize3(v: V3) -> V3 {
+        scale(v, 1.0 / dot(v, v).sqrt())
+    }
 
     /// Every f32 constant appears in the WGSL as the same bit pattern, and the
     /// polynomial's coefficients are 1/k! rounded once.

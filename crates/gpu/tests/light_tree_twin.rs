@@ -79,11 +79,12 @@ fn lights(count: usize, seed: u64) -> Vec<(ImportanceBounds, f64)> {
         .collect()
 }
 
-/// N cases: a point inside or around the lights' box, a unit normal, u, a light.
+/// N cases: a point inside or around the lights' box, a unit normal (zero, as at a
+/// point inside a medium, in one case of four, with either sign), u, a light.
 fn cases(count: usize, seed: u64) -> Vec<[f32; IN]> {
     let mut rng = Rng(seed);
     (0..N)
-        .map(|_| {
+        .map(|i| {
             let p = DVec3::new(
                 rng.range(-12.0, 12.0),
                 rng.range(-12.0, 12.0),
@@ -97,6 +98,11 @@ fn cases(count: usize, seed: u64) -> Vec<[f32; IN]> {
             )
             .normalize()
             .as_vec3();
+            let n = match i % 8 {
+                3 => glam::Vec3::ZERO,
+                7 => glam::Vec3::new(-0.0, 0.0, -0.0),
+                _ => n,
+            };
             let u = rng.next() as f32;
             let k = ((rng.next() * count as f64) as u32).min(count as u32 - 1);
             [p.x, p.y, p.z, n.x, n.y, n.z, u, f32::from_bits(k)]

@@ -14,11 +14,12 @@ use render::Rgb;
 
 /// Cases per shape.
 const N: usize = 4096;
-/// f32 words per case: p, u, wi2, light index, uc.
-const IN: usize = 10;
-/// f32 words out per case (the last: the spatial selection's importance at p, normal
-/// wi2).
-const OUT: usize = 27;
+/// f32 words per case: p, u, wi2, light index, uc, and a second normal nm for the
+/// spatial selection's importance ([`medium_normal`]).
+const IN: usize = 13;
+/// f32 words out per case (the last two: the spatial selection's importance at p with
+/// normal wi2, and with normal nm).
+const OUT: usize = 28;
 
 /// The shapes of random input this file's tests draw.
 trait Inputs {
@@ -116,8 +117,21 @@ fn clearance(l: &AreaLight, p: DVec3) -> f64 {
     }
 }
 
+/// The normal nm of case i: zero (a point inside a medium, which has none; the three
+/// zeros with either sign, which all compare equal to 0) in three cases of four, else a
+/// tiny non-zero normal, which still bounds the receiver's cosine.
+fn medium_normal(i: usize) -> [f32; 3] {
+    match (i / 4) % 4 {
+        0 => [0.0; 3],
+        1 => [-0.0, 0.0, -0.0],
+        2 => [-0.0; 3],
+        _ => [0.0, 0.0, 1.0 / 1_099_511_627_776.0],
+    }
+}
+
 /// N cases per shape: a point p at least 0.2 from the light's surface or plane (spheres
-/// seen from inside too), u, a direction wi2 toward a point near the light, uc.
+/// seen from inside too), u, a direction wi2 toward a point near the light, uc, and the
+/// normal [`medium_normal`].
 fn cases(ls: &[(AreaLight, GpuAreaLight)]) -> Vec<[f32; IN]> {
     let mut rng = Rng(5);
     (0..3 * N)
@@ -134,6 +148,7 @@ fn cases(ls: &[(AreaLight, GpuAreaLight)]) -> Vec<[f32; IN]> {
             let u = [rng.next() as f32, rng.next() as f32];
             let wi2 = a32((c + rng.vec(0.8) - p).normalize());
             let pa = a32(p);
+            let nm = medium_normal(i);
             [
                 pa[0],
                 pa[1],
@@ -145,6 +160,9 @@ fn cases(ls: &[(AreaLight, GpuAreaLight)]) -> Vec<[f32; IN]> {
                 wi2[2],
                 f32::from_bits(li as u32),
                 rng.next() as f32,
+                nm[0],
+                nm[1],
+                nm[2],
             ]
         })
         .collect()
@@ -190,12 +208,9 @@ fn twin(ls: &[GpuAreaLight], sel: &[f32], area_off: u32, c: &[f32; IN]) -> [f32;
         o[20 + 2 * k] = pmf;
     }
     let li = c[8].to_bits() as usize;
-    o[26] = light::importance(
-        sel,
-        importance_off(ls.len()) + IMPORTANCE_WORDS * li,
-        p,
-        wi2,
-    );
+    let at = importance_off(ls.len()) + IMPORTANCE_WORDS * li;
+    o[26] = light::importance(sel, at, p, wi2);
+    o[27] = light::importance(sel, at, p, [c[10], c[11], c[12]]);
     o
 }
 
@@ -214,9 +229,9 @@ fn put_sample(at: u32, s: LSample) {
 @compute @workgroup_size(64)
 fn lights_case(@builtin(global_invocation_id) id: vec3<u32>) {
     let i = id.x;
-    if (10u * i >= arrayLength(&cases)) { return; }
-    let c = 10u * i;
-    let o = 27u * i;
+    if (13u * i >= arrayLength(&cases)) { return; }
+    let c = 13u * i;
+    let o = 28u * i;
     let l = lights[bitcast<u32>(cases[c + 8u])];
     let p = vec3<f32>(cases[c], cases[c + 1u], cases[c + 2u]);
     let u = vec2<f32>(cases[c + 3u], cases[c + 4u]);
@@ -239,6 +254,8 @@ fn lights_case(@builtin(global_invocation_id) id: vec3<u32>) {
     // The importance records after both tables (n, cdf[n + 1], pmf[n] each).
     let imp = 2u * (2u * n + 2u) + 12u * bitcast<u32>(cases[c + 8u]);
     out[o + 26u] = light_importance(imp, p, wi2);
+    let nm = vec3<f32>(cases[c + 10u], cases[c + 11u], cases[c + 12u]);
+    out[o + 27u] = light_importance(imp, p, nm);
 }
 ";
 
@@ -442,6 +459,16 @@ fn twin_matches_the_f64_lights() {
         let imp64 = render::light::importance(l64, p, wi2);
         let b = l64.importance_bounds();
         let top = render::color::luminance(l64.power()) / (b.radius * b.radius);
+        worst_imp = worst_imp.max((f64::from(imp32) - imp64).abs() / top);
+        // And with the normal nm, zero in most cases (a medium point: no receiver cosine).
+        let nm = [c[10], c[11], c[12]];
+        let imp32 = light::importance(
+            &sel,
+            importance_off(gl.len()) + IMPORTANCE_WORDS * li,
+            a32(p),
+            nm,
+        );
+        let imp64 = render::light::importance(l64, p, d64(nm));
         worst_imp = worst_imp.max((f64::from(imp32) - imp64).abs() / top);
         let (iu, pu) = light::select(&sel, Select::Uniform, gl.len() as u32, c[9]);
         assert_eq!(

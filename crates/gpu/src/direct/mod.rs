@@ -43,7 +43,10 @@
 //! rectangle and disk lights, point and spot lights, a constant or mapped environment
 //! ([`crate::env`]); the techniques `bsdf`, `light`, `light-uniform`, `light-area`,
 //! `light-spatial`, `light-trained` (the table the CPU trained), `light#k`,
-//! `environment` and `cosine`; every MIS method, per light too; AOVs and the AOV integrators; `path` up to depth
+//! `environment` and `cosine`; every MIS method, per light too; AOVs and the AOV integrators;
+//! participating media inside solids behind `interface` or other boundaries, the camera
+//! inside one too (walks through boundaries, free flights and phase-function vertices, as
+//! `render::integrator::medium`; docs/gpu.md); `path` up to depth
 //! [`MAX_GPU_DEPTH`]. Anything else is a
 //! [`GpuError::Unsupported`](crate::GpuError::Unsupported) naming it, before any work.
 //!

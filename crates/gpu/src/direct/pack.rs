@@ -82,9 +82,18 @@ pub struct GpuMaterial {
     pub emission: [f32; 4],
     /// A plastic with a textured α: in `x` the first word of its coat tables at
     /// α = k/32, k = 0…32 (`render::material::RoughnessMap`), each its internal
-    /// reflectance then [`COAT_TABLE_LEN`] albedos; else unused.
+    /// reflectance then [`COAT_TABLE_LEN`] albedos; else unused. In `y` and `z` the
+    /// media inside and around the object that wears it ([`NO_MEDIUM`]: vacuum): an
+    /// object bounding a medium wears a copy of its material that names them.
     pub coats: [u32; 4],
 }
+
+/// No medium (vacuum) in [`GpuMaterial::coats`] and the frame's camera medium.
+pub const NO_MEDIUM: u32 = u32::MAX;
+
+/// The BSDF kind of an index-matched boundary (`interface`): never shaded, since the
+/// kernels' walks pass through it (render::integrator::medium).
+pub const INTERFACE: u32 = 5;
 
 /// Rows of the identity as [`GpuMaterial::to_local`] and [`GpuMaterial::normals`].
 const IDENTITY_ROWS: [[f32; 4]; 3] = [
@@ -139,11 +148,16 @@ pub(super) struct Frame {
     /// The BVH over the area lights' boxes in `nodes` and `items`: its first node, node
     /// count, first item ([`DirectScene::pack_light_boxes`]).
     pub(super) lbvh: [u32; 4],
+    /// The media: the material of the first (they follow the scene's materials, one
+    /// phase-function material each: σ_t in its `k`, the albedo in its colour), the
+    /// camera's medium ([`NO_MEDIUM`]: vacuum), and whether the scene has media or
+    /// index-matched boundaries at all (1: the kernels walk through them).
+    pub(super) media: [u32; 4],
 }
 
 const _: () = assert!(size_of::<GpuShape>() == 48);
 const _: () = assert!(size_of::<GpuMaterial>() == 64 + 48 * TEX_SLOTS + 128);
-const _: () = assert!(size_of::<Frame>() == 576);
+const _: () = assert!(size_of::<Frame>() == 592);
 
 /// The scene and options as the kernels read them.
 #[derive(Clone, Debug, Default)]
@@ -195,13 +209,9 @@ impl DirectScene {
         let mut s = DirectScene::default();
         // Perlin's permutation first: the noise patterns read it at tables[0..256].
         s.tables.extend(scene::PERLIN_PERM.map(f32::from));
-        if data.camera_medium.is_some() {
-            return Err(unsupported(
-                "the camera sits in a participating medium; media render on the CPU",
-            ));
-        }
         s.pack_lights(data)?;
         s.pack_materials(data, host)?;
+        s.pack_media(data, o)?;
         for obj in &data.objects {
             s.pack_object(data, obj)?;
         }
@@ -290,12 +300,6 @@ impl DirectScene {
                 obj.name
             )));
         };
-        if obj.interior.is_some() || obj.exterior.is_some() {
-            return Err(unsupported(format!(
-                "object '{}' bounds a participating medium; media render on the CPU",
-                obj.name
-            )));
-        }
         let flat = data.solids.solid(solid).flat();
         let root = flat.nodes.len() - 1;
         let node = &flat.nodes[root];
@@ -308,6 +312,14 @@ impl DirectScene {
             {
                 material = self.local_material(material, pl);
             }
+        }
+        if obj.interior.is_some() || obj.exterior.is_some() {
+            // A copy that names the media on its two sides.
+            let mut copy = self.materials[material as usize];
+            copy.coats[1] = obj.interior.map_or(NO_MEDIUM, |m| m.0);
+            copy.coats[2] = obj.exterior.map_or(NO_MEDIUM, |m| m.0);
+            self.materials.push(copy);
+            material = self.materials.len() as u32 - 1;
         }
         let first = self.leaves.len() as u32;
         let plain = |k: u32| -> Option<frep::PerturbedView> {
@@ -473,12 +485,7 @@ impl DirectScene {
         let mu: Vec<f64> = (0..COAT_TABLE_LEN)
             .map(|j| (j as f64 / 64.0).powi(2))
             .collect();
-        for (i, (m, name)) in data.materials.iter().zip(&data.material_names).enumerate() {
-            if matches!(m, MaterialData::Interface) {
-                return Err(unsupported(format!(
-                    "material '{name}' is an index-matched interface; media render on the CPU"
-                )));
-            }
+        for (i, m) in data.materials.iter().enumerate() {
             // A textured parameter's constant: any value serves (the texture replaces it
             // per hit), the checker's `a` where it has one.
             let rgb = |id: scene::TextureId| match &data.textures[id.index()] {
@@ -487,7 +494,7 @@ impl DirectScene {
                 TextureData::Image { .. } => [0.5; 3],
             };
             let mut tex = [GpuTexture::default(); TEX_SLOTS];
-            let mut coats = [u32::MAX, 0, 0, 0];
+            let mut coats = [u32::MAX, NO_MEDIUM, NO_MEDIUM, 0];
             let bsdf = match *m {
                 MaterialData::Diffuse { reflectance } => {
                     tex[0] = self.texture(data, reflectance, false, &mut images);
@@ -499,7 +506,10 @@ impl DirectScene {
                     GpuBsdf::conductor(rgb(eta), rgb(k), roughness)
                 }
                 MaterialData::Dielectric { eta, roughness } => GpuBsdf::dielectric(eta, roughness),
-                MaterialData::Interface => unreachable!("refused above"),
+                MaterialData::Interface => GpuBsdf {
+                    kind: INTERFACE,
+                    ..GpuBsdf::default()
+                },
                 MaterialData::Plastic {
                     diffuse,
                     eta,
@@ -532,6 +542,65 @@ impl DirectScene {
                 normals: IDENTITY_ROWS,
                 emission: f4(data.emission.get(i).copied().unwrap_or_default(), 0.0),
                 coats,
+            });
+        }
+        Ok(())
+    }
+
+    /// The media as phase-function materials after the scene's (σ_t in `k`, the albedo
+    /// as the colour, a texture read in world space), and the frame's media block.
+    fn pack_media(&mut self, data: &SceneData, o: &RenderOptions) -> Result<(), GpuError> {
+        // render::scene::Scene::participating.
+        let walks = data.camera_medium.is_some()
+            || data.objects.iter().any(|ob| {
+                ob.interior.is_some()
+                    || ob.exterior.is_some()
+                    || matches!(data.materials[ob.material.index()], MaterialData::Interface)
+            });
+        self.frame.media = [
+            self.materials.len() as u32,
+            data.camera_medium.map_or(NO_MEDIUM, |m| m.0),
+            u32::from(walks),
+            0,
+        ];
+        if !walks {
+            return Ok(());
+        }
+        if !o.aovs.is_empty()
+            || !matches!(o.integrator, IntegratorKind::Direct | IntegratorKind::Path)
+        {
+            return Err(unsupported(
+                "AOVs in a scene with participating media or index-matched boundaries \
+                 (they render on the CPU)",
+            ));
+        }
+        // Two 16-bit medium indices per vertex (the kernels' `hits`).
+        if data.media.len() >= 0xffff {
+            return Err(unsupported(format!(
+                "{} media (at most {})",
+                data.media.len(),
+                0xffff - 1
+            )));
+        }
+        let mut images = std::collections::HashMap::new();
+        for m in &data.media {
+            let albedo = match &data.textures[m.albedo.index()] {
+                TextureData::Constant { rgb } => *rgb,
+                TextureData::Checker { a, .. } | TextureData::Pattern { a, .. } => *a,
+                TextureData::Image { .. } => [0.5; 3],
+            };
+            let mut bsdf = GpuBsdf::phase(m.g);
+            bsdf.rgb = f4(albedo, 0.0);
+            bsdf.k = f4(m.sigma_t, 0.0);
+            let mut tex = [GpuTexture::default(); TEX_SLOTS];
+            tex[0] = self.texture(data, m.albedo, false, &mut images);
+            self.materials.push(GpuMaterial {
+                bsdf,
+                tex,
+                to_local: IDENTITY_ROWS,
+                normals: IDENTITY_ROWS,
+                emission: [0.0; 4],
+                coats: [u32::MAX, NO_MEDIUM, NO_MEDIUM, 0],
             });
         }
         Ok(())
@@ -720,9 +789,11 @@ impl DirectScene {
                 !o.aovs.is_empty()
                     || !matches!(o.integrator, IntegratorKind::Direct | IntegratorKind::Path),
             ) << 4)
-            // Emitting objects (render::scene::Scene::has_emitting_objects): light
-            // arriving along a draw is found by a nearest-hit ray.
-            | (u32::from(data.emission.iter().flatten().any(|&e| e != 0.0)) << 5);
+            // Emitting objects (render::scene::Scene::has_emitting_objects), or walks
+            // through media and index-matched boundaries: light arriving along a draw
+            // is found by a nearest-hit ray (render::integrator::medium::transmitted).
+            | (u32::from(data.emission.iter().flatten().any(|&e| e != 0.0) || f.media[2] != 0)
+                << 5);
         if o.techniques.len() > MAX_GPU_TECHNIQUES {
             return Err(unsupported(format!(
                 "{} techniques (at most {MAX_GPU_TECHNIQUES})",

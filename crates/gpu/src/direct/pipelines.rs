@@ -17,9 +17,10 @@ use crate::tape_trace::TapeSolid;
 use crate::{Gpu, GpuError, FLOAT_WGSL, TRIG_WGSL};
 
 impl DirectScene {
-    /// What differs between the kernels of scenes: the tape tracer (`tape_wgsl`)
-    /// and `perturbed_scan`, the perturbed-quadric scan or, in a scene without perturbed
-    /// quadrics, a stub that hands the ray to the CPU (never called there). The scan is
+    /// What differs between the kernels of scenes: the tape tracer (`tape_wgsl`),
+    /// `perturbed_scan`, the perturbed-quadric scan or, in a scene without perturbed
+    /// quadrics, a stub that hands the ray to the CPU (never called there), and `MEDIA`,
+    /// whether rays walk through media and index-matched boundaries. The scan is
     /// most of the trace kernel: without it llvmpipe compiles that kernel in 2.5 s
     /// instead of 17.5 s (scenes/cornell.toml). The key of the compiled kernels.
     pub fn variant_wgsl(&self) -> String {
@@ -34,7 +35,10 @@ impl DirectScene {
 }
 "
         };
-        self.tape_wgsl() + scan
+        // Walks through media and index-matched boundaries (the trace kernel's loop,
+        // which a scene without them never enters twice).
+        let media = format!("const MEDIA: bool = {};\n", self.frame.media[2] != 0);
+        self.tape_wgsl() + scan + &media
     }
 
     /// The WGSL that defines `use_tape`, `trace_tape` and `tape_normal`: the tape

@@ -1,5 +1,6 @@
 // BSDFs in the local shading frame (normal = +z), f32: diffuse, conductor, dielectric and
-// plastic, rough (GGX) and smooth (delta lobes), after render::bsdf (pbrt-v4 ch. 9).
+// plastic, rough (GGX) and smooth (delta lobes), after render::bsdf (pbrt-v4 ch. 9), and a
+// medium's Henyey–Greenstein phase function (kind 4, g in `eta`; pbrt-v4 §11.3.1).
 // Twin: gpu::bsdf, operation for operation. No WGSL builtins whose rounding may differ
 // from Rust's (dot, normalize, length, cross, sin, cos): explicit +, −, ×, ÷, sqrt only,
 // and a polynomial sincos used by both sides (GPU.md §3.5).
@@ -59,6 +60,54 @@ fn bsdf_sincos(q: u32, f: f32) -> vec2<f32> {
         return vec2<f32>(-s, -c);
     }
     return vec2<f32>(-c, s);
+}
+
+// Henyey–Greenstein (pbrt-v4 §11.3.1; render::bsdf::HenyeyGreenstein): the density for
+// cos θ = wo·wi. Cheap, so called from both bsdf_eval and bsdf_sample_f. The product with
+// 4π passes through bsdf_opaque as in ggx_d, and so do the sums 1 + g and 1 + g² here and
+// in bsdf_hg_sample: NIR's reassociation may move a constant term to the end of a chain
+// (a rounding change; not seen on lavapipe, which matches the twin without them too).
+fn bsdf_hg_p(g: f32, cos_theta: f32) -> f32 {
+    let denom = bsdf_opaque(1.0 + g * g) + 2.0 * g * cos_theta;
+    return (1.0 - g * g) / (bsdf_opaque(4.0 * BSDF_PI) * denom * sqrt(max(denom, 0.0)));
+}
+
+// The sign bit of x, as the CPU's copysign reads it (−0.0 is negative).
+fn bsdf_neg_bit(x: f32) -> bool {
+    return (bitcast<u32>(x) & 0x80000000u) != 0u;
+}
+
+// A direction drawn ∝ HG about wo, and its cos θ (xyz, w): cos θ by the exact inverse CDF
+// (pbrt-v4 SampleHenyeyGreenstein), the azimuth u.y in turns (render::warp::
+// spherical_direction), the frame about wo that render::frame::Frame::from_z builds
+// (Duff et al. 2017, JCGT 6(1)). One call site.
+fn bsdf_hg_sample(g: f32, wo: vec3<f32>, u: vec2<f32>) -> vec4<f32> {
+    var c: f32;
+    if (abs(g) < 1e-3) {
+        c = 1.0 - 2.0 * u.x;
+    } else {
+        let s = (1.0 - g * g) / (bsdf_opaque(1.0 + g) - 2.0 * g * u.x);
+        c = -(bsdf_opaque(1.0 + g * g) - s * s) / (2.0 * g);
+    }
+    c = clamp(c, -1.0, 1.0);
+    let sin_t = sqrt(max(0.0, 1.0 - c * c));
+    let v = 4.0 * u.y;
+    let q = u32(v + 0.5);
+    let sc = bsdf_sincos(q, v - f32(q));
+    let x = sin_t * sc.y;
+    let y = sin_t * sc.x;
+    let n = wo;
+    let sign = select(1.0, -1.0, bsdf_neg_bit(n.z));
+    let a = -1.0 / (sign + n.z);
+    let b = n.x * n.y * a;
+    let fs = vec3<f32>(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x);
+    let ft = vec3<f32>(b, sign + n.y * n.y * a, -n.y);
+    return vec4<f32>(
+        fs.x * x + ft.x * y + n.x * c,
+        fs.y * x + ft.y * y + n.y * c,
+        fs.z * x + ft.z * y + n.z * c,
+        c,
+    );
 }
 
 fn bsdf_same_hemisphere(a: vec3<f32>, b: vec3<f32>) -> bool {
@@ -269,6 +318,10 @@ fn bsdf_p_coat(m: GpuBsdf, mu_o: f32) -> f32 {
 // f (xyz) and pdf (w) of the non-delta part at (wo, wi).
 fn bsdf_eval(m: GpuBsdf, wo: vec3<f32>, wi: vec3<f32>) -> vec4<f32> {
     bsdf_zero = m.zero;
+    if (m.kind == 4u) {
+        // The whole sphere, no hemisphere test: f = pdf = p.
+        return vec4<f32>(bsdf_hg_p(m.eta, bsdf_dot(wo, wi)));
+    }
     let same = bsdf_same_hemisphere(wo, wi);
     if (m.kind == 0u) {
         if (!same) {
@@ -354,7 +407,8 @@ fn bsdf_eval(m: GpuBsdf, wo: vec3<f32>, wi: vec3<f32>) -> vec4<f32> {
 }
 
 // Draws wi given wo (uc chooses the lobe), as render::bsdf::Bsdf::sample_f in the local frame;
-// non-delta samples take f and pdf from bsdf_eval of the drawn direction.
+// non-delta samples take f and pdf from bsdf_eval of the drawn direction (the phase
+// function's from its drawn cos θ, as the CPU's).
 fn bsdf_sample_f(m: GpuBsdf, wo: vec3<f32>, uc: f32, u: vec2<f32>) -> BsdfSample {
     bsdf_zero = m.zero;
     var s = BsdfSample(vec3<f32>(0.0), 0.0, vec3<f32>(0.0), 1.0, vec3<f32>(0.0), 0u);
@@ -370,7 +424,7 @@ fn bsdf_sample_f(m: GpuBsdf, wo: vec3<f32>, uc: f32, u: vec2<f32>) -> BsdfSample
     if (m.kind == 3u) {
         pc = bsdf_p_coat(m, abs(wo.z));
         spec = m.delta != 0u && uc < pc;
-    } else if (m.delta != 0u && m.kind != 0u) {
+    } else if (m.delta != 0u && (m.kind == 1u || m.kind == 2u)) {
         spec = true;
     }
     if (spec) {
@@ -404,6 +458,13 @@ fn bsdf_sample_f(m: GpuBsdf, wo: vec3<f32>, uc: f32, u: vec2<f32>) -> BsdfSample
         }
         s.f = f;
         s.flags = 2u;
+    } else if (m.kind == 4u) {
+        // f = pdf = p at the drawn cos θ, as render's HenyeyGreenstein::sample_f.
+        let h = bsdf_hg_sample(m.eta, wo, u);
+        let p = bsdf_hg_p(m.eta, h.w);
+        s.wi = h.xyz;
+        s.f = vec3<f32>(p);
+        s.pdf = p;
     } else {
         var wi: vec3<f32>;
         if (m.kind == 0u || (m.kind == 3u && uc >= pc)) {
@@ -444,7 +505,11 @@ fn bsdf_sample_f(m: GpuBsdf, wo: vec3<f32>, uc: f32, u: vec2<f32>) -> BsdfSample
     if (!(s.pdf > 0.0 && s.pdf <= BSDF_F32_MAX) || s.wi.z == 0.0) {
         return BsdfSample(vec3<f32>(0.0), 0.0, vec3<f32>(0.0), 1.0, vec3<f32>(0.0), 0u);
     }
-    s.weight = s.f * (abs(s.wi.z) / s.pdf);
+    // A phase function's weight is p/p = 1 exactly (no cosine factor).
+    s.weight = vec3<f32>(1.0);
+    if (m.kind != 4u) {
+        s.weight = s.f * (abs(s.wi.z) / s.pdf);
+    }
     s.flags = s.flags | 1u;
     if (s.wi.z * wo.z < 0.0) {
         s.flags = s.flags | 4u;

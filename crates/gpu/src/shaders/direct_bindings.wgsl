@@ -55,6 +55,9 @@ struct Frame {
     // The BVH over the area lights' boxes in `nodes` and `items` (escape layout): its
     // first node, node count, first item.
     lbvh: vec4<u32>,
+    // The media (gpu::direct::pack): the material of the first (a phase function: σ_t
+    // in bsdf.k, the albedo as its colour), the camera's medium (NO_MEDIUM: vacuum).
+    media: vec4<u32>,
 }
 
 // One scene object: a single leaf (kind 0) or an intersection of plain-quadric leaves
@@ -74,7 +77,8 @@ struct GpuTexture { kind: u32, code: u32, size: u32, clamp: u32, a: vec4<f32>, b
 // at the point in the object's own space (dot(lx.xyz, p) + lx.w, …) with the normal
 // there (normalize(dot(nx.xyz, n), …)). `emission`: the radiance its surface sends out
 // on the outer side (0: none). `coats.x`: a plastic with a textured α, its coat tables
-// at α = k/32 (COAT_WORDS words each: r_int, then the albedos).
+// at α = k/32 (COAT_WORDS words each: r_int, then the albedos); `coats.y`, `coats.z`:
+// the media inside and around an object wearing it (NO_MEDIUM: vacuum).
 struct GpuMaterial {
     bsdf: GpuBsdf, tex: array<GpuTexture, 3>,
     lx: vec4<f32>, ly: vec4<f32>, lz: vec4<f32>,
@@ -111,7 +115,8 @@ fn noise_perm(i: u32) -> u32 { return u32(sel_buf[i]); }
 // the kernel's source defines per scene (stubs without a tape).
 @group(0) @binding(14) var<storage, read> tape: array<u32>;
 
-// vec4s per slot in `hits`: [p, status], [n, material], [wo, ·], [outside-MIS rgb, ·],
+// vec4s per slot in `hits`: [p, status], [n, material], [wo, media (inside | outside
+// << 16, 0xffff: vacuum)], [outside-MIS rgb, ·],
 // [β, ·], then the continuation the shade pass chose: [o, traced], [wi, survives],
 // [β after it and roulette, ·]; then the camera ray's first hit for AOVs: [its outward
 // normal, depth], [albedo, ·] (integrator/aov.rs).
@@ -155,6 +160,16 @@ fn push(len: u32, items: u32, slot: u32) {
     let q = atomicAdd(&stats[len], 1u);
     atomicStore(&stats[items + q], slot);
 }
+
+// Media (render::integrator::medium): no medium (vacuum); the BSDF kinds of a medium's
+// phase function and of an index-matched boundary (gpu::bsdf::PHASE,
+// gpu::direct::pack::INTERFACE); the most media stretches one walk keeps and the most
+// boundaries it crosses before it is taken as blocked.
+const NO_MEDIUM: u32 = 0xffffffffu;
+const K_PHASE: u32 = 4u;
+const K_INTERFACE: u32 = 5u;
+const MAX_SEGMENTS: u32 = 16u;
+const MAX_CROSSINGS: u32 = 64u;
 
 const T_BSDF: u32 = 0u;
 const T_POWER: u32 = 1u;

@@ -43,29 +43,7 @@ fn shade(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
     for (var s = 0u; s < 3u; s++) {
         let t = mat.tex[s];
         if (t.kind == 0u) { continue; }
-        var rgb = vec3<f32>(0.0);
-        if (t.kind == 1u) {
-            // Cells of p·scale − n·10⁻³, a where their index sum is even.
-            let q = floor(p * t.a.w - n * 1e-3);
-            let cells = q.x + q.y + q.z;
-            let r = cells - 2.0 * floor(cells * 0.5);
-            rgb = select(t.b, t.a, r < 0.5).xyz;
-        } else {
-            // In the object's own space: a·(1 − t) + b·t with t the pattern at p·scale,
-            // or the image's triplanar projection at p·scale.
-            let q = vec3<f32>(dot(mat.lx.xyz, p) + mat.lx.w, dot(mat.ly.xyz, p) + mat.ly.w,
-                dot(mat.lz.xyz, p) + mat.lz.w) * t.a.w;
-            if (t.kind == 2u) {
-                let v = pattern_value(t.code, q, t.size);
-                rgb = t.a.xyz * (1.0 - v) + t.b.xyz * v;
-            } else {
-                var nl = vec3<f32>(dot(mat.nx.xyz, n), dot(mat.ny.xyz, n), dot(mat.nz.xyz, n));
-                let len = length(nl);
-                nl = select(vec3<f32>(0.0), nl / len, len > 0.0);
-                rgb = triplanar(t.code, t.size, u32(t.b.x), q, nl, t.b.y);
-            }
-        }
-        if (t.clamp != 0u) { rgb = clamp(rgb, vec3<f32>(0.0), vec3<f32>(1.0)); }
+        let rgb = texture_rgb(t, mat, p, n);
         if (s == 0u) {
             m.rgb = vec4<f32>(rgb, 0.0);
         } else if (s == 1u) {
@@ -95,7 +73,10 @@ fn shade(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
     // The extra BSDF draw serves the continuation and, without a BSDF technique, the
     // delta lobes (Integrator::shade).
     let extra_used = carries || (frame.carry == frame.n_draws && spec_mat);
-    let f = basis(n);
+    // A point inside a medium: its phase function in a frame about wo (Bsdf::phase), no
+    // cosine factor (Bsdf::cos).
+    let phase = m.kind == K_PHASE;
+    let f = basis(select(n, wo, phase));
     let wo_l = to_local(f, wo);
     // The normal turned toward the viewer (Technique::CosineHemisphere's axis).
     let nf = select(n, -n, dot(n, wo) < 0.0);
@@ -211,7 +192,9 @@ fn shade(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
         // The path's next ray, β after it, and roulette (render::integrator::path).
         var next = beta * weight;
         var survives = ok && all(next == next) && any(next != vec3<f32>(0.0)) && is_finite(max(next.x, max(next.y, next.z)));
-        if (survives && frame.depth + 1u >= frame.rr_depth) {
+        // Through media the continuation's trace weighs the free flight in first, then
+        // plays the roulette (finish_continuation).
+        if (!MEDIA && survives && frame.depth + 1u >= frame.rr_depth) {
             let q = max(0.05, 1.0 - max(next.x, max(next.y, next.z)));
             if (rnd(px.x, px.y, px.z, base + 3u * (frame.n_draws + 1u)) < q) {
                 survives = false;
@@ -256,7 +239,7 @@ fn shade(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
     if (ok) {
         let wi_l = to_local(f, wi);
         let ev = bsdf_eval(m, wo_l, wi_l);
-        fc = ev.xyz * abs(dot(wi, n));
+        fc = ev.xyz * select(abs(dot(wi, n)), 1.0, phase);
         pdfs = tech_pdfs(p, n, nf, wi, ev.w);
         // A light draw's own density is the mixture's, and it fails where that is not
         // positive (Lights::sample_selected, sample_by_area).
@@ -354,7 +337,7 @@ fn shade_delta(i: u32, at: u32, l: u32, p: vec3<f32>, n: vec3<f32>, f: Basis, wo
         intensity = intensity * s;
     }
     let radiance = intensity / d2;
-    let fc = bsdf_eval(m, wo_l, to_local(f, wi)).xyz * abs(dot(wi, n));
+    let fc = bsdf_eval(m, wo_l, to_local(f, wi)).xyz * select(abs(dot(wi, n)), 1.0, m.kind == K_PHASE);
     if (all(fc == vec3<f32>(0.0)) || all(radiance == vec3<f32>(0.0))) { return; }
     let o = spawn(p, n, wi);
     let dist = length(dl.p0.xyz - o);
@@ -379,6 +362,34 @@ fn prepare() {
     dispatch_args(QUEUE_ARGS, atomicLoad(&stats[QUEUE_LEN]));
     dispatch_args(LIVE_ARGS, atomicLoad(&stats[LIVE_LEN]) * frame.per_slot);
     dispatch_args(CONT_ARGS, atomicLoad(&stats[CONT_LEN]));
+}
+
+// Texture t at point p with normal n (render::texture; 0 where unknown) of a material
+// `mat`: a point-space checker, cells of p·scale − n·10⁻³, a where their index sum is
+// even; else in the object's own space, a·(1 − t) + b·t with t the pattern at p·scale,
+// or the image's triplanar projection at p·scale; clamped to [0, 1] where t says so.
+fn texture_rgb(t: GpuTexture, mat: GpuMaterial, p: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
+    var rgb = vec3<f32>(0.0);
+    if (t.kind == 1u) {
+        let q = floor(p * t.a.w - n * 1e-3);
+        let cells = q.x + q.y + q.z;
+        let r = cells - 2.0 * floor(cells * 0.5);
+        rgb = select(t.b, t.a, r < 0.5).xyz;
+    } else {
+        let q = vec3<f32>(dot(mat.lx.xyz, p) + mat.lx.w, dot(mat.ly.xyz, p) + mat.ly.w,
+            dot(mat.lz.xyz, p) + mat.lz.w) * t.a.w;
+        if (t.kind == 2u) {
+            let v = pattern_value(t.code, q, t.size);
+            rgb = t.a.xyz * (1.0 - v) + t.b.xyz * v;
+        } else {
+            var nl = vec3<f32>(dot(mat.nx.xyz, n), dot(mat.ny.xyz, n), dot(mat.nz.xyz, n));
+            let len = length(nl);
+            nl = select(vec3<f32>(0.0), nl / len, len > 0.0);
+            rgb = triplanar(t.code, t.size, u32(t.b.x), q, nl, t.b.y);
+        }
+    }
+    if (t.clamp != 0u) { rgb = clamp(rgb, vec3<f32>(0.0), vec3<f32>(1.0)); }
+    return rgb;
 }
 
 // An image's pixel (i, j), both wrapped into the image (rem_euclid), from its RGB f32

@@ -34,11 +34,66 @@ fn draw_at(slot: u32, j: u32) -> u32 {
     return ((frame.depth * frame.slots + slot) * frame.per_slot + j) * draw_vec4s(frame.n_tech);
 }
 
+// The media on the two sides of a vertex packed into one word (hits' word 2), 0xffff
+// for vacuum.
+fn pack_media(inside: u32, outside: u32) -> f32 {
+    return bitcast<f32>((inside & 0xffffu) | (outside << 16u));
+}
+
 fn write_vertex(at: u32, p: vec3<f32>, leaf: u32, n: vec3<f32>, wo: vec3<f32>, beta: vec3<f32>) {
+    let material = objects[leaf & 0x7fffffffu].material;
+    let sides = materials[material].coats;
     hits[at] = vec4<f32>(p, S_SURFACE);
-    hits[at + 1u] = vec4<f32>(n, bitcast<f32>(objects[leaf & 0x7fffffffu].material));
-    hits[at + 2u] = vec4<f32>(wo, 0.0);
+    hits[at + 1u] = vec4<f32>(n, bitcast<f32>(material));
+    hits[at + 2u] = vec4<f32>(wo, pack_media(sides.y, sides.z));
     hits[at + 4u] = vec4<f32>(beta, 0.0);
+}
+
+// A scattering point inside medium `medium` (Vertex::in_medium): no normal, the medium's
+// phase function as its material, the medium on both sides.
+fn write_medium_vertex(at: u32, p: vec3<f32>, medium: u32, wo: vec3<f32>, beta: vec3<f32>) {
+    hits[at] = vec4<f32>(p, S_SURFACE);
+    hits[at + 1u] = vec4<f32>(vec3<f32>(0.0), bitcast<f32>(frame.media.x + medium));
+    hits[at + 2u] = vec4<f32>(wo, pack_media(medium, medium));
+    hits[at + 4u] = vec4<f32>(beta, 0.0);
+}
+
+// The medium a ray along `wi` leaves the vertex at hits[ha] in (Vertex::medium_toward):
+// the inside against the normal, else the outside (the same at a medium point).
+fn medium_toward(ha: u32, wi: vec3<f32>) -> u32 {
+    let sides = bitcast<u32>(hits[ha + 2u].w);
+    var m = sides >> 16u;
+    if (dot(wi, hits[ha + 1u].xyz) < 0.0) { m = sides & 0xffffu; }
+    return select(m, NO_MEDIUM, m == 0xffffu);
+}
+
+// The medium a ray along d enters at a boundary of leaf `leaf` with outward normal n
+// (render::integrator::medium::medium_entered): the object's inside where d goes against
+// n, else its outside.
+fn medium_entered(leaf: u32, n: vec3<f32>, d: vec3<f32>) -> u32 {
+    let sides = materials[objects[leaf & 0x7fffffffu].material].coats;
+    return select(sides.z, sides.y, dot(d, n) < 0.0);
+}
+
+// exp(−σ·d) per channel, 1 where σ = 0 (render::medium::optical_transmittance), 0 for
+// d = ∞ where σ > 0.
+fn transmittance(sigma: vec3<f32>, d: f32) -> vec3<f32> {
+    var t = vec3<f32>(0.0);
+    for (var c = 0u; c < 3u; c++) {
+        if (sigma[c] == 0.0) {
+            t[c] = 1.0;
+        } else if (d < inf()) {
+            t[c] = exp(-sigma[c] * d);
+        }
+    }
+    return t;
+}
+
+// The albedo of medium material `mm` at p: its colour, or its texture read in world
+// space (render::medium::Medium::sigma_s).
+fn medium_albedo(mm: GpuMaterial, p: vec3<f32>) -> vec3<f32> {
+    if (mm.tex[0].kind == 0u) { return mm.bsdf.rgb.xyz; }
+    return texture_rgb(mm.tex[0], mm, p, vec3<f32>(0.0));
 }
 
 // The radiance the surface of leaf `leaf` (outward normal n there) sends back along −d:
@@ -68,15 +123,17 @@ struct TraceRay {
     live: bool,
     // The slot (camera, continuation), draw record (shadow) or ray (probe) it is for.
     at: u32,
+    // The medium it starts in (NO_MEDIUM: vacuum).
+    medium: u32,
 }
 
 fn no_ray() -> TraceRay {
-    return TraceRay(vec3<f32>(0.0), vec3<f32>(0.0), inf(), false, false, false, 0u);
+    return TraceRay(vec3<f32>(0.0), vec3<f32>(0.0), inf(), false, false, false, 0u, NO_MEDIUM);
 }
 
 fn camera_ray_of(slot: u32) -> TraceRay {
     let ray = camera_ray(slot_pixel(slot));
-    return TraceRay(ray[0], ray[1], inf(), false, true, true, slot);
+    return TraceRay(ray[0], ray[1], inf(), false, true, true, slot, frame.media.y);
 }
 
 // The continuation of a slot's path from vertex `depth`: its nearest hit is the extending
@@ -89,68 +146,89 @@ fn continuation_ray(slot: u32) -> TraceRay {
         hits[at].w = S_NONE;
         return no_ray();
     }
-    return TraceRay(c.xyz, hits[at + 6u].xyz, inf(), false, true, true, slot);
+    let wi = hits[at + 6u].xyz;
+    var medium = NO_MEDIUM;
+    if (MEDIA) { medium = medium_toward(at, wi); }
+    return TraceRay(c.xyz, wi, inf(), false, true, true, slot, medium);
 }
 
-// A queued draw's shadow ray. With emitting objects a draw's record holds its integrand
-// without Li, which a nearest-hit ray finds: the nearest light's or the environment's
-// where no object comes first, else the emission of the surface met
+// A queued draw's shadow ray. With emitting objects (or media) a draw's record holds its
+// integrand without Li, which a nearest-hit ray finds: the nearest light's or the
+// environment's where no object comes first, else the emission of the surface met
 // (render::integrator::medium::transmitted); the objects are queried first and the
 // lights up to the object's t, the same answer but for exact ties. Point and spot
-// lights' records (after the draws) keep their any-hit rays.
+// lights' records (after the draws) keep their any-hit rays, but for walks through
+// media, which need the nearest boundary.
 fn shadow_ray(q: u32) -> TraceRay {
     if (q >= atomicLoad(&stats[QUEUE_LEN])) { return no_ray(); }
     let i = atomicLoad(&stats[QUEUE_ITEMS + q]);
     let at = (frame.depth * frame.slots * frame.per_slot + i) * draw_vec4s(frame.n_tech);
     let emitters = (frame.flags & FLAG_EMITTERS) != 0u && i % frame.per_slot <= frame.n_draws;
     let t_max = select(draws[at].w, inf(), emitters);
-    return TraceRay(draws[at].xyz, draws[at + 1u].xyz, t_max, !emitters, emitters, true, at);
+    let wi = draws[at + 1u].xyz;
+    var medium = NO_MEDIUM;
+    if (MEDIA) { medium = medium_toward((i / frame.per_slot) * HIT_WORDS, wi); }
+    return TraceRay(draws[at].xyz, wi, t_max, !emitters && !MEDIA, emitters, true, at, medium);
 }
 
 // A ray batch for tests (mode 3): ray i from draw record i's [o, ·] (origin) and
 // [wi, ·] (direction).
 fn probe_ray(i: u32) -> TraceRay {
     let at = i * draw_vec4s(frame.n_tech);
-    return TraceRay(draws[at].xyz, draws[at + 1u].xyz, inf(), false, false, true, i);
+    return TraceRay(draws[at].xyz, draws[at + 1u].xyz, inf(), false, false, true, i, NO_MEDIUM);
 }
 
-fn finish_camera(r: TraceRay, h: SceneHit, lh: LightHit, n: vec3<f32>) {
+// What a walk through index-matched boundaries and media adds to a ray's answer
+// (render::integrator::medium): the origin of its last stretch (the query's answer is
+// along it), the transmittance to its end and, for a ray that extends a path, the free
+// flight's stop: a scattering point (`p` in `medium`) with weight σ_s·Tr/p, or the
+// walk's end with weight Tr/P(pass). Without media: the ray's origin, 1, no stop, 1.
+struct Walk {
+    o: vec3<f32>,
+    tr: vec3<f32>,
+    scattered: bool,
+    p: vec3<f32>,
+    medium: u32,
+    weight: vec3<f32>,
+}
+
+fn finish_camera(r: TraceRay, h: SceneHit, lh: LightHit, n: vec3<f32>, wk: Walk) {
     let at = r.at * HIT_WORDS;
-    hits[at + 3u] = vec4<f32>(0.0);
     // The first hit's AOVs: nothing where the ray escapes (integrator/aov.rs).
     hits[at + 8u] = vec4<f32>(0.0);
     hits[at + 9u] = vec4<f32>(0.0);
     if (h.status == 2u) {
+        hits[at + 3u] = vec4<f32>(0.0);
         hits[at] = vec4<f32>(0.0, 0.0, 0.0, S_OVERFLOW);
         return;
     }
+    // What the camera sees at the walk's end, outside MIS: a light (its depth and normal,
+    // albedo 0), the environment where the ray escapes, or an emitting object.
+    var le = vec3<f32>(0.0);
+    let surface = lh.t == inf() && h.status == 1u;
     if (lh.t < inf()) {
-        // A light: its depth and normal, albedo 0.
         hits[at + 8u] = vec4<f32>(lh.n, lh.t);
-        var le = lh.le;
-        if ((frame.flags & FLAG_HIDE) != 0u) { le = vec3<f32>(0.0); }
-        hits[at] = vec4<f32>(0.0, 0.0, 0.0, S_NONE);
-        hits[at + 3u] = vec4<f32>(le, 0.0);
-        return;
+        le = lh.le;
+    } else if (h.status == 0u) {
+        le = env_radiance(frame.env, r.d);
+    } else {
+        hits[at + 8u] = vec4<f32>(n, h.t);
+        if ((frame.flags & FLAG_EMITTERS) != 0u) { le = surface_emission(h.leaf, n, r.d); }
     }
-    if (h.status == 0u) {
-        // Escaped: the environment seen directly, outside MIS.
-        var le = env_radiance(frame.env, r.d);
-        if ((frame.flags & FLAG_HIDE) != 0u) { le = vec3<f32>(0.0); }
-        hits[at] = vec4<f32>(0.0, 0.0, 0.0, S_NONE);
-        hits[at + 3u] = vec4<f32>(le, 0.0);
-        return;
-    }
-    let p = r.o + h.t * r.d;
-    write_vertex(at, p, h.leaf, n, -r.d, vec3<f32>(1.0));
-    hits[at + 8u] = vec4<f32>(n, h.t);
-    if ((frame.flags & (FLAG_EMITTERS | FLAG_HIDE)) == FLAG_EMITTERS) {
-        // An emitting object seen directly, outside MIS.
-        hits[at + 3u] = vec4<f32>(surface_emission(h.leaf, n, r.d), 0.0);
+    if ((frame.flags & FLAG_HIDE) != 0u) { le = vec3<f32>(0.0); }
+    hits[at + 3u] = vec4<f32>(le * wk.tr, 0.0);
+    hits[at] = vec4<f32>(0.0, 0.0, 0.0, S_NONE);
+    // The first vertex: the free flight's stop (render::integrator::path).
+    if (any(wk.weight != vec3<f32>(0.0))) {
+        if (wk.scattered) {
+            write_medium_vertex(at, wk.p, wk.medium, -r.d, wk.weight);
+        } else if (surface) {
+            write_vertex(at, wk.o + h.t * r.d, h.leaf, n, -r.d, wk.weight);
+        }
     }
 }
 
-fn finish_continuation(r: TraceRay, h: SceneHit, lh: LightHit, n: vec3<f32>) {
+fn finish_continuation(r: TraceRay, h: SceneHit, lh: LightHit, n: vec3<f32>, wk: Walk) {
     let slot = r.at;
     let at = slot * HIT_WORDS;
     if (h.status == 2u) {
@@ -166,7 +244,34 @@ fn finish_continuation(r: TraceRay, h: SceneHit, lh: LightHit, n: vec3<f32>) {
     } else if ((frame.flags & FLAG_EMITTERS) != 0u) {
         g = w2.xyz * surface_emission(h.leaf, n, r.d);
     }
-    draws[rec + 2u] = vec4<f32>(g, w2.w);
+    draws[rec + 2u] = vec4<f32>(g * wk.tr, w2.w);
+    if (MEDIA) {
+        // β after the draw and the free flight, then Russian roulette, which the shade
+        // pass left to this one (render::integrator::path).
+        var next = hits[at + 7u].xyz * wk.weight;
+        var vertex = hits[at + 6u].w == 1.0 && (wk.scattered || object);
+        vertex = vertex && all(next == next) && any(next != vec3<f32>(0.0)) && is_finite(max(next.x, max(next.y, next.z)));
+        if (vertex && frame.depth + 1u >= frame.rr_depth) {
+            let q = max(0.05, 1.0 - max(next.x, max(next.y, next.z)));
+            let px = slot_pixel(slot);
+            if (rnd(px.x, px.y, px.z, 8u + frame.depth * frame.stride + 3u * (frame.n_draws + 1u)) < q) {
+                vertex = false;
+            } else {
+                next = next / (1.0 - q);
+            }
+        }
+        if (!vertex) {
+            hits[at].w = S_NONE;
+            return;
+        }
+        if (wk.scattered) {
+            write_medium_vertex(at, wk.p, wk.medium, -r.d, next);
+        } else {
+            write_vertex(at, wk.o + h.t * r.d, h.leaf, n, -r.d, next);
+        }
+        push(LIVE_LEN, frame.wave.x, slot);
+        return;
+    }
     if (!object || hits[at + 6u].w != 1.0) {
         hits[at].w = S_NONE;
         return;
@@ -175,7 +280,7 @@ fn finish_continuation(r: TraceRay, h: SceneHit, lh: LightHit, n: vec3<f32>) {
     push(LIVE_LEN, frame.wave.x, slot);
 }
 
-fn finish_shadow(r: TraceRay, h: SceneHit, lh: LightHit, n: vec3<f32>) {
+fn finish_shadow(r: TraceRay, h: SceneHit, lh: LightHit, n: vec3<f32>, wk: Walk) {
     let at = r.at;
     if (h.status == 2u) {
         draws[at + 1u].w = S_OVERFLOW + 10.0;
@@ -184,11 +289,17 @@ fn finish_shadow(r: TraceRay, h: SceneHit, lh: LightHit, n: vec3<f32>) {
         if (lh.t == inf() && h.status == 1u) {
             li = surface_emission(h.leaf, n, r.d);
         }
+        li = li * wk.tr;
         let g = draws[at + 2u];
         draws[at + 2u] = vec4<f32>(g.xyz * li, g.w);
         draws[at + 1u].w = select(D_OCCLUDED, D_VISIBLE, any(li != vec3<f32>(0.0)));
     } else if (h.status == 1u) {
         draws[at + 1u].w = D_OCCLUDED;
+    } else if (MEDIA) {
+        // A point or spot light through media.
+        let g = draws[at + 2u];
+        draws[at + 2u] = vec4<f32>(g.xyz * wk.tr, g.w);
+        draws[at + 1u].w = select(D_OCCLUDED, D_VISIBLE, any(wk.tr != vec3<f32>(0.0)));
     } else {
         draws[at + 1u].w = D_VISIBLE;
     }
@@ -221,26 +332,132 @@ fn trace(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
         }
     }
     if (r.live) {
-        let h = scene_trace(r.o, r.d, r.t_max, r.any_hit);
-        var lh = LightHit(inf(), 0u, vec3<f32>(0.0), vec3<f32>(0.0));
-        if (r.lights && h.status != 2u) { lh = nearest_light(r.o, r.d, h.t); }
-        // The surface met, where its normal is wanted: the next vertex, an emission, or
-        // the probe's answer.
-        let object = h.status == 1u && lh.t == inf();
-        var wants = object;
-        if (frame.mode == 1u) {
-            wants = object && r.lights;
-        } else if (frame.mode == 2u) {
-            wants = object && ((frame.flags & FLAG_EMITTERS) != 0u || hits[r.at * HIT_WORDS + 6u].w == 1.0);
+        // Through index-matched boundaries and media (render::integrator::medium), one
+        // query per stretch: `walks` (not probes), and `flies` for the rays that extend
+        // a path, whose free flight spends an optical depth τ at channel c's σ_t
+        // (channels chosen by the throughput, balance-weighted: Walk::fly).
+        let walks = MEDIA && frame.mode < 3u;
+        let flies = walks && frame.mode != 1u;
+        var w = vec3<f32>(1.0 / 3.0);
+        var c = 0u;
+        var tau = 0.0;
+        if (flies) {
+            let px = slot_pixel(r.at);
+            var beta = vec3<f32>(1.0);
+            var depth = 0u;
+            if (frame.mode == 2u) {
+                beta = hits[r.at * HIT_WORDS + 7u].xyz;
+                depth = frame.depth + 1u;
+            }
+            // state::dims: the free flight of the ray that reaches vertex `depth`.
+            let fd = 8u + frame.max_depth * frame.stride + 2u * depth;
+            let uc = rnd(px.x, px.y, px.z, fd);
+            let u = rnd(px.x, px.y, px.z, fd + 1u);
+            let total = beta.x + beta.y + beta.z;
+            if (total > 0.0 && is_finite(total)) { w = beta / total; }
+            c = 2u;
+            if (uc < w.x) {
+                c = 0u;
+            } else if (uc < w.x + w.y || w.z == 0.0) {
+                c = 1u;
+            }
+            tau = -log(1.0 - u);
         }
+        var wk = Walk(r.o, vec3<f32>(1.0), false, vec3<f32>(0.0), 0u, vec3<f32>(1.0));
+        // A shadow ray toward a point (a point or spot light): each stretch ends there.
+        let aim = r.o + r.t_max * r.d;
+        var t_max = r.t_max;
+        var medium = r.medium;
+        var segments = 0u;
+        var crossings = 0u;
+        var blocked = false;
+        var h = SceneHit(0u, inf(), 0u);
+        var lh = LightHit(inf(), 0u, vec3<f32>(0.0), vec3<f32>(0.0));
         var n = vec3<f32>(0.0);
-        if (wants) { n = leaf_normal(h.leaf, r.o + h.t * r.d); }
+        loop {
+            h = scene_trace(wk.o, r.d, t_max, r.any_hit);
+            lh = LightHit(inf(), 0u, vec3<f32>(0.0), vec3<f32>(0.0));
+            if (r.lights && h.status != 2u) { lh = nearest_light(wk.o, r.d, h.t); }
+            // The surface met, where its normal is wanted: an index-matched boundary to
+            // cross, the next vertex, an emission, or the probe's answer.
+            let object = h.status == 1u && lh.t == inf();
+            let crosses = walks && object && materials[objects[h.leaf & 0x7fffffffu].material].bsdf.kind == K_INTERFACE;
+            var wants = object;
+            if (frame.mode == 1u) {
+                wants = object && r.lights;
+            } else if (frame.mode == 2u) {
+                wants = object && ((frame.flags & FLAG_EMITTERS) != 0u || hits[r.at * HIT_WORDS + 6u].w == 1.0);
+            }
+            n = vec3<f32>(0.0);
+            if (wants || crosses) { n = leaf_normal(h.leaf, wk.o + h.t * r.d); }
+            if (!walks || h.status == 2u) { break; }
+            // The stretch to what the query met, inside `medium`.
+            var len = t_max;
+            if (lh.t < inf()) {
+                len = lh.t;
+            } else if (h.status == 1u) {
+                len = h.t;
+            }
+            if (medium != NO_MEDIUM) {
+                segments++;
+                if (flies && segments > MAX_SEGMENTS) {
+                    blocked = true;
+                    break;
+                }
+                let mm = materials[frame.media.x + medium];
+                let st = mm.bsdf.k.xyz;
+                let sigma = st[c];
+                if (flies && !wk.scattered && sigma > 0.0) {
+                    let depth = sigma * len;
+                    if (depth > tau) {
+                        let t = tau / sigma;
+                        let tr_t = wk.tr * transmittance(st, t);
+                        let pdf = dot(w, st * tr_t);
+                        wk.scattered = true;
+                        wk.p = wk.o + r.d * t;
+                        wk.medium = medium;
+                        wk.weight = vec3<f32>(0.0);
+                        if (pdf > 0.0) { wk.weight = medium_albedo(mm, wk.p) * st * tr_t / pdf; }
+                    } else {
+                        tau -= depth;
+                    }
+                }
+                wk.tr = wk.tr * transmittance(st, len);
+            }
+            crossings++;
+            if (!crosses) { break; }
+            if (crossings == MAX_CROSSINGS || (!flies && all(wk.tr == vec3<f32>(0.0)))) {
+                blocked = true;
+                break;
+            }
+            loops++;
+            medium = medium_entered(h.leaf, n, r.d);
+            wk.o = spawn(wk.o + h.t * r.d, n, r.d);
+            if (t_max < inf()) {
+                t_max = dot(aim - wk.o, r.d);
+                if (t_max <= 0.0) {
+                    // The point is reached.
+                    h = SceneHit(0u, t_max, 0u);
+                    break;
+                }
+            }
+        }
+        if (blocked) {
+            // Taken as blocked: nothing arrives, and the path ends (Walk::blocked).
+            h = SceneHit(0u, inf(), 0u);
+            lh = LightHit(inf(), 0u, vec3<f32>(0.0), vec3<f32>(0.0));
+            wk.tr = vec3<f32>(0.0);
+            wk.scattered = false;
+        } else if (flies && !wk.scattered && segments > 0u) {
+            let through = dot(w, wk.tr);
+            wk.weight = select(vec3<f32>(0.0), wk.tr / through, through > 0.0);
+        }
         if (frame.mode == 0u) {
-            finish_camera(r, h, lh, n);
+            finish_camera(r, h, lh, n, wk);
         } else if (frame.mode == 1u) {
-            finish_shadow(r, h, lh, n);
+            finish_shadow(r, h, lh, n, wk);
         } else if (frame.mode == 2u) {
-            finish_continuation(r, h, lh, n);
+            finish_continuation(r, h, lh, n, wk);
         } else {
             finish_probe(r, h, n);
         }

@@ -290,9 +290,9 @@ fn l_sin_sub(sin_a: f32, cos_a: f32, sin_b: f32, cos_b: f32) -> f32 {
     return sin_a * cos_b - cos_a * sin_b;
 }
 
-// The spatial selection's bound on a light's contribution at p with normal n
-// (render::light::importance, pbrt-v4 §12.6.3), from its 12-word record in sel_buf at
-// `at` (light.rs importance_record: centre, radius, axis, cos θo, Φ, two-sided).
+// The spatial selection's bound on a light's contribution at p with normal n (0 at a
+// medium point) (render::light::importance, pbrt-v4 §12.6.3), from its 12-word record in
+// sel_buf at `at` (light.rs importance_record: centre, radius, axis, cos θo, Φ, two-sided).
 fn light_importance(at: u32, p: vec3<f32>, n: vec3<f32>) -> f32 {
     let center = vec3<f32>(sel_buf[at], sel_buf[at + 1u], sel_buf[at + 2u]);
     let radius = sel_buf[at + 3u];
@@ -317,9 +317,13 @@ fn light_importance(at: u32, p: vec3<f32>, n: vec3<f32>) -> f32 {
     let sin_x = l_sin_sub(sin_w, cos_w, sin_o, cos_o);
     let cos_p = l_cos_sub(sin_x, cos_x, sin_b, cos_b);
     if (cos_p <= 0.0) { return 0.0; }
-    let cos_i = abs(l_dot(n, w));
-    let sin_i = l_safe_sqrt(1.0 - cos_i * cos_i);
-    let cos_ip = l_cos_sub(sin_i, cos_i, sin_b, cos_b);
+    // No normal (a point inside a medium): no cosine to bound (pbrt-v4 likewise).
+    var cos_ip = 1.0;
+    if (n.x != 0.0 || n.y != 0.0 || n.z != 0.0) {
+        let cos_i = abs(l_dot(n, w));
+        let sin_i = l_safe_sqrt(1.0 - cos_i * cos_i);
+        cos_ip = l_cos_sub(sin_i, cos_i, sin_b, cos_b);
+    }
     let r = phi * cos_p * cos_ip / d2;
     if (r > 0.0) { return r; }
     return 0.0;
