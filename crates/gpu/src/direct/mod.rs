@@ -66,7 +66,7 @@ mod waves;
 pub use crate::record::{draw_words, DRAW_HEAD_WORDS, HIT_WORDS};
 pub use crate::stats::{GpuStats, StageTimes, SumsOn};
 pub use accumulate::add_slot;
-pub use pack::{DirectScene, GpuMaterial, GpuShape, GpuTexture, TEX_SLOTS};
+pub use pack::{DirectScene, GpuMaterial, GpuShape, GpuTexture, INTERFACE, NO_MEDIUM, TEX_SLOTS};
 pub use probe::{probe, Probe};
 pub use waves::{render_range, render_range_with, RenderJob, WaveOptions};
 
