@@ -149,20 +149,6 @@ impl GpuTape {
         &self.words
     }
 
-    /// The words with dead instructions (`const 0 → r0`) in front, to `len`
-    /// instructions: a tape of the interpreter's length `len`, with the same result (a
-    /// register-allocated tape writes every register before reading it).
-    pub fn padded_words(&self, len: usize) -> Vec<u32> {
-        assert!(len >= self.len(), "padding shortens no tape");
-        let dead = [
-            1 | u32::from(frep::bytecode::IMM) << 16 | u32::from(frep::bytecode::IMM) << 24,
-            0,
-        ];
-        let mut w: Vec<u32> = dead.repeat(len - self.len());
-        w.extend_from_slice(&self.words);
-        w
-    }
-
     /// Whether the tape has one of [`crate::elementary`]'s operations. The kernel's
     /// `ELEMENTARY` constant: without them their cases compile to nothing (Mesa drops a
     /// constant-false branch before its costly back end), so a scene that does not use
@@ -213,11 +199,11 @@ impl GpuTape {
         self.instrs.is_empty()
     }
 
-    /// The interpreter's WGSL with this tape's per-pipeline constants `REG_COUNT` and
-    /// `TAPE_LEN` (GPU.md §3.4). The kernel declares `tape: array<u32>`.
+    /// The interpreter's WGSL with this tape's per-pipeline constant `REG_COUNT` (GPU.md
+    /// §3.4) and its length as `tape_ops`. The kernel declares `tape: array<u32>`.
     pub fn wgsl(&self) -> String {
         format!(
-            "const REG_COUNT: u32 = {}u;\nconst TAPE_LEN: u32 = {}u;\nconst ELEMENTARY: bool = {};\nconst RBOUND: bool = {};\n{}{}{}{TAPE_WGSL}",
+            "const REG_COUNT: u32 = {}u;\nvar<private> tape_ops: u32 = {}u;\nconst ELEMENTARY: bool = {};\nconst RBOUND: bool = {};\n{}{}{}{TAPE_WGSL}",
             self.registers.max(1),
             self.len(),
             self.elementary(),

@@ -56,19 +56,7 @@ pub const OPEN_ZONE: f32 = 256.0;
 pub const MAX_BISECT: u32 = 64;
 
 /// Words per solid at the start of a scene's `tape` binding ([`TapeSolid::scene_words`]).
-pub const SOLID_WORDS: usize = 8;
-
-/// The interpreter's trip count for a tape of `n` instructions: `n` rounded up to
-/// m·2^k with m in 4…7 (at most 25 % more; powers of two up to 8), so that scenes whose
-/// tapes differ a little in length share one compiled kernel.
-pub fn size_class(n: usize) -> usize {
-    let n = n.max(1);
-    if n <= 8 {
-        return n.next_power_of_two();
-    }
-    let k = (usize::BITS - 1 - (n - 1).leading_zeros()) - 2;
-    (((n - 1) >> k) + 1) << k
-}
+pub const SOLID_WORDS: usize = 9;
 
 /// The interpreter's register file for a tape of `n` registers: the next power of two.
 pub fn register_class(n: usize) -> usize {
@@ -153,26 +141,24 @@ impl TapeSolid {
         )
     }
 
-    /// The tracer over several solids in one kernel (a scene's expression solids):
-    /// one interpreter whose trip count and register file are the size classes
-    /// ([`size_class`], [`register_class`]) of the longest tape and the most registers
-    /// (the tapes padded in front to it, [`GpuTape::padded_words`], so that its loops
-    /// keep a constant trip count, GPU.md §3.4), and `use_tape(k)`, which points
-    /// `tape_base`, `EPS`, `BLO` and `BHI` at solid k before a trace or a normal, from
-    /// the header of the `tape` binding ([`Self::scene_words`]). The source depends on
-    /// the classes and on which kinds of operation the tapes use, not on the tapes or the
-    /// solids' bounds: another scene of the same classes reuses the compiled kernels
-    /// (the driver's pipeline cache, Mesa's on-disk shader cache).
+    /// The tracer over several solids in one kernel (a scene's expression solids): one
+    /// interpreter whose register file is the power-of-two class of the most registers
+    /// ([`register_class`]) and whose trip count is the tape's length at run time, and
+    /// `use_tape(k)`, which points `tape_base`, `tape_ops`, `EPS`, `BLO` and `BHI` at
+    /// solid k before a trace or a normal, from the header of the `tape` binding
+    /// ([`Self::scene_words`]). The source depends on the register class and on which
+    /// kinds of operation the tapes use, not on the tapes, their lengths or the solids'
+    /// bounds: another scene of the same class reuses the compiled kernels (the driver's
+    /// pipeline cache, Mesa's on-disk shader cache).
     pub fn scene_wgsl(solids: &[TapeSolid]) -> String {
-        let len = size_class(solids.iter().map(|s| s.tape.len()).max().unwrap_or(1));
         let regs = register_class(solids.iter().map(|s| s.tape.registers()).max().unwrap_or(1));
         format!(
-            "const REG_COUNT: u32 = {regs}u;\nconst TAPE_LEN: u32 = {len}u;\nconst ELEMENTARY: bool = {};\nconst RBOUND: bool = {};\n{}{}{}{}\n\
+            "const REG_COUNT: u32 = {regs}u;\nvar<private> tape_ops: u32;\nconst ELEMENTARY: bool = {};\nconst RBOUND: bool = {};\n{}{}{}{}\n\
              var<private> EPS: f32;\nvar<private> BLO: vec3<f32>;\nvar<private> BHI: vec3<f32>;\n\
-             // Solid k's words at 8k of the `tape` binding: its tape's first word, ε, lo, hi.\n\
-             fn use_tape(k: u32) {{\n    let h = {SOLID_WORDS}u * k;\n    tape_base = tape[h];\n    EPS = bitcast<f32>(tape[h + 1u]);\n    \
-             BLO = vec3<f32>(bitcast<f32>(tape[h + 2u]), bitcast<f32>(tape[h + 3u]), bitcast<f32>(tape[h + 4u]));\n    \
-             BHI = vec3<f32>(bitcast<f32>(tape[h + 5u]), bitcast<f32>(tape[h + 6u]), bitcast<f32>(tape[h + 7u]));\n}}\n{TRACE_WGSL}",
+             // Solid k's words at {SOLID_WORDS}k of the `tape` binding: its tape's first word, its length, ε, lo, hi.\n\
+             fn use_tape(k: u32) {{\n    let h = {SOLID_WORDS}u * k;\n    tape_base = tape[h];\n    tape_ops = tape[h + 1u];\n    EPS = bitcast<f32>(tape[h + 2u]);\n    \
+             BLO = vec3<f32>(bitcast<f32>(tape[h + 3u]), bitcast<f32>(tape[h + 4u]), bitcast<f32>(tape[h + 5u]));\n    \
+             BHI = vec3<f32>(bitcast<f32>(tape[h + 6u]), bitcast<f32>(tape[h + 7u]), bitcast<f32>(tape[h + 8u]));\n}}\n{TRACE_WGSL}",
             solids.iter().any(|s| s.tape.elementary()),
             solids.iter().any(|s| s.tape.r_functions()),
             crate::FLOAT_WGSL,
@@ -183,19 +169,22 @@ impl TapeSolid {
     }
 
     /// The `tape` binding's words for [`Self::scene_wgsl`]: per solid its
-    /// [`SOLID_WORDS`] (where its tape starts, ε, the bounds' lo and hi as f32 bits),
-    /// then each solid's tape padded to the size class of the longest, in order.
+    /// [`SOLID_WORDS`] (where its tape starts, its length in instructions, ε, the bounds'
+    /// lo and hi as f32 bits), then the solids' tapes one after another.
     pub fn scene_words(solids: &[TapeSolid]) -> Vec<u32> {
-        let len = size_class(solids.iter().map(|s| s.tape.len()).max().unwrap_or(1));
         let head = SOLID_WORDS * solids.len();
-        let mut words = Vec::with_capacity(head + 2 * len * solids.len());
-        for (k, s) in solids.iter().enumerate() {
-            words.push((head + 2 * k * len) as u32);
+        let total: usize = solids.iter().map(|s| s.tape.words().len()).sum();
+        let mut words = Vec::with_capacity(head + total);
+        let mut at = head;
+        for s in solids {
+            words.push(at as u32);
+            words.push(s.tape.len() as u32);
             words.push(s.eps.to_bits());
             words.extend(s.lo.iter().chain(&s.hi).map(|v| v.to_bits()));
+            at += s.tape.words().len();
         }
         for s in solids {
-            words.extend(s.tape.padded_words(len));
+            words.extend_from_slice(s.tape.words());
         }
         words
     }
@@ -490,27 +479,9 @@ mod tests {
         assert_eq!(hex(f32::MAX), "0x1.fffffep127f");
     }
 
-    /// A size class holds the tape (n ≤ class), pads it by at most a quarter above 8
-    /// instructions, is its own class, and does not decrease with n; few classes cover
-    /// the tapes up to 10⁵ instructions. Register classes are powers of two holding n.
+    /// Register classes are powers of two holding n.
     #[test]
-    fn size_classes_hold_the_tape_and_pad_little() {
-        let mut last = 0;
-        let mut classes = std::collections::BTreeSet::new();
-        for n in 0..100_000usize {
-            let c = size_class(n);
-            assert!(c >= n.max(1), "{n}: {c}");
-            assert!(n <= 8 || 4 * c <= 5 * n + 3, "{n}: {c}");
-            assert_eq!(size_class(c), c, "{n}");
-            assert!(c >= last, "{n}");
-            last = c;
-            classes.insert(c);
-        }
-        assert!(classes.len() < 60, "{}", classes.len());
-        assert_eq!(
-            [1, 2, 3, 9, 16, 17, 520, 1024].map(size_class),
-            [1, 2, 4, 10, 16, 20, 640, 1024]
-        );
+    fn register_classes_hold_the_registers() {
         for n in 0..300 {
             let r = register_class(n);
             assert!(r >= n.max(1) && r.is_power_of_two() && r < 2 * n.max(1));

@@ -179,8 +179,8 @@ pub struct DirectScene {
     /// Area lights.
     pub lights: Vec<GpuAreaLight>,
     /// The scene's expression solids, in the order of their leaves' `first_op`: their
-    /// tapes share one interpreter, each padded to the size class of the longest
-    /// (GPU.md §6.2), in one binding checked against the device's limit.
+    /// tapes share one interpreter (GPU.md §6.2), which runs each for its own length,
+    /// in one binding checked against the device's limit.
     pub tapes: Vec<TapeSolid>,
     /// CSG nodes of kind-2 shapes, post-order: (op, leaf or part count, 0, 0).
     pub csg: Vec<[u32; 4]>,

@@ -110,8 +110,8 @@ fn noise_perm(i: u32) -> u32 { return u32(sel_buf[i]); }
 // CSG nodes of kind-2 shapes in post-order: (op, leaf or part count, 0, 0), op 0 leaf,
 // 1 union, 2 intersection, 3 difference.
 @group(0) @binding(13) var<storage, read> csg: array<vec4<u32>>;
-// The scene's expression tapes (GpuObject kind 2, its first_op the tape's index), each
-// padded to the longest, run by `trace_tape` and `tape_normal` after `use_tape`, which
+// The scene's expression tapes (GpuObject kind 2, its first_op the tape's index), one
+// after another, run by `trace_tape` and `tape_normal` after `use_tape`, which
 // the kernel's source defines per scene (stubs without a tape).
 @group(0) @binding(14) var<storage, read> tape: array<u32>;
 

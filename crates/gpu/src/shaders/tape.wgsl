@@ -8,15 +8,18 @@
 // exp, ln, tan, asin, acos, atan, floor, ceil, round, not, mod, compare, and, or
 // (elementary.wgsl, appended).
 // The kernel prepends the opcodes (OP_VAR, …) and IMM from frep's encoding
-// (gpu::tape::tape_consts_wgsl), REG_COUNT and TAPE_LEN (per pipeline, §3.4) and binds `tape:
-// array<u32>`. Each loop iteration runs four instructions and adds one to `loops` (§3.1):
-// an evaluation costs EVAL_LOOPS.
+// (gpu::tape::tape_consts_wgsl) and REG_COUNT (per pipeline, §3.4), declares `tape_ops`
+// (the tape's length in instructions) and binds `tape: array<u32>`. Each loop iteration runs four instructions and adds one to `loops` (§3.1):
+// an evaluation costs eval_loops().
 
 var<private> loops: u32;
 // Where the tape starts in `tape` (words): 0, or the scene's tape of the object traced
 // where a kernel holds several (gpu::tape_trace::scene_wgsl).
 var<private> tape_base: u32;
-const EVAL_LOOPS: u32 = (TAPE_LEN + 3u) / 4u;
+// Its length in instructions: a run-time trip count, so that tapes of every length (a
+// scene's solids, and later a solid's per-cell tapes) share one compiled interpreter.
+// Set by the kernel's preamble or `use_tape`.
+fn eval_loops() -> u32 { return (tape_ops + 3u) / 4u; }
 
 const MIN_POS: f32 = 0x1p-126f; // f32::MIN_POSITIVE
 
@@ -186,15 +189,15 @@ fn point_op(k: u32, p: vec3<f32>) -> u32 {
 }
 
 // F at p: Bytecode::eval_f32 operation for operation, four ops per loop iteration
-// (§6.2.2), so an evaluation costs EVAL_LOOPS iterations.
+// (§6.2.2), so an evaluation costs eval_loops() iterations.
 fn eval_point(p: vec3<f32>) -> f32 {
     var out = 0u;
-    for (var k = 0u; k < TAPE_LEN; k += 4u) {
+    for (var k = 0u; k < tape_ops; k += 4u) {
         loops++;
         out = point_op(k, p);
-        if (k + 1u < TAPE_LEN) { out = point_op(k + 1u, p); }
-        if (k + 2u < TAPE_LEN) { out = point_op(k + 2u, p); }
-        if (k + 3u < TAPE_LEN) { out = point_op(k + 3u, p); }
+        if (k + 1u < tape_ops) { out = point_op(k + 1u, p); }
+        if (k + 2u < tape_ops) { out = point_op(k + 2u, p); }
+        if (k + 3u < tape_ops) { out = point_op(k + 3u, p); }
     }
     return preg[out];
 }
@@ -292,12 +295,12 @@ fn interval_op(k: u32, x: vec4<f32>, y: vec4<f32>, z: vec4<f32>) -> u32 {
 fn eval_interval(x: vec4<f32>, y: vec4<f32>, z: vec4<f32>) -> vec4<f32> {
     wrap_hint = 2.0;
     var out = 0u;
-    for (var k = 0u; k < TAPE_LEN; k += 4u) {
+    for (var k = 0u; k < tape_ops; k += 4u) {
         loops++;
         out = interval_op(k, x, y, z);
-        if (k + 1u < TAPE_LEN) { out = interval_op(k + 1u, x, y, z); }
-        if (k + 2u < TAPE_LEN) { out = interval_op(k + 2u, x, y, z); }
-        if (k + 3u < TAPE_LEN) { out = interval_op(k + 3u, x, y, z); }
+        if (k + 1u < tape_ops) { out = interval_op(k + 1u, x, y, z); }
+        if (k + 2u < tape_ops) { out = interval_op(k + 2u, x, y, z); }
+        if (k + 3u < tape_ops) { out = interval_op(k + 3u, x, y, z); }
     }
     return ireg[out];
 }

@@ -11,7 +11,7 @@
 // evaluation that would pass BUDGET, or a ring that dropped a farther segment before
 // anything nearer was found end the ray with status 2 (undecided: the CPU traces it),
 // never a wrong answer. One state machine with one call of `eval_interval` (llvmpipe
-// inlines every call). Every eval adds EVAL_LOOPS to `loops`.
+// inlines every call). Every eval adds eval_loops() to `loops`.
 // Needs tape.wgsl, EPS and the bounds BLO, BHI (per object, prepended by the kernel).
 
 const STACK: u32 = 32u;
@@ -106,7 +106,7 @@ fn trace_tape(o: vec3<f32>, d: vec3<f32>, t_min: f32, t_max: f32) -> TraceResult
             hi = mid;
         }
         // Room for this evaluation and the next iteration's start (1 + 3 pushes).
-        if (loops + EVAL_LOOPS + 4u > BUDGET) { return TraceResult(2u, 0.0); }
+        if (loops + eval_loops() + 4u > BUDGET) { return TraceResult(2u, 0.0); }
         // o + t·d over [lo, hi], rounded outward: the product within an ulp, then the sum.
         let pa_lo = o + vec3<f32>(down(lo * d.x), down(lo * d.y), down(lo * d.z));
         let pa_hi = o + vec3<f32>(up(lo * d.x), up(lo * d.y), up(lo * d.z));
