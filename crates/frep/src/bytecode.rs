@@ -174,8 +174,15 @@ impl Free {
 impl Bytecode {
     /// Compiles `expr` (see the module docs).
     pub fn compile(expr: &Expr) -> Result<Self, BytecodeError> {
-        let nodes = expr.nodes();
+        Self::compile_nodes(expr.nodes())
+    }
+
+    /// Compiles a tape of nodes in evaluation order, operands before their users and
+    /// the root last (an [`Expr`]'s, or a cell tape of [`crate::occupancy`], simplified
+    /// over its cell); not empty.
+    pub fn compile_nodes(nodes: &[Node]) -> Result<Self, BytecodeError> {
         let n = nodes.len();
+        assert!(n > 0, "a tape has a root");
         let konst = |i: u32| match nodes[i as usize] {
             Node::Const(b) => Some(f64::from_bits(b) as f32),
             _ => None,

@@ -61,6 +61,7 @@
 
 mod adapter;
 pub mod bsdf;
+pub mod cell_tapes;
 pub mod direct;
 pub mod elementary;
 pub mod env;
