@@ -150,8 +150,9 @@ pub(super) struct Frame {
     pub(super) lbvh: [u32; 4],
     /// The media: the material of the first (they follow the scene's materials, one
     /// phase-function material each: σ_t in its `k`, the albedo in its colour), the
-    /// camera's medium ([`NO_MEDIUM`]: vacuum), and whether the scene has media or
-    /// index-matched boundaries at all (1: the kernels walk through them).
+    /// camera's medium ([`NO_MEDIUM`]: vacuum), whether the scene has media or
+    /// index-matched boundaries at all (1: the kernels walk through them), and the depth
+    /// after whose vertices `state::dims` puts the free flights' numbers.
     pub(super) media: [u32; 4],
 }
 
@@ -561,7 +562,9 @@ impl DirectScene {
             self.materials.len() as u32,
             data.camera_medium.map_or(NO_MEDIUM, |m| m.0),
             u32::from(walks),
-            0,
+            // state::dims places the free flights after `max_depth` vertices' numbers,
+            // the options' depth whatever the integrator (`direct` shades one vertex).
+            o.max_depth.max(1),
         ];
         if !walks {
             return Ok(());

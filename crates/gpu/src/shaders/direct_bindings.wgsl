@@ -56,7 +56,9 @@ struct Frame {
     // first node, node count, first item.
     lbvh: vec4<u32>,
     // The media (gpu::direct::pack): the material of the first (a phase function: σ_t
-    // in bsdf.k, the albedo as its colour), the camera's medium (NO_MEDIUM: vacuum).
+    // in bsdf.k, the albedo as its colour), the camera's medium (NO_MEDIUM: vacuum),
+    // whether rays walk through media, and the depth after whose vertices state::dims
+    // puts the free flights' numbers (the options' max_depth, also for `direct`).
     media: vec4<u32>,
 }
 

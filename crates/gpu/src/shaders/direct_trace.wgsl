@@ -350,7 +350,7 @@ fn trace(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
                 depth = frame.depth + 1u;
             }
             // state::dims: the free flight of the ray that reaches vertex `depth`.
-            let fd = 8u + frame.max_depth * frame.stride + 2u * depth;
+            let fd = 8u + frame.media.w * frame.stride + 2u * depth;
             let uc = rnd(px.x, px.y, px.z, fd);
             let u = rnd(px.x, px.y, px.z, fd + 1u);
             let total = beta.x + beta.y + beta.z;
