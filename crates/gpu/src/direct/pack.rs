@@ -198,6 +198,16 @@ fn unsupported(what: impl Into<String>) -> GpuError {
     GpuError::Unsupported(what.into())
 }
 
+/// A textured parameter's constant, which the texture replaces per hit: any value
+/// serves; the checker's or pattern's `a` where it has one.
+fn constant_of(data: &SceneData, id: scene::TextureId) -> [f64; 3] {
+    match &data.textures[id.index()] {
+        TextureData::Constant { rgb } => *rgb,
+        TextureData::Checker { a, .. } | TextureData::Pattern { a, .. } => *a,
+        TextureData::Image { .. } => [0.5; 3],
+    }
+}
+
 fn f3(v: [f64; 3]) -> [f32; 3] {
     [v[0] as f32, v[1] as f32, v[2] as f32]
 }
@@ -487,13 +497,7 @@ impl DirectScene {
             .map(|j| (j as f64 / 64.0).powi(2))
             .collect();
         for (i, m) in data.materials.iter().enumerate() {
-            // A textured parameter's constant: any value serves (the texture replaces it
-            // per hit), the checker's `a` where it has one.
-            let rgb = |id: scene::TextureId| match &data.textures[id.index()] {
-                TextureData::Constant { rgb } => *rgb,
-                TextureData::Checker { a, .. } | TextureData::Pattern { a, .. } => *a,
-                TextureData::Image { .. } => [0.5; 3],
-            };
+            let rgb = |id| constant_of(data, id);
             let mut tex = [GpuTexture::default(); TEX_SLOTS];
             let mut coats = [u32::MAX, NO_MEDIUM, NO_MEDIUM, 0];
             let bsdf = match *m {
@@ -587,13 +591,8 @@ impl DirectScene {
         }
         let mut images = std::collections::HashMap::new();
         for m in &data.media {
-            let albedo = match &data.textures[m.albedo.index()] {
-                TextureData::Constant { rgb } => *rgb,
-                TextureData::Checker { a, .. } | TextureData::Pattern { a, .. } => *a,
-                TextureData::Image { .. } => [0.5; 3],
-            };
             let mut bsdf = GpuBsdf::phase(m.g);
-            bsdf.rgb = f4(albedo, 0.0);
+            bsdf.rgb = f4(constant_of(data, m.albedo), 0.0);
             bsdf.k = f4(m.sigma_t, 0.0);
             let mut tex = [GpuTexture::default(); TEX_SLOTS];
             tex[0] = self.texture(data, m.albedo, false, &mut images);
