@@ -85,7 +85,7 @@ pub use adapter::{adapters, AdapterSummary, Gpu, GpuError, GpuInfo, GpuOptionErr
 
 /// WGSL float helpers the kernels share (`inf`, `nan`, `is_nan`, `is_finite`, and `rmin`,
 /// `rmax` as Rust's f32 `min`/`max`): prepend once to a kernel that uses
-/// [`perturbed::PERTURBED_WGSL`] or a tape ([`tape::GpuTape::wgsl`] includes it).
+/// [`perturbed::PERTURBED_WGSL`] or a tape ([`tape_trace::TapeSolid::scene_wgsl`] includes it).
 pub const FLOAT_WGSL: &str = include_str!("shaders/float.wgsl");
 
 /// The trigonometric polynomials the kernels share (`sincos_small`, `env_atan01`,

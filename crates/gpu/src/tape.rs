@@ -28,8 +28,8 @@ use frep::{BinaryOp, UnaryOp};
 use std::fmt;
 
 /// The interpreter's WGSL (`eval_point`, `eval_interval`, interval helpers,
-/// [`crate::elementary`]'s operations and [`crate::r_bound`]'s narrowing); see [`GpuTape::wgsl`] for the constants it
-/// needs, [`tape_consts_wgsl`] among them.
+/// [`crate::elementary`]'s operations and [`crate::r_bound`]'s narrowing); see
+/// [`crate::tape_trace::TapeSolid::scene_wgsl`] for the constants it needs, [`tape_consts_wgsl`] among them.
 pub const TAPE_WGSL: &str = concat!(
     include_str!("shaders/tape.wgsl"),
     include_str!("shaders/elementary.wgsl"),
@@ -197,21 +197,6 @@ impl GpuTape {
     /// Whether the tape is empty (never, for a compiled expression).
     pub fn is_empty(&self) -> bool {
         self.instrs.is_empty()
-    }
-
-    /// The interpreter's WGSL with this tape's per-pipeline constant `REG_COUNT` (GPU.md
-    /// §3.4) and its length as `tape_ops`. The kernel declares `tape: array<u32>`.
-    pub fn wgsl(&self) -> String {
-        format!(
-            "const REG_COUNT: u32 = {}u;\nvar<private> tape_ops: u32 = {}u;\nconst ELEMENTARY: bool = {};\nconst RBOUND: bool = {};\n{}{}{}{TAPE_WGSL}",
-            self.registers.max(1),
-            self.len(),
-            self.elementary(),
-            self.r_functions(),
-            crate::FLOAT_WGSL,
-            crate::TRIG_WGSL,
-            tape_consts_wgsl()
-        )
     }
 
     /// F at p: the twin of the kernel's `eval_point`, equal to [`Bytecode::eval_f32`] but

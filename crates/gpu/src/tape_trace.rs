@@ -33,7 +33,7 @@ use crate::tape::{down, i_add, i_mul, up, w1, GpuTape};
 use frep::Aabb;
 use glam::Vec3;
 
-/// The tracer's WGSL (`trace_tape`); see [`TapeSolid::wgsl`].
+/// The tracer's WGSL (`trace_tape`); see [`TapeSolid::scene_wgsl`].
 pub const TRACE_WGSL: &str = include_str!("shaders/tape_trace.wgsl");
 
 /// Resolution along rays, relative to the bounds' diagonal: frep's 1e-7 (f64) raised
@@ -126,19 +126,6 @@ impl TapeSolid {
         let e = Vec3::from(hi) - Vec3::from(lo);
         let eps = RESOLUTION * e.length().max(1e-12);
         Self { tape, lo, hi, eps }
-    }
-
-    /// The interpreter and tracer WGSL with this solid's constants (`EPS`, `BLO`, `BHI`,
-    /// and the tape's); the kernel declares `tape: array<u32>`.
-    pub fn wgsl(&self) -> String {
-        let v = |a: [f32; 3]| format!("vec3<f32>({}, {}, {})", hex(a[0]), hex(a[1]), hex(a[2]));
-        format!(
-            "{}\nconst EPS: f32 = {};\nconst BLO = {};\nconst BHI = {};\n{TRACE_WGSL}",
-            self.tape.wgsl(),
-            hex(self.eps),
-            v(self.lo),
-            v(self.hi)
-        )
     }
 
     /// The tracer over several solids in one kernel (a scene's expression solids): one
@@ -445,39 +432,9 @@ enum Phase {
     SplitHi,
 }
 
-/// A finite f32 as an exact WGSL hexadecimal literal (`bitcast` is no constant
-/// expression in naga 30).
-fn hex(x: f32) -> String {
-    assert!(x.is_finite(), "{x}");
-    if x == 0.0 {
-        return if x.is_sign_negative() {
-            "-0.0f"
-        } else {
-            "0.0f"
-        }
-        .into();
-    }
-    let b = x.to_bits();
-    let sign = if b >> 31 == 1 { "-" } else { "" };
-    let (e, m) = ((b >> 23) & 0xff, b & 0x7f_ffff);
-    if e == 0 {
-        // Subnormal: m × 2^-149.
-        return format!("{sign}0x{m:x}p-149f");
-    }
-    format!("{sign}0x1.{:06x}p{}f", m << 1, e as i32 - 127)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn hex_literals_are_exact() {
-        assert_eq!(hex(1.0), "0x1.000000p0f");
-        assert_eq!(hex(-0.75), "-0x1.800000p-1f");
-        assert_eq!(hex(f32::from_bits(1)), "0x1p-149f");
-        assert_eq!(hex(f32::MAX), "0x1.fffffep127f");
-    }
 
     /// Register classes are powers of two holding n.
     #[test]

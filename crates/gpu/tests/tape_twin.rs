@@ -140,16 +140,21 @@ fn tape(m: &Model) -> GpuTape {
     GpuTape::new(&Bytecode::compile(&m.expr).unwrap()).unwrap()
 }
 
-fn interp_source(t: &GpuTape) -> String {
+/// The interpreter's points and boxes, point or box i after `use_tape(which[i])`, over
+/// [`TapeSolid::scene_wgsl`]: the source the render kernels use, one compiled kernel for
+/// every model (compiling one per model took most of these tests' time on lavapipe).
+fn interp_source(solids: &[TapeSolid]) -> String {
     format!(
         "@group(0) @binding(0) var<storage, read> tape: array<u32>;
 @group(0) @binding(1) var<storage, read> input: array<f32>;
-@group(0) @binding(2) var<storage, read_write> out: array<u32>;
+@group(0) @binding(2) var<storage, read> which: array<u32>;
+@group(0) @binding(3) var<storage, read_write> out: array<u32>;
 {}
 @compute @workgroup_size(64)
 fn points(@builtin(global_invocation_id) id: vec3<u32>) {{
     let i = id.x;
     if (3u * i >= arrayLength(&input)) {{ return; }}
+    use_tape(which[i]);
     let f = eval_point(vec3<f32>(input[3u * i], input[3u * i + 1u], input[3u * i + 2u]));
     out[i] = bitcast<u32>(f);
 }}
@@ -158,6 +163,7 @@ fn boxes(@builtin(global_invocation_id) id: vec3<u32>) {{
     let i = id.x;
     if (9u * i >= arrayLength(&input)) {{ return; }}
     let r = 9u * i;
+    use_tape(which[i]);
     let x = vec4<f32>(input[r], input[r + 3u], input[r + 6u], input[r + 6u]);
     let y = vec4<f32>(input[r + 1u], input[r + 4u], input[r + 7u], input[r + 7u]);
     let z = vec4<f32>(input[r + 2u], input[r + 5u], input[r + 8u], input[r + 8u]);
@@ -165,7 +171,7 @@ fn boxes(@builtin(global_invocation_id) id: vec3<u32>) {{
     for (var k = 0u; k < 4u; k++) {{ out[4u * i + k] = bitcast<u32>(v[k]); }}
 }}
 ",
-        t.wgsl()
+        TapeSolid::scene_wgsl(solids)
     )
 }
 
@@ -282,77 +288,96 @@ fn twin_equals_eval_f32_and_is_sound() {
     }
 }
 
-/// Points and boxes through the kernels: bit for bit the twin's (all four interval
-/// bounds).
+/// Points and boxes through the kernels, every model in one kernel: bit for bit the
+/// twin's (all four interval bounds).
 #[test]
 fn interpreter_matches_its_twin() {
     let Some(g) = common::gpu(GpuOptions::default()) else {
         return;
     };
+    let models = models();
+    let solids: Vec<TapeSolid> = models
+        .iter()
+        .map(|m| TapeSolid::new(tape(m), &m.bounds))
+        .collect();
+    let src = interp_source(&solids);
+    let start = Instant::now();
+    // SAFETY: register numbers are below REG_COUNT (checked by Bytecode, the class holds
+    // every tape's), the loop runs for the tape's length (`use_tape` reads it from the
+    // binding's header), and the entry points stay within their arrays.
+    let kp = unsafe { Kernel::new_unchecked(&g, &src, "points", 3) }.unwrap();
+    let kb = unsafe { Kernel::new_unchecked(&g, &src, "boxes", 3) }.unwrap();
+    let compile = start.elapsed();
     let mut rng = Rng(7);
-    for m in models() {
-        let t = tape(&m);
-        let src = interp_source(&t);
-        let start = Instant::now();
-        // SAFETY: register numbers are below REG_COUNT (checked by Bytecode), the loop
-        // runs for the tape's length, and the entry points stay within their arrays.
-        let kp = unsafe { Kernel::new_unchecked(&g, &src, "points", 2) }.unwrap();
-        let kb = unsafe { Kernel::new_unchecked(&g, &src, "boxes", 2) }.unwrap();
-        let compile = start.elapsed();
-        let (pts, boxes) = samples(&m, &mut rng);
-        let n = pts.len();
-        let groups = [n.div_ceil(64) as u32, 1, 1];
-        let words: Vec<u32> = pts.iter().flatten().map(|f| f.to_bits()).collect();
-        let out = kp.run(&g, &[t.words(), &words], n, groups).unwrap();
-        for (i, p) in pts.iter().enumerate() {
-            let (gpu, twin) = (f32::from_bits(out[i]), t.eval_point(*p));
-            assert!(
-                same(gpu, twin),
-                "{}: at {p:?} GPU {gpu}, twin {twin}",
-                m.name
-            );
-        }
-        let words: Vec<u32> = boxes
-            .iter()
-            .flat_map(|(lo, hi, d)| [lo.to_array(), hi.to_array(), d.to_array()])
-            .flatten()
-            .map(|f| f.to_bits())
-            .collect();
-        let out = kb
-            .run(&g, &[t.words(), &words], 4 * boxes.len(), groups)
-            .unwrap();
-        for (i, b) in boxes.iter().enumerate() {
-            let twin = box_interval(&t, b);
-            for k in 0..4 {
-                let gpu = f32::from_bits(out[4 * i + k]);
-                assert!(
-                    same(gpu, twin[k]),
-                    "{}: box {i} [{k}] GPU {gpu}, twin {}",
-                    m.name,
-                    twin[k]
-                );
-            }
-        }
-        eprintln!(
-            "{}: {n} points and {} boxes bit-identical; both pipelines {compile:?}",
-            m.name,
-            boxes.len()
+    let (mut pts, mut boxes, mut which) = (Vec::new(), Vec::new(), Vec::new());
+    for (k, m) in models.iter().enumerate() {
+        let (p, b) = samples(m, &mut rng);
+        assert_eq!(p.len(), b.len());
+        which.extend(std::iter::repeat_n(k as u32, p.len()));
+        pts.extend(p);
+        boxes.extend(b);
+    }
+    let tape_words = TapeSolid::scene_words(&solids);
+    let n = pts.len();
+    let groups = [n.div_ceil(64) as u32, 1, 1];
+    let words: Vec<u32> = pts.iter().flatten().map(|f| f.to_bits()).collect();
+    let out = kp
+        .run(&g, &[&tape_words, &words, &which], n, groups)
+        .unwrap();
+    for (i, p) in pts.iter().enumerate() {
+        let k = which[i] as usize;
+        let (gpu, twin) = (f32::from_bits(out[i]), solids[k].tape.eval_point(*p));
+        assert!(
+            same(gpu, twin),
+            "{}: at {p:?} GPU {gpu}, twin {twin}",
+            models[k].name
         );
     }
+    let words: Vec<u32> = boxes
+        .iter()
+        .flat_map(|(lo, hi, d)| [lo.to_array(), hi.to_array(), d.to_array()])
+        .flatten()
+        .map(|f| f.to_bits())
+        .collect();
+    let out = kb
+        .run(&g, &[&tape_words, &words, &which], 4 * boxes.len(), groups)
+        .unwrap();
+    for (i, b) in boxes.iter().enumerate() {
+        let k = which[i] as usize;
+        let twin = box_interval(&solids[k].tape, b);
+        for c in 0..4 {
+            let gpu = f32::from_bits(out[4 * i + c]);
+            assert!(
+                same(gpu, twin[c]),
+                "{}: box {i} [{c}] GPU {gpu}, twin {}",
+                models[k].name,
+                twin[c]
+            );
+        }
+    }
+    eprintln!(
+        "{} models: {n} points and {} boxes bit-identical; both pipelines {compile:?}",
+        models.len(),
+        boxes.len()
+    );
 }
 
-fn trace_source(s: &TapeSolid) -> String {
+/// The tracer, ray i after `use_tape(which[i])`, over [`TapeSolid::scene_wgsl`], as
+/// [`interp_source`].
+fn trace_source(solids: &[TapeSolid]) -> String {
     format!(
         "@group(0) @binding(0) var<storage, read> tape: array<u32>;
 @group(0) @binding(1) var<storage, read> rays: array<f32>;
-@group(0) @binding(2) var<storage, read_write> out: array<u32>;
+@group(0) @binding(2) var<storage, read> which: array<u32>;
+@group(0) @binding(3) var<storage, read_write> out: array<u32>;
 {}
 @compute @workgroup_size(64)
 fn trace(@builtin(global_invocation_id) id: vec3<u32>) {{
     let i = id.x;
-    if (8u * i >= arrayLength(&rays)) {{ return; }}
+    if (i >= arrayLength(&which)) {{ return; }}
     let r = 8u * i;
     loops = 0u;
+    use_tape(which[i]);
     let o = vec3<f32>(rays[r], rays[r + 1u], rays[r + 2u]);
     let d = vec3<f32>(rays[r + 3u], rays[r + 4u], rays[r + 5u]);
     let h = trace_tape(o, d, rays[r + 6u], rays[r + 7u]);
@@ -361,7 +386,7 @@ fn trace(@builtin(global_invocation_id) id: vec3<u32>) {{
     out[3u * i + 2u] = loops;
 }}
 ",
-        s.wgsl()
+        TapeSolid::scene_wgsl(solids)
     )
 }
 
@@ -530,30 +555,45 @@ fn twin_traces_like_frep() {
     }
 }
 
-/// The same rays through the kernel: outcome, t and loop count bit for bit
-/// the twin's.
+/// The same rays through the kernel, every model in one kernel (a scene's expression
+/// solids, `TapeSolid::scene_wgsl`, each ray after `use_tape(k)`: the one interpreter
+/// runs each tape for its own length): outcome, t and loop count bit for bit the twin's.
 #[test]
 fn tracer_matches_its_twin() {
     let Some(g) = common::gpu(GpuOptions::default()) else {
         return;
     };
+    let models = models();
+    let solids: Vec<TapeSolid> = models
+        .iter()
+        .map(|m| TapeSolid::new(tape(m), &m.bounds))
+        .collect();
     let mut rng = Rng(21);
-    for m in models() {
-        let solid = TapeSolid::new(tape(&m), &m.bounds);
-        let rs = rays(&m, &mut rng);
-        let out = run_rays(&g, &solid, &rs, m.name);
-        for (i, r) in rs.iter().enumerate() {
-            let (o, d) = (Vec3::new(r[0], r[1], r[2]), Vec3::new(r[3], r[4], r[5]));
-            let twin = solid.trace(o, d, r[6], r[7]);
-            let gpu = Traced::from_kernel(out[3 * i + 1], out[3 * i], out[3 * i + 2]);
-            assert!(
-                same_trace(&gpu, &twin),
-                "{}: ray {i} {r:?}: GPU {gpu:?}, twin {twin:?}",
-                m.name
-            );
-        }
-        eprintln!("{}: {} rays bit-identical", m.name, rs.len());
+    let (mut all, mut which): (Vec<TestRay>, Vec<u32>) = (Vec::new(), Vec::new());
+    for (k, m) in models.iter().enumerate() {
+        let rs = rays(m, &mut rng);
+        which.extend(std::iter::repeat_n(k as u32, rs.len()));
+        all.extend(rs);
     }
+    let out = run_rays(&g, &solids, &all, &which, "every model");
+    for (i, r) in all.iter().enumerate() {
+        let k = which[i] as usize;
+        let (o, d) = (Vec3::new(r[0], r[1], r[2]), Vec3::new(r[3], r[4], r[5]));
+        let twin = solids[k].trace(o, d, r[6], r[7]);
+        let gpu = Traced::from_kernel(out[3 * i + 1], out[3 * i], out[3 * i + 2]);
+        assert!(
+            same_trace(&gpu, &twin),
+            "{}: ray {i} {r:?}: GPU {gpu:?}, twin {twin:?}",
+            models[k].name
+        );
+    }
+    let lengths: Vec<usize> = solids.iter().map(|s| s.tape.len()).collect();
+    eprintln!(
+        "{} rays over {} solids (tapes of {lengths:?} instructions) bit-identical to their twins",
+        all.len(),
+        solids.len()
+    );
+    assert!(lengths.iter().any(|&n| n != lengths[0]));
 }
 
 /// Equal outcomes, t bit for bit, equal flags and loop counts.
@@ -565,18 +605,20 @@ fn same_trace(a: &Traced, b: &Traced) -> bool {
     hit && a.loops == b.loops
 }
 
-fn run_rays(g: &Gpu, solid: &TapeSolid, rs: &[TestRay], name: &str) -> Vec<u32> {
+/// Traces ray i of `rs` through solid `which[i]` in the kernel.
+fn run_rays(g: &Gpu, solids: &[TapeSolid], rs: &[TestRay], which: &[u32], name: &str) -> Vec<u32> {
     let start = Instant::now();
-    // SAFETY: registers below REG_COUNT (checked by Bytecode), stack indices below STACK
-    // (checked before each push), every loop bounded by BUDGET.
-    let k = unsafe { Kernel::new_unchecked(g, &trace_source(solid), "trace", 2) }.unwrap();
+    // SAFETY: registers below REG_COUNT (checked by Bytecode, the class holds every
+    // tape's), stack indices below STACK (checked before each push), every loop bounded
+    // by BUDGET; `use_tape` sets tape_base and tape_ops to a tape of the binding.
+    let k = unsafe { Kernel::new_unchecked(g, &trace_source(solids), "trace", 3) }.unwrap();
     let compile = start.elapsed();
     let words: Vec<u32> = rs.iter().flatten().map(|f| f.to_bits()).collect();
     let start = Instant::now();
     let out = k
         .run(
             g,
-            &[solid.tape.words(), &words],
+            &[&TapeSolid::scene_words(solids), &words, which],
             3 * rs.len(),
             [(rs.len() as u32).div_ceil(64), 1, 1],
         )
@@ -611,26 +653,36 @@ fn loop_budget_is_kept_and_reported() {
     };
     let bounds = Aabb::new(DVec3::splat(-1.0), DVec3::splat(1.0));
     let mut rng = Rng(5);
-    for (terms, want_all_undecided) in [(800, false), (20_000, true)] {
-        let e = padded_sphere(terms);
-        let solid = TapeSolid::new(
-            GpuTape::new(&Bytecode::compile(&e).unwrap()).unwrap(),
-            &bounds,
-        );
-        let rs: Vec<TestRay> = (0..512)
-            .map(|i| {
-                let d = rng.unit().as_vec3();
-                if i % 2 == 0 {
-                    // From the centre (inside): a crossing by end signs.
-                    [0.0, 0.0, 0.0, d.x, d.y, d.z, 0.0, 4.0]
-                } else {
-                    let o = (3.0 * rng.unit()).as_vec3();
-                    let d = (rng.in_box(&bounds).as_vec3() * 0.5 - o).normalize();
-                    [o.x, o.y, o.z, d.x, d.y, d.z, 0.0, f32::INFINITY]
-                }
-            })
-            .collect();
-        let out = run_rays(&g, &solid, &rs, "padded sphere");
+    let cases = [(800, false), (20_000, true)];
+    let solids: Vec<TapeSolid> = cases
+        .iter()
+        .map(|&(terms, _)| {
+            let e = padded_sphere(terms);
+            TapeSolid::new(
+                GpuTape::new(&Bytecode::compile(&e).unwrap()).unwrap(),
+                &bounds,
+            )
+        })
+        .collect();
+    let per = 512;
+    let all: Vec<TestRay> = (0..cases.len() * per)
+        .map(|i| {
+            let d = rng.unit().as_vec3();
+            if i % 2 == 0 {
+                // From the centre (inside): a crossing by end signs.
+                [0.0, 0.0, 0.0, d.x, d.y, d.z, 0.0, 4.0]
+            } else {
+                let o = (3.0 * rng.unit()).as_vec3();
+                let d = (rng.in_box(&bounds).as_vec3() * 0.5 - o).normalize();
+                [o.x, o.y, o.z, d.x, d.y, d.z, 0.0, f32::INFINITY]
+            }
+        })
+        .collect();
+    let which: Vec<u32> = (0..all.len()).map(|i| (i / per) as u32).collect();
+    let out_all = run_rays(&g, &solids, &all, &which, "padded spheres");
+    for (c, &(_, want_all_undecided)) in cases.iter().enumerate() {
+        let (solid, rs) = (&solids[c], &all[c * per..(c + 1) * per]);
+        let out = &out_all[3 * c * per..3 * (c + 1) * per];
         let (mut undecided, mut max_loops) = (0, 0);
         for (i, r) in rs.iter().enumerate() {
             let (o, d) = (Vec3::new(r[0], r[1], r[2]), Vec3::new(r[3], r[4], r[5]));
@@ -669,84 +721,6 @@ fn loop_budget_is_kept_and_reported() {
         assert!(undecided > 0);
         assert_eq!(undecided == rs.len(), want_all_undecided);
     }
-}
-
-/// Several solids in one kernel (a scene's expression solids, `TapeSolid::scene_wgsl`):
-/// each ray traced after `use_tape(k)` equals, bit for bit (outcome, t, loop count), the
-/// twin of solid k (the kernel's one interpreter runs each tape for its own length).
-#[test]
-fn several_solids_in_one_kernel_match_their_twins() {
-    let Some(g) = common::gpu(GpuOptions::default()) else {
-        return;
-    };
-    let models: Vec<Model> = models()
-        .into_iter()
-        .filter(|m| matches!(m.name, "tanglecube" | "s2_csg" | "table"))
-        .collect();
-    let solids: Vec<TapeSolid> = models
-        .iter()
-        .map(|m| TapeSolid::new(tape(m), &m.bounds))
-        .collect();
-    let mut rng = Rng(33);
-    let mut all: Vec<TestRay> = Vec::new();
-    let mut which: Vec<u32> = Vec::new();
-    for (k, m) in models.iter().enumerate() {
-        let rs = rays(m, &mut rng);
-        which.extend(std::iter::repeat_n(k as u32, rs.len()));
-        all.extend(rs);
-    }
-    let src = format!(
-        "@group(0) @binding(0) var<storage, read> tape: array<u32>;
-@group(0) @binding(1) var<storage, read> rays: array<f32>;
-@group(0) @binding(2) var<storage, read> which: array<u32>;
-@group(0) @binding(3) var<storage, read_write> out: array<u32>;
-{}
-@compute @workgroup_size(64)
-fn trace(@builtin(global_invocation_id) id: vec3<u32>) {{
-    let i = id.x;
-    if (i >= arrayLength(&which)) {{ return; }}
-    let r = 8u * i;
-    loops = 0u;
-    use_tape(which[i]);
-    let o = vec3<f32>(rays[r], rays[r + 1u], rays[r + 2u]);
-    let d = vec3<f32>(rays[r + 3u], rays[r + 4u], rays[r + 5u]);
-    let h = trace_tape(o, d, rays[r + 6u], rays[r + 7u]);
-    out[3u * i] = bitcast<u32>(h.t);
-    out[3u * i + 1u] = h.status;
-    out[3u * i + 2u] = loops;
-}}
-",
-        TapeSolid::scene_wgsl(&solids)
-    );
-    // SAFETY: as `run_rays`; `use_tape` sets tape_base and tape_ops to a tape of the binding.
-    let kernel = unsafe { Kernel::new_unchecked(&g, &src, "trace", 3) }.unwrap();
-    let words: Vec<u32> = all.iter().flatten().map(|f| f.to_bits()).collect();
-    let out = kernel
-        .run(
-            &g,
-            &[&TapeSolid::scene_words(&solids), &words, &which],
-            3 * all.len(),
-            [(all.len() as u32).div_ceil(64), 1, 1],
-        )
-        .unwrap();
-    let lengths: Vec<usize> = solids.iter().map(|s| s.tape.len()).collect();
-    for (i, r) in all.iter().enumerate() {
-        let k = which[i] as usize;
-        let (o, d) = (Vec3::new(r[0], r[1], r[2]), Vec3::new(r[3], r[4], r[5]));
-        let twin = solids[k].trace(o, d, r[6], r[7]);
-        let gpu = Traced::from_kernel(out[3 * i + 1], out[3 * i], out[3 * i + 2]);
-        assert!(
-            same_trace(&gpu, &twin),
-            "{}: ray {i}: GPU {gpu:?}, twin {twin:?}",
-            models[k].name
-        );
-    }
-    eprintln!(
-        "{} rays over {} solids (tapes of {lengths:?} instructions) bit-identical to their twins",
-        all.len(),
-        solids.len()
-    );
-    assert!(lengths.iter().any(|&n| n != lengths[0]));
 }
 
 /// Thin and singular shapes as expressions (the tape path, not the exact quadrics): a
