@@ -190,24 +190,31 @@ impl<'a> GridView<'a> {
 /// tapes shrink as the boxes do). An empty grid when the box is not finite or the
 /// build would exceed its budget.
 pub fn build(tape: &[Node], b: &Aabb) -> Grid {
+    build_with_margin(tape, b, MARGIN)
+}
+
+/// [`build`] with every box grown by `margin` of its side instead of [`MARGIN`]: the
+/// emptiness, signs and cell tapes then hold that far around each cell (the GPU's f32
+/// walk needs more room than f64 rounding; `margin` ≥ [`MARGIN`]).
+pub fn build_with_margin(tape: &[Node], b: &Aabb, margin: f64) -> Grid {
     if !b.is_finite() || b.is_empty() || tape.is_empty() {
         return Grid::default();
     }
-    let Some((coarse, spent)) = build_n(tape, b, GRID) else {
+    let Some((coarse, spent)) = build_n(tape, b, GRID, margin) else {
         return Grid::default();
     };
     // The fine grid's octree has one more level, about 8× the coarse one's finest: try
     // it where that fits the budget, and keep the coarse grid where it does not.
     if spent.saturating_mul(8) <= BUILD_BUDGET {
-        if let Some((fine, _)) = build_n(tape, b, FINE_GRID) {
+        if let Some((fine, _)) = build_n(tape, b, FINE_GRID, margin) {
             return fine;
         }
     }
     coarse
 }
 
-/// [`build`] at `n` cells per axis, with the node evaluations it spent; None past the
-/// budget.
+/// [`build`] at `n` cells per axis and boxes grown by `margin`, with the node
+/// evaluations it spent; None past the budget.
 ///
 /// The octree's top [`SPLIT_LEVELS`] levels are evaluated here; the subtrees below them
 /// are built in parallel (rayon's current pool), each into its own node arena starting
@@ -215,19 +222,26 @@ pub fn build(tape: &[Node], b: &Aabb) -> Grid {
 /// same tape as in a sequential walk, so the cells and their tapes do not depend on the
 /// number of threads; so do the subtrees' shares of [`TAPE_BUDGET`] (in batches of
 /// [`BATCH`], each an equal share of what the batches before it left).
-fn build_n(tape: &[Node], b: &Aabb, n: usize) -> Option<(Grid, usize)> {
-    build_split(tape, b, n, SPLIT_LEVELS)
+fn build_n(tape: &[Node], b: &Aabb, n: usize, margin: f64) -> Option<(Grid, usize)> {
+    build_split(tape, b, n, margin, SPLIT_LEVELS)
 }
 
 /// [`build_n`] with its top `levels` levels evaluated before the parallel subtrees (0:
 /// one subtree, the whole octree on one thread).
-fn build_split(tape: &[Node], b: &Aabb, n: usize, levels: usize) -> Option<(Grid, usize)> {
+fn build_split(
+    tape: &[Node],
+    b: &Aabb,
+    n: usize,
+    margin: f64,
+    levels: usize,
+) -> Option<(Grid, usize)> {
     use rayon::prelude::*;
     let geometry = Octree {
         lo: b.lo,
         hi: b.hi,
         cell: (b.hi - b.lo) / n as f64,
         n,
+        margin,
         used: used_axes(tape),
     };
     // The top levels, breadth first: what they split becomes the parallel subtrees.
@@ -352,6 +366,8 @@ struct Octree {
     hi: DVec3,
     cell: DVec3,
     n: usize,
+    /// Boxes are bounded grown by this fraction of their side ([`MARGIN`] for the CPU).
+    margin: f64,
     /// The axes F depends on: boxes are split along these only. Along another axis
     /// every box spans the grid, so that a model that does not depend on z (Fidget's
     /// prospero, text in the plane) costs a quadtree of columns, not an octree of cells.
@@ -468,7 +484,7 @@ impl Builder {
         } else {
             lo + g.cell * cells
         };
-        let m = g.cell * (cells * MARGIN);
+        let m = g.cell * (cells * g.margin);
         let iv = |k: usize| Interval::new(lo[k] - m[k], hi[k].max(lo[k]) + m[k]);
         let v = eval_choices_nodes(
             &self.nodes[s..e],
@@ -798,8 +814,9 @@ mod tests {
             let b =
                 crate::bounds::expr_bounds(&expr, Aabb::new(DVec3::splat(-2.0), DVec3::splat(2.0)));
             for n in [GRID, FINE_GRID] {
-                let (one, spent_one) = build_split(expr.nodes(), &b, n, 0).unwrap();
-                let (split, spent_split) = build_split(expr.nodes(), &b, n, SPLIT_LEVELS).unwrap();
+                let (one, spent_one) = build_split(expr.nodes(), &b, n, MARGIN, 0).unwrap();
+                let (split, spent_split) =
+                    build_split(expr.nodes(), &b, n, MARGIN, SPLIT_LEVELS).unwrap();
                 assert_eq!(spent_one, spent_split, "{m} {n}");
                 assert_eq!(
                     (&one.words, &one.inside, &one.blocks),

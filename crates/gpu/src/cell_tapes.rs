@@ -9,7 +9,8 @@
 //! Each distinct cell tape (cells that share a simplified tape share one range of the
 //! grid's nodes) is compiled once to the kernels' register bytecode
 //! ([`frep::Bytecode::compile_nodes`], then [`GpuTape`]); a cell maps to its tape's
-//! index. The tracer's cell walk, which will use them, is GPU.md §6.2's next step.
+//! index, and an empty cell to F's sign over it ([`NO_TAPE`], [`INSIDE`]). The tracer
+//! walks the cells along a ray ([`crate::tape_trace`]).
 
 use crate::tape::{GpuTape, Unsupported};
 use frep::bytecode::BytecodeError;
@@ -17,8 +18,11 @@ use frep::occupancy::GridView;
 use std::collections::HashMap;
 use std::fmt;
 
-/// No tape: an empty cell (F keeps one sign over it).
+/// No tape: an empty cell where F < 0 (F keeps its sign over it).
 pub const NO_TAPE: u32 = u32::MAX;
+
+/// No tape: an empty cell where F > 0.
+pub const INSIDE: u32 = u32::MAX - 1;
 
 /// An expression solid's cell tapes ([`Self::new`]).
 #[derive(Clone, Debug)]
@@ -26,7 +30,7 @@ pub struct CellTapes {
     /// Cells per axis of the grid.
     pub n: usize,
     /// Per cell (the grid's order, `frep::occupancy::bit`), the index of its tape in
-    /// `tapes`, or [`NO_TAPE`].
+    /// `tapes`, or for an empty cell [`NO_TAPE`] (outside) or [`INSIDE`].
     pub cell: Vec<u32>,
     /// The distinct cell tapes.
     pub tapes: Vec<GpuTape>,
@@ -81,9 +85,14 @@ impl CellTapes {
         for (c, &[s, e]) in grid.cells.iter().enumerate() {
             // Empty cells keep their parent's tape in the grid; F's sign there is the
             // grid's, and no ray evaluates in them.
-            if grid.words[c / 64] >> (c % 64) & 1 == 0 || s == e {
-                cell.push(NO_TAPE);
+            if grid.words[c / 64] >> (c % 64) & 1 == 0 {
+                let inside = grid.inside[c / 64] >> (c % 64) & 1 == 1;
+                cell.push(if inside { INSIDE } else { NO_TAPE });
                 continue;
+            }
+            if s == e {
+                // An occupied cell without a tape of its own: no walk by cell tapes.
+                return Ok(None);
             }
             let k = match by_range.get(&[s, e]) {
                 Some(&k) => k,
@@ -107,7 +116,7 @@ impl CellTapes {
         let lens: Vec<usize> = self
             .cell
             .iter()
-            .filter(|&&k| k != NO_TAPE)
+            .filter(|&&k| k < INSIDE)
             .map(|&k| self.tapes[k as usize].len())
             .collect();
         CellTapeStats {
@@ -156,7 +165,7 @@ mod tests {
             let (mut points, mut exact) = (0usize, 0usize);
             // About 2 000 occupied cells of each model, spread over the grid.
             let stride = (st.occupied / 2000).max(1);
-            let occupied = cells.cell.iter().enumerate().filter(|(_, &k)| k != NO_TAPE);
+            let occupied = cells.cell.iter().enumerate().filter(|(_, &k)| k < INSIDE);
             for (c, &k) in occupied.step_by(stride) {
                 let at = DVec3::new((c % n) as f64, ((c / n) % n) as f64, (c / (n * n)) as f64);
                 for j in 0..8 {

