@@ -74,8 +74,32 @@ fn tape_normal(p: vec3<f32>) -> vec3<f32> { return vec3<f32>(0.0, 0.0, 1.0); }
         out.push_str(rest);
         out + "
 // The outward normal −∇F/|∇F| by central differences of 10³ ε (the tape has no
-// derivative code at points; F is smooth where a ray meets it).
+// derivative code at points; F is smooth where a ray meets it). At a cap, a hit on the
+// face of the box the tracer clips to (a solid its bounds cut, F ≥ 0 there: Fidget's
+// prospero is a flat text extruded through its box), the face's outward normal, as
+// frep's `face_normal`; ∇F there lies along the face and sent shading and shadow rays
+// astray (rays down a letter's wall, each at the loop budget).
 fn tape_normal(p: vec3<f32>) -> vec3<f32> {
+    let glo = BLO - vec3<f32>(TAPE_EPS);
+    let ghi = BHI + vec3<f32>(TAPE_EPS);
+    var best = max(TAPE_EPS, 1e-6 * (1.0 + max(abs(p.x), max(abs(p.y), abs(p.z)))));
+    var face = vec3<f32>(0.0, 0.0, 0.0);
+    for (var k = 0u; k < 3u; k++) {
+        loops++;
+        let below = abs(p[k] - glo[k]);
+        if (below <= best) {
+            best = below;
+            face = vec3<f32>(0.0, 0.0, 0.0);
+            face[k] = -1.0;
+        }
+        let above = abs(ghi[k] - p[k]);
+        if (above <= best) {
+            best = above;
+            face = vec3<f32>(0.0, 0.0, 0.0);
+            face[k] = 1.0;
+        }
+    }
+    if (any(face != vec3<f32>(0.0, 0.0, 0.0))) { return face; }
     let h = 500.0 * TAPE_EPS;
     var v: array<f32, 6>;
     for (var k = 0u; k < 6u; k++) {

@@ -64,6 +64,68 @@ fn csg_start(sh: GpuShape, o: vec3<f32>, d: vec3<f32>, t_min: f32, t_max: f32) {
     cs_w = clip_box(sh.lo.xyz - grow, sh.hi.xyz + grow, o, inv, t_min, t_max);
     cs_general = false;
     cs_pending = false;
+    csg_clip_window(o, d);
+}
+
+// Narrows the window to the hull of the inside set of each plain quadric that the
+// shape's inside set lies in: a part whose ancestors are all intersections (or first
+// parts of differences). The shape's crossings lie in that hull, so general parts are
+// searched no farther (a 2-D model shown as a slab, prospero ∩ |z| ≤ h: a shadow ray
+// leaving the slab no longer searches the text's tape up to its box, crossing letter
+// after letter until the loop budget ran out). An empty hull empties the window.
+fn csg_clip_window(o: vec3<f32>, d: vec3<f32>) {
+    let root = csg[cs_first + cs_count - 1u];
+    if (root.x != 2u && root.x != 3u) { return; }
+    // Only a shape with a general part searches; the others keep their window.
+    var general = false;
+    for (var j = 0u; j < cs_count; j++) {
+        loops++;
+        let node = csg[cs_first + j];
+        general = general || (node.x == 0u && objects[node.y].kind != 0u);
+    }
+    if (!general) { return; }
+    // Per open op, its parts still to visit, whether its inside set lies in each of
+    // them (an intersection) or in its first (a difference), and whether it lies in
+    // every part above it.
+    var left: array<u32, 16>;
+    var op: array<u32, 16>;
+    var within: array<bool, 16>;
+    left[0] = root.y;
+    op[0] = root.x;
+    within[0] = true;
+    var sp = 1u;
+    // In reverse post-order each node is a part of the op on top whose parts are left.
+    for (var j = cs_count - 1u; j > 0u; j--) {
+        loops++;
+        while (sp > 0u && left[sp - 1u] == 0u) { sp--; }
+        if (sp == 0u) { return; }
+        left[sp - 1u]--;
+        // The last part visited is the first part.
+        let lies = within[sp - 1u] && (op[sp - 1u] == 2u || left[sp - 1u] == 0u);
+        let node = csg[cs_first + j - 1u];
+        if (node.x != 0u) {
+            if (sp == 16u) { return; }
+            left[sp] = node.y;
+            op[sp] = node.x;
+            within[sp] = lies;
+            sp++;
+            continue;
+        }
+        if (!lies || objects[node.y].kind != 0u) { continue; }
+        let cq = quadric_centred(quadrics[objects[node.y].first_op].c, o, d, cs_w.x, cs_w.y);
+        if (cq.open) { continue; }
+        let ps = positive_set(cq.k);
+        if (ps.n == 0u) {
+            cs_w = vec2<f32>(1.0, 0.0);
+            return;
+        }
+        let a = ps.s.x + cq.tc;
+        let b = select(ps.s.y, ps.s.w, ps.n == 2u) + cq.tc;
+        // A margin for the f32 ends: the hull's own ends stay inside the window.
+        let m = 1e-5 * (1.0 + max(abs(a), abs(b)));
+        cs_w = vec2<f32>(rmax(cs_w.x, a - m), rmin(cs_w.y, b + m));
+        if (!(cs_w.x <= cs_w.y)) { return; }
+    }
 }
 
 // Takes a general part's search answer (status 0 none, 1 at t, 2 overflow): 0 when that
