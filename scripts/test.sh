@@ -93,15 +93,9 @@ step "dependency arrows (DESIGN.md §3)" python3 scripts/check-deps.py
 # GPU tests fail, not skip, when no adapter is found (lavapipe comes with setup.sh);
 # Mesa wants a private runtime directory, else it prints a harmless error per device.
 export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-$(mktemp -d)}"
-# Examples and benchmarks were built above; doctests run in a second call. The GPU
-# crate's tests run beside the others: lavapipe keeps about 1.5 of the 2 cores busy
-# (312 s of wall time, 484 s of CPU time), and the other crates' tests fill the rest.
+# Examples and benchmarks were built above; doctests run in a second call.
 run_tests() {
-  env FREPRAY_REQUIRE_GPU=1 cargo test -p gpu --lib --bins --tests > "$logs/gpu" 2>&1 &
-  local gpu=$!
-  env FREPRAY_REQUIRE_GPU=1 cargo test --workspace --exclude gpu --lib --bins --tests 2>&1 |
-    tee "$logs/test"
-  await "$gpu" "$logs/gpu" "the GPU tests"
+  env FREPRAY_REQUIRE_GPU=1 cargo test --workspace --lib --bins --tests 2>&1 | tee "$logs/test"
 }
 step "cargo test" run_tests
 step "cargo doc (beside the tests)" await "$docs" "$logs/doc" "cargo doc"
