@@ -183,6 +183,40 @@ impl Kernel {
         }
     }
 
+    /// [`Self::add_sample`] for a sample whose `f` is 0 in every channel: the same sums
+    /// bit for bit, where optimal-direct adds to `Â` only ([`Moments::add_zero_valued`]).
+    #[inline(always)]
+    pub fn add_zero_valued(
+        &self,
+        block: &mut [f64],
+        key: u64,
+        technique: usize,
+        f: &[f64],
+        pdfs: &[f64],
+    ) {
+        debug_assert_eq!(block.len(), self.len);
+        let l = &*self.layout;
+        match self.code {
+            Code::Direct => {
+                Moments::view_mut_sized(l, &mut block[1..]).add_zero_valued(l, technique, f, pdfs);
+            }
+            _ => self.add_sample_out_of_line(block, key, technique, f, pdfs),
+        }
+    }
+
+    /// [`Self::add_sample`] in a call of its own, for the short paths' rare cases.
+    #[inline(never)]
+    fn add_sample_out_of_line(
+        &self,
+        block: &mut [f64],
+        key: u64,
+        technique: usize,
+        f: &[f64],
+        pdfs: &[f64],
+    ) {
+        self.add_sample(block, key, technique, f, pdfs);
+    }
+
     /// Where in a block a failed sample of `technique` adds, and what, for the estimators
     /// whose failed sample is one addition whatever the key (optimal-direct: `Â_tt` after
     /// the count, `1/n_t²`); None for the others. A caller's short path for

@@ -103,6 +103,32 @@ impl<S: AsRef<[f64]> + AsMut<[f64]>> Moments<S> {
         s
     }
 
+    /// [`Self::add`] for a sample whose `f` is 0 in every channel (an occluded or unlit
+    /// draw, which the optimal estimators count where the heuristics skip it): `Â` only,
+    /// since `b̂` would gain nothing. The same sums bit for bit.
+    #[inline(always)]
+    pub fn add_zero_valued(
+        &mut self,
+        layout: &Layout,
+        t: usize,
+        f: &[f64],
+        pdfs: &[f64],
+    ) -> Option<f64> {
+        debug_assert!(f.iter().all(|&x| x == 0.0), "f must be 0");
+        let (data, n) = (self.data.as_mut(), layout.counts());
+        // The sizes `Self::add` unrolls, without channels.
+        let s = match (self.t, f.len()) {
+            (2, 3) => add_sums(data, n, 2, 0, t, &[], pdfs),
+            (3, 3) => add_sums(data, n, 3, 0, t, &[], pdfs),
+            (4, 3) => add_sums(data, n, 4, 0, t, &[], pdfs),
+            _ => return self.add(layout, t, f, pdfs),
+        };
+        if s.is_none() {
+            self.add_failed(layout, t);
+        }
+        s
+    }
+
     /// Counts a failed sample of technique `t`: `Â_tt += 1/n_t²` (see the module docs).
     #[inline]
     pub fn add_failed(&mut self, layout: &Layout, t: usize) {
@@ -294,6 +320,34 @@ mod tests {
     use super::*;
     use rand::{Rng, SeedableRng};
     use std::hint::black_box;
+
+    /// `add_zero_valued` gives the sums `add` gives for f = 0, bit for bit, over the sizes
+    /// it unrolls and the others, failed samples included; and it adds nothing to `b̂`.
+    #[test]
+    fn zero_valued_samples_add_as_add_does() {
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(8);
+        for t in 1..=6 {
+            for channels in [1, 3] {
+                let layout = Layout::new(&(1..=t as u32).collect::<Vec<_>>(), channels);
+                let (mut short, mut full) = (Moments::new(&layout), Moments::new(&layout));
+                let zero = vec![0.0; channels];
+                for i in 0..300 {
+                    let k = rng.gen_range(0..t);
+                    let mut pdfs: Vec<f64> = (0..t).map(|_| rng.gen::<f64>() * 3.0).collect();
+                    if i % 7 == 0 {
+                        pdfs[k] = 0.0;
+                    }
+                    let a = short.add_zero_valued(&layout, k, &zero, &pdfs);
+                    let b = full.add(&layout, k, &zero, &pdfs);
+                    assert_eq!(a.map(f64::to_bits), b.map(f64::to_bits));
+                }
+                let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                assert_eq!(bits(&short.data), bits(&full.data), "T = {t}, {channels}");
+                assert!(short.matrix().iter().any(|&x| x > 0.0));
+                assert!(short.vectors().iter().all(|&x| x.to_bits() == 0));
+            }
+        }
+    }
 
     /// The sizes `Moments::add` unrolls (T = 2, 3, 4 with RGB) and the sparse loops of
     /// the other sizes give bit for bit the sums of the dense general loops, failed

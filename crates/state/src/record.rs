@@ -133,6 +133,23 @@ impl Pixel<'_> {
         }
     }
 
+    /// [`Pixel::add_draw`] for a draw whose value `f` is 0 (an estimator's, which counts
+    /// it), with one block per vertex: the same sums bit for bit, inlined into a caller's
+    /// short path ([`mis::Kernel::add_zero_valued`]).
+    #[inline(always)]
+    pub fn add_zero_valued(&mut self, it: &Tally, depth: usize, k: usize, f: Rgb, pdfs: &[f64]) {
+        if self.mute {
+            return;
+        }
+        match &it.combine {
+            Combine::Estimator(kernel) if it.record.lights == 1 => {
+                let r = it.record.depth_light(depth, 0);
+                kernel.add_zero_valued(&mut self.rec[r], self.key, k, &f.to_array(), pdfs);
+            }
+            _ => self.add_draw(it, depth, k, f, pdfs, None),
+        }
+    }
+
     /// [`Pixel::add_draw`] into a vertex's one estimator block: the sums in a call of
     /// their own, outside the heuristics' short path (which stays inlined in the caller's
     /// loop), and small enough to need few saved registers.

@@ -121,6 +121,23 @@ fn unlit_shortcut_allowed() -> bool {
     true
 }
 
+#[cfg(test)]
+thread_local! {
+    /// Tests: integrators made on this thread take every zero-valued draw through the
+    /// general pdfs (the reference for [`Integrator::unlit_listed`]).
+    static NO_UNLIT_LISTED: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+}
+
+#[cfg(test)]
+fn unlit_listed_allowed() -> bool {
+    !NO_UNLIT_LISTED.with(std::cell::Cell::get)
+}
+
+#[cfg(not(test))]
+fn unlit_listed_allowed() -> bool {
+    true
+}
+
 #[cfg(not(test))]
 fn forced_zero_draws() -> bool {
     false
@@ -146,6 +163,13 @@ pub(crate) struct Integrator {
     /// `Moments::add_failed`): the same sums and residuals to rounding, at a fraction of
     /// the cost (the heuristics skip such draws altogether).
     pub unlit_bsdf_draws_fail: bool,
+    /// Whether a zero-valued draw that still enters the combination may take its pdfs
+    /// from the lights its ray crosses in one short call ([`Self::add_unlit`]): every
+    /// technique is the BSDF or a light mixture whose pdf is a sum over that list
+    /// ([`crate::light::Lights::pdf_listed`]), and one block per vertex. The same sums bit
+    /// for bit as through [`crate::technique::pdfs`], at a fraction of the cost (the
+    /// heuristics skip such draws; docs/results.md, Overhead).
+    pub unlit_listed: bool,
     pub max_depth: u32,
     pub rr_depth: u32,
     /// Whether emitters seen by the camera are left out.
@@ -192,8 +216,19 @@ impl Integrator {
                 .techniques
                 .iter()
                 .all(|&t| t == Technique::Bsdf || crate::technique::samples_lights(t));
+        let unlit_listed = zero_draws_count
+            && unlit_listed_allowed()
+            && tally.record.lights == 1
+            && tally.techniques.len() <= vertex::UNLIT_LISTED_MAX
+            && tally.techniques.iter().all(|&t| {
+                matches!(
+                    t,
+                    Technique::Bsdf | Technique::LightPower | Technique::LightArea
+                )
+            });
         Ok(Self {
             unlit_bsdf_draws_fail,
+            unlit_listed,
             sampler: Sampler::new(o.seed),
             bsdf_index: tally.techniques.iter().position(|&t| t == Technique::Bsdf),
             area_pdfs: tally.techniques.contains(&Technique::LightArea),
@@ -541,6 +576,35 @@ mod tests {
                         "{integrator:?} {method}: {a} {b}"
                     );
                 }
+            }
+        }
+        // Their other zero-valued draws take their pdfs from the lights their rays
+        // cross in one short call: the same states, bit for bit.
+        let listed = |o: &RenderOptions, on: bool| {
+            NO_UNLIT_LISTED.with(|c| c.set(!on));
+            assert_eq!(Integrator::new(o).unwrap().unlit_listed, on);
+            let r = crate::render_loop::render(&scene, o, &AtomicBool::new(false), &|_, _| {});
+            NO_UNLIT_LISTED.with(|c| c.set(false));
+            r.unwrap().0.to_bytes()
+        };
+        for integrator in [IntegratorKind::Direct, IntegratorKind::Path] {
+            for method in [
+                Method::OptimalDirect,
+                Method::OptimalUncorrelated,
+                Method::OptimalProgressive,
+            ] {
+                let mut o = options(integrator, method, 8, 7);
+                assert_eq!(
+                    listed(&o, true),
+                    listed(&o, false),
+                    "{integrator:?} {method}"
+                );
+                o.techniques = vec![(Technique::LightPower, 2), (Technique::LightArea, 1)];
+                assert_eq!(
+                    listed(&o, true),
+                    listed(&o, false),
+                    "{integrator:?} {method}"
+                );
             }
         }
     }

@@ -18,6 +18,9 @@ use glam::DVec3;
 /// ray's side, so that the surface just left is never found again.
 const RAY_OFFSET: f64 = 1e-7;
 
+/// The most techniques [`Integrator::add_unlit`] takes (its pdfs on the stack).
+pub(super) const UNLIT_LISTED_MAX: usize = 4;
+
 /// What a ray met first.
 #[derive(Clone, Copy, Debug)]
 pub(crate) enum Trace {
@@ -222,6 +225,40 @@ pub(crate) struct Continuation {
 }
 
 impl Integrator {
+    /// A zero-valued draw of technique `k` ([`Self::unlit_listed`]) into the MIS
+    /// combination, every pdf from the lights `c` lists and the BSDF's `bsdf_pdf`: what
+    /// [`crate::technique::pdfs`], the own-pdf check and [`Pixel::add_draw`] do
+    /// for it, the same sums bit for bit, without their general dispatch. False (nothing
+    /// added) where a pdf needs more than the list (an environment).
+    #[inline(never)]
+    #[allow(clippy::too_many_arguments)]
+    fn add_unlit(
+        &self,
+        lights: &crate::light::Lights,
+        c: &crate::light::Crossed,
+        bsdf_pdf: Option<f64>,
+        depth: usize,
+        k: usize,
+        f: Rgb,
+        px: &mut Pixel,
+    ) -> bool {
+        let mut pdfs = [0.0; UNLIT_LISTED_MAX];
+        let pdfs = &mut pdfs[..self.techniques.len()];
+        for (o, &t) in pdfs.iter_mut().zip(&self.techniques) {
+            *o = match (t, bsdf_pdf) {
+                (Technique::Bsdf, Some(p)) => p,
+                _ => match lights.pdf_listed(t, c) {
+                    Some(p) => p,
+                    None => return false,
+                },
+            };
+        }
+        // A light draw without density of its own is refused as failed, which is what
+        // the sums do with a sample whose own pdf is 0 (`mis`, `Moments::add`).
+        px.add_zero_valued(self, depth, k, f, pdfs);
+        true
+    }
+
     /// The continuation of a BSDF draw along `ray` in a scene with media: the walk's
     /// `Li` (with its transmittance) and the free flight's stop (`integrator/medium.rs`).
     /// Out of line and cold, so that scenes without media keep the short path inlined.
@@ -486,6 +523,14 @@ impl Integrator {
                     {
                         px.add_failed(self, depth, k);
                         continue;
+                    }
+                    if self.unlit_listed {
+                        if let Some(c) = along.crossed() {
+                            let f = beta * fc * li;
+                            if self.add_unlit(&scene.lights, c, bsdf_pdf, depth, k, f, px) {
+                                continue;
+                            }
+                        }
                     }
                 }
                 crate::technique::pdfs(

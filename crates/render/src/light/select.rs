@@ -16,6 +16,7 @@ use crate::color::luminance;
 use crate::warp::safe_sqrt;
 use frep::Ray;
 use glam::{DVec2, DVec3};
+use state::Technique;
 
 /// A light-selection pmf.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -408,6 +409,38 @@ impl Lights {
                 self.pdf_mixture_over(p, wi, crossed, |k| self.pmf_with(sel, p, n, k, total))
             }
         }
+    }
+
+    /// The pdf at `wi` of `light-power` or `light-area` from the
+    /// lights `crossed` lists, in a scene without an environment (None otherwise):
+    /// [`Self::pdf_selected_over`]'s and [`Self::pdf_by_area_over`]'s terms in the same
+    /// order, bit for bit, without the general dispatch. The optimal estimators take
+    /// these pdfs for every draw, the zero-valued ones too (docs/results.md, Overhead).
+    #[inline(always)]
+    pub(crate) fn pdf_listed(&self, t: Technique, c: &Crossed) -> Option<f64> {
+        if self.environment.is_some() {
+            return None;
+        }
+        let mut sum = 0.0;
+        match t {
+            Technique::LightPower => {
+                let d = self.by_power.as_ref();
+                for (&k, &pdf) in c.lights().iter().zip(c.pdf_li()) {
+                    if pdf != 0.0 {
+                        let pm = d.map_or(0.0, |d| d.pmf(k as usize));
+                        sum += if pm > 0.0 { pm * pdf } else { 0.0 };
+                    }
+                }
+            }
+            Technique::LightArea => {
+                let d = self.by_area.as_ref()?;
+                for (&i, &pdf) in c.lights().iter().zip(c.pdf_area()) {
+                    sum += d.pmf(i as usize) * pdf;
+                }
+            }
+            _ => return None,
+        }
+        Some(sum)
     }
 
     /// Σ_k pmf(k) · p_k(wi) over the area lights `crossed` lists (None: found by the
