@@ -15,6 +15,11 @@ pub struct Distribution1D {
     func: Vec<f64>,
     cdf: Vec<f64>,
     integral: f64,
+    /// Guide table (Chen & Asau 1974, indexed search; Devroye 1986, §III.2.4):
+    /// `guide[j]` is the piece holding u = j/n. A search starts there and steps over the
+    /// cdf points in u's bucket, n + 1 points in n buckets: O(1) expected whatever f, and
+    /// the piece the binary search over the cdf finds.
+    guide: Vec<u32>,
 }
 
 impl Distribution1D {
@@ -35,10 +40,26 @@ impl Distribution1D {
     pub fn integral(&self) -> f64 {
         self.integral
     }
-    /// The piece i with cdf[i] ≤ u < cdf[i+1].
+    /// The piece i with cdf[i] ≤ u < cdf[i+1] (the last such, where pieces are empty;
+    /// the first piece for u < 0 or NaN, the last for u ≥ 1), from its guide-table
+    /// bucket: the same piece as [`Self::find_binary`] for every u.
+    #[inline]
     fn find(&self, u: f64) -> usize {
-        let i = self.cdf.partition_point(|&c| c <= u);
-        i.saturating_sub(1).min(self.func.len() - 1)
+        let n = self.func.len();
+        let mut i = self.guide[((u * n as f64) as usize).min(n - 1)] as usize;
+        // u·n rounded up past a bucket's edge: step back to the piece holding u.
+        while i > 0 && !(self.cdf[i] <= u) {
+            i -= 1;
+        }
+        while i + 1 < n && self.cdf[i + 1] <= u {
+            i += 1;
+        }
+        i
+    }
+    /// [`Self::find`] by binary search over the cdf, O(log n): what builds the guide.
+    fn find_binary(cdf: &[f64], u: f64) -> usize {
+        let i = cdf.partition_point(|&c| c <= u);
+        i.saturating_sub(1).min(cdf.len() - 2)
     }
     /// A point x of [0, 1) with density f(x)/∫f; returns (x, density, piece).
     pub fn sample_continuous(&self, u: f64) -> (f64, f64, usize) {
@@ -109,10 +130,15 @@ impl Distribution2D {
 impl From<&scene::Distribution1D> for Distribution1D {
     /// The sampler over a table computed at scene resolution.
     fn from(d: &scene::Distribution1D) -> Self {
+        let n = d.func.len();
+        let guide = (0..n)
+            .map(|j| Self::find_binary(&d.cdf, j as f64 / n as f64) as u32)
+            .collect();
         Self {
             func: d.func.clone(),
             cdf: d.cdf.clone(),
             integral: d.integral,
+            guide,
         }
     }
 }
@@ -147,6 +173,43 @@ mod tests {
         assert!((r - 0.5).abs() < 1e-12);
         let z = Distribution1D::new(&[0.0, 0.0]);
         assert_eq!(z.pmf(1), 0.5);
+    }
+
+    /// The guide table finds the piece the binary search finds, for every u: on random
+    /// distributions with empty pieces, runs of equal values and one heavy piece, at
+    /// random u, at every cdf point and bucket edge and the floats beside them, and
+    /// outside [0, 1).
+    #[test]
+    fn guide_table_finds_the_binary_search_piece() {
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        let mut rand = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let beside = |x: f64| [x, x.next_down(), x.next_up()];
+        for case in 0..300 {
+            let n = 1 + (rand() * 200.0) as usize;
+            let f: Vec<f64> = (0..n)
+                .map(|i| match case % 4 {
+                    0 => rand(),
+                    1 if rand() < 0.5 => 0.0,
+                    2 if i == n / 2 => 1e9,
+                    3 => (i / 7) as f64,
+                    _ => rand() * 10.0,
+                })
+                .collect();
+            let d = Distribution1D::new(&f);
+            let mut us: Vec<f64> = (0..400).map(|_| rand()).collect();
+            us.extend(d.cdf.iter().flat_map(|&c| beside(c)));
+            us.extend((0..=n).flat_map(|j| beside(j as f64 / n as f64)));
+            us.extend([-1.0, -0.0, 1.0, 2.0, f64::NAN, ONE_MINUS_EPSILON]);
+            for u in us {
+                let want = Distribution1D::find_binary(&d.cdf, u);
+                assert_eq!(d.find(u), want, "case {case}, n {n}, u {u:e}");
+            }
+        }
     }
 
     #[test]
