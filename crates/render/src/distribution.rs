@@ -48,7 +48,7 @@ impl Distribution1D {
         let n = self.func.len();
         let mut i = self.guide[((u * n as f64) as usize).min(n - 1)] as usize;
         // u·n rounded up past a bucket's edge: step back to the piece holding u.
-        while i > 0 && !(self.cdf[i] <= u) {
+        while i > 0 && (self.cdf[i] > u || u.is_nan()) {
             i -= 1;
         }
         while i + 1 < n && self.cdf[i + 1] <= u {
