@@ -165,11 +165,14 @@ pub(crate) struct Integrator {
     pub unlit_bsdf_draws_fail: bool,
     /// Whether a zero-valued draw that still enters the combination may take its pdfs
     /// from the lights its ray crosses in one short call ([`Self::add_unlit`]): every
-    /// technique is the BSDF or a light mixture whose pdf is a sum over that list
-    /// ([`crate::light::Lights::pdf_listed`]), and one block per vertex. The same sums bit
+    /// technique is the BSDF, one light or a light mixture whose pdf is a sum over that
+    /// list ([`crate::light::Lights::pdf_listed`]), and one block per vertex. The same sums bit
     /// for bit as through [`crate::technique::pdfs`], at a fraction of the cost (the
     /// heuristics skip such draws; docs/results.md, Overhead).
     pub unlit_listed: bool,
+    /// Whether a technique is one light's (`light#k`), for [`Self::add_unlit`] and
+    /// [`crate::technique::pdfs_known`].
+    pub unlit_one: bool,
     pub max_depth: u32,
     pub rr_depth: u32,
     /// Whether emitters seen by the camera are left out.
@@ -219,16 +222,23 @@ impl Integrator {
         let unlit_listed = zero_draws_count
             && unlit_listed_allowed()
             && tally.record.lights == 1
-            && tally.techniques.len() <= vertex::UNLIT_LISTED_MAX
             && tally.techniques.iter().all(|&t| {
                 matches!(
                     t,
-                    Technique::Bsdf | Technique::LightPower | Technique::LightArea
+                    Technique::Bsdf
+                        | Technique::LightPower
+                        | Technique::LightArea
+                        | Technique::Light(_)
                 )
             });
+        let unlit_one = tally
+            .techniques
+            .iter()
+            .any(|t| matches!(t, Technique::Light(_)));
         Ok(Self {
             unlit_bsdf_draws_fail,
             unlit_listed,
+            unlit_one,
             sampler: Sampler::new(o.seed),
             bsdf_index: tally.techniques.iter().position(|&t| t == Technique::Bsdf),
             area_pdfs: tally.techniques.contains(&Technique::LightArea),
@@ -594,17 +604,19 @@ mod tests {
                 Method::OptimalProgressive,
             ] {
                 let mut o = options(integrator, method, 8, 7);
-                assert_eq!(
-                    listed(&o, true),
-                    listed(&o, false),
-                    "{integrator:?} {method}"
-                );
-                o.techniques = vec![(Technique::LightPower, 2), (Technique::LightArea, 1)];
-                assert_eq!(
-                    listed(&o, true),
-                    listed(&o, false),
-                    "{integrator:?} {method}"
-                );
+                let one = [(Technique::Light(0), 1), (Technique::Light(1), 2)];
+                let mixtures = [(Technique::LightPower, 1), (Technique::LightArea, 1)];
+                for techniques in [
+                    o.techniques.clone(),
+                    vec![(Technique::LightPower, 2), (Technique::LightArea, 1)],
+                    // One technique per light, alone and beside the mixtures.
+                    [&one[..], &[(Technique::Bsdf, 1)]].concat(),
+                    [&one[..], &mixtures[..], &[(Technique::Bsdf, 1)]].concat(),
+                ] {
+                    o.techniques = techniques;
+                    let (on, off) = (listed(&o, true), listed(&o, false));
+                    assert!(on == off, "{integrator:?} {method} {:?}", o.techniques);
+                }
             }
         }
     }

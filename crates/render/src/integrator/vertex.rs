@@ -18,8 +18,8 @@ use glam::DVec3;
 /// ray's side, so that the surface just left is never found again.
 const RAY_OFFSET: f64 = 1e-7;
 
-/// The most techniques [`Integrator::add_unlit`] takes (its pdfs on the stack).
-pub(super) const UNLIT_LISTED_MAX: usize = 4;
+/// Techniques up to which [`Integrator::add_unlit`] keeps its pdfs in a short array.
+const UNLIT_SHORT: usize = 4;
 
 /// What a ray met first.
 #[derive(Clone, Copy, Debug)]
@@ -226,32 +226,31 @@ pub(crate) struct Continuation {
 
 impl Integrator {
     /// A zero-valued draw of technique `k` ([`Self::unlit_listed`]) into the MIS
-    /// combination, every pdf from the lights `c` lists and the BSDF's `bsdf_pdf`: what
-    /// [`crate::technique::pdfs`], the own-pdf check and [`Pixel::add_draw`] do
-    /// for it, the same sums bit for bit, without their general dispatch. False (nothing
-    /// added) where a pdf needs more than the list (an environment).
+    /// combination, every pdf from the lights `c` lists and the BSDF's `bsdf_pdf`
+    /// ([`crate::technique::pdfs_listed`]): what [`crate::technique::pdfs`], the own-pdf
+    /// check and [`Pixel::add_draw`] do for it, the same sums bit for bit, without their
+    /// general dispatch. False (nothing added) where a pdf needs more than the list (an
+    /// environment). `N` words of pdfs on the stack: zeroing 32 for three techniques cost
+    /// a tenth of the call.
     #[inline(never)]
     #[allow(clippy::too_many_arguments)]
-    fn add_unlit(
+    fn add_unlit<const N: usize, const ONE: bool>(
         &self,
         lights: &crate::light::Lights,
         c: &crate::light::Crossed,
+        p: DVec3,
+        wi: DVec3,
         bsdf_pdf: Option<f64>,
         depth: usize,
         k: usize,
         f: Rgb,
         px: &mut Pixel,
     ) -> bool {
-        let mut pdfs = [0.0; UNLIT_LISTED_MAX];
+        let mut pdfs = [0.0; N];
         let pdfs = &mut pdfs[..self.techniques.len()];
-        for (o, &t) in pdfs.iter_mut().zip(&self.techniques) {
-            *o = match (t, bsdf_pdf) {
-                (Technique::Bsdf, Some(p)) => p,
-                _ => match lights.pdf_listed(t, c) {
-                    Some(p) => p,
-                    None => return false,
-                },
-            };
+        let t = &self.techniques;
+        if !crate::technique::pdfs_listed::<ONE>(t, lights, c, p, wi, bsdf_pdf, pdfs) {
+            return false;
         }
         // A light draw without density of its own is refused as failed, which is what
         // the sums do with a sample whose own pdf is 0 (`mis`, `Moments::add`).
@@ -526,14 +525,26 @@ impl Integrator {
                     }
                     if self.unlit_listed {
                         if let Some(c) = along.crossed() {
-                            let f = beta * fc * li;
-                            if self.add_unlit(&scene.lights, c, bsdf_pdf, depth, k, f, px) {
+                            let (f, l) = (beta * fc * li, &scene.lights);
+                            // Short sets of mixtures (the paper's) apart from sets
+                            // with one technique per light (`light#*`).
+                            let added = if t_count <= UNLIT_SHORT && !self.unlit_one {
+                                self.add_unlit::<UNLIT_SHORT, false>(
+                                    l, c, v.p, s.wi, bsdf_pdf, depth, k, f, px,
+                                )
+                            } else {
+                                self.add_unlit::<MAX_TECHNIQUES, true>(
+                                    l, c, v.p, s.wi, bsdf_pdf, depth, k, f, px,
+                                )
+                            };
+                            if added {
                                 continue;
                             }
                         }
                     }
                 }
-                crate::technique::pdfs(
+                crate::technique::pdfs_known(
+                    self.unlit_one,
                     &self.techniques,
                     &ctx,
                     s.wi,

@@ -218,20 +218,44 @@ pub fn pdfs(
     bsdf_pdf: Option<f64>,
     out: &mut [f64],
 ) {
+    let one = techniques.iter().any(|t| matches!(t, Technique::Light(_)));
+    pdfs_known(one, techniques, ctx, wi, crossed, bsdf_pdf, out)
+}
+
+/// [`pdfs`] for a caller that knows whether a technique is one light's (`one`: `light#k`).
+#[inline(never)]
+pub(crate) fn pdfs_known(
+    one: bool,
+    techniques: &[Technique],
+    ctx: &ShadingPoint,
+    wi: DVec3,
+    crossed: Option<&Crossed>,
+    bsdf_pdf: Option<f64>,
+    out: &mut [f64],
+) {
     // A direction that crosses no area light (most BSDF draws), without an environment:
     // the mixtures over the lights have no term to sum, 0.0 exactly. The optimal
     // estimators need the pdfs of such draws too, where the heuristics skip them.
     let none_crossed =
         crossed.is_some_and(|c| c.lights().is_empty()) && ctx.lights.environment().is_none();
     let fill = |out: &mut [f64], crossed: Option<&Crossed>| {
-        fill_pdfs::<false>(techniques, ctx, wi, crossed, bsdf_pdf, none_crossed, out)
+        for (o, &t) in out.iter_mut().zip(techniques) {
+            *o = match (t, bsdf_pdf) {
+                (Technique::Bsdf, Some(p)) => p,
+                _ if none_crossed && mixes(t) => 0.0,
+                _ => pdf_over(t, ctx, wi, crossed),
+            };
+        }
     };
-    if crossed.is_some() {
-        // A few techniques: `light-power` and `light-area` summed from the list here.
-        // With many (one per light), the loop that tries it for each spilled more than
-        // it saved (+2.7 % with `light#*`, bench/overhead).
-        if techniques.len() <= 4 {
-            return fill_pdfs::<true>(techniques, ctx, wi, crossed, bsdf_pdf, none_crossed, out);
+    if let Some(c) = crossed {
+        let (lights, p) = (ctx.lights, ctx.p);
+        let listed = if one {
+            pdfs_listed::<true>(techniques, lights, c, p, wi, bsdf_pdf, out)
+        } else {
+            pdfs_listed::<false>(techniques, lights, c, p, wi, bsdf_pdf, out)
+        };
+        if listed {
+            return;
         }
         return fill(out, crossed);
     }
@@ -244,31 +268,32 @@ pub fn pdfs(
     fill(out, None)
 }
 
-/// [`pdfs`]' loop over the techniques; with `LISTED`, `light-power`'s and `light-area`'s
-/// pdfs from the list `crossed` without [`pdf_over`]'s dispatch ([`Lights::pdf_listed`]).
+/// Fills `out` as [`pdfs`] does where every technique's pdf at `wi` from `p` comes from
+/// the lights `crossed` lists ([`Lights::pdf_listed`], `light#k` with `ONE`) or is the
+/// BSDF's `bsdf_pdf`, bit for bit, without [`pdf_over`]'s dispatch; false (`out` partly
+/// written) where one does not. One loop without calls but the crossed lights' own
+/// pdfs: a loop that called [`pdf_over`] for the rest kept values alive across the
+/// calls (+2.7 % with `light#*`).
 #[inline(always)]
-fn fill_pdfs<const LISTED: bool>(
+pub(crate) fn pdfs_listed<const ONE: bool>(
     techniques: &[Technique],
-    ctx: &ShadingPoint,
+    lights: &Lights,
+    crossed: &Crossed,
+    p: DVec3,
     wi: DVec3,
-    crossed: Option<&Crossed>,
     bsdf_pdf: Option<f64>,
-    none_crossed: bool,
     out: &mut [f64],
-) {
+) -> bool {
     for (o, &t) in out.iter_mut().zip(techniques) {
         *o = match (t, bsdf_pdf) {
-            (Technique::Bsdf, Some(p)) => p,
-            _ if none_crossed && mixes(t) => 0.0,
-            (Technique::LightPower | Technique::LightArea, _) if LISTED => {
-                match crossed.and_then(|c| ctx.lights.pdf_listed(t, c)) {
-                    Some(p) => p,
-                    None => pdf_over(t, ctx, wi, crossed),
-                }
-            }
-            _ => pdf_over(t, ctx, wi, crossed),
+            (Technique::Bsdf, Some(pdf)) => pdf,
+            _ => match lights.pdf_listed::<ONE>(t, crossed, p, wi) {
+                Some(pdf) => pdf,
+                None => return false,
+            },
         };
     }
+    true
 }
 
 #[cfg(test)]

@@ -337,6 +337,25 @@ fn shared_crossings_give_each_techniques_own_pdf() {
             let mut shared = [0.0; 9];
             pdfs(&all, &ctx, d.wi, along.crossed(), None, &mut shared);
             assert_eq!(shared.map(f64::to_bits), out.map(f64::to_bits));
+            // Sets whose pdfs all come from the list (`pdfs_listed`, without an
+            // environment), with and without one technique per light.
+            let bsdf_pdf = Some(Technique::Bsdf.pdf(&ctx, d.wi));
+            for listable in [
+                &[Technique::Bsdf, Technique::LightPower, Technique::LightArea][..],
+                &[Technique::Light(1), Technique::Bsdf, Technique::Light(0)],
+                &[
+                    Technique::LightArea,
+                    Technique::Light(2),
+                    Technique::LightPower,
+                ],
+            ] {
+                let mut own = [0.0; 3];
+                pdfs(listable, &ctx, d.wi, along.crossed(), bsdf_pdf, &mut own);
+                for (k, t) in listable.iter().enumerate() {
+                    let want = t.pdf(&ctx, d.wi);
+                    assert_eq!(own[k].to_bits(), want.to_bits(), "{t:?} of {listable:?}");
+                }
+            }
             assert_eq!(along.nearest, lights.intersect(&ray, 0.0, f64::INFINITY));
             total += 1;
             crossing += usize::from(out[3] > 0.0);
