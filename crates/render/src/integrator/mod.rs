@@ -170,9 +170,11 @@ pub(crate) struct Integrator {
     /// for bit as through [`crate::technique::pdfs`], at a fraction of the cost (the
     /// heuristics skip such draws; docs/results.md, Overhead).
     pub unlit_listed: bool,
-    /// Whether a technique is one light's (`light#k`), for [`Self::add_unlit`] and
-    /// [`crate::technique::pdfs_known`].
+    /// Whether a technique is one light's (`light#k`).
     pub unlit_one: bool,
+    /// Each light's technique where techniques are one light's
+    /// ([`crate::technique::one_light_map`]).
+    pub one_light_map: Option<Box<[u32]>>,
     pub max_depth: u32,
     pub rr_depth: u32,
     /// Whether emitters seen by the camera are left out.
@@ -235,10 +237,12 @@ impl Integrator {
             .techniques
             .iter()
             .any(|t| matches!(t, Technique::Light(_)));
+        let one_light_map = crate::technique::one_light_map(&tally.techniques);
         Ok(Self {
             unlit_bsdf_draws_fail,
-            unlit_listed,
+            unlit_listed: unlit_listed && (!unlit_one || one_light_map.is_some()),
             unlit_one,
+            one_light_map,
             sampler: Sampler::new(o.seed),
             bsdf_index: tally.techniques.iter().position(|&t| t == Technique::Bsdf),
             area_pdfs: tally.techniques.contains(&Technique::LightArea),
@@ -313,6 +317,16 @@ impl Integrator {
                 .camera
                 .ray_through_lens(x, y, u, rng.get_2d(dims::LENS)),
             None => scene.camera.ray(x, y, u),
+        }
+    }
+
+    /// Where the one-light techniques are, for [`crate::technique::pdfs_known`].
+    pub fn one_light(&self) -> crate::technique::OneLight<'_> {
+        use crate::technique::OneLight;
+        match (&self.one_light_map, self.unlit_one) {
+            (_, false) => OneLight::None,
+            (Some(m), true) => OneLight::Map(m),
+            (None, true) => OneLight::Search,
         }
     }
 

@@ -248,8 +248,11 @@ impl Integrator {
     ) -> bool {
         let mut pdfs = [0.0; N];
         let pdfs = &mut pdfs[..self.techniques.len()];
-        let t = &self.techniques;
-        if !crate::technique::pdfs_listed::<ONE>(t, lights, c, p, wi, bsdf_pdf, pdfs) {
+        let (t, map) = (
+            &self.techniques,
+            self.one_light_map.as_deref().unwrap_or(&[]),
+        );
+        if !crate::technique::pdfs_listed::<ONE>(t, lights, c, p, wi, bsdf_pdf, map, pdfs) {
             return false;
         }
         // A light draw without density of its own is refused as failed, which is what
@@ -544,7 +547,7 @@ impl Integrator {
                     }
                 }
                 crate::technique::pdfs_known(
-                    self.unlit_one,
+                    self.one_light(),
                     &self.techniques,
                     &ctx,
                     s.wi,

@@ -317,8 +317,14 @@ impl Lights {
         }
     }
 
+    /// Whether the scene has an environment light.
+    #[inline]
+    pub(crate) fn has_environment(&self) -> bool {
+        self.environment.is_some()
+    }
+
     /// The density of MIS light `k`'s own sampling at direction `wi` from `p`.
-    pub(super) fn pdf_one(&self, p: DVec3, k: usize, wi: DVec3) -> f64 {
+    pub(crate) fn pdf_one(&self, p: DVec3, k: usize, wi: DVec3) -> f64 {
         if k == self.area.len() {
             self.environment.as_ref().map_or(0.0, |e| e.pdf(wi))
         } else {
@@ -411,24 +417,13 @@ impl Lights {
         }
     }
 
-    /// The pdf at `wi` from `p` of `light-power`, `light-area` or `light#k` (an area
-    /// light) from the lights `crossed` lists, in a scene without an environment (None
-    /// otherwise): [`Self::pdf_selected_over`]'s and [`Self::pdf_by_area_over`]'s terms
-    /// in the same order, bit for bit, without the general dispatch. The optimal
-    /// estimators take these pdfs for every draw, the zero-valued ones too
-    /// (docs/results.md, Overhead).
+    /// The pdf at `wi` of `light-power` or `light-area` from the lights `crossed` lists,
+    /// in a scene without an environment (None otherwise): [`Self::pdf_selected_over`]'s
+    /// and [`Self::pdf_by_area_over`]'s terms in the same order, bit for bit, without the
+    /// general dispatch. The optimal estimators take these pdfs for every draw, the
+    /// zero-valued ones too (docs/results.md, Overhead).
     #[inline(always)]
-    ///
-    /// With `ONE` false, `light#k` gets None too: the one light's pdf is a call inside a
-    /// caller's loop over the techniques, around which the compiler kept the whole list
-    /// in stack slots (+80 instructions a call with three techniques).
-    pub(crate) fn pdf_listed<const ONE: bool>(
-        &self,
-        t: Technique,
-        c: &Crossed,
-        p: DVec3,
-        wi: DVec3,
-    ) -> Option<f64> {
+    pub(crate) fn pdf_listed(&self, t: Technique, c: &Crossed) -> Option<f64> {
         if self.environment.is_some() {
             return None;
         }
@@ -447,12 +442,6 @@ impl Lights {
                 let d = self.by_area.as_ref()?;
                 for (&i, &pdf) in c.lights().iter().zip(c.pdf_area()) {
                     sum += d.pmf(i as usize) * pdf;
-                }
-            }
-            // `pdf_selected_over`'s one light: its own pdf from p where the list holds it.
-            Technique::Light(k) if ONE && k < self.area.len() => {
-                if c.lights().contains(&(k as u32)) {
-                    sum = self.area[k].pdf_li(p, wi);
                 }
             }
             _ => return None,

@@ -218,14 +218,48 @@ pub fn pdfs(
     bsdf_pdf: Option<f64>,
     out: &mut [f64],
 ) {
-    let one = techniques.iter().any(|t| matches!(t, Technique::Light(_)));
+    let one = match techniques.iter().any(|t| matches!(t, Technique::Light(_))) {
+        true => OneLight::Search,
+        false => OneLight::None,
+    };
     pdfs_known(one, techniques, ctx, wi, crossed, bsdf_pdf, out)
 }
 
-/// [`pdfs`] for a caller that knows whether a technique is one light's (`one`: `light#k`).
+/// Whether a technique list holds one light's techniques (`light#k`), and where.
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum OneLight<'a> {
+    /// None does.
+    None,
+    /// Some do; their pdfs come from the general dispatch.
+    Search,
+    /// Some do: `map[k]` is the index of light k's technique ([`one_light_map`]).
+    Map(&'a [u32]),
+}
+
+/// For a technique list with one light's techniques (`light#k`), each light's technique
+/// index (`u32::MAX` for a light without one); None where there is none, or a light has
+/// two.
+pub(crate) fn one_light_map(techniques: &[Technique]) -> Option<Box<[u32]>> {
+    let lights = techniques.iter().filter_map(|t| match t {
+        Technique::Light(k) => Some(*k),
+        _ => None,
+    });
+    let mut map = vec![u32::MAX; lights.max()? + 1];
+    for (m, t) in techniques.iter().enumerate() {
+        if let Technique::Light(k) = *t {
+            if map[k] != u32::MAX {
+                return None;
+            }
+            map[k] = m as u32;
+        }
+    }
+    Some(map.into_boxed_slice())
+}
+
+/// [`pdfs`] for a caller that knows where the one-light techniques are (`one`).
 #[inline(never)]
 pub(crate) fn pdfs_known(
-    one: bool,
+    one: OneLight,
     techniques: &[Technique],
     ctx: &ShadingPoint,
     wi: DVec3,
@@ -249,10 +283,12 @@ pub(crate) fn pdfs_known(
     };
     if let Some(c) = crossed {
         let (lights, p) = (ctx.lights, ctx.p);
-        let listed = if one {
-            pdfs_listed::<true>(techniques, lights, c, p, wi, bsdf_pdf, out)
-        } else {
-            pdfs_listed::<false>(techniques, lights, c, p, wi, bsdf_pdf, out)
+        let listed = match one {
+            OneLight::None => {
+                pdfs_listed::<false>(techniques, lights, c, p, wi, bsdf_pdf, &[], out)
+            }
+            OneLight::Map(m) => pdfs_listed::<true>(techniques, lights, c, p, wi, bsdf_pdf, m, out),
+            OneLight::Search => false,
         };
         if listed {
             return;
@@ -269,12 +305,16 @@ pub(crate) fn pdfs_known(
 }
 
 /// Fills `out` as [`pdfs`] does where every technique's pdf at `wi` from `p` comes from
-/// the lights `crossed` lists ([`Lights::pdf_listed`], `light#k` with `ONE`) or is the
-/// BSDF's `bsdf_pdf`, bit for bit, without [`pdf_over`]'s dispatch; false (`out` partly
-/// written) where one does not. One loop without calls but the crossed lights' own
-/// pdfs: a loop that called [`pdf_over`] for the rest kept values alive across the
-/// calls (+2.7 % with `light#*`).
+/// the lights `crossed` lists or is the BSDF's `bsdf_pdf`, bit for bit, without
+/// [`pdf_over`]'s dispatch; false (`out` partly written) where one does not, or the
+/// scene has an environment. The mixtures' from [`Lights::pdf_listed`]; with `ONE`,
+/// `light#k`'s as `pdf_selected_over` gives it: its own pdf from `p` where the list holds
+/// light k, else 0, each crossed light's technique found in `map` ([`one_light_map`]).
+/// No calls in the loop over the techniques: one that called [`pdf_over`] for the
+/// others kept values alive across the calls (+2.7 % with `light#*`), and one that
+/// called the one light's pdf copied the list to the stack (+80 instructions a call).
 #[inline(always)]
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn pdfs_listed<const ONE: bool>(
     techniques: &[Technique],
     lights: &Lights,
@@ -282,16 +322,28 @@ pub(crate) fn pdfs_listed<const ONE: bool>(
     p: DVec3,
     wi: DVec3,
     bsdf_pdf: Option<f64>,
+    map: &[u32],
     out: &mut [f64],
 ) -> bool {
+    if lights.has_environment() {
+        return false;
+    }
     for (o, &t) in out.iter_mut().zip(techniques) {
         *o = match (t, bsdf_pdf) {
             (Technique::Bsdf, Some(pdf)) => pdf,
-            _ => match lights.pdf_listed::<ONE>(t, crossed, p, wi) {
+            (Technique::Light(_), _) if ONE => 0.0,
+            _ => match lights.pdf_listed(t, crossed) {
                 Some(pdf) => pdf,
                 None => return false,
             },
         };
+    }
+    if ONE {
+        for &k in crossed.lights() {
+            if let Some(&m) = map.get(k as usize).filter(|&&m| m != u32::MAX) {
+                out[m as usize] = lights.pdf_one(p, k as usize, wi);
+            }
+        }
     }
     true
 }

@@ -350,7 +350,10 @@ fn shared_crossings_give_each_techniques_own_pdf() {
                 ],
             ] {
                 let mut own = [0.0; 3];
-                pdfs(listable, &ctx, d.wi, along.crossed(), bsdf_pdf, &mut own);
+                let map = one_light_map(listable);
+                let one = map.as_deref().map_or(OneLight::None, OneLight::Map);
+                let c = along.crossed();
+                pdfs_known(one, listable, &ctx, d.wi, c, bsdf_pdf, &mut own);
                 for (k, t) in listable.iter().enumerate() {
                     let want = t.pdf(&ctx, d.wi);
                     assert_eq!(own[k].to_bits(), want.to_bits(), "{t:?} of {listable:?}");
@@ -365,4 +368,15 @@ fn shared_crossings_give_each_techniques_own_pdf() {
         crossing > total / 4,
         "{crossing} of {total} directions cross a light"
     );
+}
+
+/// `one_light_map` gives each light's technique index, and None without one-light
+/// techniques or where a light has two.
+#[test]
+fn one_light_map_finds_each_lights_technique() {
+    use Technique::{Bsdf, Light, LightPower};
+    let m = one_light_map(&[Light(2), Bsdf, Light(0), LightPower]).unwrap();
+    assert_eq!(&*m, &[2, u32::MAX, 0]);
+    assert!(one_light_map(&[Bsdf, LightPower]).is_none());
+    assert!(one_light_map(&[Light(1), Bsdf, Light(1)]).is_none());
 }
