@@ -408,7 +408,8 @@ impl<'s> Wave<'s> {
                     continue;
                 }
                 let pdfs = &mut self.pdfs[at * t_count..(at + 1) * t_count];
-                crate::technique::pdfs(
+                crate::technique::pdfs_known(
+                    it.one_light(),
                     &it.techniques,
                     &ctx,
                     s.wi,
