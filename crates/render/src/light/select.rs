@@ -317,12 +317,6 @@ impl Lights {
         }
     }
 
-    /// Whether the scene has an environment light.
-    #[inline]
-    pub(crate) fn has_environment(&self) -> bool {
-        self.environment.is_some()
-    }
-
     /// The density of MIS light `k`'s own sampling at direction `wi` from `p`.
     pub(crate) fn pdf_one(&self, p: DVec3, k: usize, wi: DVec3) -> f64 {
         if k == self.area.len() {

@@ -325,7 +325,7 @@ pub(crate) fn pdfs_listed<const ONE: bool>(
     map: &[u32],
     out: &mut [f64],
 ) -> bool {
-    if lights.has_environment() {
+    if lights.environment().is_some() {
         return false;
     }
     for (o, &t) in out.iter_mut().zip(techniques) {
