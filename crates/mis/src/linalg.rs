@@ -151,24 +151,29 @@ fn factor_and_solve(
 /// when a pivot falls below [`PIVOT_TOL`] times its diagonal entry (numerically singular).
 #[inline(always)]
 fn cholesky_in_place(m: &mut [f64], t: usize) -> bool {
+    // Row i of the packed lower triangle is m[i(i+1)/2 ..][..=i]: the sums run over the
+    // rows' leading parts as slices, in the same order as indexed loops would.
     for j in 0..t {
-        let diag = m[packed_index(j, j)];
+        let rj = packed_index(j, 0);
+        let diag = m[rj + j];
         let mut d = diag;
-        for k in 0..j {
-            let l = m[packed_index(j, k)];
+        for &l in &m[rj..rj + j] {
             d -= l * l;
         }
         if !(d > PIVOT_TOL * diag && d.is_finite()) {
             return false;
         }
         let l_jj = d.sqrt();
-        m[packed_index(j, j)] = l_jj;
+        m[rj + j] = l_jj;
         for i in j + 1..t {
-            let mut v = m[packed_index(i, j)];
-            for k in 0..j {
-                v -= m[packed_index(i, k)] * m[packed_index(j, k)];
+            let ri = packed_index(i, 0);
+            let (head, tail) = m.split_at_mut(ri);
+            let (lj, li) = (&head[rj..rj + j], &mut tail[..=j]);
+            let mut v = li[j];
+            for (a, b) in li[..j].iter().zip(lj) {
+                v -= a * b;
             }
-            m[packed_index(i, j)] = v / l_jj;
+            li[j] = v / l_jj;
         }
     }
     true
@@ -178,16 +183,22 @@ fn cholesky_in_place(m: &mut [f64], t: usize) -> bool {
 #[inline(always)]
 fn cholesky_solve(l: &[f64], t: usize, b: &[f64], x: &mut [f64]) {
     for i in 0..t {
+        let ri = packed_index(i, 0);
+        let row = &l[ri..=ri + i];
         let mut v = b[i];
-        for k in 0..i {
-            v -= l[packed_index(i, k)] * x[k];
+        for (a, xk) in row[..i].iter().zip(&x[..i]) {
+            v -= a * xk;
         }
-        x[i] = v / l[packed_index(i, i)];
+        x[i] = v / row[i];
     }
     for i in (0..t).rev() {
         let mut v = x[i];
-        for k in i + 1..t {
-            v -= l[packed_index(k, i)] * x[k];
+        // Down column i: entry (k, i) is i past row k's start, and row k + 1 starts
+        // k + 1 words after row k.
+        let mut at = packed_index(i + 1, i);
+        for (k, xk) in x.iter().enumerate().take(t).skip(i + 1) {
+            v -= l[at] * xk;
+            at += k + 1;
         }
         x[i] = v / l[packed_index(i, i)];
     }

@@ -174,7 +174,7 @@ pub(crate) struct Integrator {
     pub unlit_one: bool,
     /// Each light's technique where techniques are one light's
     /// ([`crate::technique::one_light_map`]).
-    pub one_light_map: Option<Box<[u32]>>,
+    pub one_light_map: Option<crate::technique::OneLightMap>,
     pub max_depth: u32,
     pub rr_depth: u32,
     /// Whether emitters seen by the camera are left out.

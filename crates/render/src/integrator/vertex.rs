@@ -248,10 +248,7 @@ impl Integrator {
     ) -> bool {
         let mut pdfs = [0.0; N];
         let pdfs = &mut pdfs[..self.techniques.len()];
-        let (t, map) = (
-            &self.techniques,
-            self.one_light_map.as_deref().unwrap_or(&[]),
-        );
+        let (t, map) = (&self.techniques, self.one_light_map.as_ref());
         if !crate::technique::pdfs_listed::<ONE>(t, lights, c, p, wi, bsdf_pdf, map, pdfs) {
             return false;
         }

@@ -349,9 +349,10 @@ fn shared_crossings_give_each_techniques_own_pdf() {
                     Technique::LightPower,
                 ],
             ] {
-                let mut own = [0.0; 3];
+                // NaN where nothing is written: every pdf must be.
+                let mut own = [f64::NAN; 3];
                 let map = one_light_map(listable);
-                let one = map.as_deref().map_or(OneLight::None, OneLight::Map);
+                let one = map.as_ref().map_or(OneLight::None, OneLight::Map);
                 let c = along.crossed();
                 pdfs_known(one, listable, &ctx, d.wi, c, bsdf_pdf, &mut own);
                 for (k, t) in listable.iter().enumerate() {
@@ -370,13 +371,14 @@ fn shared_crossings_give_each_techniques_own_pdf() {
     );
 }
 
-/// `one_light_map` gives each light's technique index, and None without one-light
-/// techniques or where a light has two.
+/// `one_light_map` gives each light's technique index and the other techniques', and
+/// None without one-light techniques or where a light has two.
 #[test]
 fn one_light_map_finds_each_lights_technique() {
     use Technique::{Bsdf, Light, LightPower};
     let m = one_light_map(&[Light(2), Bsdf, Light(0), LightPower]).unwrap();
-    assert_eq!(&*m, &[2, u32::MAX, 0]);
+    assert_eq!(&*m.of_light, &[2, u32::MAX, 0]);
+    assert_eq!(&*m.others, &[1, 3]);
     assert!(one_light_map(&[Bsdf, LightPower]).is_none());
     assert!(one_light_map(&[Light(1), Bsdf, Light(1)]).is_none());
 }
