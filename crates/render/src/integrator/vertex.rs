@@ -230,11 +230,11 @@ impl Integrator {
     /// ([`crate::technique::pdfs_listed`]): what [`crate::technique::pdfs`], the own-pdf
     /// check and [`Pixel::add_draw`] do for it, the same sums bit for bit, without their
     /// general dispatch. False (nothing added) where a pdf needs more than the list (an
-    /// environment). `N` words of pdfs on the stack: zeroing 32 for three techniques cost
-    /// a tenth of the call.
+    /// environment). The pdfs are written into the caller's `pdfs` (one per technique),
+    /// which every call overwrites: an array of 32 zeroed here cost a tenth of the call.
     #[inline(never)]
     #[allow(clippy::too_many_arguments)]
-    fn add_unlit<const N: usize, const ONE: bool>(
+    fn add_unlit<const ONE: bool>(
         &self,
         lights: &crate::light::Lights,
         c: &crate::light::Crossed,
@@ -244,10 +244,9 @@ impl Integrator {
         depth: usize,
         k: usize,
         f: Rgb,
+        pdfs: &mut [f64],
         px: &mut Pixel,
     ) -> bool {
-        let mut pdfs = [0.0; N];
-        let pdfs = &mut pdfs[..self.techniques.len()];
         let (t, map) = (&self.techniques, self.one_light_map.as_ref());
         if !crate::technique::pdfs_listed::<ONE>(t, lights, c, p, wi, bsdf_pdf, map, pdfs) {
             return false;
@@ -528,13 +527,14 @@ impl Integrator {
                             let (f, l) = (beta * fc * li, &scene.lights);
                             // Short sets of mixtures (the paper's) apart from sets
                             // with one technique per light (`light#*`).
+                            let out = &mut pdfs[..t_count];
                             let added = if t_count <= UNLIT_SHORT && !self.unlit_one {
-                                self.add_unlit::<UNLIT_SHORT, false>(
-                                    l, c, v.p, s.wi, bsdf_pdf, depth, k, f, px,
+                                self.add_unlit::<false>(
+                                    l, c, v.p, s.wi, bsdf_pdf, depth, k, f, out, px,
                                 )
                             } else {
-                                self.add_unlit::<MAX_TECHNIQUES, true>(
-                                    l, c, v.p, s.wi, bsdf_pdf, depth, k, f, px,
+                                self.add_unlit::<true>(
+                                    l, c, v.p, s.wi, bsdf_pdf, depth, k, f, out, px,
                                 )
                             };
                             if added {
