@@ -184,7 +184,8 @@ impl Kernel {
     }
 
     /// [`Self::add_sample`] for a sample whose `f` is 0 in every channel: the same sums
-    /// bit for bit, where optimal-direct adds to `Â` only ([`Moments::add_zero_valued`]).
+    /// bit for bit, where the optimal estimators add to `Â` only
+    /// ([`Moments::add_zero_valued`]).
     #[inline(always)]
     pub fn add_zero_valued(
         &self,
@@ -200,6 +201,11 @@ impl Kernel {
             Code::Direct => {
                 Moments::view_mut_sized(l, &mut block[1..]).add_zero_valued(l, technique, f, pdfs);
             }
+            Code::Uncorrelated => {
+                uncorrelated::set_mut(l, block, (key & 1) as usize)
+                    .add_zero_valued(l, technique, f, pdfs);
+            }
+            Code::Progressive(_) => progressive::add_zero_valued(l, block, technique, f, pdfs),
             _ => self.add_sample_out_of_line(block, key, technique, f, pdfs),
         }
     }

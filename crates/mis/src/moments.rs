@@ -282,7 +282,7 @@ fn add_sums_any(
 /// comparison on x86-64, where the compiler's own form of the loop shifted each bit
 /// into place with vector shifts (about 100 instructions for 11 pdfs).
 #[inline(always)]
-fn nonzero_bits(pdfs: &[f64]) -> u64 {
+pub(crate) fn nonzero_bits(pdfs: &[f64]) -> u64 {
     debug_assert!(pdfs.len() <= 64);
     let mut mask = 0u64;
     let mut pairs = pdfs.chunks_exact(2);

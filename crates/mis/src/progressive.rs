@@ -109,17 +109,65 @@ pub(crate) fn add_sample(
     f: &[f64],
     pdfs: &[f64],
 ) {
-    let t = layout.techniques();
+    add(layout, block, technique, f, pdfs, false)
+}
+
+/// [`add_sample`] for a sample whose `f` is 0 in every channel: `Â` only
+/// ([`Moments::add_zero_valued`]), and the residual's `−α·p/s`; the same sums bit for bit.
+#[inline(always)]
+pub(crate) fn add_zero_valued(
+    layout: &Layout,
+    block: &mut [f64],
+    technique: usize,
+    f: &[f64],
+    pdfs: &[f64],
+) {
+    add(layout, block, technique, f, pdfs, true)
+}
+
+#[inline(always)]
+fn add(layout: &Layout, block: &mut [f64], k: usize, f: &[f64], pdfs: &[f64], zero: bool) {
     let mut p = parts(layout, block);
-    match p.moments.add(layout, technique, f, pdfs) {
-        Some(s) => {
-            let inv = 1.0 / s;
-            for ((acc, fc), al) in p.acc.iter_mut().zip(f).zip(p.alpha.chunks_exact(t)) {
-                let cv: f64 = al.iter().zip(pdfs).map(|(a, p)| a * p).sum();
-                *acc += (fc - cv) * inv;
-            }
+    let s = match zero {
+        true => p.moments.add_zero_valued(layout, k, f, pdfs),
+        false => p.moments.add(layout, k, f, pdfs),
+    };
+    match s {
+        Some(s) => add_residual(layout.techniques(), &mut p, f, pdfs, 1.0 / s),
+        None => fail_residual(layout, &mut p, k),
+    }
+}
+
+/// The residual of a sample with pdf sum `1/inv`: `acc_c += (f_c − α_c·p)·inv`. Past
+/// four techniques `α_c·p` runs over the pdfs that are not 0 (with one technique per
+/// light, most are): α is finite (`solve`), so the terms left out are ±0, which leave
+/// the sum as it is but for the sign of a zero sum, and `f_c − ±0` is the same unless
+/// f_c is −0, which no radiance is.
+#[inline(always)]
+fn add_residual(t: usize, p: &mut Parts, f: &[f64], pdfs: &[f64], inv: f64) {
+    let pdfs = &pdfs[..t];
+    if t > 4 && t <= 64 {
+        let mut nonzero = [0u8; 64];
+        let (mut m, mut mask) = (0, crate::moments::nonzero_bits(pdfs));
+        while mask != 0 {
+            nonzero[m] = mask.trailing_zeros() as u8;
+            mask &= mask - 1;
+            m += 1;
         }
-        None => fail_residual(layout, &mut p, technique),
+        let nonzero = &nonzero[..m];
+        for (c, (acc, fc)) in p.acc.iter_mut().zip(f).enumerate() {
+            let al = &p.alpha[c * t..][..t];
+            let cv: f64 = nonzero
+                .iter()
+                .map(|&i| al[usize::from(i)] * pdfs[usize::from(i)])
+                .sum();
+            *acc += (fc - cv) * inv;
+        }
+        return;
+    }
+    for ((acc, fc), al) in p.acc.iter_mut().zip(f).zip(p.alpha.chunks_exact(t)) {
+        let cv: f64 = al.iter().zip(pdfs).map(|(a, p)| a * p).sum();
+        *acc += (fc - cv) * inv;
     }
 }
 
@@ -308,6 +356,61 @@ mod tests {
         assert_eq!(points(Schedule::Every { warmup: 38 }), vec![38, 39, 40]);
         assert_eq!(points(Schedule::Once { after: 5 }), vec![5]);
         assert!(points(Schedule::Fixed).is_empty());
+    }
+
+    /// The residual over the nonzero pdfs (T > 4) and the zero-valued short path give
+    /// bit for bit the dense sums of `add_sample` as written for every T, failed
+    /// samples, zero pdfs of either sign and zero-valued draws included (T = 3, 5, 11,
+    /// 64, and 65 past the sparse loop).
+    #[test]
+    fn sparse_residuals_equal_the_dense_sums() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(9);
+        for t in [3, 5, 11, 64, 65] {
+            let layout = Layout::new(&(1..=t as u32).collect::<Vec<_>>(), 3);
+            let alpha: Vec<f64> = (0..3 * t).map(|_| rng.gen::<f64>() - 0.4).collect();
+            let mut fast = vec![0.0; block_len(&layout)];
+            let mut dense = fast.clone();
+            parts(&layout, &mut fast).alpha.copy_from_slice(&alpha);
+            parts(&layout, &mut dense).alpha.copy_from_slice(&alpha);
+            for i in 0..400 {
+                let k = rng.gen_range(0..t);
+                let mut pdfs: Vec<f64> = (0..t)
+                    .map(|_| match rng.gen_range(0..4) {
+                        0 => 0.0,
+                        1 => -0.0,
+                        _ => rng.gen::<f64>() * 2.0,
+                    })
+                    .collect();
+                if i % 9 == 0 {
+                    pdfs[k] = 0.0; // a failed sample
+                }
+                let zero = i % 3 == 0;
+                let f: Vec<f64> = (0..3)
+                    .map(|_| if zero { 0.0 } else { rng.gen::<f64>() })
+                    .collect();
+                if zero {
+                    add_zero_valued(&layout, &mut fast, k, &f, &pdfs);
+                } else {
+                    add_sample(&layout, &mut fast, k, &f, &pdfs);
+                }
+                // `add_sample` before the sparse residual, every sum dense.
+                let mut p = parts(&layout, &mut dense);
+                match p.moments.add(&layout, k, &f, &pdfs) {
+                    Some(s) => {
+                        let inv = 1.0 / s;
+                        for ((acc, fc), al) in p.acc.iter_mut().zip(&f).zip(p.alpha.chunks_exact(t))
+                        {
+                            let cv: f64 = al.iter().zip(&pdfs).map(|(a, p)| a * p).sum();
+                            *acc += (fc - cv) * inv;
+                        }
+                    }
+                    None => fail_residual(&layout, &mut p, k),
+                }
+            }
+            let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&fast), bits(&dense), "T = {t}");
+        }
     }
 
     #[test]
