@@ -223,16 +223,20 @@ impl Kernel {
         self.add_sample(block, key, technique, f, pdfs);
     }
 
-    /// Where in a block a failed sample of `technique` adds, and what, for the estimators
-    /// whose failed sample is one addition whatever the key (optimal-direct: `Â_tt` after
-    /// the count, `1/n_t²`); None for the others. A caller's short path for
+    /// Where in a block a failed sample of `technique` in the iteration with key `key`
+    /// adds, and what, for the estimators whose failed sample is one addition
+    /// (optimal-direct: `Â_tt` after the count, `1/n_t²`; optimal-uncorrelated: the same
+    /// in the key's set); None for the others. A caller's short path for
     /// [`Self::add_failed`], bit for bit.
     #[inline]
-    pub fn failed_word(&self, technique: usize) -> Option<(usize, f64)> {
+    pub fn failed_word(&self, technique: usize, key: u64) -> Option<(usize, f64)> {
+        let (at, add) = self.failed[technique];
         match self.code {
-            Code::Direct => {
-                let (at, add) = self.failed[technique];
-                Some((1 + at, add))
+            Code::Direct => Some((1 + at, add)),
+            // `uncorrelated::set_mut`: after the two counts, set k at k sets' length.
+            Code::Uncorrelated => {
+                let set = (key & 1) as usize * Moments::len(&self.layout);
+                Some((2 + set + at, add))
             }
             _ => None,
         }
@@ -345,6 +349,36 @@ impl Kernel {
 mod tests {
     use super::*;
     use crate::Estimator;
+
+    /// Where `failed_word` gives one addition, it is `add_failed`'s bit for bit, for
+    /// every method, key parity and technique; the others get None.
+    #[test]
+    fn failed_words_add_as_add_failed() {
+        let layout = Layout::new(&[2, 1, 3], 3);
+        for m in Method::ALL {
+            let k = Kernel::new(m, &layout, &Params::default()).unwrap();
+            for key in 0..4u64 {
+                for t in 0..3 {
+                    let start: Vec<f64> = (0..k.block_len()).map(|i| i as f64 * 0.25).collect();
+                    let mut want = start.clone();
+                    k.add_failed(&mut want, key, t);
+                    match k.failed_word(t, key) {
+                        Some((at, add)) => {
+                            let mut got = start.clone();
+                            got[at] += add;
+                            let bits =
+                                |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                            assert_eq!(bits(&got), bits(&want), "{m:?}, key {key}, t {t}");
+                        }
+                        None => assert!(
+                            !matches!(k.code, Code::Direct | Code::Uncorrelated),
+                            "{m:?}"
+                        ),
+                    }
+                }
+            }
+        }
+    }
 
     /// The kernel over a block and the object estimator run the same code: equal
     /// estimates bit for bit, for every method, on the same samples.

@@ -198,10 +198,10 @@ impl Pixel<'_> {
             return;
         }
         if let Combine::Estimator(kernel) = &it.combine {
-            // One addition for optimal-direct without per-light blocks (most failed and
-            // unlit draws), with no block slicing and no call (the optimal estimators
-            // count every unlit BSDF draw here).
-            if let (1, Some((at, add))) = (it.record.lights, kernel.failed_word(k)) {
+            // One addition for optimal-direct and -uncorrelated without per-light blocks
+            // (most failed and unlit draws), with no block slicing and no call (the
+            // optimal estimators count every unlit BSDF draw here).
+            if let (1, Some((at, add))) = (it.record.lights, kernel.failed_word(k, self.key)) {
                 self.rec[it.record.depth_light(depth, 0).start + at] += add;
                 return;
             }
