@@ -147,8 +147,20 @@ fn model(file: &Path) -> Result<(), String> {
     // form, anything else by interval arithmetic.
     let poly = &m.polynomial_degrees;
     if !poly.is_empty() || m.by_intervals > 0 {
+        // Solids whose polynomial parts fold into leaves along rays: fewer nodes a ray.
+        let leaves = match m.with_leaves.as_slice() {
+            [] => String::new(),
+            w => format!(
+                " ({} with polynomial leaves: {} nodes a ray)",
+                w.len(),
+                w.iter()
+                    .map(|(a, b)| format!("{a} → {b}"))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+        };
         out!(
-            "expression solids: {} polynomial (Bernstein search{}), {} by intervals",
+            "expression solids: {} polynomial (Bernstein search{}), {} by intervals{leaves}",
             poly.len(),
             match poly.is_empty() {
                 true => String::new(),

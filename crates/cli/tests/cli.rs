@@ -141,20 +141,25 @@ fn check_summarises_a_model() {
     );
     assert!(text.contains("bounds:"), "{text}");
     assert!(text.contains("dimensions:    3-D"), "{text}");
-    // Which search its rays take: tanglecube is a quartic, colonnade is not a polynomial.
+    // Which search its rays take: tanglecube is a quartic, colonnade is not a polynomial,
+    // smooth_blob's ellipsoids fold into leaves along rays.
     for (m, want) in [
         (
-            "tanglecube",
+            "fidget/tanglecube.vm",
             "expression solids: 1 polynomial (Bernstein search, degree 4), 0 by intervals",
         ),
         (
-            "colonnade",
-            "expression solids: 0 polynomial (Bernstein search), 1 by intervals",
+            "fidget/colonnade.vm",
+            "expression solids: 0 polynomial (Bernstein search), 1 by intervals\n",
+        ),
+        (
+            "examples/smooth_blob.frep",
+            "1 by intervals (1 with polynomial leaves: 76 → 38 nodes a ray)",
         ),
     ] {
         let st = frepray()
             .arg("check")
-            .arg(root().join(format!("models/fidget/{m}.vm")))
+            .arg(root().join(format!("models/{m}")))
             .output()
             .unwrap();
         assert!(st.status.success());

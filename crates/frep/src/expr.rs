@@ -237,7 +237,7 @@ fn set_node<S: Scalar>(nodes: &[Node], i: usize, n: Node, scratch: &mut [S], x: 
 /// a + b ± √(a² + b²) from the nodes before it, as [`crate::csg`] builds it (operands of
 /// each sum in either order).
 #[inline]
-fn r_pattern(nodes: &[Node], n: Node) -> Option<(u32, u32, bool)> {
+pub(crate) fn r_pattern(nodes: &[Node], n: Node) -> Option<(u32, u32, bool)> {
     let Node::Binary(op @ (BinaryOp::Add | BinaryOp::Sub), s, r) = n else {
         return None;
     };
@@ -458,6 +458,19 @@ pub fn eval_nodes<S: Scalar>(nodes: &[Node], x: S, y: S, z: S, scratch: &mut Vec
         set_node(nodes, i, *n, scratch, x, y, z);
     }
     *scratch.last().expect("an expression has a root")
+}
+
+/// Evaluates `nodes` from index `start` on, where `scratch[..start]` holds the values of
+/// the nodes before it (leaves filled by the caller, [`crate::ray_tape`]); no node from
+/// `start` on may read a coordinate.
+#[inline]
+pub(crate) fn eval_tail<S: Scalar>(nodes: &[Node], start: usize, scratch: &mut [S]) -> S {
+    let scratch = &mut scratch[..nodes.len()];
+    let zero = S::constant(0.0);
+    for (i, n) in nodes.iter().enumerate().skip(start) {
+        set_node(nodes, i, *n, scratch, zero, zero, zero);
+    }
+    scratch[nodes.len() - 1]
 }
 
 /// The first `n` values of `scratch`, grown to hold them (grown once per thread in

@@ -123,6 +123,14 @@ pub enum Leaf {
         grid_n: u32,
         /// Its degree as a polynomial of low degree ([`crate::poly_trace::degree`]).
         degree: Option<u8>,
+        /// Its plan along rays ([`crate::ray_tape::Plan`]): the parts' tape and the
+        /// tape left in [`Flat::plan_nodes`] (an empty tape: no plan), the leaves in
+        /// [`Flat::plan_leaves`].
+        plan_parts: Span,
+        /// See `plan_parts`.
+        plan_tape: Span,
+        /// See `plan_parts`.
+        plan_leaves: Span,
     },
 }
 
@@ -171,6 +179,13 @@ pub struct Flat {
     pub grid_cells: Vec<[u32; 2]>,
     /// The cell tapes of every occupancy grid ([`crate::occupancy::Grid::nodes`]).
     pub cell_tapes: Vec<Node>,
+    /// The expression leaves' plans along rays ([`crate::ray_tape`]): their parts'
+    /// tapes and the tapes left. CPU searches only.
+    #[cfg_attr(feature = "serde", serde(skip))]
+    pub plan_nodes: Vec<Node>,
+    /// The plans' leaves, as indices of their parts.
+    #[cfg_attr(feature = "serde", serde(skip))]
+    pub plan_leaves: Vec<u32>,
 }
 
 impl Flat {
@@ -220,6 +235,17 @@ impl Flat {
         self.grid_cells.extend_from_slice(v.grid.cells);
         let ct0 = self.cell_tapes.len();
         self.cell_tapes.extend_from_slice(v.grid.nodes);
+        let plan = v.plan.unwrap_or(crate::ray_tape::PlanView {
+            parts: &[],
+            leaves: &[],
+            tape: &[],
+        });
+        let p0 = self.plan_nodes.len();
+        self.plan_nodes.extend_from_slice(plan.parts);
+        let p1 = self.plan_nodes.len();
+        self.plan_nodes.extend_from_slice(plan.tape);
+        let l0 = self.plan_leaves.len();
+        self.plan_leaves.extend_from_slice(plan.leaves);
         self.leaves.push(Leaf::Expr {
             tape: Span::since(t0, self.tapes.len()),
             code: Span::since(c0, self.bytecode.len()),
@@ -231,6 +257,9 @@ impl Flat {
             cell_tapes: Span::since(ct0, self.cell_tapes.len()),
             grid_n: v.grid.n as u32,
             degree: v.degree,
+            plan_parts: Span::since(p0, p1),
+            plan_tape: Span::since(p1, self.plan_nodes.len()),
+            plan_leaves: Span::since(l0, self.plan_leaves.len()),
         });
         Ok(self.leaves.len() as u32 - 1)
     }
@@ -268,6 +297,9 @@ impl Flat {
                 cell_tapes,
                 grid_n,
                 degree,
+                plan_parts,
+                plan_tape,
+                plan_leaves,
                 ..
             } => {
                 // The occupancy bits, the signs (as many words) and the blocks.
@@ -288,6 +320,11 @@ impl Flat {
                         n: grid_n as usize,
                     },
                     degree,
+                    plan: (plan_tape.count > 0).then(|| crate::ray_tape::PlanView {
+                        parts: &self.plan_nodes[plan_parts.range()],
+                        leaves: &self.plan_leaves[plan_leaves.range()],
+                        tape: &self.plan_nodes[plan_tape.range()],
+                    }),
                 })
             }
         }

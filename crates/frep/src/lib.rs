@@ -38,6 +38,7 @@ pub mod poly;
 pub mod poly_trace;
 pub mod quadric;
 pub mod ray;
+pub mod ray_tape;
 pub mod read;
 pub mod scalar;
 pub mod shape;

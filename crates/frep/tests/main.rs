@@ -12,6 +12,7 @@ mod occludes;
 mod occupancy;
 mod perturbed_march;
 mod poly_trace;
+mod ray_tape;
 mod read_frep;
 mod read_hf;
 mod read_vm;

@@ -1,6 +1,7 @@
 //! No allocation per ray: a counting global allocator (this test binary only) watches a
 //! batch of rays through a perturbed quadric with many perturbations, expression solids
-//! read from models/ (one large enough for per-segment tape simplification), Fidget's
+//! read from models/ (one large enough for per-segment tape simplification, one whose
+//! polynomial parts fold into leaves along rays), Fidget's
 //! tanglecube (a quartic, searched in Bernstein form) and a CSG of both kinds. After one warm-up batch (different rays) has grown each thread's scratch,
 //! intersecting, testing inside and taking normals must not allocate at all.
 

@@ -12,7 +12,6 @@ use frep::solid::Solid;
 use frep::tree::Tree;
 use frep::{Aabb, Expr, LeafView, Ray};
 use glam::DVec3;
-use rand::{Rng, SeedableRng};
 use std::path::PathBuf;
 
 /// Walks every crossing along `rays` with both searches; returns how many it compared.
@@ -46,23 +45,6 @@ fn compare(name: &str, v: ExprView<'_>, rays: &[Ray]) -> usize {
     hits
 }
 
-/// Rays at the box: from three eyes through a 24² grid, grazing rays through random
-/// points on a sphere around it, and rays from random points inside.
-fn rays(b: &Aabb, seed: u64) -> Vec<Ray> {
-    let (c, r) = (b.center(), 0.5 * b.extent().length());
-    let mut rays = common::eye_rays(b);
-    let mut rng = rand_pcg::Pcg64::seed_from_u64(seed);
-    let mut point =
-        |s: f64| c + s * r * DVec3::from_array([(); 3].map(|_| rng.gen_range(-1.0..1.0)));
-    for _ in 0..400 {
-        let (o, at) = (point(2.0), point(0.8));
-        rays.push(Ray::new(o, at - o));
-        let (o, at) = (point(0.5), point(1.0));
-        rays.push(Ray::new(o, at - o));
-    }
-    rays
-}
-
 #[test]
 fn tanglecube_crossings_are_the_interval_searchs() {
     let p = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../models/fidget/tanglecube.vm");
@@ -72,7 +54,7 @@ fn tanglecube_crossings_are_the_interval_searchs() {
     for k in 0..solid.flat().leaves.len() {
         if let LeafView::Expr(v) = solid.flat().leaf(k) {
             assert_eq!(v.degree, Some(4), "tanglecube is a quartic");
-            n += compare("tanglecube.vm", v, &rays(&v.bounds, 1));
+            n += compare("tanglecube.vm", v, &common::probe_rays(&v.bounds, 1));
         }
     }
     assert!(n > 1500, "{n} crossings");
@@ -110,7 +92,7 @@ fn quartic_and_sextic_crossings_are_the_interval_searchs() {
     ];
     for (k, (name, tree, bounds)) in cases.into_iter().enumerate() {
         let s = ExprSurface::new(Expr::new(&tree), bounds);
-        let n = compare(name, s.view(), &rays(&bounds, 2 + k as u64));
+        let n = compare(name, s.view(), &common::probe_rays(&bounds, 2 + k as u64));
         println!("{name}: {n} crossings");
         assert!(n > 500, "{name}: {n} crossings");
     }

@@ -19,6 +19,9 @@ pub struct ModelInfo {
     pub polynomial_degrees: Vec<u8>,
     /// Expression solids searched by interval arithmetic.
     pub by_intervals: usize,
+    /// Of those, the ones whose low-degree polynomial parts fold into leaves along a
+    /// ray ([`frep::ray_tape`]): their nodes, and the nodes a ray evaluates.
+    pub with_leaves: Vec<(usize, usize)>,
     /// F does not depend on z (a 2-D model, as Fidget's prospero.vm).
     pub planar: bool,
     /// The solid's bounds (lowest and highest corner), None where F < 0 everywhere in
@@ -44,12 +47,19 @@ pub fn info(path: &Path) -> Result<ModelInfo, Error> {
         })
         .collect();
     let polynomial_degrees: Vec<u8> = degrees.iter().flatten().copied().collect();
+    let with_leaves = (0..flat.leaves.len())
+        .filter_map(|k| match flat.leaf(k) {
+            LeafView::Expr(v) => v.plan.map(|p| (v.tape.len(), p.tape.len())),
+            LeafView::Perturbed(_) => None,
+        })
+        .collect();
     let b = solid.bounds();
     Ok(ModelInfo {
         name: file.name.clone(),
         nodes: expr.len(),
         perturbed: perturbations(&file.shape),
         by_intervals: degrees.len() - polynomial_degrees.len(),
+        with_leaves,
         polynomial_degrees,
         planar: crate::preview::is_planar(&expr),
         bounds: (!b.is_empty()).then(|| (b.lo.to_array(), b.hi.to_array())),
@@ -85,6 +95,11 @@ mod tests {
         assert!(!ball.planar && ball.bounds.is_some());
         let hi = info(&root.join("models/fidget/hi.vm")).unwrap();
         assert!(hi.planar && hi.perturbed == (0, 0) && hi.by_intervals == 1);
+        // A blend of quadrics: its spheres and their scaled copies fold into leaves.
+        let blob = info(&root.join("models/examples/smooth_blob.frep")).unwrap();
+        assert_eq!(blob.with_leaves.len(), 1);
+        let (all, left) = blob.with_leaves[0];
+        assert!(all == blob.nodes && left <= all / 2, "{all} → {left}");
         let cube = info(&root.join("models/fidget/tanglecube.vm")).unwrap();
         assert_eq!(cube.polynomial_degrees, vec![4]);
     }

@@ -121,3 +121,22 @@ pub fn rho_range((x0, x1): (f64, f64), (y0, y1): (f64, f64)) -> (f64, f64) {
     let (x, y) = (dist_range(x0, x1, 0.0), dist_range(y0, y1, 0.0));
     (x.0.hypot(y.0), x.1.hypot(y.1))
 }
+
+/// Rays at the box: from three eyes through a 24² grid ([`eye_rays`]), grazing rays
+/// through random points on a sphere around it, and rays from random points inside.
+pub fn probe_rays(b: &frep::Aabb, seed: u64) -> Vec<frep::Ray> {
+    use glam::DVec3;
+    use rand::{Rng, SeedableRng};
+    let (c, r) = (b.center(), 0.5 * b.extent().length());
+    let mut rays = eye_rays(b);
+    let mut rng = rand_pcg::Pcg64::seed_from_u64(seed);
+    let mut point =
+        |s: f64| c + s * r * DVec3::from_array([(); 3].map(|_| rng.gen_range(-1.0..1.0)));
+    for _ in 0..400 {
+        let (o, at) = (point(2.0), point(0.8));
+        rays.push(frep::Ray::new(o, at - o));
+        let (o, at) = (point(0.5), point(1.0));
+        rays.push(frep::Ray::new(o, at - o));
+    }
+    rays
+}
