@@ -14,13 +14,16 @@ use crate::build_error::BuildError;
 use crate::expr::Expr;
 use crate::flat::{CsgNode, CsgOp, Flat, Leaf, LeafView, Span, MAX_DEPTH, MAX_PARTS};
 use crate::interval_trace::ExprSurface;
-use crate::perturbed::along::{positive_set, q_local_f64};
+use crate::perturbed::along::{positive_set, q_local};
 use crate::quadric::Quadric;
 use crate::ray::{Aabb, Ray};
 use crate::shape::Shape;
 use crate::surface::{outward, Surface};
 use crate::transform::Affine;
 use glam::DVec3;
+
+mod conjunction;
+use conjunction::{Conjunctions, Item};
 
 /// A ray's first crossing of a solid.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -45,6 +48,9 @@ pub struct Solid {
     /// Per CSG node, whether its crossings are roots in closed form ([`exact_nodes`]).
     #[cfg_attr(feature = "serde", serde(skip))]
     exact: Vec<bool>,
+    /// The differences of plain quadrics taken in closed form ([`conjunction`]).
+    #[cfg_attr(feature = "serde", serde(skip))]
+    conjunctions: Conjunctions,
 }
 
 /// The CSG intersections whose parts are all plain planes (boxes, slabs, wedges):
@@ -136,12 +142,14 @@ impl Solid {
         }
         let polytopes = Polytopes::new(&flat);
         let scales = walk_scales(&flat);
-        let exact = exact_nodes(&flat);
+        let conjunctions = Conjunctions::new(&flat);
+        let exact = exact_nodes(&flat, &conjunctions);
         Ok(Solid {
             flat,
             polytopes,
             scales,
             exact,
+            conjunctions,
         })
     }
 
@@ -293,6 +301,9 @@ impl Solid {
                 }
                 self.intersect_node(i, ray, t_min, t_max).is_some()
             }
+            CsgOp::Difference if self.conjunctions.of(i).is_some() => {
+                self.intersect_node(i, ray, t_min, t_max).is_some()
+            }
             CsgOp::Difference => {
                 let Some((lo, hi)) = self.walk_range(i, ray, t_min, t_max) else {
                     return false;
@@ -351,12 +362,17 @@ impl Solid {
                         };
                     }
                 }
-                if let Some(hit) = self.plain_intersection(i, ray, t_min, t_max) {
-                    return hit;
+                if let Some(items) = self.conjunctions.of(i) {
+                    return self.conjunction(items, ray, t_min, t_max);
                 }
                 Rule::All
             }
-            CsgOp::Difference => Rule::FirstNotSecond,
+            CsgOp::Difference => {
+                if let Some(items) = self.conjunctions.of(i) {
+                    return self.conjunction(items, ray, t_min, t_max);
+                }
+                Rule::FirstNotSecond
+            }
         };
         self.combine(i, rule, ray, t_min, t_max)
     }
@@ -478,87 +494,83 @@ impl Solid {
         }
     }
 
-    /// An intersection whose parts are all plain quadrics (boxes, slabs, capped
-    /// cylinders: no perturbations) in closed form: the inside set along the ray is the
-    /// intersection of the parts' positive sets (each at most two open intervals, the
-    /// roots of the quadratic about the ray's origin, as the leaves themselves find
-    /// them), and the crossing is its first end in (t_min, t_max). None when a part is
-    /// not a plain quadric (the general walk of [`Self::combine`] then runs).
-    #[allow(clippy::option_option)]
-    fn plain_intersection(
-        &self,
-        i: usize,
-        ray: &Ray,
-        t_min: f64,
-        t_max: f64,
-    ) -> Option<Option<Hit>> {
-        let parts = self.flat.parts(i);
+    /// The first crossing in (t_min, t_max) of the intersection of the positive sets of
+    /// the quadrics `items` ([`conjunction`]; a complemented one's negative set, as a
+    /// difference takes its second part), in closed form: along the ray each set is
+    /// at most two open intervals, the roots of the quadratic about the ray's origin (as
+    /// the leaves themselves find them), and the crossing is the first end of their
+    /// intersection in range, with the normal of the quadric that makes it (reversed
+    /// where complemented).
+    fn conjunction(&self, items: &[Item], ray: &Ray, t_min: f64, t_max: f64) -> Option<Hit> {
+        const N: usize = conjunction::MAX_ITEMS;
         let (o, d) = (ray.o.to_array(), ray.d.to_array());
-        // Intersecting k parts' sets leaves at most k + 1 intervals; each end remembers
-        // the part whose root it is.
-        let mut set = [(f64::NEG_INFINITY, f64::INFINITY, 0u8, 0u8); MAX_PARTS + 2];
+        // `q_local_f64`'s plane shortcut, its test on the ray made once.
+        let finite = o.iter().chain(&d).all(|v| v.is_finite());
+        // Intersecting k sets leaves at most k + 1 intervals; each end remembers the
+        // item whose root it is.
+        let mut set = [(f64::NEG_INFINITY, f64::INFINITY, 0u8, 0u8); N + 2];
         let mut n = 1;
-        for (k, &part) in parts.iter().enumerate() {
-            let node = &self.flat.nodes[part as usize];
-            let LeafView::Perturbed(view) = (match node.op {
-                CsgOp::Leaf => self.flat.leaf(node.operands.first as usize),
-                _ => return None,
-            }) else {
-                return None;
+        for (k, item) in items.iter().enumerate().take(N) {
+            let c = &self.flat.quadrics[item.quadric as usize].c;
+            let mut a = match item.plane && finite {
+                true => {
+                    let ([x, y, z], [u, v, w]) = (o, d);
+                    [
+                        x * c[6] + y * c[7] + z * c[8] + c[9],
+                        c[6] * u + c[7] * v + c[8] * w,
+                        0.0,
+                    ]
+                }
+                false => q_local(c, o, d),
             };
-            if !view.perturbations.is_empty() {
-                return None;
+            if item.complemented {
+                a = a.map(|v| -v);
             }
-            let (pos, m) = positive_set(q_local_f64(&view.base.c, o, d));
+            let (pos, m) = positive_set(a);
             let cut = |(a, b, ka, kb): (f64, f64, u8, u8), (c, e): (f64, f64)| {
                 let (lo, klo) = if c > a { (c, k as u8) } else { (a, ka) };
                 let (hi, khi) = if e < b { (e, k as u8) } else { (b, kb) };
                 (lo < hi).then_some((lo, hi, klo, khi))
             };
+            let mut len = 0;
             if m == 1 {
-                // The common case (a convex part): cut each interval in place.
-                let mut len = 0;
+                // A convex set: each interval is cut in place.
                 for j in 0..n {
                     if let Some(v) = cut(set[j], pos[0]) {
                         set[len] = v;
                         len += 1;
                     }
                 }
-                n = len;
             } else {
-                let mut out = [(0.0, 0.0, 0u8, 0u8); MAX_PARTS + 2];
-                let mut len = 0;
-                for &v in &set[..n] {
+                // Two intervals split at most the one interval holding the gap between
+                // them: the intervals are read from a copy, written in order.
+                let from = set;
+                for &v in &from[..n] {
                     for &w in &pos[..m] {
-                        if let Some(c) = cut(v, w).filter(|_| len < out.len()) {
-                            out[len] = c;
+                        if let Some(c) = cut(v, w).filter(|_| len < set.len()) {
+                            set[len] = c;
                             len += 1;
                         }
                     }
                 }
-                (set, n) = (out, len);
             }
+            n = len;
             if n == 0 {
-                return Some(None);
+                return None;
             }
         }
-        // The first interval end in range, and the part that makes it.
-        let first = set[..n]
+        // The first interval end in range, and the item that makes it.
+        let (t, k) = set[..n]
             .iter()
             .flat_map(|&(a, b, ka, kb)| [(a, ka), (b, kb)])
             .filter(|&(t, _)| t > t_min && t < t_max && t.is_finite())
-            .min_by(|x, y| x.0.total_cmp(&y.0));
-        let Some((t, k)) = first else {
-            return Some(None);
-        };
-        let node = &self.flat.nodes[parts[k as usize] as usize];
-        let LeafView::Perturbed(view) = self.flat.leaf(node.operands.first as usize) else {
-            return None;
-        };
-        Some(Some(Hit {
+            .min_by(|x, y| x.0.total_cmp(&y.0))?;
+        let item = items[k as usize];
+        let normal = outward(self.flat.quadrics[item.quadric as usize].gradient(ray.at(t)));
+        Some(Hit {
             t,
-            normal: outward(view.gradient(ray.at(t))),
-        }))
+            normal: if item.complemented { -normal } else { normal },
+        })
     }
 
     fn value_node(&self, i: usize, p: DVec3) -> f64 {
@@ -732,25 +744,22 @@ fn walk_scales(flat: &Flat) -> Vec<f64> {
 
 /// Per CSG node, whether its crossings are roots in closed form, computed about the ray's
 /// origin whatever the search starts from, so that a search from a root never finds it
-/// again nor skips the next: a plain quadric (no perturbations), or an intersection of
-/// plain quadrics ([`Solid::plain_intersection`], boxes and polytopes).
-fn exact_nodes(flat: &Flat) -> Vec<bool> {
-    let plain = |i: usize| {
-        let node = &flat.nodes[i];
-        node.op == CsgOp::Leaf
-            && matches!(
-                flat.leaves[node.operands.first as usize],
-                Leaf::Perturbed {
-                    perturbations: Span { count: 0, .. },
-                    ..
-                }
-            )
-    };
+/// again nor skips the next: a plain quadric (no perturbations), or a node of plain
+/// quadrics that [`conjunction`] takes (intersections, boxes and polytopes, and
+/// differences of them).
+fn exact_nodes(flat: &Flat, conjunctions: &Conjunctions) -> Vec<bool> {
     (0..flat.nodes.len())
         .map(|i| {
-            plain(i)
-                || (flat.nodes[i].op == CsgOp::Intersection
-                    && flat.parts(i).iter().all(|&p| plain(p as usize)))
+            let node = &flat.nodes[i];
+            let plain = node.op == CsgOp::Leaf
+                && matches!(
+                    flat.leaves[node.operands.first as usize],
+                    Leaf::Perturbed {
+                        perturbations: Span { count: 0, .. },
+                        ..
+                    }
+                );
+            plain || conjunctions.of(i).is_some()
         })
         .collect()
 }
@@ -780,7 +789,7 @@ fn transform_box(b: &Aabb, m: &Affine) -> Aabb {
     out
 }
 
-/// [`Solid::plain_intersection`] for an intersection of planes, bit for bit (the same
+/// [`Solid::conjunction`] for an intersection of planes, bit for bit (the same
 /// expansions along the ray as `q_local_f64`'s plane shortcut, o and d finite; the same
 /// roots as `positive_set`'s linear case; ties kept by the earlier part): each plane
 /// cuts the one interval where every part is positive, and the crossing is its first
@@ -1127,7 +1136,8 @@ mod tests {
                 let ray = Ray::new(o, d.normalize());
                 let t_min = if k % 3 == 0 { 0.5 } else { 0.0 };
                 let fast = s.intersect(&ray, t_min, 10.0);
-                let general = s.plain_intersection(root, &ray, t_min, 10.0).unwrap();
+                let items = s.conjunctions.of(root).unwrap();
+                let general = s.conjunction(items, &ray, t_min, 10.0);
                 let bits = |h: Option<Hit>| {
                     h.map(|h| (h.t.to_bits(), h.normal.to_array().map(f64::to_bits)))
                 };
@@ -1203,20 +1213,8 @@ mod tests {
     /// walked from crossing to crossing.
     #[test]
     fn plain_intersections_walk_as_the_general_combine() {
-        use crate::perturbed::PerturbedQuadric;
+        use super::conjunction::tests::{plane, q, slab_box};
         use crate::quadric::Quadric;
-        use rand::{Rng, SeedableRng};
-        let q = |q: Quadric| Shape::Perturbed(PerturbedQuadric::new(q));
-        let plane = |n: DVec3, d: f64| q(Quadric::plane(n.normalize(), d));
-        let slab_box = |h: DVec3| {
-            Shape::Intersection(
-                [DVec3::X, DVec3::Y, DVec3::Z]
-                    .iter()
-                    .zip(h.to_array())
-                    .flat_map(|(&a, h)| [plane(a, h), plane(-a, h)])
-                    .collect(),
-            )
-        };
         let axis = DVec3::new(0.2, 1.0, 0.3).normalize();
         let shapes = [
             slab_box(DVec3::new(1.0, 0.5, 0.2)),
@@ -1236,47 +1234,12 @@ mod tests {
             ]),
             Shape::Intersection(vec![plane(DVec3::X, -0.1), plane(-DVec3::X, -0.1)]),
         ];
-        let mut rng = rand_pcg::Pcg64::seed_from_u64(5);
-        let mut crossings = 0;
-        for (j, shape) in shapes.iter().enumerate() {
-            let s = Solid::build(shape).unwrap();
-            let root = s.root();
-            assert_eq!(s.flat.nodes[root].op, CsgOp::Intersection);
-            let general = |ray: &Ray, t0: f64| s.combine(root, Rule::All, ray, t0, 50.0);
-            for _ in 0..2000 {
-                let o = DVec3::new(
-                    rng.gen_range(-3.0..3.0),
-                    rng.gen_range(-3.0..3.0),
-                    rng.gen_range(-3.0..3.0),
-                );
-                let aim = DVec3::new(
-                    rng.gen_range(-0.8..0.8),
-                    rng.gen_range(-0.8..0.8),
-                    rng.gen_range(-0.8..0.8),
-                );
-                let ray = Ray::new(o, (aim - o).normalize());
-                let mut t = 0.0;
-                for _ in 0..8 {
-                    let (got, want) = (s.intersect(&ray, t, 50.0), general(&ray, t));
-                    match (got, want) {
-                        (Some(g), Some(w)) => {
-                            assert!(
-                                (g.t - w.t).abs() < 1e-9,
-                                "shape {j} {ray:?}: {g:?} vs {w:?}"
-                            );
-                            assert!(
-                                (g.normal - w.normal).length() < 1e-9,
-                                "shape {j}: {g:?} vs {w:?}"
-                            );
-                            crossings += 1;
-                            t = g.t + 1e-9;
-                        }
-                        (None, None) => break,
-                        _ => panic!("shape {j} {ray:?} from {t}: {got:?} vs {want:?}"),
-                    }
-                }
-            }
-        }
+        let crossings = conjunction::tests::walk_as_the_general_combine(
+            &shapes,
+            CsgOp::Intersection,
+            Rule::All,
+            5,
+        );
         assert!(crossings > 3000, "{crossings}");
     }
 
