@@ -363,13 +363,13 @@ impl Solid {
                     }
                 }
                 if let Some(items) = self.conjunctions.of(i) {
-                    return self.conjunction(items, ray, t_min, t_max);
+                    return self.conjunction_within(i, items, ray, t_min, t_max);
                 }
                 Rule::All
             }
             CsgOp::Difference => {
                 if let Some(items) = self.conjunctions.of(i) {
-                    return self.conjunction(items, ray, t_min, t_max);
+                    return self.conjunction_within(i, items, ray, t_min, t_max);
                 }
                 Rule::FirstNotSecond
             }
@@ -492,6 +492,27 @@ impl Solid {
             CsgOp::Leaf => from,
             _ => from + nudge(self.scales[i], ray, from),
         }
+    }
+
+    /// [`Self::conjunction`] for node i, none where the ray's range misses the node's
+    /// bounds (grown by 10⁻⁹ of their size and place, beyond the slab test's rounding):
+    /// its crossings lie in them, and most rays a CSG walk asks of a thin part (a
+    /// table's leg) pass it by.
+    #[inline]
+    fn conjunction_within(
+        &self,
+        i: usize,
+        items: &[Item],
+        ray: &Ray,
+        t_min: f64,
+        t_max: f64,
+    ) -> Option<Hit> {
+        let b = &self.flat.nodes[i].bounds;
+        if b.is_finite() {
+            let pad = 1e-9 * (1.0 + b.lo.abs().max(b.hi.abs()).max_element());
+            Aabb::new(b.lo - pad, b.hi + pad).clip(ray, t_min, t_max)?;
+        }
+        self.conjunction(items, ray, t_min, t_max)
     }
 
     /// The first crossing in (t_min, t_max) of the intersection of the positive sets of
