@@ -59,7 +59,7 @@ pub struct ExprSurface {
     eps: f64,
     grid: Arc<occupancy::Grid>,
     degree: Option<u8>,
-    plan: Arc<Plan>,
+    plan: Option<Arc<Plan>>,
 }
 
 /// An expression solid over a borrowed tape (root last): what [`ExprSurface`] and the
@@ -139,7 +139,7 @@ impl ExprSurface {
             eps,
             grid,
             degree,
-            plan: Arc::new(plan.unwrap_or_default()),
+            plan: plan.map(Arc::new),
         }
     }
 
@@ -156,7 +156,7 @@ impl ExprSurface {
             eps: self.eps,
             grid: self.grid.view(),
             degree: self.degree,
-            plan: (!self.plan.view().tape.is_empty()).then(|| self.plan.view()),
+            plan: self.plan.as_deref().map(Plan::view),
         }
     }
 }
@@ -374,14 +374,11 @@ impl ExprView<'_> {
         }
         // F along this ray with its polynomial parts as leaves, where the tape has them.
         // Computed at the first evaluation: a ray through empty cells only needs none.
-        let leaves = self.plan.map(|plan| {
-            crate::ray_tape::reserve(plan.parts.len().max(plan.tape.len()));
-            Leaves {
-                plan,
-                ray,
-                t0,
-                tape: OnceCell::new(),
-            }
+        let leaves = self.plan.map(|plan| Leaves {
+            plan,
+            ray,
+            t0,
+            tape: OnceCell::new(),
         });
         let search = Search {
             root,
@@ -468,7 +465,11 @@ impl Leaves<'_> {
     /// The ray's leaves; None where their coefficients are not finite.
     fn get(&self) -> Option<&RayTape<'_>> {
         self.tape
-            .get_or_init(|| RayTape::new(self.plan, self.ray, self.t0))
+            .get_or_init(|| {
+                let plan = self.plan;
+                crate::ray_tape::reserve(plan.parts.len().max(plan.tape.len()));
+                RayTape::new(plan, self.ray, self.t0)
+            })
             .as_ref()
     }
 }

@@ -39,7 +39,7 @@ const LEAF_DEGREE: usize = 2;
 const MIN_FOLDED: usize = 8;
 
 /// Which nodes of a tape fold into leaves along a ray, and the tape that is left.
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Plan {
     /// The folded nodes the leaves need, as a tape of their own (operands renumbered).
     parts: Vec<Node>,

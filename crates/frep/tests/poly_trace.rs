@@ -18,31 +18,7 @@ use std::path::PathBuf;
 fn compare(name: &str, v: ExprView<'_>, rays: &[Ray]) -> usize {
     assert!(v.degree.is_some(), "{name}: not taken as a polynomial");
     let interval = ExprView { degree: None, ..v };
-    let r = 0.5 * v.bounds.extent().length();
-    let mut hits = 0;
-    for ray in rays {
-        let mut t = 0.0;
-        for _ in 0..16 {
-            let (p, i) = (
-                v.trace(ray, t, 1e3, true),
-                interval.trace(ray, t, 1e3, true),
-            );
-            match (p, i) {
-                (Some(p), Some(i)) => {
-                    assert!(
-                        (p.0 - i.0).abs() <= 1e-9 * r,
-                        "{name} {ray:?} from {t}: {p:?} vs {i:?}"
-                    );
-                    assert!(p.1.dot(i.1) > 1.0 - 1e-9, "{name}: normals {p:?} {i:?}");
-                    hits += 1;
-                    t = p.0 + v.eps;
-                }
-                (None, None) => break,
-                _ => panic!("{name} {ray:?} from {t}: polynomial {p:?} vs intervals {i:?}"),
-            }
-        }
-    }
-    hits
+    common::same_crossings(name, v, interval, rays, false)
 }
 
 #[test]

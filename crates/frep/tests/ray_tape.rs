@@ -134,31 +134,8 @@ fn crossings_with_leaves_are_the_whole_tapes() {
         let mut hits = 0;
         for v in planned(name, &s) {
             let whole = ExprView { plan: None, ..v };
-            let r = 0.5 * v.bounds.extent().length();
-            for ray in &common::probe_rays(&v.bounds, 20 + k as u64) {
-                let mut t = 0.0;
-                for _ in 0..16 {
-                    let (p, w) = (v.trace(ray, t, 1e3, true), whole.trace(ray, t, 1e3, true));
-                    match (p, w) {
-                        (Some(p), Some(w)) => {
-                            assert!(
-                                (p.0 - w.0).abs() <= 1e-9 * r,
-                                "{name} {ray:?} from {t}: {p:?} vs {w:?}"
-                            );
-                            assert!(p.1.dot(w.1) > 1.0 - 1e-9, "{name}: normals {p:?} {w:?}");
-                            assert_eq!(
-                                v.crosses(ray, t, 1e3),
-                                whole.crosses(ray, t, 1e3),
-                                "{name} {ray:?} from {t}: shadow query"
-                            );
-                            hits += 1;
-                            t = p.0 + v.eps;
-                        }
-                        (None, None) => break,
-                        _ => panic!("{name} {ray:?} from {t}: leaves {p:?} vs whole {w:?}"),
-                    }
-                }
-            }
+            let rays = common::probe_rays(&v.bounds, 20 + k as u64);
+            hits += common::same_crossings(name, v, whole, &rays, true);
         }
         println!("{name}: {hits} crossings");
         assert!(hits > 800, "{name}: {hits} crossings");

@@ -140,3 +140,45 @@ pub fn probe_rays(b: &frep::Aabb, seed: u64) -> Vec<frep::Ray> {
     }
     rays
 }
+
+/// Walks every crossing along `rays` (from 0, then a resolution past each crossing, 16 at
+/// most) with two searches of one solid, `a` and `b`, and asserts they agree: the same t
+/// within 10⁻⁹ of the solid's size, the same normal, and, with `shadow`, the same
+/// answer to the shadow query from each start. Returns how many crossings it compared.
+pub fn same_crossings(
+    name: &str,
+    a: frep::interval_trace::ExprView<'_>,
+    b: frep::interval_trace::ExprView<'_>,
+    rays: &[frep::Ray],
+    shadow: bool,
+) -> usize {
+    let r = 0.5 * a.bounds.extent().length();
+    let mut hits = 0;
+    for ray in rays {
+        let mut t = 0.0;
+        for _ in 0..16 {
+            let (p, q) = (a.trace(ray, t, 1e3, true), b.trace(ray, t, 1e3, true));
+            match (p, q) {
+                (Some(p), Some(q)) => {
+                    assert!(
+                        (p.0 - q.0).abs() <= 1e-9 * r,
+                        "{name} {ray:?} from {t}: {p:?} vs {q:?}"
+                    );
+                    assert!(p.1.dot(q.1) > 1.0 - 1e-9, "{name}: normals {p:?} {q:?}");
+                    if shadow {
+                        assert_eq!(
+                            a.crosses(ray, t, 1e3),
+                            b.crosses(ray, t, 1e3),
+                            "{name} {ray:?} from {t}: shadow query"
+                        );
+                    }
+                    hits += 1;
+                    t = p.0 + a.eps;
+                }
+                (None, None) => break,
+                _ => panic!("{name} {ray:?} from {t}: {p:?} vs {q:?}"),
+            }
+        }
+    }
+    hits
+}
