@@ -51,6 +51,34 @@ pub struct Solid {
     /// The differences of plain quadrics taken in closed form ([`conjunction`]).
     #[cfg_attr(feature = "serde", serde(skip))]
     conjunctions: Conjunctions,
+    /// Per CSG node, its bounds grown as the queries grow them ([`QueryBoxes`]).
+    #[cfg_attr(feature = "serde", serde(skip))]
+    boxes: Vec<QueryBoxes>,
+}
+
+/// A node's bounds grown as each query grows them, computed once per solid instead of
+/// on every query: the same boxes, so the same answers.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct QueryBoxes {
+    /// [`Solid::inside_node`]'s: grown by 10⁻⁹·(1 + the largest side).
+    inside: Aabb,
+    /// [`Solid::conjunction_within`]'s: grown by 10⁻⁹·(1 + the largest coordinate's
+    /// magnitude), where the bounds are finite.
+    conjunction: Option<Aabb>,
+}
+
+impl QueryBoxes {
+    fn new(b: &Aabb) -> Self {
+        let pad = 1e-9 * (1.0 + b.extent().max_element());
+        let conjunction = b.is_finite().then(|| {
+            let pad = 1e-9 * (1.0 + b.lo.abs().max(b.hi.abs()).max_element());
+            Aabb::new(b.lo - pad, b.hi + pad)
+        });
+        QueryBoxes {
+            inside: Aabb::new(b.lo - pad, b.hi + pad),
+            conjunction,
+        }
+    }
 }
 
 /// The CSG intersections whose parts are all plain planes (boxes, slabs, wedges):
@@ -144,12 +172,18 @@ impl Solid {
         let scales = walk_scales(&flat);
         let conjunctions = Conjunctions::new(&flat);
         let exact = exact_nodes(&flat, &conjunctions);
+        let boxes = flat
+            .nodes
+            .iter()
+            .map(|n| QueryBoxes::new(&n.bounds))
+            .collect();
         Ok(Solid {
             flat,
             polytopes,
             scales,
             exact,
             conjunctions,
+            boxes,
         })
     }
 
@@ -330,9 +364,7 @@ impl Solid {
     /// nothing is evaluated (a CSG walk asks every part's state where the ray enters,
     /// and most parts lie far from there).
     fn inside_node(&self, i: usize, p: DVec3) -> bool {
-        let b = self.flat.nodes[i].bounds;
-        let pad = 1e-9 * (1.0 + b.extent().max_element());
-        if !Aabb::new(b.lo - pad, b.hi + pad).contains(p) {
+        if !self.boxes[i].inside.contains(p) {
             return false;
         }
         self.value_node(i, p) >= 0.0
@@ -507,10 +539,8 @@ impl Solid {
         t_min: f64,
         t_max: f64,
     ) -> Option<Hit> {
-        let b = &self.flat.nodes[i].bounds;
-        if b.is_finite() {
-            let pad = 1e-9 * (1.0 + b.lo.abs().max(b.hi.abs()).max_element());
-            Aabb::new(b.lo - pad, b.hi + pad).clip(ray, t_min, t_max)?;
+        if let Some(b) = &self.boxes[i].conjunction {
+            b.clip(ray, t_min, t_max)?;
         }
         self.conjunction(items, ray, t_min, t_max)
     }
