@@ -65,6 +65,8 @@ struct QueryBoxes {
     /// [`Solid::conjunction_within`]'s: grown by 10⁻⁹·(1 + the largest coordinate's
     /// magnitude), where the bounds are finite.
     conjunction: Option<Aabb>,
+    /// [`Solid::walk_range`]'s: grown by 10⁻⁹, where the bounds are finite.
+    walk: Option<Aabb>,
 }
 
 impl QueryBoxes {
@@ -77,6 +79,7 @@ impl QueryBoxes {
         QueryBoxes {
             inside: Aabb::new(b.lo - pad, b.hi + pad),
             conjunction,
+            walk: b.is_finite().then(|| Aabb::new(b.lo - 1e-9, b.hi + 1e-9)),
         }
     }
 }
@@ -416,11 +419,9 @@ impl Solid {
     /// the state is the one the walk goes on with.
     #[inline]
     fn walk_range(&self, i: usize, ray: &Ray, t_min: f64, t_max: f64) -> Option<(f64, f64)> {
-        let bounds = &self.flat.nodes[i].bounds;
-        let (lo, hi) = if bounds.is_finite() {
-            Aabb::new(bounds.lo - 1e-9, bounds.hi + 1e-9).clip(ray, t_min, t_max)?
-        } else {
-            (t_min, t_max)
+        let (lo, hi) = match &self.boxes[i].walk {
+            Some(b) => b.clip(ray, t_min, t_max)?,
+            None => (t_min, t_max),
         };
         let lo = if lo.is_finite() {
             lo + nudge(self.scales[i], ray, lo)
