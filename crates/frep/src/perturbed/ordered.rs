@@ -53,11 +53,17 @@ impl Actives<f64> for [Known] {
     }
 }
 
+/// a0 + a1·t + a2·t², by Horner's rule.
+#[inline]
+pub(super) fn quadratic_at([a0, a1, a2]: [f64; 3], t: f64) -> f64 {
+    a0 + t * (a1 + t * a2)
+}
+
 /// A quadratic a0 + a1·t + a2·t² along the ray with its vertex found once: the
 /// certain-sign test asks for its range over every piece it spans.
 #[derive(Clone, Copy)]
-struct Quadratic {
-    a: [f64; 3],
+pub(super) struct Quadratic {
+    pub(super) a: [f64; 3],
     /// −a1 / (2·a2), NaN when a2 = 0 (so that no piece holds it).
     vertex: f64,
     /// The value there.
@@ -65,7 +71,7 @@ struct Quadratic {
 }
 
 impl Quadratic {
-    fn new(a: [f64; 3]) -> Self {
+    pub(super) fn new(a: [f64; 3]) -> Self {
         let mut q = Self {
             a,
             vertex: f64::NAN,
@@ -79,14 +85,13 @@ impl Quadratic {
     }
 
     #[inline]
-    fn at(&self, t: f64) -> f64 {
-        let [a0, a1, a2] = self.a;
-        a0 + t * (a1 + t * a2)
+    pub(super) fn at(&self, t: f64) -> f64 {
+        quadratic_at(self.a, t)
     }
 
     /// The least and greatest value on [ta, tb]: at the ends or at the vertex.
     #[inline]
-    fn range(&self, ta: f64, tb: f64) -> (f64, f64) {
+    pub(super) fn range(&self, ta: f64, tb: f64) -> (f64, f64) {
         let (va, vb) = (self.at(ta), self.at(tb));
         let (mut lo, mut hi) = (va.min(vb), va.max(vb));
         if self.vertex > ta && self.vertex < tb {

@@ -6,7 +6,7 @@
 //! exact piecewise-polynomial scan of [`super::scan`].
 
 use super::along::{positive_set, q_local, q_local_f64, q_local_mag};
-use super::ordered;
+use super::ordered::{self, Quadratic};
 use super::scan::{self, Coeffs};
 use super::{Perturbation, PerturbedQuadric};
 use crate::bvh::{Bvh, BvhRef};
@@ -237,10 +237,12 @@ impl PerturbedView<'_> {
         let Some((lo, hi, sign)) = self.clip(ray, t_min, t_max) else {
             return false;
         };
-        if sign < 0.0 && self.certainly_positive_within(ray, lo, hi) {
+        // The base along the ray, which both checks read.
+        let base = Quadratic::new(q_local(&self.base.c, ray.o.to_array(), ray.d.to_array()));
+        if sign < 0.0 && self.certainly_positive_within(ray, &base, lo, hi) {
             return true;
         }
-        if self.certainly_negative_within(ray, lo, hi) {
+        if self.certainly_negative_within(ray, &base, lo, hi) {
             return false;
         }
         self.scan_first_crossing(ray, t_min, t_max, true).is_some()
@@ -251,16 +253,14 @@ impl PerturbedView<'_> {
     /// their rounding), and the ray meets the support box of no perturbation that adds
     /// material (the others only lower F'). Shadow rays that pass a solid's bounds by,
     /// or start in them away from its surface, are answered so without the scan.
-    pub(super) fn certainly_negative_within(&self, ray: &Ray, lo: f64, hi: f64) -> bool {
-        let (o, d) = (ray.o.to_array(), ray.d.to_array());
-        let at = |a: [f64; 3], t: f64| a[0] + t * (a[1] + t * a[2]);
-        let a = q_local(&self.base.c, o, d);
-        // The quadratic's maximum over [lo, hi]: at an end, or at its vertex.
-        let mut top = at(a, lo).max(at(a, hi));
-        let v = -a[1] / (2.0 * a[2]);
-        if a[2] < 0.0 && v > lo && v < hi {
-            top = top.max(at(a, v));
-        }
+    pub(super) fn certainly_negative_within(
+        &self,
+        ray: &Ray,
+        base: &Quadratic,
+        lo: f64,
+        hi: f64,
+    ) -> bool {
+        let (_, top) = base.range(lo, hi);
         // (NaN and infinite ranges fail here.)
         let margin = 1e-9 * magnitude(&self.base.c, ray, lo.abs().max(hi.abs()));
         if top.partial_cmp(&-margin) != Some(Ordering::Less) {
@@ -294,11 +294,16 @@ impl PerturbedView<'_> {
     /// magnitudes of its terms ([`q_local_mag`]), far above their rounding (a few ε of
     /// them) and above what a perturbation whose support box just misses the rounded
     /// point could add (its q there is within rounding of 0, and enters cubed).
-    pub(super) fn certainly_positive_within(&self, ray: &Ray, lo: f64, hi: f64) -> bool {
+    pub(super) fn certainly_positive_within(
+        &self,
+        ray: &Ray,
+        base: &Quadratic,
+        lo: f64,
+        hi: f64,
+    ) -> bool {
         let (o, d) = (ray.o.to_array(), ray.d.to_array());
-        let at = |a: [f64; 3], t: f64| a[0] + t * (a[1] + t * a[2]);
-        let base = q_local(&self.base.c, o, d);
-        let (set, m) = positive_set(base);
+        let at = ordered::quadratic_at;
+        let (set, m) = positive_set(base.a);
         let Some(t) = set[..m]
             .iter()
             .map(|&(a, b)| (a.max(lo), b.min(hi)))
@@ -308,7 +313,7 @@ impl PerturbedView<'_> {
         else {
             return false;
         };
-        let mut value = at(base, t);
+        let mut value = base.at(t);
         let mut mag = at(q_local_mag(&self.base.c, o, d), t.abs());
         self.bvh.for_each_containing(ray.at(t), |i| {
             let p = &self.perturbations[i];
@@ -607,14 +612,16 @@ mod tests {
                 let scan = view.first_crossing(&ray, 0.0, t_max).is_some();
                 crossed += scan as usize;
                 rays += 1;
-                if sign < 0.0 && view.certainly_positive_within(&ray, lo, hi) {
+                let (o, d) = (ray.o.to_array(), ray.d.to_array());
+                let base = Quadratic::new(q_local(&view.base.c, o, d));
+                if sign < 0.0 && view.certainly_positive_within(&ray, &base, lo, hi) {
                     assert!(
                         scan,
                         "{name} ray {k}: {ray:?} to {t_max} certain, scan none"
                     );
                     certain += 1;
                 }
-                if view.certainly_negative_within(&ray, lo, hi) {
+                if view.certainly_negative_within(&ray, &base, lo, hi) {
                     assert!(
                         !scan,
                         "{name} ray {k}: {ray:?} to {t_max} certain miss, scan hit"
