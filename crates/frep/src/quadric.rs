@@ -230,24 +230,81 @@ impl Quadric {
     /// A box holding {F ≥ 0}. For negative definite A the set is the ellipsoid
     /// (x−c)ᵀ(−A)(x−c) ≤ F(c), whose half-extent along axis k is √(F(c)·(−A⁻¹)_kk)
     /// (the support function of an ellipsoid); the box is widened by a few ulps so that
-    /// rounding never makes it too small, and is [`Aabb::EMPTY`] when F(c) < 0. Any other
-    /// quadric gives [`Aabb::EVERYTHING`].
+    /// rounding never makes it too small, and is [`Aabb::EMPTY`] when F(c) < 0. Where
+    /// F does not depend on some coordinate axes (an axis-aligned cylinder, a slab
+    /// between two parallel planes, as `cylinder(z, …)` builds them) and is such an
+    /// ellipsoid in the others, the box is that ellipsoid's there and unbounded along
+    /// the free axes. Any other quadric gives [`Aabb::EVERYTHING`].
     pub fn support_bounds(&self) -> Aabb {
-        let Some((c, peak)) = self.peak() else {
-            return Aabb::EVERYTHING;
+        let (c, peak, diag) = match self.peak() {
+            Some((c, peak)) => {
+                let inv = -self.quadratic_part().inverse();
+                (
+                    c,
+                    peak,
+                    DVec3::new(inv.x_axis.x, inv.y_axis.y, inv.z_axis.z),
+                )
+            }
+            None => match self.free_axes_peak() {
+                Some(v) => v,
+                None => return Aabb::EVERYTHING,
+            },
         };
         if peak < 0.0 {
             return Aabb::EMPTY;
         }
-        let inv = -self.quadratic_part().inverse();
-        let diag = DVec3::new(inv.x_axis.x, inv.y_axis.y, inv.z_axis.z);
-        let half = (diag * peak).max(DVec3::ZERO).map(f64::sqrt);
+        // Free axes (diag +∞) stay unbounded, a peak of 0 included.
+        let half = diag.map(|v| match v {
+            f64::INFINITY => v,
+            _ => (v * peak).max(0.0).sqrt(),
+        });
         let pad = (half + c.abs()) * 1e-12 + DVec3::splat(f64::MIN_POSITIVE);
         let half = half + pad;
-        if !half.is_finite() || !c.is_finite() {
+        if half.is_nan() || !c.is_finite() {
             return Aabb::EVERYTHING;
         }
         Aabb::new(c - half, c + half)
+    }
+
+    /// [`Self::peak`] for a quadric that does not depend on one or two coordinate axes
+    /// (their rows of A and their entries of b exactly zero) and whose quadratic part in
+    /// the others is negative definite: the centre (0 along the free axes), the peak
+    /// value, and the diagonal of −A⁻¹ in the bound axes (+∞ along the free ones, so
+    /// that the box is unbounded there). None for any other quadric.
+    fn free_axes_peak(&self) -> Option<(DVec3, f64, DVec3)> {
+        let (a, b, k) = self.to_matrix();
+        let free = |i: usize| a[i].iter().all(|&v| v == 0.0) && b[i] == 0.0;
+        let bound: Vec<usize> = (0..3).filter(|&i| !free(i)).collect();
+        let norm = a.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
+        let tol = 1e-12;
+        let mut c = DVec3::ZERO;
+        let mut diag = DVec3::INFINITY;
+        match bound[..] {
+            [i] => {
+                // a·x² + 2b·x + k: centre −b/a, peak k + b·c, half-extent² peak/(−a).
+                let ai = a[i][i];
+                let definite = -ai > tol * norm;
+                if !definite {
+                    return None;
+                }
+                c[i] = -b[i] / ai;
+                diag[i] = -1.0 / ai;
+            }
+            [i, j] => {
+                // The 2×2 block's inverse, [[a_jj, −a_ij], [−a_ij, a_ii]] / det.
+                let (aii, aij, ajj) = (a[i][i], a[i][j], a[j][j]);
+                let det = aii * ajj - aij * aij;
+                if !(-aii > tol * norm && det > tol * norm * norm) {
+                    return None;
+                }
+                c[i] = -(ajj * b[i] - aij * b[j]) / det;
+                c[j] = -(aii * b[j] - aij * b[i]) / det;
+                diag[i] = -ajj / det;
+                diag[j] = -aii / det;
+            }
+            _ => return None,
+        }
+        Some((c, k + b.dot(c), diag))
     }
 
     /// F∘A⁻¹: the quadric moved by the affine map `a`, again a quadric. With A⁻¹x = Mx + t
@@ -574,6 +631,54 @@ mod tests {
         let s = Quadric::sphere(DVec3::new(1.0, 2.0, 3.0), 0.5).support_bounds();
         assert!((s.lo - DVec3::new(0.5, 1.5, 2.5)).abs().max_element() < 1e-11);
         assert!((s.hi - DVec3::new(1.5, 2.5, 3.5)).abs().max_element() < 1e-11);
+        // Axis-aligned cylinders and slabs: bounded across their free axes only.
+        let cyl = Quadric::cylinder(DVec3::new(1.5, 0.9, 7.0), DVec3::Z, 0.25).support_bounds();
+        let want = (DVec3::new(1.25, 0.65, 0.0), DVec3::new(1.75, 1.15, 0.0));
+        for k in 0..2 {
+            assert!((cyl.lo[k] - want.0[k]).abs() < 1e-11, "{cyl:?}");
+            assert!((cyl.hi[k] - want.1[k]).abs() < 1e-11, "{cyl:?}");
+        }
+        assert_eq!((cyl.lo.z, cyl.hi.z), (f64::NEG_INFINITY, f64::INFINITY));
+        let mut slab = Quadric::new([0.0; 10]);
+        (slab.c[0], slab.c[6], slab.c[9]) = (-1.0, 2.0, -0.75); // 0.25 − (x − 1)²
+        let b = slab.support_bounds();
+        assert!(
+            (b.lo.x - 0.5).abs() < 1e-11 && (b.hi.x - 1.5).abs() < 1e-11,
+            "{b:?}"
+        );
+        assert!(
+            b.lo.y == f64::NEG_INFINITY && b.hi.z == f64::INFINITY,
+            "{b:?}"
+        );
+        // An elliptic cylinder along y, turned about its axis (a cross term x·z): the
+        // box holds every surface point and is touched on its x and z faces.
+        let turn =
+            Affine::rotate(DVec3::Y, 0.7).then(&Affine::translate(DVec3::new(0.2, 5.0, -1.0)));
+        let mut ell = Quadric::new([0.0; 10]);
+        (ell.c[0], ell.c[2], ell.c[9]) = (-1.0 / 0.09, -1.0 / 0.64, 1.0); // x²/0.3² + z²/0.8² ≤ 1
+        let ell = ell.transformed(&turn).unwrap();
+        let b = ell.support_bounds();
+        assert!(
+            b.lo.y == f64::NEG_INFINITY && b.hi.y == f64::INFINITY,
+            "{b:?}"
+        );
+        let mut seen = Aabb::EMPTY;
+        for _ in 0..100_000 {
+            let a: f64 = rng.gen_range(0.0..std::f64::consts::TAU);
+            let y = rng.gen_range(-10.0..10.0);
+            let p = turn.point(DVec3::new(0.3 * a.cos(), y, 0.8 * a.sin()));
+            assert!(ell.eval(p).abs() < 1e-12);
+            assert!(b.contains(p), "{p} outside {b:?}");
+            seen.include(p);
+        }
+        for k in [0, 2] {
+            assert!((seen.lo[k] - b.lo[k]).abs() < 2e-3, "{seen:?} vs {b:?}");
+            assert!((seen.hi[k] - b.hi[k]).abs() < 2e-3, "{seen:?} vs {b:?}");
+        }
+        // A cylinder of negative radius² holds nothing.
+        let mut none = Quadric::cylinder(DVec3::ZERO, DVec3::X, 1.0);
+        none.c[9] = -0.1;
+        assert!(none.support_bounds().is_empty());
         // Nothing positive: empty. Unbounded positive sets: everything.
         let mut none = Quadric::sphere(DVec3::ZERO, 1.0);
         none.c[9] = -0.1;

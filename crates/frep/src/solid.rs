@@ -562,7 +562,18 @@ impl Solid {
         // item whose root it is.
         let mut set = [(f64::NEG_INFINITY, f64::INFINITY, 0u8, 0u8); N + 2];
         let mut n = 1;
+        // The box of the stretch the set spans (its intervals are in order), taken at
+        // the first hole with a reach: the set only shrinks, so it stays a bound.
+        let mut stretch = None;
         for (k, item) in items.iter().enumerate().take(N) {
+            if let Some((lo, hi)) = &item.reach {
+                let b = stretch.get_or_insert_with(|| stretch_box(&set[..n], o, d));
+                if let Some((slo, shi)) = b {
+                    if (0..3).any(|a| shi[a] < lo[a] || slo[a] > hi[a]) {
+                        continue;
+                    }
+                }
+            }
             let c = &self.flat.quadrics[item.quadric as usize].c;
             let mut a = match item.plane && finite {
                 true => {
@@ -719,6 +730,26 @@ fn same_op_parts<'a>(s: &'a Shape, m: &Affine, union: bool, out: &mut Vec<(&'a S
 }
 
 /// Appends a node; returns its index.
+/// The box of the ray's points from the first interval's start to the last one's end
+/// (`set` in order), or None where an end is not finite.
+#[inline]
+fn stretch_box(
+    set: &[(f64, f64, u8, u8)],
+    o: [f64; 3],
+    d: [f64; 3],
+) -> Option<([f64; 3], [f64; 3])> {
+    let (t0, t1) = (set.first()?.0, set.last()?.1);
+    if !(t0.is_finite() && t1.is_finite()) {
+        return None;
+    }
+    let (mut lo, mut hi) = ([0.0; 3], [0.0; 3]);
+    for a in 0..3 {
+        let (p, q) = (o[a] + t0 * d[a], o[a] + t1 * d[a]);
+        (lo[a], hi[a]) = (p.min(q), p.max(q));
+    }
+    Some((lo, hi))
+}
+
 fn push_node(flat: &mut Flat, op: CsgOp, operands: Span, bounds: Aabb) -> u32 {
     flat.nodes.push(CsgNode {
         op,

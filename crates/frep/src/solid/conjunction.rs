@@ -8,6 +8,9 @@
 //! one by one) is not needed.
 
 use crate::flat::{CsgOp, Flat, Leaf, Span};
+use crate::quadric::Quadric;
+use crate::ray::Aabb;
+use glam::DVec3;
 
 #[cfg(doc)]
 use super::Solid;
@@ -35,6 +38,35 @@ pub(super) struct Item {
     /// Whether it is a plane (no quadratic terms): its expansion along a ray takes
     /// [`crate::perturbed::along::q_local_f64`]'s shortcut.
     pub plane: bool,
+    /// For a complemented quadric whose positive set is bounded along some axis (a
+    /// hole: a ball, an axis-aligned cylinder), a box holding what it cuts away
+    /// ([`Quadric::support_bounds`] grown by [`REACH_PAD`]) as `(lo, hi)`: a stretch of
+    /// the ray whose box misses it keeps every point, so the quadric is not expanded.
+    pub reach: Option<([f64; 3], [f64; 3])>,
+}
+
+/// How far a hole's reach is grown beyond its positive set's box: 10⁻⁶·(1 + the
+/// largest coordinate's magnitude), far above the rounding of the roots that would cut
+/// the stretch (a grazing ray's roots are good to about √ε of the hole's size, 10⁻⁸),
+/// so that a stretch kept whole without the quadric is what cutting it would keep.
+const REACH_PAD: f64 = 1e-6;
+
+/// [`Item::reach`] for quadric `q`, cut away where `complemented`.
+fn reach(q: &Quadric, complemented: bool) -> Option<([f64; 3], [f64; 3])> {
+    let b = q.support_bounds();
+    if !complemented || b == Aabb::EVERYTHING || b.is_empty() {
+        return None;
+    }
+    let finite = |v: DVec3| {
+        v.to_array()
+            .map(|x| if x.is_finite() { x.abs() } else { 0.0 })
+    };
+    let m = finite(b.lo)
+        .into_iter()
+        .chain(finite(b.hi))
+        .fold(0.0, f64::max);
+    let pad = REACH_PAD * (1.0 + m);
+    Some(((b.lo - pad).to_array(), (b.hi + pad).to_array()))
 }
 
 impl Conjunctions {
@@ -98,6 +130,7 @@ impl Conjunctions {
                 quadric: q,
                 complemented,
                 plane: flat.quadrics[q as usize].c[..6].iter().all(|&v| v == 0.0),
+                reach: reach(&flat.quadrics[q as usize], complemented),
             };
             c.items.extend(kept.iter().map(|&q| item(q, false)));
             c.items.extend(cut.iter().map(|&q| item(q, true)));
@@ -118,6 +151,7 @@ impl Conjunctions {
 #[cfg(test)]
 pub(super) mod tests {
     use super::super::{Rule, Solid};
+    use super::Item;
     use crate::flat::CsgOp;
     use crate::perturbed::PerturbedQuadric;
     use crate::quadric::Quadric;
@@ -199,6 +233,95 @@ pub(super) mod tests {
         let crossings =
             walk_as_the_general_combine(&shapes, CsgOp::Difference, Rule::FirstNotSecond, 8);
         assert!(crossings > 8000, "{crossings} crossings");
+    }
+
+    /// A hole skipped where the stretch of the ray the set spans misses its reach
+    /// ([`super::Item::reach`]) cuts what expanding it cuts: the same crossing and
+    /// normal, bit for bit, as with every quadric expanded, for rays aimed at the holes
+    /// of a table top (axis-aligned cylinders), a plate with ball-shaped dimples and a
+    /// ball with a slab cut out (20 000 rays each; 10 446, 17 661 and 4 396 miss some
+    /// hole's reach, 1 862, 2 200 and 2 488 are cut by a hole).
+    #[test]
+    fn holes_skipped_by_their_reach_cut_as_expanded() {
+        let cut =
+            |a: Shape, b: Vec<Shape>| Shape::Difference(Box::new(a), Box::new(Shape::Union(b)));
+        let column = |x: f64, y: f64| q(Quadric::cylinder(DVec3::new(x, y, 0.0), DVec3::Z, 0.25));
+        let mut band = Quadric::new([0.0; 10]);
+        (band.c[0], band.c[9]) = (-1.0, 0.01); // |x| ≤ 0.1
+        let shapes = [
+            cut(
+                slab_box(DVec3::new(1.5, 0.9, 0.04)),
+                vec![
+                    column(1.5, 0.9),
+                    column(-1.5, 0.9),
+                    column(1.5, -0.9),
+                    column(-1.5, -0.9),
+                ],
+            ),
+            cut(
+                slab_box(DVec3::new(1.0, 1.0, 0.1)),
+                (0..4)
+                    .map(|k| {
+                        q(Quadric::sphere(
+                            DVec3::new(0.5 * k as f64 - 0.75, 0.2, 0.12),
+                            0.2,
+                        ))
+                    })
+                    .collect(),
+            ),
+            cut(q(Quadric::sphere(DVec3::ZERO, 1.0)), vec![q(band)]),
+        ];
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(12);
+        for (j, shape) in shapes.iter().enumerate() {
+            let s = Solid::build(shape).unwrap();
+            let items = s.conjunctions.of(s.root()).unwrap().to_vec();
+            let holes = items.iter().filter(|i| i.reach.is_some()).count();
+            assert_eq!(
+                holes,
+                items.iter().filter(|i| i.complemented).count(),
+                "shape {j}"
+            );
+            let expanded: Vec<Item> = items.iter().map(|&i| Item { reach: None, ..i }).collect();
+            let bounds = s.flat.nodes[s.root()].bounds;
+            let (mut skipped, mut holed) = (0, 0);
+            for _ in 0..20_000 {
+                let o = DVec3::from_array([(); 3].map(|_| rng.gen_range(-3.0..3.0)));
+                // Aimed at the holes' reach more often than not.
+                let hole = items[items.len() - 1 - rng.gen_range(0..holes)]
+                    .reach
+                    .unwrap();
+                let aim = DVec3::from_array([0, 1, 2].map(|a| {
+                    let (lo, hi) = (hole.0[a].max(bounds.lo[a]), hole.1[a].min(bounds.hi[a]));
+                    rng.gen_range(lo - 0.2..hi + 0.2)
+                }));
+                let ray = Ray::new(o, (aim - o).normalize());
+                let t0 = rng.gen_range(0.0..1.0);
+                let got = s.conjunction(&items, &ray, t0, 50.0);
+                let want = s.conjunction(&expanded, &ray, t0, 50.0);
+                let bits = |h: Option<super::super::Hit>| {
+                    h.map(|h| (h.t.to_bits(), h.normal.to_array().map(f64::to_bits)))
+                };
+                assert_eq!(bits(got), bits(want), "shape {j} {ray:?} from {t0}");
+                // Whether the ray's stretch through the bounds misses some hole's reach
+                // (so the stretch the set spans, inside it, does too), and whether a
+                // hole made the crossing.
+                if let Some((a, b)) = bounds.clip(&ray, f64::NEG_INFINITY, f64::INFINITY) {
+                    let (p, r) = (ray.at(a), ray.at(b));
+                    let misses = |i: &Item| {
+                        i.reach.is_some_and(|(lo, hi)| {
+                            (0..3).any(|k| p[k].max(r[k]) < lo[k] || p[k].min(r[k]) > hi[k])
+                        })
+                    };
+                    skipped += items.iter().any(misses) as usize;
+                }
+                let whole: Vec<Item> = items.iter().filter(|i| !i.complemented).copied().collect();
+                holed += (bits(s.conjunction(&whole, &ray, t0, 50.0)) != bits(want)) as usize;
+            }
+            assert!(
+                skipped > 4_000 && holed > 1_500,
+                "shape {j}: {skipped} skipped, {holed} holed"
+            );
+        }
     }
 
     /// Walks 2 000 random rays through each shape, whose root is a node of `op` taken in
