@@ -130,57 +130,55 @@ impl Sampler {
 
     /// The stream of sample `index` of pixel `(x, y)`.
     pub fn stream(&self, x: u32, y: u32, index: u32) -> SampleStream {
+        self.stream_keeping(x, y, index, cached_blocks())
+    }
+
+    /// [`Self::stream`] evaluating and keeping `blocks` Philox blocks at a time: 8 where
+    /// the CPU has AVX2 and 8 is asked, else 4. The values are the same either way; for
+    /// benchmarks and tests that compare the two (`cargo bench -p state --bench
+    /// sample_stream`).
+    pub fn stream_keeping(&self, x: u32, y: u32, index: u32, blocks: u32) -> SampleStream {
+        let window = match blocks {
+            MAX_CACHED_BLOCKS => cached_blocks(),
+            _ => SSE2_CACHED_BLOCKS,
+        };
         SampleStream {
             key: [self.seed as u32, (self.seed >> 32) as u32],
             counter: [x, y, index],
             first: Cell::new(NONE),
+            window,
             bits: Default::default(),
         }
     }
 }
 
+/// Philox blocks a [`SampleStream`] evaluates at once and keeps on this CPU: eight in
+/// one pass of AVX2 lanes where it has AVX2 (found at run time), else four interleaved
+/// in SSE2 ([`philox_sse2_n`]). The eight take fewer instructions than the four (261
+/// against 288 an evaluation) and less time (`cargo bench -p state --bench
+/// sample_stream`), and hold a first vertex of up to six draws with the pixel's
+/// dimensions (`state::dims`: 8 to 8 + 3·(D + 1)), where four blocks end at dimension
+/// 15 and a third draw (16) needs a second evaluation
+/// (docs/notebook/2026-12-07-philox-eight-blocks.md).
+#[inline]
+fn cached_blocks() -> u32 {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        return MAX_CACHED_BLOCKS;
+    }
+    SSE2_CACHED_BLOCKS
+}
+
 impl Sampler {
     /// The streams of `samples` (pixel x, pixel y, sample index), in order, into `out`
-    /// (cleared first), each with its first four blocks (dimensions 0–15:
-    /// the camera ray and the first vertex of most renders) already evaluated, two
-    /// samples' four blocks per pass of eight AVX2 lanes where the CPU has AVX2 (found at
-    /// run time). Each stream equals [`Sampler::stream`]'s once that has read dimension 0.
+    /// (cleared first), each with its first blocks (the camera ray and the first vertex
+    /// of most renders) already evaluated: eight blocks in one pass of AVX2 lanes where
+    /// the CPU has AVX2 (found at run time). Each stream equals [`Sampler::stream`]'s
+    /// once that has read dimension 0.
     pub fn streams_into(&self, samples: &[(u32, u32, u32)], out: &mut Vec<SampleStream>) {
         out.clear();
         out.extend(samples.iter().map(|&(x, y, i)| self.stream(x, y, i)));
-        #[cfg(target_arch = "x86_64")]
-        let whole = if std::arch::is_x86_feature_detected!("avx2") {
-            let pairs = out.chunks_exact(2);
-            let done = pairs.len() * 2;
-            for pair in pairs {
-                let [a, b] = [&pair[0], &pair[1]];
-                let lanes = |w: usize| -> [u32; 8] {
-                    std::array::from_fn(|j| {
-                        let t = if j < 4 { a } else { b };
-                        if w < 3 {
-                            t.counter[w]
-                        } else {
-                            (j % 4) as u32
-                        }
-                    })
-                };
-                let c = [lanes(0), lanes(1), lanes(2), lanes(3)];
-                // SAFETY: AVX2 is present (checked above).
-                let words = unsafe { philox_avx2_8(&c, a.key) };
-                for (j, t) in [a, a, a, a, b, b, b, b].into_iter().enumerate() {
-                    for (w, word) in words.iter().enumerate() {
-                        t.bits[4 * (j % 4) + w].set(word[j]);
-                    }
-                    t.first.set(0);
-                }
-            }
-            done
-        } else {
-            0
-        };
-        #[cfg(not(target_arch = "x86_64"))]
-        let whole = 0;
-        for t in &out[whole..] {
+        for t in out.iter() {
             t.refill(0);
         }
     }
@@ -219,14 +217,31 @@ pub fn philox_many(counters: &[[u32; 4]], key: [u32; 2], out: &mut [[u32; 4]]) {
 #[target_feature(enable = "avx2")]
 #[inline]
 unsafe fn philox_avx2_8(c: &[[u32; 8]; 4], k: [u32; 2]) -> [[u32; 8]; 4] {
-    use std::arch::x86_64::{
-        __m256i, _mm256_add_epi32, _mm256_blend_epi32, _mm256_loadu_si256, _mm256_mul_epu32,
-        _mm256_set1_epi32, _mm256_slli_epi64, _mm256_srli_epi64, _mm256_storeu_si256,
-        _mm256_xor_si256,
-    };
+    use std::arch::x86_64::{__m256i, _mm256_loadu_si256, _mm256_storeu_si256};
     // SAFETY: unaligned loads of 32-byte arrays.
-    let [mut c0, mut c1, mut c2, mut c3] =
-        c.map(|w| unsafe { _mm256_loadu_si256(w.as_ptr().cast::<__m256i>()) });
+    let c = c.map(|w| unsafe { _mm256_loadu_si256(w.as_ptr().cast::<__m256i>()) });
+    let words = philox_avx2_lanes(c, k);
+    let mut out = [[0u32; 8]; 4];
+    for (w, v) in out.iter_mut().zip(words) {
+        // SAFETY: an unaligned store into a 32-byte array.
+        unsafe { _mm256_storeu_si256(w.as_mut_ptr().cast::<__m256i>(), v) };
+    }
+    out
+}
+
+/// [`philox_avx2_8`] on registers: word w of the eight counters in `c[w]`.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+fn philox_avx2_lanes(
+    c: [std::arch::x86_64::__m256i; 4],
+    k: [u32; 2],
+) -> [std::arch::x86_64::__m256i; 4] {
+    use std::arch::x86_64::{
+        _mm256_add_epi32, _mm256_blend_epi32, _mm256_mul_epu32, _mm256_set1_epi32,
+        _mm256_slli_epi64, _mm256_srli_epi64, _mm256_xor_si256,
+    };
+    let [mut c0, mut c1, mut c2, mut c3] = c;
     let (m0, m1) = (_mm256_set1_epi32(M0 as i32), _mm256_set1_epi32(M1 as i32));
     let (w0, w1) = (_mm256_set1_epi32(W0 as i32), _mm256_set1_epi32(W1 as i32));
     let (mut k0, mut k1) = (
@@ -259,35 +274,36 @@ unsafe fn philox_avx2_8(c: &[[u32; 8]; 4], k: [u32; 2]) -> [[u32; 8]; 4] {
             lo0,
         );
     }
-    let mut words = [[0u32; 8]; 4];
-    for (w, v) in words.iter_mut().zip([c0, c1, c2, c3]) {
-        // SAFETY: an unaligned store into a 32-byte array.
-        unsafe { _mm256_storeu_si256(w.as_mut_ptr().cast::<__m256i>(), v) };
-    }
-    words
+    [c0, c1, c2, c3]
 }
 
-/// Philox blocks of four dimensions that [`SampleStream`] evaluates at once and keeps: a
-/// vertex's dimensions (`state::dims`: three per draw and one more, from a
-/// multiple of 4) mostly lie within 16 consecutive ones, and four interleaved
+/// Philox blocks of four dimensions that [`SampleStream`] evaluates at once and keeps
+/// without AVX2: a vertex's dimensions (`state::dims`: three per draw and one more,
+/// from a multiple of 4) mostly lie within 16 consecutive ones, and four interleaved
 /// evaluations take little more time than one ([`philox_sse2_n`]).
-const CACHED_BLOCKS: u32 = 4;
+const SSE2_CACHED_BLOCKS: u32 = 4;
+
+/// The most blocks a [`SampleStream`] keeps ([`cached_blocks`]).
+const MAX_CACHED_BLOCKS: u32 = 8;
 
 /// [`SampleStream`]'s first cached block when none is: `block − NONE` (wrapping) is at
 /// least 9 for every block (blocks are below 2³⁰), so no block reads as cached.
 const NONE: u32 = u32::MAX - 8;
 
-/// The random values of one sample, addressed by dimension. The last four Philox
-/// blocks computed are kept (16 dimensions, evaluated together), so that reading a
-/// vertex's dimensions in order costs about one evaluation per 16 dimensions.
+/// The random values of one sample, addressed by dimension. The last Philox blocks
+/// computed are kept (32 dimensions, evaluated together in AVX2 lanes where the CPU has
+/// AVX2, else 16 in SSE2), so that reading a vertex's dimensions in order costs about
+/// one evaluation per vertex.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct SampleStream {
     key: [u32; 2],
     counter: [u32; 3],
     /// The first block kept ([`NONE`]: none yet).
     first: Cell<u32>,
+    /// Blocks evaluated at once and kept ([`cached_blocks`]).
+    window: u32,
     /// Dimensions `4·first …`, as 32-bit integers.
-    bits: [Cell<u32>; 4 * CACHED_BLOCKS as usize],
+    bits: [Cell<u32>; 4 * MAX_CACHED_BLOCKS as usize],
 }
 
 impl SampleStream {
@@ -303,29 +319,89 @@ impl SampleStream {
     #[inline(always)]
     pub fn get(&self, dim: u32) -> f64 {
         let block = dim / 4;
-        if block.wrapping_sub(self.first.get()) >= CACHED_BLOCKS {
+        if block.wrapping_sub(self.first.get()) >= self.window {
             self.refill(block);
         }
         let at = dim.wrapping_sub(4 * self.first.get()) as usize;
         to_unit(self.bits[at % self.bits.len()].get())
     }
-    /// Evaluates and keeps blocks `block … block + CACHED_BLOCKS − 1` (no counter
-    /// overflows: blocks are below 2³⁰).
+    /// Evaluates and keeps blocks `block … block + window − 1` (no counter overflows:
+    /// blocks are below 2³⁰).
     #[inline(never)]
     fn refill(&self, block: u32) {
         let [x, y, i] = self.counter;
-        let counters: [[u32; 4]; CACHED_BLOCKS as usize] =
+        #[cfg(target_arch = "x86_64")]
+        if self.window == MAX_CACHED_BLOCKS {
+            // SAFETY: a window of eight is chosen only where the CPU has AVX2
+            // (`cached_blocks`).
+            unsafe { self.refill_avx2(block) };
+            return;
+        }
+        let counters: [[u32; 4]; SSE2_CACHED_BLOCKS as usize] =
             std::array::from_fn(|j| [x, y, i, block + j as u32]);
         #[cfg(target_arch = "x86_64")]
         let blocks = philox_sse2_n(counters, self.key);
         #[cfg(not(target_arch = "x86_64"))]
         let blocks = counters.map(|c| philox_scalar(c, self.key));
-        for (cells, words) in self.bits.chunks_exact(4).zip(blocks) {
-            for (cell, w) in cells.iter().zip(words) {
-                cell.set(w);
-            }
+        self.keep(block, |j, w| blocks[j][w]);
+    }
+
+    /// [`Self::refill`] of eight blocks in one pass of AVX2 lanes, lane j for block
+    /// `block + j`: the words come out a register per word and are transposed in
+    /// registers into the kept blocks' order, four stores of 32 bytes.
+    ///
+    /// # Safety
+    /// The CPU must have AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn refill_avx2(&self, block: u32) {
+        use std::arch::x86_64::{
+            __m256i, _mm256_add_epi32, _mm256_permute2x128_si256, _mm256_set1_epi32,
+            _mm256_setr_epi32, _mm256_storeu_si256, _mm256_unpackhi_epi32, _mm256_unpackhi_epi64,
+            _mm256_unpacklo_epi32, _mm256_unpacklo_epi64,
+        };
+        let [x, y, i] = self.counter.map(|v| _mm256_set1_epi32(v as i32));
+        let blocks = _mm256_add_epi32(
+            _mm256_set1_epi32(block as i32),
+            _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7),
+        );
+        let [w0, w1, w2, w3] = philox_avx2_lanes([x, y, i, blocks], self.key);
+        // Per 128-bit half: [w0 w1 w0 w1] of lanes 0, 1 (and 4, 5), then of 2, 3 (6, 7).
+        let (a, b) = (_mm256_unpacklo_epi32(w0, w1), _mm256_unpacklo_epi32(w2, w3));
+        let (c, d) = (_mm256_unpackhi_epi32(w0, w1), _mm256_unpackhi_epi32(w2, w3));
+        // Blocks 0 and 4, 1 and 5, 2 and 6, 3 and 7, each a half.
+        let (b04, b15) = (_mm256_unpacklo_epi64(a, b), _mm256_unpackhi_epi64(a, b));
+        let (b26, b37) = (_mm256_unpacklo_epi64(c, d), _mm256_unpackhi_epi64(c, d));
+        let out = [
+            _mm256_permute2x128_si256::<0x20>(b04, b15),
+            _mm256_permute2x128_si256::<0x20>(b26, b37),
+            _mm256_permute2x128_si256::<0x31>(b04, b15),
+            _mm256_permute2x128_si256::<0x31>(b26, b37),
+        ];
+        // The cells are 32 contiguous u32 (`Cell` is `repr(transparent)`) and may be
+        // written through a shared reference (`UnsafeCell`).
+        let cells = self.bits.as_ptr().cast::<__m256i>().cast_mut();
+        for (k, v) in out.into_iter().enumerate() {
+            // SAFETY: an unaligned store of 32 bytes within the 128 of `bits`.
+            unsafe { _mm256_storeu_si256(cells.add(k), v) };
         }
         self.first.set(block);
+    }
+
+    /// Keeps `word(j, w)`, word w of block `first + j`, for the window's blocks.
+    #[inline(always)]
+    fn keep(&self, first: u32, word: impl Fn(usize, usize) -> u32) {
+        for (j, cells) in self
+            .bits
+            .chunks_exact(4)
+            .take(self.window as usize)
+            .enumerate()
+        {
+            for (w, cell) in cells.iter().enumerate() {
+                cell.set(word(j, w));
+            }
+        }
+        self.first.set(first);
     }
     /// Dimensions `dim` and `dim + 1` as a point of [0, 1)².
     #[inline]
@@ -366,7 +442,7 @@ mod tests {
 
     /// `get` reads the value of its block's Philox evaluation whatever was read before:
     /// dimensions in order, backwards, repeated, far apart and up to the last block,
-    /// through the cache of [`CACHED_BLOCKS`] interleaved evaluations.
+    /// through the cache of [`cached_blocks`] blocks evaluated together.
     #[test]
     fn cached_blocks_give_each_dimension_its_value() {
         let mut word = words(11);
@@ -381,6 +457,35 @@ mod tests {
             dims.extend((0..50).map(|_| word()));
             for d in dims {
                 assert_eq!(t.get(d), expect(&t, d), "dimension {d}");
+            }
+        }
+    }
+
+    /// Streams that keep four blocks and streams that keep eight (AVX2, where the CPU
+    /// has it) read the same value for every dimension, whatever was read before.
+    #[test]
+    fn windows_of_four_and_eight_blocks_read_the_same_values() {
+        let mut word = words(21);
+        let s = Sampler::new(0x0bad_cafe_f00d_d00d);
+        let windows: &[u32] = match cached_blocks() {
+            MAX_CACHED_BLOCKS => &[SSE2_CACHED_BLOCKS, MAX_CACHED_BLOCKS],
+            _ => &[SSE2_CACHED_BLOCKS],
+        };
+        for round in 0..200 {
+            let (x, y) = (word(), word());
+            let t: Vec<SampleStream> = windows
+                .iter()
+                .map(|&w| s.stream_keeping(x, y, round, w))
+                .collect();
+            let mut dims: Vec<u32> = (0..70).collect();
+            dims.extend((0..70).rev());
+            dims.extend((0..300).map(|_| word() % 128));
+            dims.extend([u32::MAX, u32::MAX - 31, 0, 31, 32, 33]);
+            for d in dims {
+                let want = to_unit(t[0].block_bits(d / 4)[(d % 4) as usize]);
+                for t in &t {
+                    assert_eq!(t.get(d), want, "dimension {d}, window {}", t.window);
+                }
             }
         }
     }
