@@ -287,33 +287,54 @@ pub fn adapters() -> Vec<AdapterSummary> {
 }
 
 /// Compiled kernels kept by a [`Gpu`] for every later render, by their type and the part
-/// of their source that tells them apart. The module that compiles them names their type
-/// (so that this one names none, and depends on none of them); the type is part of the
-/// key, so that what comes back is always of the type asked for.
+/// of their source that tells them apart, and what else a render makes from the scene
+/// alone and may reuse (walk grids). The module that makes them names their type (so
+/// that this one names none, and depends on none of them); the type is part of the key,
+/// so that what comes back is always of the type asked for.
 #[derive(Default)]
 pub(crate) struct KernelCache(Mutex<Vec<CachedKernels>>);
 
-/// One entry of a [`KernelCache`]: the kernels' type, their key, the kernels.
-type CachedKernels = (TypeId, String, Arc<dyn Any + Send + Sync>);
+/// One entry of a [`KernelCache`]: the kernels' type, their key, the kernels once made.
+type CachedKernels = (
+    TypeId,
+    String,
+    Arc<Mutex<Option<Arc<dyn Any + Send + Sync>>>>,
+);
 
 impl KernelCache {
     /// The kernels of type `T` for `key`, made by `make` the first time they are asked
-    /// for (compiling them can take minutes on llvmpipe; others asking meanwhile wait).
+    /// for (compiling them can take minutes on llvmpipe). Others asking for the same
+    /// key meanwhile wait; those asking for other keys do not (on lavapipe two
+    /// compilations then use two cores). A failed `make` keeps nothing: the next asker
+    /// tries again.
     pub(crate) fn get_or_make<T: Any + Send + Sync, E>(
         &self,
         key: &str,
         make: impl FnOnce() -> Result<T, E>,
     ) -> Result<Arc<T>, E> {
-        let mut cache = self.0.lock().unwrap_or_else(PoisonError::into_inner);
         let id = TypeId::of::<T>();
-        if let Some((_, _, k)) = cache.iter().find(|(t, s, _)| *t == id && s == key) {
-            return Ok(Arc::clone(k)
-                .downcast()
-                .unwrap_or_else(|_| unreachable!("entries are keyed by their type")));
-        }
-        let k = Arc::new(make()?);
-        cache.push((id, key.to_string(), k.clone()));
-        Ok(k)
+        let entry = {
+            let mut cache = self.0.lock().unwrap_or_else(PoisonError::into_inner);
+            match cache.iter().find(|(t, s, _)| *t == id && s == key) {
+                Some((_, _, e)) => Arc::clone(e),
+                None => {
+                    let e = Arc::new(Mutex::new(None));
+                    cache.push((id, key.to_string(), Arc::clone(&e)));
+                    e
+                }
+            }
+        };
+        let mut slot = entry.lock().unwrap_or_else(PoisonError::into_inner);
+        let k = match slot.as_ref() {
+            Some(k) => Arc::clone(k),
+            None => {
+                let k: Arc<dyn Any + Send + Sync> = Arc::new(make()?);
+                *slot = Some(Arc::clone(&k));
+                k
+            }
+        };
+        Ok(k.downcast()
+            .unwrap_or_else(|_| unreachable!("entries are keyed by their type")))
     }
 }
 
@@ -323,7 +344,8 @@ pub struct Gpu {
     pub(crate) queue: wgpu::Queue,
     info: GpuInfo,
     /// The kernels compiled so far: the `direct` kernels by the scene part of their
-    /// source (its expression tape), the record-terms and sums kernels.
+    /// source (its expression tape), the record-terms and sums kernels; and the walk
+    /// grids of the expression solids rendered so far.
     pub(crate) kernels: KernelCache,
 }
 
@@ -421,5 +443,59 @@ impl Gpu {
             });
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::KernelCache;
+    use std::sync::mpsc;
+    use std::sync::Arc;
+    use std::time::Duration;
+
+    #[test]
+    fn entries_are_made_once_per_type_and_key_and_failures_are_not_kept() {
+        let c = KernelCache::default();
+        let a = c.get_or_make::<u32, ()>("k", || Ok(1)).unwrap();
+        let b = c.get_or_make::<u32, ()>("k", || Ok(2)).unwrap();
+        assert!(Arc::ptr_eq(&a, &b) && *b == 1);
+        // Another type under the same key is another entry.
+        assert_eq!(*c.get_or_make::<u64, ()>("k", || Ok(3)).unwrap(), 3);
+        assert_eq!(c.get_or_make::<u8, &str>("f", || Err("no")), Err("no"));
+        assert_eq!(*c.get_or_make::<u8, &str>("f", || Ok(4)).unwrap(), 4);
+    }
+
+    /// A slow make (a compilation) holds up only those asking for its key: here the
+    /// make of "a" waits until another thread's make of "b" has run, which a cache
+    /// locked while making would never let happen.
+    #[test]
+    fn makes_of_different_keys_run_at_once() {
+        let c = Arc::new(KernelCache::default());
+        let (tx, rx) = mpsc::channel();
+        let c2 = Arc::clone(&c);
+        let waiter = std::thread::spawn(move || {
+            c2.get_or_make::<u32, ()>("a", || {
+                // Within the make of "a": the other thread's make must get through.
+                rx.recv_timeout(Duration::from_secs(20))
+                    .expect("the make of \"b\" waited for the make of \"a\"");
+                Ok(1)
+            })
+            .map(|k| *k)
+        });
+        // Wait until "a" is being made (its entry exists and is locked).
+        loop {
+            let entries = c.0.lock().unwrap();
+            if entries
+                .iter()
+                .any(|(_, s, e)| s == "a" && e.try_lock().is_err())
+            {
+                break;
+            }
+            drop(entries);
+            std::thread::sleep(Duration::from_millis(5));
+        }
+        assert_eq!(*c.get_or_make::<u32, ()>("b", || Ok(2)).unwrap(), 2);
+        tx.send(()).unwrap();
+        assert_eq!(waiter.join().unwrap(), Ok(1));
     }
 }

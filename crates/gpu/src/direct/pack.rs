@@ -3,6 +3,7 @@
 //! tables and the uniform [`Frame`].
 
 use super::{MAX_GPU_DEPTH, MAX_GPU_TECHNIQUES};
+use crate::adapter::KernelCache;
 use crate::bsdf::{GpuBsdf, COAT_STEPS, COAT_TABLE_LEN};
 use crate::env::GpuEnv;
 use crate::layout::{outward, GpuBvhNode, GpuItemBox, GpuObject, GpuPerturbation, GpuQuadric};
@@ -217,6 +218,17 @@ impl DirectScene {
     /// of the same scene and options: coat albedos, light bounds, the trained light
     /// selection), or says what the GPU cannot do.
     pub fn new(data: &SceneData, o: &RenderOptions, host: &dyn Host) -> Result<Self, GpuError> {
+        Self::packed(data, o, host, None)
+    }
+
+    /// [`Self::new`], the expression solids' walk grids kept in `walks` (a device's
+    /// cache) for the later renders of the same solids.
+    pub(crate) fn packed(
+        data: &SceneData,
+        o: &RenderOptions,
+        host: &dyn Host,
+        walks: Option<&KernelCache>,
+    ) -> Result<Self, GpuError> {
         let mut s = DirectScene::default();
         // Perlin's permutation first: the noise patterns read it at tables[0..256].
         s.tables.extend(scene::PERLIN_PERM.map(f32::from));
@@ -224,7 +236,7 @@ impl DirectScene {
         s.pack_materials(data, host)?;
         s.pack_media(data, o)?;
         for obj in &data.objects {
-            s.pack_object(data, obj)?;
+            s.pack_object(data, obj, walks)?;
         }
         s.pack_light_boxes(data);
         s.pack_frame(data, o, host)?;
@@ -272,6 +284,7 @@ impl DirectScene {
         view: &frep::ExprView,
         name: &str,
         material: u32,
+        walks: Option<&KernelCache>,
     ) -> Result<(), GpuError> {
         let frep::Leaf::Expr {
             code, registers, ..
@@ -293,8 +306,21 @@ impl DirectScene {
         if view.grid.is_some() {
             // Rays walk the cells with their tapes (prospero: 0.02 % of pixel centres
             // left to the CPU instead of 63 %); without cell tapes, the whole tape.
-            if let Ok(walked) = solid.clone().with_cells(view.tape) {
-                solid = walked;
+            // The grid depends on the expression and the window alone: a device's
+            // later renders of the solid take the one its first made.
+            let walk = || solid.clone().with_cells(view.tape).map(|s| s.walk);
+            let walk = match walks {
+                Some(cache) => {
+                    let key = format!(
+                        "{:?} {:?} {:?} {:?}",
+                        view.tape, solid.lo, solid.hi, solid.eps
+                    );
+                    cache.get_or_make(&key, walk).map(|w| (*w).clone())
+                }
+                None => walk(),
+            };
+            if let Ok(w) = walk {
+                solid.walk = w;
             }
         }
         let (lo, hi) = (solid.lo, solid.hi);
@@ -311,7 +337,12 @@ impl DirectScene {
         Ok(())
     }
 
-    fn pack_object(&mut self, data: &SceneData, obj: &scene::ObjectData) -> Result<(), GpuError> {
+    fn pack_object(
+        &mut self,
+        data: &SceneData,
+        obj: &scene::ObjectData,
+        walks: Option<&KernelCache>,
+    ) -> Result<(), GpuError> {
         let Some(solid) = obj.geometry.solid() else {
             return Err(unsupported(format!(
                 "object '{}' is a triangle mesh; meshes render on the CPU",
@@ -355,7 +386,14 @@ impl DirectScene {
                     (0, first, 1)
                 }
                 LeafView::Expr(v) => {
-                    self.pack_expr(flat, node.operands.first as usize, &v, &obj.name, material)?;
+                    self.pack_expr(
+                        flat,
+                        node.operands.first as usize,
+                        &v,
+                        &obj.name,
+                        material,
+                        walks,
+                    )?;
                     (0, first, 1)
                 }
             },
@@ -381,7 +419,7 @@ impl DirectScene {
                         let leaf = match flat.leaf(k) {
                             LeafView::Perturbed(v) => self.pack_leaf(&v, material),
                             LeafView::Expr(v) => {
-                                self.pack_expr(flat, k, &v, &obj.name, material)?;
+                                self.pack_expr(flat, k, &v, &obj.name, material, walks)?;
                                 self.leaves.len() as u32 - 1
                             }
                         };

@@ -226,18 +226,34 @@ fn compile(gpu: &Gpu, variant_wgsl: &str) -> Result<Pipelines, GpuError> {
         // renders so and compares.
         unsafe { d.create_shader_module_trusted(desc, wgpu::ShaderRuntimeChecks::unchecked()) }
     };
+    // A pipeline and the validation error of making it. Error scopes are per thread.
     let make = |entry: &str| {
-        d.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+        let scope = d.push_error_scope(wgpu::ErrorFilter::Validation);
+        let p = d.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
             label: Some(entry),
             layout: Some(&pl),
             module: &module,
             entry_point: Some(entry),
             compilation_options: Default::default(),
             cache: None,
-        })
+        });
+        (p, pollster::block_on(scope.pop()))
     };
-    let (trace, shade, prepare) = (make("trace"), make("shade"), make("prepare"));
-    if let Some(e) = pollster::block_on(scope.pop()) {
+    // Each on a thread of its own: lavapipe compiles a pipeline on the calling thread.
+    let ([trace, shade, prepare], error) = std::thread::scope(|s| {
+        let others = ["trace", "prepare"].map(|e| s.spawn(move || make(e)));
+        let shade = make("shade");
+        let [trace, prepare] =
+            others.map(|h| h.join().unwrap_or_else(|e| std::panic::resume_unwind(e)));
+        let error = [&trace, &shade, &prepare]
+            .into_iter()
+            .find_map(|(_, e)| e.as_ref().map(ToString::to_string));
+        ([trace.0, shade.0, prepare.0], error)
+    });
+    if let Some(e) = pollster::block_on(scope.pop())
+        .map(|e| e.to_string())
+        .or(error)
+    {
         return Err(GpuError::Run(format!("direct kernels: {e}")));
     }
     Ok(Pipelines {

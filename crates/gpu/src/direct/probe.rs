@@ -34,7 +34,7 @@ pub fn probe(
     host: &dyn Host,
     rays: &[([f32; 3], [f32; 3])],
 ) -> Result<Vec<Probe>, GpuError> {
-    let mut pack = DirectScene::new(data, &RenderOptions::default(), host)?;
+    let mut pack = DirectScene::packed(data, &RenderOptions::default(), host, Some(&gpu.kernels))?;
     let p = kernels(gpu, &pack)?;
     let scene = scene_buffers(gpu, &pack)?;
     let n = rays.len().max(1) as u32;

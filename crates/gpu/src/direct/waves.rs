@@ -184,7 +184,7 @@ impl<'a> Waves<'a> {
         how: &WaveOptions,
     ) -> Result<(Self, Totals), GpuError> {
         let acc = host.tally();
-        let mut pack = DirectScene::new(data, o, host)?;
+        let mut pack = DirectScene::packed(data, o, host, Some(&gpu.kernels))?;
         let started = Instant::now();
         let kernels = kernels(gpu, &pack)?;
         let mut stats = GpuStats::default();
