@@ -312,17 +312,35 @@ impl KernelCache {
         key: &str,
         make: impl FnOnce() -> Result<T, E>,
     ) -> Result<Arc<T>, E> {
+        self.get_or_make_keeping(key, usize::MAX, make)
+    }
+
+    /// [`Self::get_or_make`], keeping at most `keep` entries of type `T`: the ones
+    /// asked for last. What a scene alone determines (walk grids) changes with every
+    /// edit of a model in a long session, and must not pile up.
+    pub(crate) fn get_or_make_keeping<T: Any + Send + Sync, E>(
+        &self,
+        key: &str,
+        keep: usize,
+        make: impl FnOnce() -> Result<T, E>,
+    ) -> Result<Arc<T>, E> {
         let id = TypeId::of::<T>();
         let entry = {
             let mut cache = self.0.lock().unwrap_or_else(PoisonError::into_inner);
-            match cache.iter().find(|(t, s, _)| *t == id && s == key) {
-                Some((_, _, e)) => Arc::clone(e),
-                None => {
-                    let e = Arc::new(Mutex::new(None));
-                    cache.push((id, key.to_string(), Arc::clone(&e)));
-                    e
-                }
-            }
+            let e = match cache.iter().position(|(t, s, _)| *t == id && s == key) {
+                // The last asked for last in the list.
+                Some(i) => cache.remove(i).2,
+                None => Arc::new(Mutex::new(None)),
+            };
+            cache.push((id, key.to_string(), Arc::clone(&e)));
+            let mut over = cache.iter().filter(|(t, _, _)| *t == id).count();
+            // The oldest first (one being made elsewhere lives on with its maker).
+            cache.retain(|(t, _, _)| {
+                let drop = *t == id && over > keep;
+                over -= usize::from(drop);
+                !drop
+            });
+            e
         };
         let mut slot = entry.lock().unwrap_or_else(PoisonError::into_inner);
         let k = match slot.as_ref() {
@@ -463,6 +481,20 @@ mod tests {
         assert_eq!(*c.get_or_make::<u64, ()>("k", || Ok(3)).unwrap(), 3);
         assert_eq!(c.get_or_make::<u8, &str>("f", || Err("no")), Err("no"));
         assert_eq!(*c.get_or_make::<u8, &str>("f", || Ok(4)).unwrap(), 4);
+    }
+
+    #[test]
+    fn entries_past_the_kept_number_go_oldest_first() {
+        let c = KernelCache::default();
+        let get = |k: &str, v: u32| *c.get_or_make_keeping::<u32, ()>(k, 2, || Ok(v)).unwrap();
+        assert_eq!(*c.get_or_make::<u64, ()>("a", || Ok(9)).unwrap(), 9);
+        assert_eq!((get("a", 1), get("b", 2)), (1, 2));
+        // "a" asked for again: "b" is now the oldest, and "c" pushes it out.
+        assert_eq!((get("a", 0), get("c", 3)), (1, 3));
+        assert_eq!((get("a", 0), get("c", 0), get("b", 4)), (1, 3, 4));
+        // "a", the oldest when "b" came back, is gone; another type under its key stays.
+        assert_eq!(get("a", 5), 5);
+        assert_eq!(*c.get_or_make::<u64, ()>("a", || Ok(0)).unwrap(), 9);
     }
 
     /// A slow make (a compilation) holds up only those asking for its key: here the

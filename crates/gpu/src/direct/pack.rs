@@ -192,6 +192,10 @@ pub struct DirectScene {
     pub(super) frame: Frame,
 }
 
+/// The most walk grids a device keeps for later renders (the solids rendered last):
+/// the test scenes' three, with room for a few scenes of a session.
+const KEPT_WALKS: usize = 8;
+
 /// The most CSG nodes one object may have on the GPU (after shared parts are copied).
 const MAX_CSG_NODES: u32 = 256;
 
@@ -315,7 +319,9 @@ impl DirectScene {
                         "{:?} {:?} {:?} {:?}",
                         view.tape, solid.lo, solid.hi, solid.eps
                     );
-                    cache.get_or_make(&key, walk).map(|w| (*w).clone())
+                    cache
+                        .get_or_make_keeping(&key, KEPT_WALKS, walk)
+                        .map(|w| (*w).clone())
                 }
                 None => walk(),
             };
