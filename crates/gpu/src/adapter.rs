@@ -327,20 +327,26 @@ impl KernelCache {
         let id = TypeId::of::<T>();
         let entry = {
             let mut cache = self.0.lock().unwrap_or_else(PoisonError::into_inner);
-            let e = match cache.iter().position(|(t, s, _)| *t == id && s == key) {
-                // The last asked for last in the list.
-                Some(i) => cache.remove(i).2,
-                None => Arc::new(Mutex::new(None)),
-            };
-            cache.push((id, key.to_string(), Arc::clone(&e)));
-            let mut over = cache.iter().filter(|(t, _, _)| *t == id).count();
-            // The oldest first (one being made elsewhere lives on with its maker).
-            cache.retain(|(t, _, _)| {
-                let drop = *t == id && over > keep;
-                over -= usize::from(drop);
-                !drop
-            });
-            e
+            match cache.iter().position(|(t, s, _)| *t == id && s == key) {
+                Some(i) => {
+                    // The last asked for last in the list.
+                    cache[i..].rotate_left(1);
+                    Arc::clone(&cache[cache.len() - 1].2)
+                }
+                None => {
+                    let e = Arc::new(Mutex::new(None));
+                    cache.push((id, key.to_string(), Arc::clone(&e)));
+                    // The oldest of the type go first (one being made elsewhere lives
+                    // on with its maker).
+                    let mut over = cache.iter().filter(|(t, _, _)| *t == id).count();
+                    cache.retain(|(t, _, _)| {
+                        let drop = *t == id && over > keep;
+                        over -= usize::from(drop);
+                        !drop
+                    });
+                    e
+                }
+            }
         };
         let mut slot = entry.lock().unwrap_or_else(PoisonError::into_inner);
         let k = match slot.as_ref() {
