@@ -40,6 +40,13 @@ await() {
 }
 
 step "setup (Rust components, lavapipe, Chromium, .venv)" bash scripts/setup.sh --venv-only
+# CI builds a fresh clone once: incremental compilation's caches would only cost the
+# time to write them (the workspace's crates from scratch 124.7–126.5 s against
+# 134.3–137.1 s: docs/notebook/2026-12-07-test-time-probes.md). Set before any Cargo
+# call, so that every build here shares it; a developer's run keeps them.
+if [ -n "${CI:-}" ]; then
+  export CARGO_INCREMENTAL=0
+fi
 [ -x "$HOME/.cargo/bin/cargo" ] && export PATH="$HOME/.cargo/bin:$PATH"
 # What `maturin develop` sets for Cargo (maturin 1.16), so that pyo3's build script
 # gives the tests' build and the extension's the same configuration.
