@@ -27,19 +27,35 @@ const FLOOR: f64 = f64::from_bits(53 << 52);
 /// (∞ − MAX = ∞). Never subnormal: a zero bound widened by the least subnormal, as
 /// before, made the next products and widenings multiply subnormals, which Intel CPUs
 /// run through a microcode assist at about 15× a normal multiplication's time (grid
-/// builds 1.1–1.9× faster without them:
+/// builds 1.1–2× faster without them:
 /// docs/notebook/2026-12-07-normal-widenings.md). Branch-free (`maxsd`, `mulsd`,
 /// `minsd`), where `next_down`/`next_up` branch on the bit pattern.
 #[inline]
 fn relative_ulp(v: f64) -> f64 {
-    let a = v.abs();
-    // Written as a comparison so that it is one `maxsd` (NaN gives FLOOR: v − d is NaN).
-    let a = if a > FLOOR { a } else { FLOOR };
-    let d = a * f64::EPSILON;
+    let d = at_least_floor(v.abs()) * f64::EPSILON;
     if d < f64::MAX {
         d
     } else {
         f64::MAX
+    }
+}
+
+/// max(a, [`FLOOR`]) for a ≥ 0 (NaN: either; v − d is NaN then), as one `maxsd`. A
+/// comparison and select would do in principle, but LLVM may move the multiplication
+/// that follows into both arms (`a·ε` or the constant `FLOOR·ε`, then the select), which
+/// multiplies the subnormal again: it did so in `occupancy::Builder::node` in one build of
+/// the workspace. The SSE2 intrinsic is opaque to that rewrite.
+#[inline(always)]
+fn at_least_floor(a: f64) -> f64 {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::{_mm_cvtsd_f64, _mm_max_sd, _mm_set_sd};
+        // SAFETY: SSE2 is part of the x86-64 baseline.
+        unsafe { _mm_cvtsd_f64(_mm_max_sd(_mm_set_sd(a), _mm_set_sd(FLOOR))) }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        a.max(FLOOR)
     }
 }
 
