@@ -20,42 +20,30 @@ pub struct Interval {
 
 /// 2⁻⁹⁷⁰: below it in magnitude a bound is widened by 2⁻⁹⁷⁰·2⁻⁵² = 2⁻¹⁰²², the least
 /// normal, instead of |v|·2⁻⁵².
+#[cfg(test)]
 const FLOOR: f64 = f64::from_bits(53 << 52);
 
 /// The widening of a bound `v`: max(|v|, 2⁻⁹⁷⁰)·2⁻⁵², one ulp of v or more (two at most
-/// from 2⁻⁹⁷⁰ up); capped at `f64::MAX` so that an infinite bound stays infinite
-/// (∞ − MAX = ∞). Never subnormal: a zero bound widened by the least subnormal, as
+/// from 2⁻⁹⁷⁰ up). Never subnormal: a zero bound widened by the least subnormal, as
 /// before, made the next products and widenings multiply subnormals, which Intel CPUs
 /// run through a microcode assist at about 15× a normal multiplication's time (grid
-/// builds 1.1–2× faster without them:
-/// docs/notebook/2026-12-07-normal-widenings.md). Branch-free (`maxsd`, `mulsd`,
-/// `minsd`), where `next_down`/`next_up` branch on the bit pattern.
+/// builds 1.1–2× faster without them: docs/notebook/2026-12-07-normal-widenings.md).
+///
+/// Computed on the bit pattern, with no multiplication at all: |v|·2⁻⁵² is |v| with 52
+/// taken off its exponent, exact wherever the result is normal (|v| ≥ 2⁻⁹⁷⁰). Below, the
+/// difference of bit patterns is a subnormal pattern or wraps to a negative number or a
+/// NaN, and the comparison gives 2⁻¹⁰²² instead. An infinite v gives 2⁹⁷² (∞ ∓ 2⁹⁷² = ∞)
+/// and NaN gives 2⁻¹⁰²² (v ∓ d is NaN). Three operations after |v| (an integer
+/// subtraction, a `maxsd`, then v ∓ d), where max(|v|, 2⁻⁹⁷⁰)·2⁻⁵² capped at `f64::MAX`
+/// took a max, a product and a min on the chain every tape node's bounds wait on: the
+/// same values bit for bit (`widening_by_exponent_equals_the_product`).
 #[inline]
 fn relative_ulp(v: f64) -> f64 {
-    let d = at_least_floor(v.abs()) * f64::EPSILON;
-    if d < f64::MAX {
+    let d = f64::from_bits(v.abs().to_bits().wrapping_sub(52 << 52));
+    if d > f64::MIN_POSITIVE {
         d
     } else {
-        f64::MAX
-    }
-}
-
-/// max(a, [`FLOOR`]) for a ≥ 0 (NaN: either; v − d is NaN then), as one `maxsd`. A
-/// comparison and select would do in principle, but LLVM may move the multiplication
-/// that follows into both arms (`a·ε` or the constant `FLOOR·ε`, then the select), which
-/// multiplies the subnormal again: it did so in `occupancy::Builder::node` in one build of
-/// the workspace. The SSE2 intrinsic is opaque to that rewrite.
-#[inline(always)]
-fn at_least_floor(a: f64) -> f64 {
-    #[cfg(target_arch = "x86_64")]
-    {
-        use std::arch::x86_64::{_mm_cvtsd_f64, _mm_max_sd, _mm_set_sd};
-        // SAFETY: SSE2 is part of the x86-64 baseline.
-        unsafe { _mm_cvtsd_f64(_mm_max_sd(_mm_set_sd(a), _mm_set_sd(FLOOR))) }
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    {
-        a.max(FLOOR)
+        f64::MIN_POSITIVE
     }
 }
 
@@ -495,6 +483,41 @@ mod tests {
             assert_eq!((down(inf), up(inf)), (inf, inf));
         }
         assert!(down(f64::NAN).is_nan() && up(f64::NAN).is_nan());
+    }
+
+    /// The widening taken from the exponent equals max(|v|, 2⁻⁹⁷⁰)·2⁻⁵² capped at
+    /// `f64::MAX` bit for bit, over every exponent, the subnormals, zero, the ends of the
+    /// range and the exponents where the bit patterns' difference wraps; and both give
+    /// the same bounds at infinity.
+    #[test]
+    fn widening_by_exponent_equals_the_product() {
+        let product = |v: f64| (v.abs().max(FLOOR) * f64::EPSILON).min(f64::MAX);
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(12);
+        let mut values = vec![
+            0.0,
+            f64::from_bits(1),
+            f64::MIN_POSITIVE,
+            f64::from_bits(52 << 52),
+            f64::from_bits((52 << 52) - 1),
+            f64::from_bits((52 << 52) + 1),
+            FLOOR,
+            f64::from_bits((53 << 52) - 1),
+            f64::from_bits((53 << 52) + 1),
+            1.0,
+            f64::MAX,
+        ];
+        for _ in 0..200_000 {
+            values.push(f64::from_bits(rng.gen_range(0..0x7ff0_0000_0000_0000u64)));
+        }
+        for v in values {
+            for v in [v, -v] {
+                assert_eq!(relative_ulp(v).to_bits(), product(v).to_bits(), "{v:e}");
+            }
+        }
+        for inf in [f64::INFINITY, f64::NEG_INFINITY] {
+            assert_eq!(inf - relative_ulp(inf), inf - product(inf));
+            assert_eq!(inf + relative_ulp(inf), inf + product(inf));
+        }
     }
 
     /// A zero bound widens to the least normal, not to a subnormal, so that the
