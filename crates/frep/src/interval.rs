@@ -18,11 +18,6 @@ pub struct Interval {
     pub hi: f64,
 }
 
-/// 2⁻⁹⁷⁰: below it in magnitude a bound is widened by 2⁻⁹⁷⁰·2⁻⁵² = 2⁻¹⁰²², the least
-/// normal, instead of |v|·2⁻⁵².
-#[cfg(test)]
-const FLOOR: f64 = f64::from_bits(53 << 52);
-
 /// The widening of a bound `v`: max(|v|, 2⁻⁹⁷⁰)·2⁻⁵², one ulp of v or more (two at most
 /// from 2⁻⁹⁷⁰ up). Never subnormal: a zero bound widened by the least subnormal, as
 /// before, made the next products and widenings multiply subnormals, which Intel CPUs
@@ -428,6 +423,10 @@ impl Interval {
 mod tests {
     use super::*;
     use rand::{Rng, SeedableRng};
+
+    /// 2⁻⁹⁷⁰: below it in magnitude a bound is widened by 2⁻⁹⁷⁰·2⁻⁵² = 2⁻¹⁰²², the least
+    /// normal, instead of |v|·2⁻⁵² ([`relative_ulp`]).
+    const FLOOR: f64 = f64::from_bits(53 << 52);
 
     /// Outward rounding moves every finite bound from 2⁻⁹⁷⁰ up by one or two ulps, and
     /// every smaller one (zero and the subnormals included) by at least one ulp and at
