@@ -7,6 +7,7 @@
 
 use crate::dual::Dual;
 use crate::interval::Interval;
+use crate::lanes::Lanes;
 use crate::scalar::Scalar;
 use crate::tree::{BinaryOp, Tree, TreeOp, UnaryOp, Var};
 use std::cell::RefCell;
@@ -499,20 +500,52 @@ pub fn eval_choices_nodes<S: Scalar>(
     for (i, n) in nodes.iter().enumerate() {
         match *n {
             Node::Binary(op @ (BinaryOp::Min | BinaryOp::Max), a, b) => {
+                (scratch[i], choices[i]) = choose(op, scratch[a as usize], scratch[b as usize]);
+            }
+            node => set_node(nodes, i, node, scratch, x, y, z),
+        }
+    }
+    *scratch.last().expect("an expression has a root")
+}
+
+/// The most lanes [`eval_choices_lanes`] records choices for: an octree box's children.
+pub const MAX_LANES: usize = 8;
+
+/// A min/max node's value over a box and which operand decides it there.
+#[inline(always)]
+fn choose<S: Scalar>(op: BinaryOp, u: S, w: S) -> (S, Choice) {
+    let a_low = u.less(w) == Some(true);
+    let b_low = w.less(u) == Some(true);
+    match (op, a_low, b_low) {
+        (BinaryOp::Min, true, _) | (BinaryOp::Max, _, true) => (u, Choice::Left),
+        (BinaryOp::Min, _, true) | (BinaryOp::Max, true, _) => (w, Choice::Right),
+        _ => (apply_binary(op, u, w), Choice::Both),
+    }
+}
+
+/// [`eval_choices_nodes`] over `L` ≤ [`MAX_LANES`] boxes in one pass ([`crate::lanes`]):
+/// lane i's value, and its choices `choices[node][i]`, are those of the one-box
+/// evaluation bit for bit ([`simplify_into_lane`] reads them).
+pub fn eval_choices_lanes<S: Scalar, const L: usize>(
+    nodes: &[Node],
+    x: Lanes<S, L>,
+    y: Lanes<S, L>,
+    z: Lanes<S, L>,
+    scratch: &mut Vec<Lanes<S, L>>,
+    choices: &mut Vec<[Choice; MAX_LANES]>,
+) -> Lanes<S, L> {
+    const { assert!(L <= MAX_LANES) };
+    let scratch = slots(scratch, nodes.len());
+    choices.clear();
+    choices.resize(nodes.len(), [Choice::Both; MAX_LANES]);
+    for (i, n) in nodes.iter().enumerate() {
+        match *n {
+            Node::Binary(op @ (BinaryOp::Min | BinaryOp::Max), a, b) => {
                 let (u, w) = (scratch[a as usize], scratch[b as usize]);
-                let a_low = u.less(w) == Some(true);
-                let b_low = w.less(u) == Some(true);
-                let choice = match (op, a_low, b_low) {
-                    (BinaryOp::Min, true, _) | (BinaryOp::Max, _, true) => Choice::Left,
-                    (BinaryOp::Min, _, true) | (BinaryOp::Max, true, _) => Choice::Right,
-                    _ => Choice::Both,
-                };
-                match choice {
-                    Choice::Left => scratch[i] = u,
-                    Choice::Right => scratch[i] = w,
-                    Choice::Both => scratch[i] = apply_binary(op, u, w),
+                let (v, c) = (&mut scratch[i].0, &mut choices[i]);
+                for (l, (v, c)) in v.iter_mut().zip(c).enumerate() {
+                    (*v, *c) = choose(op, u.0[l], w.0[l]);
                 }
-                choices[i] = choice;
             }
             node => set_node(nodes, i, node, scratch, x, y, z),
         }
@@ -530,13 +563,35 @@ pub fn simplify_into(
     choices: &[Choice],
     out: &mut Vec<Node>,
 ) -> bool {
-    if !choices.iter().any(|c| *c != Choice::Both) {
-        return false;
-    }
+    simplify_by(tape, range, |i| choices[i], out)
+}
+
+/// [`simplify_into`] with lane `lane`'s choices of [`eval_choices_lanes`].
+pub fn simplify_into_lane(
+    tape: &[Node],
+    range: Option<std::ops::Range<usize>>,
+    choices: &[[Choice; MAX_LANES]],
+    lane: usize,
+    out: &mut Vec<Node>,
+) -> bool {
+    simplify_by(tape, range, |i| choices[i][lane], out)
+}
+
+/// [`simplify_into`] with node i's choice `choice(i)`.
+#[inline(always)]
+fn simplify_by(
+    tape: &[Node],
+    range: Option<std::ops::Range<usize>>,
+    choice: impl Fn(usize) -> Choice,
+    out: &mut Vec<Node>,
+) -> bool {
     let (base, n) = match &range {
         Some(r) => (r.start, r.len()),
         None => (0, tape.len()),
     };
+    if !(0..n).any(|i| choice(i) != Choice::Both) {
+        return false;
+    }
     let from_out = range.is_some();
     let node = |out: &Vec<Node>, i: usize| {
         if from_out {
@@ -554,7 +609,7 @@ pub fn simplify_into(
             if !live[i] {
                 continue;
             }
-            match (node(out, i), choices[i]) {
+            match (node(out, i), choice(i)) {
                 (Node::Binary(_, a, _), Choice::Left) => live[a as usize] = true,
                 (Node::Binary(_, _, b), Choice::Right) => live[b as usize] = true,
                 (Node::Binary(_, a, b), _) => {
@@ -573,7 +628,7 @@ pub fn simplify_into(
             if !live[i] {
                 continue;
             }
-            remap[i] = match (node(out, i), choices[i]) {
+            remap[i] = match (node(out, i), choice(i)) {
                 (Node::Binary(_, a, _), Choice::Left) => remap[a as usize],
                 (Node::Binary(_, _, b), Choice::Right) => remap[b as usize],
                 (nd, _) => {

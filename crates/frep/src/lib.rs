@@ -31,6 +31,7 @@ pub mod fixed;
 pub mod flat;
 pub mod interval;
 pub mod interval_trace;
+pub mod lanes;
 pub mod mesh;
 pub mod occupancy;
 pub mod perturbed;

@@ -12,8 +12,12 @@
 //! set was dilated by one cell instead, which searched three times the cells.)
 
 use crate::dual::Dual;
-use crate::expr::{eval_choices_nodes, eval_nodes, simplify_into, Choice, Node};
+use crate::expr::{
+    eval_choices_lanes, eval_choices_nodes, eval_nodes, simplify_into, simplify_into_lane, Choice,
+    Node, MAX_LANES,
+};
 use crate::interval::Interval;
+use crate::lanes::Lanes;
 use crate::ray::{Aabb, Ray};
 use crate::tree::Var;
 use glam::DVec3;
@@ -391,6 +395,21 @@ impl Octree {
             .collect()
     }
 
+    /// The box at corner cell `c`, `size` cells wide: its bounds grown by the margin as
+    /// intervals, its corners and the margin.
+    fn bounded(&self, c: [usize; 3], size: [usize; 3]) -> ([Interval; 3], DVec3, DVec3, DVec3) {
+        let lo = self.lo + DVec3::new(c[0] as f64, c[1] as f64, c[2] as f64) * self.cell;
+        let cells = DVec3::new(size[0] as f64, size[1] as f64, size[2] as f64);
+        let hi = if (0..3).all(|k| c[k] + size[k] == self.n) {
+            self.hi
+        } else {
+            lo + self.cell * cells
+        };
+        let m = self.cell * (cells * self.margin);
+        let iv = |k: usize| Interval::new(lo[k] - m[k], hi[k].max(lo[k]) + m[k]);
+        ([iv(0), iv(1), iv(2)], lo, hi, m)
+    }
+
     /// Whether a box `size` cells wide is a finest box: one cell along every axis F
     /// depends on.
     fn finest(&self, size: [usize; 3]) -> bool {
@@ -417,6 +436,7 @@ fn used_axes(tape: &[Node]) -> [bool; 3] {
 type OctBox = ([usize; 3], [usize; 3], [u32; 2]);
 
 /// An octree box that is not split: empty (`excluded`, with F's sign) or a finest box.
+#[derive(Debug, PartialEq)]
 struct Leaf {
     corner: [usize; 3],
     size: [usize; 3],
@@ -436,7 +456,40 @@ struct Builder {
     duals: Vec<Dual<Interval, 3>>,
     spent: usize,
     leaves: Vec<Leaf>,
+    /// Scratch of the children's evaluation in lanes, and spent choice buffers.
+    lanes: LaneScratch,
 }
+
+/// What [`Builder::children`] evaluates in: four or eight lanes, and the families of
+/// children whose choices are still to be read.
+#[derive(Default)]
+struct LaneScratch {
+    four: Vec<Lanes<Interval, 4>>,
+    eight: Vec<Lanes<Interval, 8>>,
+    families: Vec<Family>,
+    /// Families all of whose children are decided, for reuse.
+    free: Vec<u32>,
+}
+
+/// The choices of siblings bounded together (lane i: child i), and how many of them
+/// are still to be decided.
+#[derive(Default)]
+struct Family {
+    choices: Vec<[Choice; MAX_LANES]>,
+    left: usize,
+}
+
+/// The min/max choices behind a box's bound: of its own evaluation, or its lane of its
+/// family's.
+#[derive(Clone, Copy)]
+enum Choices<'a> {
+    One(&'a [Choice]),
+    Lane(&'a [[Choice; MAX_LANES]], usize),
+}
+
+/// A box of the walk with its bound over it, its family and lane, when its parent
+/// bounded it ([`Builder::children`]).
+type Evaluated = (OctBox, Option<(Interval, u32, usize)>);
 
 impl Builder {
     fn new(nodes: Vec<Node>, tape_cap: usize) -> Self {
@@ -449,20 +502,83 @@ impl Builder {
             duals: Vec::new(),
             spent: 0,
             leaves: Vec::new(),
+            lanes: LaneScratch::default(),
         }
     }
 
     /// Depth first below box `c` until every box is a leaf, or until more than
-    /// `budget` evaluations are spent.
+    /// `budget` evaluations are spent. A box's children are bounded together, in lanes
+    /// ([`Self::children`]), and then decided one by one in the order of a walk that
+    /// bounds each on its own: the same boxes, bounds, tapes and budget, bit for bit.
     fn walk(&mut self, g: &Octree, c: [usize; 3], size: [usize; 3], span: [u32; 2], budget: usize) {
-        let mut stack = vec![(c, size, span)];
-        while let Some((c, size, span)) = stack.pop() {
-            if let Some(own) = self.node(g, c, size, span) {
-                stack.extend(g.children(c, size, own));
+        let mut stack: Vec<Evaluated> = vec![((c, size, span), None)];
+        while let Some(((c, size, span), pre)) = stack.pop() {
+            let own = match pre {
+                None => self.node(g, c, size, span),
+                Some((v, f, lane)) => {
+                    let family = &mut self.lanes.families[f as usize];
+                    let choices = std::mem::take(&mut family.choices);
+                    let own = self.decide(g, c, size, span, v, Choices::Lane(&choices, lane));
+                    let family = &mut self.lanes.families[f as usize];
+                    family.choices = choices;
+                    family.left -= 1;
+                    if family.left == 0 {
+                        self.lanes.free.push(f);
+                    }
+                    own
+                }
+            };
+            if let Some(own) = own {
+                self.children(g, g.children(c, size, own), &mut stack);
             }
             if self.spent > budget {
                 return;
             }
+        }
+    }
+
+    /// Bounds the boxes `kids` (siblings, all with the same tape) in one pass of four or
+    /// eight lanes and pushes each with its bound, family and lane onto `stack`, in
+    /// order; other numbers of children one by one.
+    fn children(&mut self, g: &Octree, kids: Vec<OctBox>, stack: &mut Vec<Evaluated>) {
+        let span = kids[0].2;
+        debug_assert!(kids.iter().all(|k| k.2 == span));
+        let tape = &self.nodes[span[0] as usize..span[1] as usize];
+        let boxes: Vec<[Interval; 3]> = kids.iter().map(|k| g.bounded(k.0, k.1).0).collect();
+        let lanes = &mut self.lanes;
+        let f = lanes.free.pop().unwrap_or_else(|| {
+            lanes.families.push(Family::default());
+            lanes.families.len() as u32 - 1
+        });
+        let family = &mut lanes.families[f as usize];
+        family.left = kids.len();
+        let choices = &mut family.choices;
+        let mut bounds = [Interval::point(0.0); MAX_LANES];
+        macro_rules! in_lanes {
+            ($l:literal, $scratch:expr) => {{
+                let lane = |a: usize| Lanes::<Interval, $l>(std::array::from_fn(|i| boxes[i][a]));
+                let v = eval_choices_lanes(tape, lane(0), lane(1), lane(2), $scratch, choices);
+                bounds[..$l].copy_from_slice(&v.0);
+            }};
+        }
+        match kids.len() {
+            8 => in_lanes!(8, &mut lanes.eight),
+            4 => in_lanes!(4, &mut lanes.four),
+            _ => {
+                // Two children (a model of one axis) or one: a lane each, one by one.
+                choices.clear();
+                choices.resize(tape.len(), [Choice::Both; MAX_LANES]);
+                for (k, b) in boxes.iter().enumerate() {
+                    let (scratch, one) = (&mut self.scratch, &mut self.choices);
+                    bounds[k] = eval_choices_nodes(tape, b[0], b[1], b[2], scratch, one);
+                    for (n, &c) in one.iter().enumerate() {
+                        choices[n][k] = c;
+                    }
+                }
+            }
+        }
+        for (k, &kid) in kids.iter().enumerate() {
+            stack.push((kid, Some((bounds[k], f, k))));
         }
     }
 
@@ -476,24 +592,35 @@ impl Builder {
         span: [u32; 2],
     ) -> Option<[u32; 2]> {
         let (s, e) = (span[0] as usize, span[1] as usize);
-        self.spent = self.spent.saturating_add(e - s);
-        let lo = g.lo + DVec3::new(c[0] as f64, c[1] as f64, c[2] as f64) * g.cell;
-        let cells = DVec3::new(size[0] as f64, size[1] as f64, size[2] as f64);
-        let hi = if (0..3).all(|k| c[k] + size[k] == g.n) {
-            g.hi
-        } else {
-            lo + g.cell * cells
-        };
-        let m = g.cell * (cells * g.margin);
-        let iv = |k: usize| Interval::new(lo[k] - m[k], hi[k].max(lo[k]) + m[k]);
+        let [x, y, z] = g.bounded(c, size).0;
         let v = eval_choices_nodes(
             &self.nodes[s..e],
-            iv(0),
-            iv(1),
-            iv(2),
+            x,
+            y,
+            z,
             &mut self.scratch,
             &mut self.choices,
         );
+        let choices = std::mem::take(&mut self.choices);
+        let own = self.decide(g, c, size, span, v, Choices::One(&choices));
+        self.choices = choices;
+        own
+    }
+
+    /// [`Self::node`] for a box whose bound `v` over the tape `span`, with its
+    /// min/max `choices`, is known.
+    fn decide(
+        &mut self,
+        g: &Octree,
+        c: [usize; 3],
+        size: [usize; 3],
+        span: [u32; 2],
+        v: Interval,
+        choices: Choices,
+    ) -> Option<[u32; 2]> {
+        let (s, e) = (span[0] as usize, span[1] as usize);
+        self.spent = self.spent.saturating_add(e - s);
+        let (_, lo, hi, m) = g.bounded(c, size);
         let mut excluded = v.lo > 0.0 || v.hi < 0.0;
         let mut positive = v.lo > 0.0;
         // The tape over this box: the one it was given, simplified where it can be (an
@@ -502,7 +629,11 @@ impl Builder {
         let added = self.nodes.len() - self.start;
         if (!excluded || e - s > SHORT_TAPE) && added < self.tape_cap {
             let start = self.nodes.len();
-            if simplify_into(&[], Some(s..e), &self.choices, &mut self.nodes) {
+            let simplified = match choices {
+                Choices::One(c) => simplify_into(&[], Some(s..e), c, &mut self.nodes),
+                Choices::Lane(c, k) => simplify_into_lane(&[], Some(s..e), c, k, &mut self.nodes),
+            };
+            if simplified {
                 own = [start as u32, self.nodes.len() as u32];
             }
         }
@@ -830,6 +961,65 @@ mod tests {
                 for k in 0..n * n * n {
                     assert!(tape(&one, k) == tape(&split, k), "{m} {n}: cell {k}");
                 }
+            }
+        }
+    }
+
+    /// A walk that bounds each box's children together in lanes leaves the same leaves,
+    /// tapes and spent evaluations, bit for bit, as one that bounds every box on its own
+    /// (`Builder::node` box by box, the walk before lanes): octrees (eight children),
+    /// prospero's quadtree of columns (four) and a model of x alone (two), at both grid
+    /// sizes.
+    #[test]
+    fn children_in_lanes_equal_boxes_one_by_one() {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+        let models = [
+            "models/fidget/colonnade.vm",
+            "models/fidget/prospero.vm",
+            "models/fidget/tanglecube.vm",
+            "models/canonical/s2_csg.hf",
+            "models/canonical/s3_blend.hf",
+            "models/canonical/s5_twist.hf",
+            "scenes/models/blob.frep",
+        ];
+        let mut trees: Vec<(String, crate::Tree)> = models
+            .iter()
+            .map(|m| {
+                let model = read_file(&root.join(m)).unwrap_or_else(|e| panic!("{m}: {e}"));
+                let crate::Shape::Function { tree, .. } = model.shape else {
+                    panic!("{m}: not one expression");
+                };
+                (m.to_string(), tree)
+            })
+            .collect();
+        let x = crate::Tree::x();
+        trees.push(("x alone".into(), 0.3 - (&x * &x)));
+        for (name, tree) in &trees {
+            let tape = crate::expr::Expr::new(tree).nodes().to_vec();
+            for n in [GRID, FINE_GRID] {
+                let b = Aabb::new(DVec3::splat(-1.2), DVec3::splat(1.2));
+                let g = Octree {
+                    lo: b.lo,
+                    hi: b.hi,
+                    cell: (b.hi - b.lo) / n as f64,
+                    n,
+                    margin: MARGIN,
+                    used: used_axes(&tape),
+                };
+                let span = [0, tape.len() as u32];
+                let mut lanes = Builder::new(tape.clone(), TAPE_BUDGET);
+                lanes.walk(&g, [0; 3], [n; 3], span, usize::MAX);
+                let mut one = Builder::new(tape.clone(), TAPE_BUDGET);
+                let mut stack = vec![([0; 3], [n; 3], span)];
+                while let Some((c, size, span)) = stack.pop() {
+                    if let Some(own) = one.node(&g, c, size, span) {
+                        stack.extend(g.children(c, size, own));
+                    }
+                }
+                assert!(one.leaves.len() > 8, "{name}: {} leaves", one.leaves.len());
+                assert_eq!(lanes.spent, one.spent, "{name} at {n}");
+                assert!(lanes.nodes == one.nodes, "{name} at {n}: tapes differ");
+                assert!(lanes.leaves == one.leaves, "{name} at {n}: leaves differ");
             }
         }
     }
