@@ -13,8 +13,99 @@
 
 use crate::expr::Expr;
 use crate::interval::Interval;
+use crate::lanes::Lanes;
 use crate::ray::Aabb;
 use glam::DVec3;
+
+/// Boxes' bounds in one pass: eight, or four.
+type Lanes8 = Lanes<Interval, 8>;
+type Lanes4 = Lanes<Interval, 4>;
+
+/// The evaluation scratch of the searches: one box, four and eight lanes.
+#[derive(Default)]
+struct Scratch {
+    one: Vec<Interval>,
+    four: Vec<Lanes4>,
+    eight: Vec<Lanes8>,
+}
+
+impl Scratch {
+    fn new(len: usize) -> Self {
+        Self {
+            one: Vec::with_capacity(len),
+            ..Self::default()
+        }
+    }
+}
+
+/// The eight octants of `cell` (octant k lies on the high side of axis a where bit a of
+/// k is set), with F's bound over those not inside `done`, found together in one pass
+/// over the tape in lanes ([`crate::lanes`]): every bound is the one-box evaluation's
+/// bit for bit. The searches bound a cell's children together and then visit them one
+/// by one as before, so what they find, and the budget they spend, are the same. An
+/// octant inside `done` (which only grows) is skipped by its visit, so it is not
+/// bounded; one the visit skips for another reason was bounded for nothing.
+fn octants(
+    expr: &Expr,
+    cell: &Aabb,
+    done: &Aabb,
+    scratch: &mut Scratch,
+) -> ([Aabb; 8], [Option<Interval>; 8]) {
+    let c = cell.center();
+    let subs: [Aabb; 8] = std::array::from_fn(|k| {
+        let pick = |bit: usize, axis: usize| {
+            if k >> bit & 1 == 0 {
+                (cell.lo[axis], c[axis])
+            } else {
+                (c[axis], cell.hi[axis])
+            }
+        };
+        let (x, y, z) = (pick(0, 0), pick(1, 1), pick(2, 2));
+        Aabb::new(DVec3::new(x.0, y.0, z.0), DVec3::new(x.1, y.1, z.1))
+    });
+    let inside = |b: &Aabb| done.lo.cmple(b.lo).all() && done.hi.cmpge(b.hi).all();
+    let (mut wanted, mut n) = ([0usize; 8], 0);
+    for k in (0..8).filter(|&k| !inside(&subs[k])) {
+        wanted[n] = k;
+        n += 1;
+    }
+    let want = &wanted[..n];
+    let mut v = [None; 8];
+    // Coordinate k of the j-th box wanted (lanes past them repeat the last one).
+    let axis = |k: usize| {
+        move |j: usize| {
+            let b = subs[want[j.min(want.len() - 1)]];
+            Interval::new(b.lo[k], b.hi[k])
+        }
+    };
+    #[cfg(test)]
+    let lanes_off = tests::ONE_BY_ONE.get();
+    #[cfg(not(test))]
+    let lanes_off = false;
+    match want.len() {
+        5.. if !lanes_off => {
+            let i = |k: usize| Lanes8::new(std::array::from_fn(axis(k)));
+            let r = expr.eval_with(i(0), i(1), i(2), &mut scratch.eight);
+            for (j, &k) in want.iter().enumerate() {
+                v[k] = Some(r.lane(j));
+            }
+        }
+        2.. if !lanes_off => {
+            let i = |k: usize| Lanes4::new(std::array::from_fn(axis(k)));
+            let r = expr.eval_with(i(0), i(1), i(2), &mut scratch.four);
+            for (j, &k) in want.iter().enumerate() {
+                v[k] = Some(r.lane(j));
+            }
+        }
+        _ => {
+            for (j, &k) in want.iter().enumerate() {
+                let i = |a: usize| axis(a)(j);
+                v[k] = Some(expr.eval_with(i(0), i(1), i(2), &mut scratch.one));
+            }
+        }
+    }
+    (subs, v)
+}
 
 /// The box searched when a model declares none: HyperFun and Fidget models live well
 /// inside it; anything that reaches its faces is clipped to it.
@@ -22,7 +113,7 @@ pub const DEFAULT_DOMAIN: f64 = 100.0;
 
 /// A box holding every point of `domain` where F ≥ 0 (empty if there is none).
 pub fn expr_bounds(expr: &Expr, domain: Aabb) -> Aabb {
-    let mut scratch = Vec::with_capacity(expr.len());
+    let mut scratch = Scratch::new(expr.len());
     let mut b = domain;
     let mut depth = START_DEPTH;
     // Each pass searches the previous result. When a pass no longer shrinks it while
@@ -33,7 +124,7 @@ pub fn expr_bounds(expr: &Expr, domain: Aabb) -> Aabb {
     for _ in 0..16 {
         let mut out = Aabb::EMPTY;
         let mut budget = BUDGET / expr.len().max(1);
-        refine(expr, b, depth, &mut out, &mut scratch, &mut budget);
+        refine(expr, b, None, depth, &mut out, &mut scratch, &mut budget);
         if out.is_empty() {
             return out;
         }
@@ -68,7 +159,7 @@ pub fn expr_bounds(expr: &Expr, domain: Aabb) -> Aabb {
 pub fn surface_bounds(expr: &Expr, domain: Aabb) -> Aabb {
     let mut search = SurfaceSearch {
         expr,
-        intervals: Vec::with_capacity(expr.len()),
+        scratch: Scratch::new(expr.len()),
         points: Vec::with_capacity(expr.len()),
         sure: Aabb::EMPTY,
         maybe: Aabb::EMPTY,
@@ -79,7 +170,7 @@ pub fn surface_bounds(expr: &Expr, domain: Aabb) -> Aabb {
         search.sure = Aabb::EMPTY;
         search.maybe = Aabb::EMPTY;
         search.budget = BUDGET / expr.len().max(1);
-        search.refine(b, SURFACE_DEPTH);
+        search.refine(b, None, SURFACE_DEPTH);
         if search.budget == 0 {
             // Cut short: what was not searched is kept whole.
             return search.sure.union(&search.maybe);
@@ -106,7 +197,7 @@ pub fn surface_bounds(expr: &Expr, domain: Aabb) -> Aabb {
 /// change, and the node evaluations left.
 struct SurfaceSearch<'a> {
     expr: &'a Expr,
-    intervals: Vec<Interval>,
+    scratch: Scratch,
     points: Vec<f64>,
     sure: Aabb,
     maybe: Aabb,
@@ -114,7 +205,8 @@ struct SurfaceSearch<'a> {
 }
 
 impl SurfaceSearch<'_> {
-    fn refine(&mut self, cell: Aabb, depth: u32) {
+    /// One cell, with F's bound `v` over it when its parent found it ([`octants`]).
+    fn refine(&mut self, cell: Aabb, v: Option<Interval>, depth: u32) {
         if self.sure.lo.cmple(cell.lo).all() && self.sure.hi.cmpge(cell.hi).all() {
             return;
         }
@@ -124,7 +216,7 @@ impl SurfaceSearch<'_> {
         }
         self.budget -= 1;
         let i = |k: usize| Interval::new(cell.lo[k], cell.hi[k]);
-        let v = self.expr.eval_with(i(0), i(1), i(2), &mut self.intervals);
+        let v = v.unwrap_or_else(|| self.expr.eval_with(i(0), i(1), i(2), &mut self.scratch.one));
         if v.lo > 0.0 || v.hi < 0.0 {
             return;
         }
@@ -151,11 +243,9 @@ impl SurfaceSearch<'_> {
             }
             return;
         }
-        let c = cell.center();
-        for k in 0..8 {
-            let m = glam::BVec3::new(k & 1 != 0, k & 2 != 0, k & 4 != 0);
-            let sub = Aabb::new(DVec3::select(m, c, cell.lo), DVec3::select(m, cell.hi, c));
-            self.refine(sub, depth - 1);
+        let (subs, vs) = octants(self.expr, &cell, &self.sure, &mut self.scratch);
+        for (sub, v) in subs.into_iter().zip(vs) {
+            self.refine(sub, v, depth - 1);
         }
     }
 }
@@ -170,12 +260,15 @@ const MAX_DEPTH: u32 = 12;
 /// Node evaluations one pass may spend (a fraction of a second for any expression).
 const BUDGET: usize = 5_000_000;
 
+/// One cell of a pass of [`expr_bounds`], with F's bound `v` over it when its parent
+/// found it ([`octants`]).
 fn refine(
     expr: &Expr,
     cell: Aabb,
+    v: Option<Interval>,
     depth: u32,
     out: &mut Aabb,
-    scratch: &mut Vec<Interval>,
+    scratch: &mut Scratch,
     budget: &mut usize,
 ) {
     // Cells already inside the result cannot grow it.
@@ -189,7 +282,7 @@ fn refine(
     }
     *budget -= 1;
     let i = |k: usize| Interval::new(cell.lo[k], cell.hi[k]);
-    let v = expr.eval_with(i(0), i(1), i(2), scratch);
+    let v = v.unwrap_or_else(|| expr.eval_with(i(0), i(1), i(2), &mut scratch.one));
     if v.hi < 0.0 {
         return;
     }
@@ -197,18 +290,9 @@ fn refine(
         *out = out.union(&cell);
         return;
     }
-    let c = cell.center();
-    for k in 0..8 {
-        let pick = |bit: usize, axis: usize| {
-            if k >> bit & 1 == 0 {
-                (cell.lo[axis], c[axis])
-            } else {
-                (c[axis], cell.hi[axis])
-            }
-        };
-        let (x, y, z) = (pick(0, 0), pick(1, 1), pick(2, 2));
-        let sub = Aabb::new(DVec3::new(x.0, y.0, z.0), DVec3::new(x.1, y.1, z.1));
-        refine(expr, sub, depth - 1, out, scratch, budget);
+    let (subs, vs) = octants(expr, &cell, out, scratch);
+    for (sub, v) in subs.into_iter().zip(vs) {
+        refine(expr, sub, v, depth - 1, out, scratch, budget);
     }
 }
 
@@ -216,6 +300,37 @@ fn refine(
 mod tests {
     use super::*;
     use crate::Tree;
+
+    thread_local! {
+        /// Set: [`octants`] bounds the octants one by one, as the searches did before
+        /// lanes.
+        pub(super) static ONE_BY_ONE: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+    }
+
+    /// Both searches find, with the octants bounded in lanes, the boxes they find with
+    /// the octants bounded one by one, bit for bit: every expression model of the
+    /// repository (the budget runs out on the longest), in the default domain and in a
+    /// small one.
+    #[test]
+    fn lanes_find_the_same_boxes() {
+        let bits = |b: Aabb| [b.lo.to_array(), b.hi.to_array()].map(|v| v.map(f64::to_bits));
+        for (m, tree) in crate::test_models::expression_models() {
+            let e = Expr::new(&tree);
+            for d in [DEFAULT_DOMAIN, 1.3] {
+                let domain = Aabb::new(DVec3::splat(-d), DVec3::splat(d));
+                let found = |one: bool| {
+                    ONE_BY_ONE.set(one);
+                    let r = (expr_bounds(&e, domain), surface_bounds(&e, domain));
+                    ONE_BY_ONE.set(false);
+                    r
+                };
+                let (lanes, one) = (found(false), found(true));
+                assert!(!lanes.0.is_empty() && !lanes.1.is_empty(), "{m}: {lanes:?}");
+                assert_eq!(bits(lanes.0), bits(one.0), "{m} in ±{d}: solid");
+                assert_eq!(bits(lanes.1), bits(one.1), "{m} in ±{d}: surface");
+            }
+        }
+    }
 
     #[test]
     fn ball_bounds_are_tight_and_conservative() {

@@ -16,6 +16,12 @@ use std::ops::{Add, Div, Mul, Neg, Sub};
 pub struct Lanes<S, const L: usize>(pub [S; L]);
 
 impl<S: Copy, const L: usize> Lanes<S, L> {
+    /// The lanes `v`.
+    #[inline(always)]
+    pub fn new(v: [S; L]) -> Self {
+        Lanes(v)
+    }
+
     /// Lane `i`.
     #[inline(always)]
     pub fn lane(&self, i: usize) -> S {
@@ -114,35 +120,19 @@ mod tests {
     use super::*;
     use crate::expr::{eval_nodes, Expr};
     use crate::interval::Interval;
-    use crate::read::read_file;
     use rand::{Rng, SeedableRng};
 
     /// Every lane of a lane evaluation equals the one-value evaluation bit for bit, over
     /// boxes and points of the repository's expression models (min/max, R-functions,
     /// transcendentals) and over degenerate, infinite and NaN boxes; and the lanes'
-    /// `zero` and `less` agree with the lanes' own where those all agree.
+    /// `zero` and `less` say what every lane says, where they all agree.
     #[test]
     fn each_lane_is_the_single_evaluation() {
-        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
-        let models = [
-            "models/fidget/colonnade.vm",
-            "models/fidget/tanglecube.vm",
-            "models/fidget/hi.vm",
-            "models/canonical/s2_csg.hf",
-            "models/canonical/s3_blend.hf",
-            "models/canonical/s4_gyroid.hf",
-            "models/canonical/s5_twist.hf",
-            "scenes/models/blob.frep",
-        ];
         let mut rng = rand_pcg::Pcg64::seed_from_u64(31);
         let bits = |v: Interval| (v.lo.to_bits(), v.hi.to_bits());
         let (mut one, mut eight) = (Vec::new(), Vec::new());
-        for m in models {
-            let model = read_file(&root.join(m)).unwrap_or_else(|e| panic!("{m}: {e}"));
-            let crate::Shape::Function { tree, .. } = &model.shape else {
-                panic!("{m}: not one expression");
-            };
-            let expr = Expr::new(tree);
+        for (m, tree) in crate::test_models::expression_models() {
+            let expr = Expr::new(&tree);
             let tape = expr.nodes();
             // Points and boxes of every width up to 3, some of them degenerate.
             let mut boxes: Vec<[Interval; 3]> = (0..400)

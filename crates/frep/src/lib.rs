@@ -49,6 +49,9 @@ pub mod transform;
 pub mod tree;
 pub mod triangles;
 
+#[cfg(test)]
+mod test_models;
+
 pub use build_error::BuildError;
 pub use bvh::{Bvh, BvhRef};
 pub use bytecode::Bytecode;

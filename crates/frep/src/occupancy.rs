@@ -967,33 +967,14 @@ mod tests {
 
     /// A walk that bounds each box's children together in lanes leaves the same leaves,
     /// tapes and spent evaluations, bit for bit, as one that bounds every box on its own
-    /// (`Builder::node` box by box, the walk before lanes): octrees (eight children),
-    /// prospero's quadtree of columns (four) and a model of x alone (two), at both grid
-    /// sizes.
+    /// (`Builder::node` box by box, the walk before lanes): the repository's expression
+    /// models (octrees of eight children, the quadtrees of columns of Fidget's 2-D
+    /// models with four) and a model of x alone (two), at both grid sizes.
     #[test]
     fn children_in_lanes_equal_boxes_one_by_one() {
-        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
-        let models = [
-            "models/fidget/colonnade.vm",
-            "models/fidget/prospero.vm",
-            "models/fidget/tanglecube.vm",
-            "models/canonical/s2_csg.hf",
-            "models/canonical/s3_blend.hf",
-            "models/canonical/s5_twist.hf",
-            "scenes/models/blob.frep",
-        ];
-        let mut trees: Vec<(String, crate::Tree)> = models
-            .iter()
-            .map(|m| {
-                let model = read_file(&root.join(m)).unwrap_or_else(|e| panic!("{m}: {e}"));
-                let crate::Shape::Function { tree, .. } = model.shape else {
-                    panic!("{m}: not one expression");
-                };
-                (m.to_string(), tree)
-            })
-            .collect();
+        let mut trees: Vec<(&str, crate::Tree)> = crate::test_models::expression_models();
         let x = crate::Tree::x();
-        trees.push(("x alone".into(), 0.3 - (&x * &x)));
+        trees.push(("x alone", 0.3 - (&x * &x)));
         for (name, tree) in &trees {
             let tape = crate::expr::Expr::new(tree).nodes().to_vec();
             for n in [GRID, FINE_GRID] {
