@@ -11,7 +11,10 @@
 //! there because nested R-functions (`f1 + f2 + sqrt(f1² + f2²)`, HyperFun's `|`)
 //! widen intervals so much that no cell of the search domain is ever proved empty.
 
-use crate::expr::Expr;
+use crate::expr::{
+    eval_choices_lanes, eval_choices_nodes, eval_nodes, simplify_into_lane, Choice, Expr, Node,
+    MAX_LANES,
+};
 use crate::interval::Interval;
 use crate::lanes::Lanes;
 use crate::ray::Aabb;
@@ -21,12 +24,15 @@ use glam::DVec3;
 type Lanes8 = Lanes<Interval, 8>;
 type Lanes4 = Lanes<Interval, 4>;
 
-/// The evaluation scratch of the searches: one box, four and eight lanes.
+/// The evaluation scratch of the searches: one box, four and eight lanes, and the
+/// octants' min/max choices (lane k: octant k).
 #[derive(Default)]
 struct Scratch {
     one: Vec<Interval>,
     four: Vec<Lanes4>,
     eight: Vec<Lanes8>,
+    choices: Vec<[Choice; MAX_LANES]>,
+    one_choices: Vec<Choice>,
 }
 
 impl Scratch {
@@ -40,17 +46,20 @@ impl Scratch {
 
 /// The eight octants of `cell` (octant k lies on the high side of axis a where bit a of
 /// k is set), with F's bound over those not inside `done`, found together in one pass
-/// over the tape in lanes ([`crate::lanes`]): every bound is the one-box evaluation's
+/// over `tape` in lanes ([`crate::lanes`]): every bound is the one-box evaluation's
 /// bit for bit. The searches bound a cell's children together and then visit them one
 /// by one as before, so what they find, and the budget they spend, are the same. An
 /// octant inside `done` (which only grows) is skipped by its visit, so it is not
-/// bounded; one the visit skips for another reason was bounded for nothing.
+/// bounded; one the visit skips for another reason was bounded for nothing. With
+/// `choices`, each bounded octant's min/max choices go to `scratch.choices`, in the
+/// lane returned for it, for [`simplify_into_lane`].
 fn octants(
-    expr: &Expr,
+    tape: &[Node],
     cell: &Aabb,
     done: &Aabb,
     scratch: &mut Scratch,
-) -> ([Aabb; 8], [Option<Interval>; 8]) {
+    choices: bool,
+) -> ([Aabb; 8], [Option<(Interval, usize)>; 8]) {
     let c = cell.center();
     let subs: [Aabb; 8] = std::array::from_fn(|k| {
         let pick = |bit: usize, axis: usize| {
@@ -78,33 +87,59 @@ fn octants(
             Interval::new(b.lo[k], b.hi[k])
         }
     };
-    #[cfg(test)]
-    let lanes_off = tests::ONE_BY_ONE.get();
-    #[cfg(not(test))]
-    let lanes_off = false;
+    macro_rules! in_lanes {
+        ($lanes:ident, $scratch:expr) => {{
+            let i = |k: usize| $lanes::new(std::array::from_fn(axis(k)));
+            let r = match choices {
+                true => {
+                    let (x, y, z) = (i(0), i(1), i(2));
+                    eval_choices_lanes(tape, x, y, z, $scratch, &mut scratch.choices)
+                }
+                false => eval_nodes(tape, i(0), i(1), i(2), $scratch),
+            };
+            for (j, &k) in want.iter().enumerate() {
+                v[k] = Some((r.lane(j), j));
+            }
+        }};
+    }
     match want.len() {
-        5.. if !lanes_off => {
-            let i = |k: usize| Lanes8::new(std::array::from_fn(axis(k)));
-            let r = expr.eval_with(i(0), i(1), i(2), &mut scratch.eight);
-            for (j, &k) in want.iter().enumerate() {
-                v[k] = Some(r.lane(j));
-            }
-        }
-        2.. if !lanes_off => {
-            let i = |k: usize| Lanes4::new(std::array::from_fn(axis(k)));
-            let r = expr.eval_with(i(0), i(1), i(2), &mut scratch.four);
-            for (j, &k) in want.iter().enumerate() {
-                v[k] = Some(r.lane(j));
-            }
-        }
+        5.. if !lanes_off() => in_lanes!(Lanes8, &mut scratch.eight),
+        2.. if !lanes_off() => in_lanes!(Lanes4, &mut scratch.four),
         _ => {
+            if choices {
+                scratch.choices.clear();
+                scratch
+                    .choices
+                    .resize(tape.len(), [Choice::Both; MAX_LANES]);
+            }
             for (j, &k) in want.iter().enumerate() {
                 let i = |a: usize| axis(a)(j);
-                v[k] = Some(expr.eval_with(i(0), i(1), i(2), &mut scratch.one));
+                let (x, y, z) = (i(0), i(1), i(2));
+                let r = match choices {
+                    true => {
+                        let one = &mut scratch.one_choices;
+                        let r = eval_choices_nodes(tape, x, y, z, &mut scratch.one, one);
+                        for (row, &c) in scratch.choices.iter_mut().zip(one.iter()) {
+                            row[j] = c;
+                        }
+                        r
+                    }
+                    false => eval_nodes(tape, x, y, z, &mut scratch.one),
+                };
+                v[k] = Some((r, j));
             }
         }
     }
     (subs, v)
+}
+
+/// Whether the searches bound octants one by one over the whole tape, as before lanes
+/// and simplification (the tests' reference).
+fn lanes_off() -> bool {
+    #[cfg(test)]
+    return tests::ONE_BY_ONE.get();
+    #[cfg(not(test))]
+    false
 }
 
 /// The box searched when a model declares none: HyperFun and Fidget models live well
@@ -114,6 +149,16 @@ pub const DEFAULT_DOMAIN: f64 = 100.0;
 /// A box holding every point of `domain` where F ≥ 0 (empty if there is none).
 pub fn expr_bounds(expr: &Expr, domain: Aabb) -> Aabb {
     let mut scratch = Scratch::new(expr.len());
+    // The tapes of the cells being searched, the whole one first: each cell's tape is
+    // its parent's simplified over it ([`crate::expr::simplify_into`]), which gives the
+    // same bounds there (a min or max decided over a box is decided over its parts).
+    let mut arena = expr.nodes().to_vec();
+    let choices = arena.iter().any(|n| {
+        matches!(
+            n,
+            Node::Binary(crate::tree::BinaryOp::Min | crate::tree::BinaryOp::Max, ..)
+        )
+    });
     let mut b = domain;
     let mut depth = START_DEPTH;
     // Each pass searches the previous result. When a pass no longer shrinks it while
@@ -124,7 +169,9 @@ pub fn expr_bounds(expr: &Expr, domain: Aabb) -> Aabb {
     for _ in 0..16 {
         let mut out = Aabb::EMPTY;
         let mut budget = BUDGET / expr.len().max(1);
-        refine(expr, b, None, depth, &mut out, &mut scratch, &mut budget);
+        let whole = 0..expr.len();
+        let mut pass = (&mut arena, &mut scratch, &mut budget, choices);
+        refine(&mut pass, b, whole, None, depth, &mut out);
         if out.is_empty() {
             return out;
         }
@@ -243,12 +290,22 @@ impl SurfaceSearch<'_> {
             }
             return;
         }
-        let (subs, vs) = octants(self.expr, &cell, &self.sure, &mut self.scratch);
+        let (subs, vs) = octants(
+            self.expr.nodes(),
+            &cell,
+            &self.sure,
+            &mut self.scratch,
+            false,
+        );
         for (sub, v) in subs.into_iter().zip(vs) {
-            self.refine(sub, v, depth - 1);
+            self.refine(sub, v.map(|v| v.0), depth - 1);
         }
     }
 }
+
+/// Tapes shorter than this are not simplified per cell: their simplification costs
+/// more than it saves (Fidget's quarter.vm, 12 nodes; as `interval_trace`'s segments).
+const SIMPLIFY_MIN_LEN: usize = 24;
 
 /// Octree depth of a pass of [`surface_bounds`] (32³ cells at most: where intervals
 /// prune nothing, a pass evaluates every cell of every level).
@@ -260,29 +317,31 @@ const MAX_DEPTH: u32 = 12;
 /// Node evaluations one pass may spend (a fraction of a second for any expression).
 const BUDGET: usize = 5_000_000;
 
-/// One cell of a pass of [`expr_bounds`], with F's bound `v` over it when its parent
-/// found it ([`octants`]).
+/// One cell of a pass of [`expr_bounds`] with its tape `arena[tape]`, and F's bound `v`
+/// over it when its parent found it ([`octants`]). `pass`: the tapes' arena, the
+/// scratch, the cells left in the budget and whether the tape has a min or max to
+/// simplify.
 fn refine(
-    expr: &Expr,
+    pass: &mut (&mut Vec<Node>, &mut Scratch, &mut usize, bool),
     cell: Aabb,
+    tape: std::ops::Range<usize>,
     v: Option<Interval>,
     depth: u32,
     out: &mut Aabb,
-    scratch: &mut Scratch,
-    budget: &mut usize,
 ) {
     // Cells already inside the result cannot grow it.
     if out.lo.cmple(cell.lo).all() && out.hi.cmpge(cell.hi).all() {
         return;
     }
-    if *budget == 0 {
+    if *pass.2 == 0 {
         // Out of budget: keep the cell whole, which stays conservative.
         *out = out.union(&cell);
         return;
     }
-    *budget -= 1;
+    *pass.2 -= 1;
     let i = |k: usize| Interval::new(cell.lo[k], cell.hi[k]);
-    let v = v.unwrap_or_else(|| expr.eval_with(i(0), i(1), i(2), &mut scratch.one));
+    let nodes = &pass.0[tape.clone()];
+    let v = v.unwrap_or_else(|| eval_nodes(nodes, i(0), i(1), i(2), &mut pass.1.one));
     if v.hi < 0.0 {
         return;
     }
@@ -290,10 +349,33 @@ fn refine(
         *out = out.union(&cell);
         return;
     }
-    let (subs, vs) = octants(expr, &cell, out, scratch);
-    for (sub, v) in subs.into_iter().zip(vs) {
-        refine(expr, sub, v, depth - 1, out, scratch, budget);
+    let simplify = pass.3 && tape.len() >= SIMPLIFY_MIN_LEN && !lanes_off();
+    let (subs, vs) = octants(nodes, &cell, out, pass.1, simplify);
+    if !simplify {
+        for (sub, v) in subs.into_iter().zip(vs) {
+            refine(pass, sub, tape.clone(), v.map(|v| v.0), depth - 1, out);
+        }
+        return;
     }
+    // Each octant's tape, simplified by its choices (where any is decided) before the
+    // visits reuse the choices' scratch; dropped after the visits.
+    let mark = pass.0.len();
+    let tapes: [std::ops::Range<usize>; 8] = std::array::from_fn(|k| {
+        let start = pass.0.len();
+        let arena = &mut *pass.0;
+        match vs[k] {
+            Some((_, j))
+                if simplify_into_lane(&[], Some(tape.clone()), &pass.1.choices, j, arena) =>
+            {
+                start..arena.len()
+            }
+            _ => tape.clone(),
+        }
+    });
+    for ((sub, v), t) in subs.into_iter().zip(vs).zip(tapes) {
+        refine(pass, sub, t, v.map(|v| v.0), depth - 1, out);
+    }
+    pass.0.truncate(mark);
 }
 
 #[cfg(test)]
