@@ -12,8 +12,8 @@
 //! widen intervals so much that no cell of the search domain is ever proved empty.
 
 use crate::expr::{
-    eval_choices_lanes, eval_choices_nodes, eval_nodes, simplify_into_lane, Choice, Expr, Node,
-    MAX_LANES,
+    eval_choices_lanes, eval_choices_nodes, eval_nodes, has_min_max, simplify_into_lane, Choice,
+    Expr, Node, MAX_LANES,
 };
 use crate::interval::Interval;
 use crate::lanes::Lanes;
@@ -153,12 +153,7 @@ pub fn expr_bounds(expr: &Expr, domain: Aabb) -> Aabb {
     // its parent's simplified over it ([`crate::expr::simplify_into`]), which gives the
     // same bounds there (a min or max decided over a box is decided over its parts).
     let mut arena = expr.nodes().to_vec();
-    let choices = arena.iter().any(|n| {
-        matches!(
-            n,
-            Node::Binary(crate::tree::BinaryOp::Min | crate::tree::BinaryOp::Max, ..)
-        )
-    });
+    let simplifies = has_min_max(expr.nodes());
     let mut b = domain;
     let mut depth = START_DEPTH;
     // Each pass searches the previous result. When a pass no longer shrinks it while
@@ -169,9 +164,13 @@ pub fn expr_bounds(expr: &Expr, domain: Aabb) -> Aabb {
     for _ in 0..16 {
         let mut out = Aabb::EMPTY;
         let mut budget = BUDGET / expr.len().max(1);
-        let whole = 0..expr.len();
-        let mut pass = (&mut arena, &mut scratch, &mut budget, choices);
-        refine(&mut pass, b, whole, None, depth, &mut out);
+        let mut pass = Pass {
+            arena: &mut arena,
+            scratch: &mut scratch,
+            budget: &mut budget,
+            simplifies,
+        };
+        refine(&mut pass, b, 0..expr.len(), None, depth, &mut out);
         if out.is_empty() {
             return out;
         }
@@ -317,12 +316,21 @@ const MAX_DEPTH: u32 = 12;
 /// Node evaluations one pass may spend (a fraction of a second for any expression).
 const BUDGET: usize = 5_000_000;
 
-/// One cell of a pass of [`expr_bounds`] with its tape `arena[tape]`, and F's bound `v`
-/// over it when its parent found it ([`octants`]). `pass`: the tapes' arena, the
-/// scratch, the cells left in the budget and whether the tape has a min or max to
-/// simplify.
+/// What one pass of [`expr_bounds`] works in.
+struct Pass<'a> {
+    /// The cells' tapes, the whole one first.
+    arena: &'a mut Vec<Node>,
+    scratch: &'a mut Scratch,
+    /// Cells the pass may still evaluate.
+    budget: &'a mut usize,
+    /// Whether the tape has a min or max, so that simplification can shorten it.
+    simplifies: bool,
+}
+
+/// One cell of a pass of [`expr_bounds`] with its tape `pass.arena[tape]`, and F's bound
+/// `v` over it when its parent found it ([`octants`]).
 fn refine(
-    pass: &mut (&mut Vec<Node>, &mut Scratch, &mut usize, bool),
+    pass: &mut Pass,
     cell: Aabb,
     tape: std::ops::Range<usize>,
     v: Option<Interval>,
@@ -333,15 +341,15 @@ fn refine(
     if out.lo.cmple(cell.lo).all() && out.hi.cmpge(cell.hi).all() {
         return;
     }
-    if *pass.2 == 0 {
+    if *pass.budget == 0 {
         // Out of budget: keep the cell whole, which stays conservative.
         *out = out.union(&cell);
         return;
     }
-    *pass.2 -= 1;
+    *pass.budget -= 1;
     let i = |k: usize| Interval::new(cell.lo[k], cell.hi[k]);
-    let nodes = &pass.0[tape.clone()];
-    let v = v.unwrap_or_else(|| eval_nodes(nodes, i(0), i(1), i(2), &mut pass.1.one));
+    let nodes = &pass.arena[tape.clone()];
+    let v = v.unwrap_or_else(|| eval_nodes(nodes, i(0), i(1), i(2), &mut pass.scratch.one));
     if v.hi < 0.0 {
         return;
     }
@@ -349,8 +357,8 @@ fn refine(
         *out = out.union(&cell);
         return;
     }
-    let simplify = pass.3 && tape.len() >= SIMPLIFY_MIN_LEN && !lanes_off();
-    let (subs, vs) = octants(nodes, &cell, out, pass.1, simplify);
+    let simplify = pass.simplifies && tape.len() >= SIMPLIFY_MIN_LEN && !lanes_off();
+    let (subs, vs) = octants(nodes, &cell, out, pass.scratch, simplify);
     if !simplify {
         for (sub, v) in subs.into_iter().zip(vs) {
             refine(pass, sub, tape.clone(), v.map(|v| v.0), depth - 1, out);
@@ -359,13 +367,13 @@ fn refine(
     }
     // Each octant's tape, simplified by its choices (where any is decided) before the
     // visits reuse the choices' scratch; dropped after the visits.
-    let mark = pass.0.len();
+    let mark = pass.arena.len();
     let tapes: [std::ops::Range<usize>; 8] = std::array::from_fn(|k| {
-        let start = pass.0.len();
-        let arena = &mut *pass.0;
+        let start = pass.arena.len();
+        let arena = &mut *pass.arena;
         match vs[k] {
             Some((_, j))
-                if simplify_into_lane(&[], Some(tape.clone()), &pass.1.choices, j, arena) =>
+                if simplify_into_lane(&[], Some(tape.clone()), &pass.scratch.choices, j, arena) =>
             {
                 start..arena.len()
             }
@@ -375,7 +383,7 @@ fn refine(
     for ((sub, v), t) in subs.into_iter().zip(vs).zip(tapes) {
         refine(pass, sub, t, v.map(|v| v.0), depth - 1, out);
     }
-    pass.0.truncate(mark);
+    pass.arena.truncate(mark);
 }
 
 #[cfg(test)]

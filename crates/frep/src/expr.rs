@@ -508,6 +508,14 @@ pub fn eval_choices_nodes<S: Scalar>(
     *scratch.last().expect("an expression has a root")
 }
 
+/// Whether `nodes` hold a min or max: a node whose choice over a box can be decided,
+/// which tape simplification needs.
+pub fn has_min_max(nodes: &[Node]) -> bool {
+    nodes
+        .iter()
+        .any(|n| matches!(n, Node::Binary(BinaryOp::Min | BinaryOp::Max, ..)))
+}
+
 /// The most lanes [`eval_choices_lanes`] records choices for: an octree box's children.
 pub const MAX_LANES: usize = 8;
 

@@ -67,11 +67,7 @@ impl Plan {
     /// polynomial part (such tapes take [`crate::poly_trace`]).
     pub fn new(tape: &[Node]) -> Option<Plan> {
         let n = tape.len();
-        if n == 0
-            || tape
-                .iter()
-                .any(|t| matches!(t, Node::Binary(BinaryOp::Min | BinaryOp::Max, ..)))
-        {
+        if n == 0 || crate::expr::has_min_max(tape) {
             return None;
         }
         // The R-functions' inner nodes stay, so that their bound still narrows.
