@@ -308,6 +308,21 @@ pub(crate) fn nonzero_bits(pdfs: &[f64]) -> u64 {
     mask
 }
 
+/// [`Moments::add_zero_valued`] over `data` = `[Â packed | b̂]` for `T` techniques, a
+/// failed sample's `1/n_t²` ([`Moments::add_failed`]) included: the same sums bit for bit.
+#[inline(always)]
+pub(crate) fn add_zero_valued_sized<const T: usize>(
+    data: &mut [f64],
+    counts: &[f64],
+    t: usize,
+    pdfs: &[f64; T],
+) {
+    if add_sums(data, counts, T, 0, t, &[], pdfs).is_none() {
+        let n = counts[t];
+        data[packed_index(t, t)] += 1.0 / (n * n);
+    }
+}
+
 /// [`Moments::add`] over `data` = `[Â packed | b̂]` for `tt` techniques and `c` channels;
 /// None (nothing added) for a failed sample. Inlined where `tt` and `c` are constants.
 #[inline(always)]

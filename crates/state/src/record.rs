@@ -150,6 +150,26 @@ impl Pixel<'_> {
         }
     }
 
+    /// [`Pixel::add_zero_valued`] where `kernel` is `it`'s, one block per vertex and its
+    /// [`mis::Kernel::zero_valued_size`] is `T`: the same sums bit for bit, without the
+    /// dispatch.
+    #[inline(always)]
+    pub fn add_zero_valued_sized<const T: usize>(
+        &mut self,
+        it: &Tally,
+        kernel: &mis::Kernel,
+        depth: usize,
+        k: usize,
+        pdfs: &[f64; T],
+    ) {
+        debug_assert_eq!(it.record.lights, 1);
+        if self.mute {
+            return;
+        }
+        let r = it.record.depth_light(depth, 0);
+        kernel.add_zero_valued_sized(&mut self.rec[r], k, pdfs);
+    }
+
     /// [`Pixel::add_draw`] into a vertex's one estimator block: the sums in a call of
     /// their own, outside the heuristics' short path (which stays inlined in the caller's
     /// loop), and small enough to need few saved registers.

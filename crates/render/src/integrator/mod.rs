@@ -172,6 +172,10 @@ pub(crate) struct Integrator {
     pub unlit_listed: bool,
     /// Whether a technique is one light's (`light#k`).
     pub unlit_one: bool,
+    /// The technique count where [`Self::unlit_listed`]'s draws take the short form of
+    /// optimal-direct's sums ([`mis::Kernel::zero_valued_size`]) and no technique is one
+    /// light's; None elsewhere.
+    pub unlit_sized: Option<usize>,
     /// Each light's technique where techniques are one light's
     /// ([`crate::technique::one_light_map`]).
     pub one_light_map: Option<crate::technique::OneLightMap>,
@@ -241,6 +245,10 @@ impl Integrator {
         Ok(Self {
             unlit_bsdf_draws_fail,
             unlit_listed: unlit_listed && (!unlit_one || one_light_map.is_some()),
+            unlit_sized: match &tally.combine {
+                Combine::Estimator(k) if unlit_listed && !unlit_one => k.zero_valued_size(),
+                _ => None,
+            },
             unlit_one,
             one_light_map,
             sampler: Sampler::new(o.seed),
@@ -623,11 +631,21 @@ mod tests {
                 for techniques in [
                     o.techniques.clone(),
                     vec![(Technique::LightPower, 2), (Technique::LightArea, 1)],
+                    vec![(Technique::LightPower, 1), (Technique::Bsdf, 2)],
                     // One technique per light, alone and beside the mixtures.
                     [&one[..], &[(Technique::Bsdf, 1)]].concat(),
                     [&one[..], &mixtures[..], &[(Technique::Bsdf, 1)]].concat(),
                 ] {
                     o.techniques = techniques;
+                    // Optimal-direct's short form of the sums where no technique is
+                    // one light's (`Integrator::unlit_sized`).
+                    let t = o.techniques.len();
+                    let one_light = o
+                        .techniques
+                        .iter()
+                        .any(|t| matches!(t.0, Technique::Light(_)));
+                    let sized = (method == Method::OptimalDirect && !one_light).then_some(t);
+                    assert_eq!(Integrator::new(&o).unwrap().unlit_sized, sized);
                     let (on, off) = (listed(&o, true), listed(&o, false));
                     assert!(on == off, "{integrator:?} {method} {:?}", o.techniques);
                 }

@@ -11,6 +11,7 @@ use crate::sampler::SampleStream;
 use crate::scene::{Scene, SurfaceHit};
 use crate::technique::Sampling;
 use crate::technique::{ShadingPoint, Technique};
+use ::state::Combine;
 use frep::Ray;
 use glam::DVec3;
 
@@ -247,6 +248,14 @@ impl Integrator {
         pdfs: &mut [f64],
         px: &mut Pixel,
     ) -> bool {
+        // At most three techniques qualify (the BSDF and the two mixtures, each once).
+        if !ONE {
+            match self.unlit_sized {
+                Some(2) => return self.add_unlit_sized::<2>(lights, c, bsdf_pdf, depth, k, px),
+                Some(3) => return self.add_unlit_sized::<3>(lights, c, bsdf_pdf, depth, k, px),
+                _ => {}
+            }
+        }
         let (t, map) = (&self.techniques, self.one_light_map.as_ref());
         if !crate::technique::pdfs_listed::<ONE>(t, lights, c, p, wi, bsdf_pdf, map, pdfs) {
             return false;
@@ -254,6 +263,31 @@ impl Integrator {
         // A light draw without density of its own is refused as failed, which is what
         // the sums do with a sample whose own pdf is 0 (`mis`, `Moments::add`).
         px.add_zero_valued(self, depth, k, f, pdfs);
+        true
+    }
+
+    /// [`Self::add_unlit`] where [`Self::unlit_sized`] is `T`: the pdfs in an array of
+    /// their own and optimal-direct's sums without the estimator's dispatch
+    /// ([`Pixel::add_zero_valued_sized`]); the same sums bit for bit.
+    #[inline(always)]
+    fn add_unlit_sized<const T: usize>(
+        &self,
+        lights: &crate::light::Lights,
+        c: &crate::light::Crossed,
+        bsdf_pdf: Option<f64>,
+        depth: usize,
+        k: usize,
+        px: &mut Pixel,
+    ) -> bool {
+        let Combine::Estimator(kernel) = &self.combine else {
+            return false;
+        };
+        let mut pdfs = [0.0; T];
+        let t = &self.techniques[..T];
+        if !crate::technique::pdfs_mixtures(t, lights, c, bsdf_pdf, &mut pdfs) {
+            return false;
+        }
+        px.add_zero_valued_sized(self, kernel, depth, k, &pdfs);
         true
     }
 

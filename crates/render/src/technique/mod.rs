@@ -363,14 +363,33 @@ pub(crate) fn pdfs_listed<const ONE: bool>(
                 }
             }
         }
-        None => {
-            for (o, &t) in out.iter_mut().zip(techniques) {
-                match listed(t) {
-                    Some(pdf) => *o = pdf,
-                    None => return false,
-                }
-            }
-        }
+        None => return pdfs_mixtures(techniques, lights, crossed, bsdf_pdf, out),
+    }
+    true
+}
+
+/// [`pdfs_listed`] where every technique is the BSDF (with `bsdf_pdf`) or a light
+/// mixture, whose sums come from one pass over `crossed`'s list
+/// ([`Lights::pdf_listed_mixtures`]); false where one is not, or the scene has an
+/// environment.
+#[inline(always)]
+pub(crate) fn pdfs_mixtures(
+    techniques: &[Technique],
+    lights: &Lights,
+    crossed: &Crossed,
+    bsdf_pdf: Option<f64>,
+    out: &mut [f64],
+) -> bool {
+    let Some((power, area)) = lights.pdf_listed_mixtures(crossed) else {
+        return false;
+    };
+    for (o, &t) in out.iter_mut().zip(techniques) {
+        *o = match (t, bsdf_pdf, area) {
+            (Technique::Bsdf, Some(pdf), _) => pdf,
+            (Technique::LightPower, ..) => power,
+            (Technique::LightArea, _, Some(area)) => area,
+            _ => return false,
+        };
     }
     true
 }

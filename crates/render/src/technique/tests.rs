@@ -360,6 +360,16 @@ fn shared_crossings_give_each_techniques_own_pdf() {
                     assert_eq!(own[k].to_bits(), want.to_bits(), "{t:?} of {listable:?}");
                 }
             }
+            // Without by-area pdfs in the list (no technique samples by area), the
+            // power mixture's sum alone (`Lights::pdf_listed_mixtures`).
+            let no_area = lights.along(&ray, false);
+            let listable = [Technique::LightPower, Technique::Bsdf];
+            let mut own = [f64::NAN; 2];
+            let c = no_area.crossed();
+            pdfs_known(OneLight::None, &listable, &ctx, d.wi, c, bsdf_pdf, &mut own);
+            for (k, t) in listable.iter().enumerate() {
+                assert_eq!(own[k].to_bits(), t.pdf(&ctx, d.wi).to_bits(), "{t:?}");
+            }
             assert_eq!(along.nearest, lights.intersect(&ray, 0.0, f64::INFINITY));
             total += 1;
             crossing += usize::from(out[3] > 0.0);
