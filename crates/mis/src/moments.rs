@@ -132,8 +132,7 @@ impl<S: AsRef<[f64]> + AsMut<[f64]>> Moments<S> {
     /// Counts a failed sample of technique `t`: `Â_tt += 1/n_t²` (see the module docs).
     #[inline]
     pub fn add_failed(&mut self, layout: &Layout, t: usize) {
-        let n = layout.counts()[t];
-        self.data.as_mut()[packed_index(t, t)] += 1.0 / (n * n);
+        add_failed_sums(self.data.as_mut(), layout.counts(), t);
     }
 
     /// Adds another state's sums.
@@ -318,9 +317,15 @@ pub(crate) fn add_zero_valued_sized<const T: usize>(
     pdfs: &[f64; T],
 ) {
     if add_sums(data, counts, T, 0, t, &[], pdfs).is_none() {
-        let n = counts[t];
-        data[packed_index(t, t)] += 1.0 / (n * n);
+        add_failed_sums(data, counts, t);
     }
+}
+
+/// [`Moments::add_failed`] over `data` = `[Â packed | b̂]`: `Â_tt += 1/n_t²`.
+#[inline(always)]
+fn add_failed_sums(data: &mut [f64], counts: &[f64], t: usize) {
+    let n = counts[t];
+    data[packed_index(t, t)] += 1.0 / (n * n);
 }
 
 /// [`Moments::add`] over `data` = `[Â packed | b̂]` for `tt` techniques and `c` channels;

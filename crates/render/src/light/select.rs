@@ -424,12 +424,8 @@ impl Lights {
         let mut sum = 0.0;
         match t {
             Technique::LightPower => {
-                let d = self.by_power.as_ref();
                 for (&k, &pdf) in c.lights().iter().zip(c.pdf_li()) {
-                    if pdf != 0.0 {
-                        let pm = d.map_or(0.0, |d| d.pmf(k as usize));
-                        sum += if pm > 0.0 { pm * pdf } else { 0.0 };
-                    }
+                    self.add_power_term(&mut sum, k, pdf);
                 }
             }
             Technique::LightArea => {
@@ -454,26 +450,29 @@ impl Lights {
         if self.environment.is_some() {
             return None;
         }
-        let power_pmf = self.by_power.as_ref();
         let mut power = 0.0;
-        let mut add_power = |k: u32, pdf: f64| {
-            if pdf != 0.0 {
-                let pm = power_pmf.map_or(0.0, |d| d.pmf(k as usize));
-                power += if pm > 0.0 { pm * pdf } else { 0.0 };
-            }
-        };
         let Some(d) = self.by_area.as_ref().filter(|_| c.by_area) else {
             for (&k, &pdf) in c.lights().iter().zip(c.pdf_li()) {
-                add_power(k, pdf);
+                self.add_power_term(&mut power, k, pdf);
             }
             return Some((power, None));
         };
         let mut area = 0.0;
         for ((&k, &pdf), &pa) in c.lights().iter().zip(c.pdf_li()).zip(c.pdf_area()) {
-            add_power(k, pdf);
+            self.add_power_term(&mut power, k, pdf);
             area += d.pmf(k as usize) * pa;
         }
         Some((power, Some(area)))
+    }
+
+    /// Light k's term of `light-power`'s pdf, its own pdf `pdf` times its pmf, added to
+    /// `sum` where both are nonzero ([`Self::pdf_listed`], [`Self::pdf_listed_mixtures`]).
+    #[inline(always)]
+    fn add_power_term(&self, sum: &mut f64, k: u32, pdf: f64) {
+        if pdf != 0.0 {
+            let pm = self.by_power.as_ref().map_or(0.0, |d| d.pmf(k as usize));
+            *sum += if pm > 0.0 { pm * pdf } else { 0.0 };
+        }
     }
 
     /// Σ_k pmf(k) · p_k(wi) over the area lights `crossed` lists (None: found by the
